@@ -1,0 +1,286 @@
+/* core.h — the one public header of mscale's core library.
+ *
+ * The core is what every physics folder stands on and nothing physical lives here:
+ *   - status codes (one list, with messages) and the exit-code mapping of DESIGN.md §8;
+ *   - the run context (communicator wrapper, rank, logger, output directory);
+ *   - units (DESIGN.md §2: internal g, cm, 10 µs; decks may say `units: si`);
+ *   - the deck reader (libyaml → a tree that remembers FILE:LINE:COL, typed readers that
+ *     collect every error, unknown-key detection, defaults written back for the resolved deck);
+ *   - output writers that never leave a truncated file under a final name (CSV with a units
+ *     header, HDF5 with an XDMF sidecar), run directories, progress with ETA;
+ *   - the MPI layer (`par_*`): core/par.c is the only file that includes <mpi.h>
+ *     (core/h5io.c includes <hdf5.h>, which in the parallel build pulls it in too).
+ */
+#ifndef MSCALE_CORE_H
+#define MSCALE_CORE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#define MSCALE_VERSION_STRING "0.1.0"
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status codes                                                                                */
+
+typedef enum ms_status {
+  MS_OK = 0,
+  MS_ERR_INPUT,    /* bad deck, bad data file, bad command line  -> exit 2 */
+  MS_ERR_IO,       /* cannot read/write a file                   -> exit 1 */
+  MS_ERR_NOMEM,    /* allocation failed                          -> exit 1 */
+  MS_ERR_UNSTABLE, /* NaN, negative volume, time-step collapse   -> exit 1 */
+  MS_ERR_SOLVER,   /* a nonlinear/ODE solver did not converge    -> exit 1 */
+  MS_ERR_INTERNAL  /* a bug: an invariant was violated           -> exit 1 */
+} ms_status;
+
+const char *ms_status_str(ms_status s);
+/* Process exit code for a status: 0 success, 2 bad input, 1 anything else (DESIGN.md §8). */
+int ms_exit_code(ms_status s);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Memory: allocation that never returns NULL silently.                                        */
+
+void *ms_calloc(size_t n, size_t size);           /* aborts with a message on failure */
+void *ms_aligned_alloc(size_t n, size_t size);    /* 64-byte aligned, zeroed; free with free() */
+void *ms_realloc(void *p, size_t n, size_t size); /* aborts with a message on failure */
+char *ms_strdup(const char *s);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Logging and the run context                                                                 */
+
+typedef enum ms_log_level { MS_LOG_ERROR = 0, MS_LOG_WARN, MS_LOG_INFO, MS_LOG_DEBUG } ms_log_level;
+
+typedef struct ms_ctx {
+  int rank, size;         /* MPI rank and size (0, 1 in a serial run) */
+  ms_log_level verbosity; /* messages above this level are dropped */
+  FILE *log_file;         /* run.log in the output directory, or NULL */
+  char *outdir;           /* output directory ("" = none: tests, tools) */
+  bool quiet;             /* no progress lines on stderr */
+  double wall_start;      /* ms_wall_time() when the context was made */
+} ms_ctx;
+
+/* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
+void ms_ctx_init_serial(ms_ctx *ctx);
+void ms_ctx_close(ms_ctx *ctx);
+/* Messages go to stderr (rank 0 only, unless ERROR) and to ctx->log_file. */
+void ms_log(const ms_ctx *ctx, ms_log_level level, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+double ms_wall_time(void);
+
+/* Path inside the output directory; returns a malloc'd string. */
+char *ms_out_path(const ms_ctx *ctx, const char *name);
+/* Create the output directory; if it exists and holds files, refuse unless force (MS_ERR_INPUT). */
+ms_status ms_outdir_create(ms_ctx *ctx, const char *dir, bool force);
+
+/* Progress: a single updating line with ETA on a terminal, plain log lines every
+ * `log_interval_s` seconds otherwise. */
+typedef struct ms_progress {
+  const ms_ctx *ctx;
+  const char *what;
+  double t_start, t_end; /* simulated time span */
+  double wall_start, wall_last;
+  double log_interval_s;
+  bool tty;
+  bool active;
+} ms_progress;
+void ms_progress_start(ms_progress *p, const ms_ctx *ctx, const char *what, double t_start,
+                       double t_end);
+void ms_progress_update(ms_progress *p, double t, long step);
+void ms_progress_finish(ms_progress *p, double t, long step);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Units (DESIGN.md §2). Internal system: g, cm, 10 µs -> g/cm³, km/s, GPa, kJ/g.               */
+
+typedef enum ms_dim {
+  MS_DIM_NONE = 0,     /* dimensionless */
+  MS_DIM_LENGTH,       /* cm */
+  MS_DIM_TIME,         /* 10 µs */
+  MS_DIM_MASS,         /* g */
+  MS_DIM_DENSITY,      /* g/cm³ */
+  MS_DIM_VELOCITY,     /* km/s = cm/10µs */
+  MS_DIM_PRESSURE,     /* GPa */
+  MS_DIM_SPEC_ENERGY,  /* kJ/g = (km/s)² */
+  MS_DIM_ENERGY,       /* g·cm²/(10µs)² = 1e5 J... see ms_unit_label */
+  MS_DIM_VISCOSITY,    /* g/(cm·10µs) */
+  MS_DIM_TEMPERATURE,  /* K */
+  MS_DIM_COUNT
+} ms_dim;
+
+typedef enum ms_unit_system { MS_UNITS_INTERNAL = 0, MS_UNITS_SI } ms_unit_system;
+
+/* Factor that converts a value in `sys` to internal units. */
+double ms_unit_to_internal(ms_unit_system sys, ms_dim dim);
+/* Label of the internal unit of a dimension, e.g. "GPa", "km/s", "g/cm^3". */
+const char *ms_unit_label(ms_dim dim);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Deck reading (libyaml)                                                                      *
+ *
+ * dk_load parses a YAML file into a tree of nodes that remember FILE:LINE:COL. Readers look keys
+ * up in mappings (marking them used), convert and range-check values, and append every problem
+ * to a dk_errors list: `mscale check` reports all of them, not just the first. Keys that no
+ * reader asked for are reported by dk_report_unused() as unknown (typos). Readers given a
+ * default write it into the tree, so dk_write_resolved() emits the deck with defaults filled in.
+ */
+
+typedef struct dk_node dk_node;
+typedef struct dk_doc dk_doc;
+
+typedef struct dk_errors {
+  size_t n, cap;
+  char **msg; /* each "FILE:LINE:COL: message" */
+} dk_errors;
+
+void dk_errors_init(dk_errors *e);
+void dk_errors_free(dk_errors *e);
+void dk_errors_print(const dk_errors *e, FILE *f);
+/* Record an error located at node `at` (NULL: at the file as a whole). */
+void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+/* Record an error at an explicit location (for data files that are not YAML). */
+void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+/* Parse `path`. On a syntax error, returns NULL and adds the error (with libyaml's position). */
+dk_doc *dk_load(const char *path, dk_errors *e);
+dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e);
+void dk_free(dk_doc *doc);
+const dk_node *dk_root(const dk_doc *doc);
+const char *dk_file(const dk_doc *doc);
+/* Directory of the deck file (for resolving relative data-file paths); "" for strings. */
+const char *dk_dir(const dk_doc *doc);
+/* Unit system of the deck (`units:` at top level, read by dk_read_units). */
+ms_unit_system dk_units(const dk_doc *doc);
+/* Reads the top-level `units:` key: `internal` (g, cm, 10 µs; the default) or `si`. */
+void dk_read_units(dk_doc *doc, dk_errors *e);
+/* Resolve a path given in the deck relative to the deck's directory; malloc'd. */
+char *dk_resolve_path(const dk_doc *doc, const char *path);
+
+typedef enum dk_kind { DK_SCALAR, DK_MAP, DK_SEQ } dk_kind;
+dk_kind dk_node_kind(const dk_node *n);
+int dk_node_line(const dk_node *n);
+int dk_node_col(const dk_node *n);
+const char *dk_scalar(const dk_node *n); /* NULL unless a scalar */
+size_t dk_seq_len(const dk_node *n);     /* 0 unless a sequence */
+const dk_node *dk_seq_at(const dk_node *n, size_t i);
+size_t dk_map_len(const dk_node *n);
+const char *dk_map_key(const dk_node *n, size_t i);
+const dk_node *dk_map_value(const dk_node *n, size_t i);
+
+/* Look a key up in a mapping and mark it used; NULL if absent or `map` is not a mapping. */
+const dk_node *dk_get(const dk_node *map, const char *key);
+/* Require `n` to be a mapping / sequence; records an error naming `what` otherwise. */
+bool dk_expect_map(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what);
+bool dk_expect_seq(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what);
+
+/* Typed readers. `required` keys that are missing are errors; optional ones take `def`, which
+ * is written back into the tree. Values are converted from the deck's unit system to internal
+ * units according to `dim`. Return false (and record an error) when the value is absent and
+ * required, has the wrong type, or is outside [lo, hi]. Use -INFINITY/INFINITY for no bound. */
+bool dk_read_double(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim,
+                    bool required, double def, double lo, double hi, double *out);
+/* Same with an exclusive lower bound (e.g. density > 0). */
+bool dk_read_positive(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim,
+                      bool required, double def, double *out);
+bool dk_read_int(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, bool required,
+                 long def, long lo, long hi, long *out);
+bool dk_read_bool(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, bool required,
+                  bool def, bool *out);
+/* String: *out points into the tree (valid while doc lives). */
+bool dk_read_string(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, bool required,
+                    const char *def, const char **out);
+/* One of `choices` (NULL-terminated); *out is its index. */
+bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, bool required,
+                  int def, const char *const *choices, int *out);
+/* A sequence of numbers (or a single number); *out is malloc'd, *n its length. */
+bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
+                         ms_dim dim, bool required, double **out, size_t *n);
+/* Convert a scalar node to a double (with units); records an error if it is not a number. */
+bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what,
+                    ms_dim dim, double *out);
+
+/* Report every mapping key in the document that no reader asked for. */
+void dk_report_unused(dk_errors *e, const dk_doc *doc);
+/* Write the tree (with defaults filled in) as YAML, atomically (temporary name + rename). */
+ms_status dk_write_resolved(const dk_doc *doc, const char *path);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Atomic files: write to "<path>.part", rename to <path> on commit; an interrupted run never  *
+ * leaves a truncated file under the final name.                                               */
+
+typedef struct ms_afile {
+  FILE *f;
+  char *path, *tmp_path;
+} ms_afile;
+ms_status ms_afile_open(ms_afile *af, const char *path);
+ms_status ms_afile_commit(ms_afile *af); /* fclose + rename; frees names */
+void ms_afile_abort(ms_afile *af);       /* fclose + remove the temporary */
+
+/* CSV tables with a units header:
+ *   # <title>
+ *   # units: up [km/s], Us [km/s], ...
+ *   up,Us,...
+ * `f` is any FILE (stdout or an ms_afile's f). */
+void ms_csv_header(FILE *f, const char *title, size_t ncol, const char *const *names,
+                   const char *const *units);
+void ms_csv_row(FILE *f, size_t ncol, const double *values);
+
+/* Read a numeric table (CSV or whitespace separated; '#' comments; an optional header line of
+ * names). Errors name FILE:LINE. On success *data is row-major [nrow][ncol], malloc'd. */
+ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t *nrow,
+                        size_t *ncol, dk_errors *e);
+
+/* ------------------------------------------------------------------------------------------ */
+/* HDF5 output with XDMF sidecar (core/h5io.c).                                                */
+
+typedef struct ms_h5 ms_h5;
+/* Creates "<path>.part"; ms_h5_close renames it to <path>. */
+ms_h5 *ms_h5_create(const char *path);
+/* Write a 1D/2D double dataset at `name` (groups made as needed) with a "units" attribute. */
+ms_status ms_h5_write_doubles(ms_h5 *h, const char *name, size_t n0, size_t n1, const double *data,
+                              const char *units);
+ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *data);
+ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v);
+ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const char *v);
+ms_status ms_h5_close(ms_h5 *h); /* commit: close + rename */
+void ms_h5_abort(ms_h5 *h);      /* close + remove temporary */
+
+/* Reading (for post-processing commands and tests). */
+typedef struct ms_h5r ms_h5r;
+ms_h5r *ms_h5_open_read(const char *path, dk_errors *e);
+/* Reads a double dataset; *data malloc'd, dims in n0/n1 (n1 = 1 for 1D). */
+ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
+                             dk_errors *e);
+bool ms_h5_exists(ms_h5r *h, const char *name);
+void ms_h5_close_read(ms_h5r *h);
+
+/* XDMF sidecar describing datasets in an HDF5 file so ParaView can open it.
+ * Polyvertex (particles): positions dataset "<grp>/x" with dims [n][3]; attributes are
+ * scalars [n] or vectors [n][3]. For a 1D grid write a polyvertex of node positions too. */
+typedef struct ms_xdmf_attr {
+  const char *name;    /* attribute name shown in ParaView */
+  const char *dataset; /* path inside the .h5 */
+  int ncomp;           /* 1 scalar, 3 vector */
+  bool cell_centred;   /* lives on cells (1D grid) rather than nodes/points */
+} ms_xdmf_attr;
+ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
+                               size_t npoints, int dim, double time, size_t nattr,
+                               const ms_xdmf_attr *attr);
+
+/* ------------------------------------------------------------------------------------------ */
+/* MPI layer (core/par.c). Serial builds and tests use the same calls on one rank.            */
+
+ms_status par_init(int *argc, char ***argv, ms_ctx *ctx);
+void par_finalize(void);
+void par_barrier(void);
+double par_sum_double(double v);
+double par_max_double(double v);
+double par_min_double(double v);
+long par_sum_long(long v);
+int par_max_int(int v);
+/* All ranks agree on a status: the worst (non-zero) one wins. */
+ms_status par_agree_status(ms_status s);
+void par_bcast_doubles(double *v, size_t n, int root);
+
+#endif /* MSCALE_CORE_H */

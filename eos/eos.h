@@ -1,0 +1,100 @@
+/* eos.h — equations of state, materials, Hugoniots and mixtures (DESIGN.md §3).
+ *
+ * Internal units (DESIGN.md §2): ρ g/cm³, e kJ/g, P GPa, c km/s.
+ * An EOS is an opaque object with a small table of operations (eos/eos_impl.h); the grid calls
+ * the array form over whole material regions, the particles ask for the cold curve once at
+ * set-up to tabulate their pair potentials.
+ */
+#ifndef MSCALE_EOS_H
+#define MSCALE_EOS_H
+
+#include "core.h"
+
+typedef enum eos_kind {
+  EOS_MG_COLD,    /* Mie–Grüneisen, cold-curve form: rho0, c0, n, gamma */
+  EOS_MG_LINEAR,  /* Mie–Grüneisen, linear Us–up reference Hugoniot: rho0, c0, s, gamma0 */
+  EOS_IDEAL_GAS,  /* gamma, (optional) reference rho0 for the cold-curve-free gas */
+  EOS_TABLE_COLD, /* tabulated cold curve (delta, rho, eps_x, P_x) + Grüneisen gamma */
+  EOS_TABLE_FULL, /* full table P(rho, e), c(rho, e) on a rectangular (rho, e) grid */
+  EOS_LINEAR_ELASTIC /* small-strain elastic solid for the paper-000 tests: rho0, K (bulk modulus) */
+} eos_kind;
+
+typedef struct eos eos_t;
+
+/* Constructors validate their parameters (MS_ERR_INPUT with a message in *e if impossible).
+ * gamma_rho_const: if true, Γρ = Γ0ρ0 (Γ = Γ0 ρ0/ρ); otherwise Γ is constant. */
+eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const);
+eos_t *eos_create_mg_linear(double rho0, double c0, double s, double gamma0);
+eos_t *eos_create_ideal_gas(double gamma, double rho0);
+eos_t *eos_create_linear_elastic(double rho0, double bulk_modulus);
+/* Tabulated cold curve from a file in the Table-1 format (docs/eos.md); gamma as for MG. */
+eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_const, dk_errors *e);
+/* Full (rho, e) table from text or HDF5 (by extension .h5); format in docs/eos.md. */
+eos_t *eos_create_table_full(const char *path, dk_errors *e);
+/* Build a full table by sampling another EOS on a grid (used by tests and `mscale eos-table`). */
+eos_t *eos_create_table_from(const eos_t *src, double rho_min, double rho_max, size_t nrho,
+                             double e_min, double e_max, size_t ne);
+void eos_destroy(eos_t *eos);
+
+eos_kind eos_get_kind(const eos_t *eos);
+const char *eos_kind_name(eos_kind k);
+double eos_rho0(const eos_t *eos);     /* reference density (g/cm³) */
+double eos_c0(const eos_t *eos);       /* reference (bulk) sound speed at rho0, e = 0 (km/s) */
+bool eos_has_cold_curve(const eos_t *eos);
+
+/* Single-state queries. */
+double eos_pressure(const eos_t *eos, double rho, double e);
+double eos_sound_speed(const eos_t *eos, double rho, double e);
+/* Cold curve: P_x(δ) and ε_x(δ), δ = ρ/ρ0 (DESIGN.md §3). NaN if the EOS has none. */
+double eos_cold_pressure(const eos_t *eos, double delta);
+double eos_cold_energy(const eos_t *eos, double delta);
+/* Temperature if the EOS knows it, else NaN. */
+double eos_temperature(const eos_t *eos, double rho, double e);
+
+/* Array form for the grid's hot loop: p[i], c[i] (c may be NULL) for i < n.
+ * Returns MS_ERR_UNSTABLE if any state is outside the EOS's domain (index in *bad). */
+ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *e, double *p,
+                   double *c, size_t *bad);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Materials: the `materials:` list of a deck.                                                  */
+
+typedef struct eos_material {
+  char *name;
+  eos_t *eos;
+  /* Optional strength/elastic data used by the particle models (0 if not given). */
+  double shear_modulus; /* G, GPa */
+} eos_material;
+
+typedef struct eos_materials {
+  size_t n;
+  eos_material *m;
+} eos_materials;
+
+/* Read `materials:` from the deck root; every problem goes to *e. Returns NULL only if the
+ * section is absent or not a list (error recorded). */
+eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e);
+/* Look a material up by name; records "unknown material 'x' (known: a, b)" at `where`. */
+const eos_material *eos_materials_find(const eos_materials *mats, const char *name,
+                                       dk_errors *e, const dk_doc *doc, const dk_node *where);
+void eos_materials_free(eos_materials *mats);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Hugoniot (Rankine–Hugoniot jump conditions from an initial state rho0, e0, p0).             */
+
+typedef struct eos_hugoniot_point {
+  double up, us, p, rho, e;
+} eos_hugoniot_point;
+
+/* Solve the jump conditions for each particle velocity up[i] > 0 (KINSOL, safeguarded by a
+ * bracketing fallback). MS_ERR_SOLVER if a point cannot be found (index reported via log). */
+ms_status eos_hugoniot(const eos_t *eos, double rho0, double e0, size_t n, const double *up,
+                       eos_hugoniot_point *out);
+
+/* Kuropatenko mixture rule (paper 002 §1.2): 1/(D − u) = Σ α_i/(D_i − u_i), with equal pressure
+ * in every component. Given the mixture particle velocity u (the components' u_i follow from
+ * pressure equilibrium), returns D. alpha = volume fractions (sum 1). */
+ms_status eos_kuropatenko(size_t ncomp, const eos_t *const *comp, const double *alpha, double u,
+                          double *D, double *p);
+
+#endif /* MSCALE_EOS_H */
