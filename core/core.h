@@ -101,7 +101,7 @@ typedef enum ms_dim {
   MS_DIM_VELOCITY,     /* km/s = cm/10µs */
   MS_DIM_PRESSURE,     /* GPa */
   MS_DIM_SPEC_ENERGY,  /* kJ/g = (km/s)² */
-  MS_DIM_ENERGY,       /* g·cm²/(10µs)² = 1e5 J... see ms_unit_label */
+  MS_DIM_ENERGY,       /* g·cm²/(10µs)² = kJ */
   MS_DIM_VISCOSITY,    /* g/(cm·10µs) */
   MS_DIM_TEMPERATURE,  /* K */
   MS_DIM_COUNT
@@ -256,8 +256,9 @@ bool ms_h5_exists(ms_h5r *h, const char *name);
 void ms_h5_close_read(ms_h5r *h);
 
 /* XDMF sidecar describing datasets in an HDF5 file so ParaView can open it.
- * Polyvertex (particles): positions dataset "<grp>/x" with dims [n][3]; attributes are
- * scalars [n] or vectors [n][3]. For a 1D grid write a polyvertex of node positions too. */
+ * Points (particles): positions dataset `coords` with dims [n][dim], dim 2 or 3; attributes
+ * are scalars [n] or vectors [n][3]. A 1D grid writes node positions as [n][3] = (x, 0, 0);
+ * if any attribute is cell_centred ([n-1] values) the points are joined into a polyline. */
 typedef struct ms_xdmf_attr {
   const char *name;    /* attribute name shown in ParaView */
   const char *dataset; /* path inside the .h5 */

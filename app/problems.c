@@ -1,0 +1,95 @@
+/* The problem types a deck can describe (`problem:` at top level) and the deck → materials →
+ * problem reading that `run` and `check` share. Each problem type is a module's
+ * read/run/free triple; its deck section has the same name as the type. */
+#include "commands.h"
+
+#include <stdlib.h>
+#include <string.h>
+#ifdef MSCALE_HAVE_CONTINUUM
+#include "cont.h"
+#endif
+#ifdef MSCALE_HAVE_PARTICLES
+#include "ptl.h"
+#endif
+
+typedef void *(*problem_read_fn)(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
+typedef ms_status (*problem_run_fn)(ms_ctx *, void *);
+typedef void (*problem_free_fn)(void *);
+
+typedef struct problem_type {
+  const char *name, *summary;
+  problem_read_fn read;
+  problem_run_fn run;
+  problem_free_fn free;
+} problem_type;
+
+/* Built in: Hugoniot curves of deck materials (app/problem_hugoniot.c). */
+void *hugoniot_problem_read(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
+ms_status hugoniot_problem_run(ms_ctx *, void *);
+void hugoniot_problem_free(void *);
+
+static const problem_type problem_types[] = {
+    {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", hugoniot_problem_read,
+     hugoniot_problem_run, hugoniot_problem_free},
+#ifdef MSCALE_HAVE_CONTINUUM
+    {"continuum", "1D Lagrangian gas dynamics (cross scheme)", (problem_read_fn)cont_problem_read,
+     (problem_run_fn)cont_problem_run, (problem_free_fn)cont_problem_free},
+#endif
+#ifdef MSCALE_HAVE_PARTICLES
+    {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)",
+     (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
+     (problem_free_fn)cd_problem_free},
+    {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes",
+     (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
+     (problem_free_fn)dm_problem_free},
+#endif
+};
+enum { N_PROBLEM_TYPES = sizeof problem_types / sizeof problem_types[0] };
+
+void app_print_problem_types(FILE *f) {
+  for (int i = 0; i < N_PROBLEM_TYPES; i++)
+    fprintf(f, "  %-18s %s\n", problem_types[i].name, problem_types[i].summary);
+}
+
+ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e) {
+  memset(d, 0, sizeof *d);
+  d->problem_kind = -1;
+  d->doc = dk_load(path, e);
+  if (!d->doc) return MS_ERR_INPUT;
+  dk_read_units(d->doc, e);
+  const dk_node *root = dk_root(d->doc);
+
+  const char *names[N_PROBLEM_TYPES + 1];
+  for (int i = 0; i < N_PROBLEM_TYPES; i++) names[i] = problem_types[i].name;
+  names[N_PROBLEM_TYPES] = NULL;
+  int kind = -1;
+  bool kind_ok = dk_read_enum(e, d->doc, root, "problem", true, 0, names, &kind);
+
+  d->mats = eos_materials_read(d->doc, e);
+  if (kind_ok && d->mats) {
+    const problem_type *pt = &problem_types[kind];
+    const dk_node *section = dk_get(root, pt->name);
+    if (!section)
+      dk_error(e, d->doc, root, "problem '%s' needs a top-level '%s:' section", pt->name,
+               pt->name);
+    else if (dk_expect_map(e, d->doc, section, pt->name)) {
+      d->problem = pt->read(d->doc, section, d->mats, e);
+      d->problem_kind = kind;
+    }
+  }
+  /* keys written for other problem types or misspelt: report them all */
+  dk_report_unused(e, d->doc);
+  return e->n ? MS_ERR_INPUT : MS_OK;
+}
+
+ms_status app_deck_run(ms_ctx *ctx, app_deck *d) {
+  if (d->problem_kind < 0 || !d->problem) return MS_ERR_INTERNAL;
+  return problem_types[d->problem_kind].run(ctx, d->problem);
+}
+
+void app_deck_free(app_deck *d) {
+  if (d->problem && d->problem_kind >= 0) problem_types[d->problem_kind].free(d->problem);
+  eos_materials_free(d->mats);
+  dk_free(d->doc);
+  memset(d, 0, sizeof *d);
+}

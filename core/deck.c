@@ -1,0 +1,495 @@
+/* Deck tree: libyaml's document model copied into nodes that remember their position, their
+ * path in the deck (for messages) and which keys a reader asked for (for unknown-key reports).
+ */
+#include "core.h"
+#include "deck_impl.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <yaml.h>
+
+/* Guards against alias bombs and runaway nesting in hostile decks. */
+enum { DK_MAX_DEPTH = 64, DK_MAX_NODES = 1000000 };
+
+/* ------------------------------------------------------------------------------------------ */
+/* Errors                                                                                      */
+
+void dk_errors_init(dk_errors *e) { memset(e, 0, sizeof *e); }
+
+void dk_errors_free(dk_errors *e) {
+  for (size_t i = 0; i < e->n; i++) free(e->msg[i]);
+  free(e->msg);
+  memset(e, 0, sizeof *e);
+}
+
+void dk_errors_print(const dk_errors *e, FILE *f) {
+  for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[i]);
+}
+
+static void errors_push(dk_errors *e, char *msg) {
+  if (e->n == e->cap) {
+    e->cap = e->cap ? 2 * e->cap : 8;
+    e->msg = ms_realloc(e->msg, e->cap, sizeof *e->msg);
+  }
+  e->msg[e->n++] = msg;
+}
+
+static void verror_at(dk_errors *e, const char *file, int line, int col, const char *fmt,
+                      va_list ap) {
+  char body[1536];
+  vsnprintf(body, sizeof body, fmt, ap);
+  char *msg = ms_calloc(strlen(body) + strlen(file) + 48, 1);
+  if (line > 0)
+    sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
+  else
+    sprintf(msg, "%s: %s", file, body);
+  errors_push(e, msg);
+}
+
+void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  verror_at(e, file ? file : "<input>", line, col, fmt, ap);
+  va_end(ap);
+}
+
+void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, fmt, ap);
+  va_end(ap);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Nodes                                                                                       */
+
+dk_node *dk_node_new(dk_kind kind, int line, int col, const char *path) {
+  dk_node *n = ms_calloc(1, sizeof *n);
+  n->kind = kind;
+  n->line = line;
+  n->col = col;
+  n->path = ms_strdup(path);
+  return n;
+}
+
+static void node_free(dk_node *n) {
+  if (!n) return;
+  for (size_t i = 0; i < n->n; i++) {
+    node_free(n->items[i]);
+    if (n->keys) free(n->keys[i]);
+  }
+  for (size_t i = 0; i < n->nasked; i++) free(n->asked[i]);
+  free(n->asked);
+  free(n->items);
+  free(n->keys);
+  free(n->used);
+  free(n->is_default);
+  free(n->value);
+  free(n->path);
+  free(n);
+}
+
+void dk_node_append(dk_node *parent, const char *key, dk_node *child, bool used, bool is_default) {
+  if (parent->n == parent->cap) {
+    parent->cap = parent->cap ? 2 * parent->cap : 4;
+    parent->items = ms_realloc(parent->items, parent->cap, sizeof *parent->items);
+    if (parent->kind == DK_MAP) {
+      parent->keys = ms_realloc(parent->keys, parent->cap, sizeof *parent->keys);
+      parent->used = ms_realloc(parent->used, parent->cap, sizeof *parent->used);
+      parent->is_default = ms_realloc(parent->is_default, parent->cap, sizeof *parent->is_default);
+    }
+  }
+  size_t i = parent->n++;
+  parent->items[i] = child;
+  if (parent->kind == DK_MAP) {
+    parent->keys[i] = ms_strdup(key);
+    parent->used[i] = used;
+    parent->is_default[i] = is_default;
+  }
+}
+
+char *dk_child_path(const char *parent, const char *key, size_t index) {
+  char idx[32];
+  snprintf(idx, sizeof idx, "[%zu]", index);
+  const char *sep = key && parent[0] ? "." : "";
+  const char *tail = key ? key : idx;
+  size_t n = strlen(parent) + strlen(sep) + strlen(tail) + 1;
+  char *p = ms_calloc(n, 1);
+  snprintf(p, n, "%s%s%s", parent, sep, tail);
+  return p;
+}
+
+typedef struct build_state {
+  yaml_document_t *ydoc;
+  dk_doc *doc;
+  dk_errors *e;
+  size_t nnodes;
+  bool failed;
+} build_state;
+
+static dk_node *build(build_state *st, int index, const char *path, int depth) {
+  yaml_node_t *y = yaml_document_get_node(st->ydoc, index);
+  if (!y || st->failed) return NULL;
+  int line = (int)y->start_mark.line + 1, col = (int)y->start_mark.column + 1;
+  if (depth > DK_MAX_DEPTH || ++st->nnodes > DK_MAX_NODES) {
+    dk_error_at(st->e, st->doc->file, line, col,
+                "the deck nests deeper than %d levels or expands to more than %d nodes "
+                "(recursive or exploding aliases?)",
+                DK_MAX_DEPTH, DK_MAX_NODES);
+    st->failed = true;
+    return NULL;
+  }
+  switch (y->type) {
+  case YAML_SCALAR_NODE: {
+    dk_node *n = dk_node_new(DK_SCALAR, line, col, path);
+    n->value = ms_calloc(y->data.scalar.length + 1, 1);
+    memcpy(n->value, y->data.scalar.value, y->data.scalar.length);
+    if (strlen(n->value) != y->data.scalar.length) {
+      dk_error_at(st->e, st->doc->file, line, col, "%s: a value contains a NUL character",
+                  path[0] ? path : "deck");
+    }
+    n->quoted = y->data.scalar.style == YAML_SINGLE_QUOTED_SCALAR_STYLE ||
+                y->data.scalar.style == YAML_DOUBLE_QUOTED_SCALAR_STYLE;
+    return n;
+  }
+  case YAML_SEQUENCE_NODE: {
+    dk_node *n = dk_node_new(DK_SEQ, line, col, path);
+    size_t i = 0;
+    for (yaml_node_item_t *it = y->data.sequence.items.start; it < y->data.sequence.items.top;
+         it++, i++) {
+      char *cp = dk_child_path(path, NULL, i);
+      dk_node *c = build(st, *it, cp, depth + 1);
+      free(cp);
+      if (!c) break;
+      dk_node_append(n, NULL, c, false, false);
+    }
+    return n;
+  }
+  case YAML_MAPPING_NODE: {
+    dk_node *n = dk_node_new(DK_MAP, line, col, path);
+    for (yaml_node_pair_t *pr = y->data.mapping.pairs.start; pr < y->data.mapping.pairs.top; pr++) {
+      yaml_node_t *k = yaml_document_get_node(st->ydoc, pr->key);
+      if (!k) continue;
+      int kl = (int)k->start_mark.line + 1, kc = (int)k->start_mark.column + 1;
+      if (k->type != YAML_SCALAR_NODE) {
+        dk_error_at(st->e, st->doc->file, kl, kc, "%s: a key must be a plain name, not a %s",
+                    path[0] ? path : "deck", k->type == YAML_MAPPING_NODE ? "mapping" : "list");
+        continue;
+      }
+      char key[256];
+      size_t kn = k->data.scalar.length < sizeof key - 1 ? k->data.scalar.length : sizeof key - 1;
+      memcpy(key, k->data.scalar.value, kn);
+      key[kn] = 0;
+      bool dup = false;
+      for (size_t j = 0; j < n->n; j++)
+        if (!strcmp(n->keys[j], key)) dup = true;
+      if (dup) {
+        dk_error_at(st->e, st->doc->file, kl, kc, "%s: key '%s' appears twice",
+                    path[0] ? path : "deck", key);
+        continue;
+      }
+      char *cp = dk_child_path(path, key, 0);
+      dk_node *c = build(st, pr->value, cp, depth + 1);
+      free(cp);
+      if (!c) break;
+      dk_node_append(n, key, c, false, false);
+    }
+    return n;
+  }
+  default:
+    return NULL;
+  }
+}
+
+static char *dir_of(const char *path) {
+  const char *slash = strrchr(path, '/');
+  if (!slash) return ms_strdup(".");
+  if (slash == path) return ms_strdup("/");
+  char *d = ms_calloc((size_t)(slash - path) + 1, 1);
+  memcpy(d, path, (size_t)(slash - path));
+  return d;
+}
+
+static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const char *dir,
+                                dk_errors *e) {
+  dk_doc *doc = ms_calloc(1, sizeof *doc);
+  doc->file = ms_strdup(name);
+  doc->dir = ms_strdup(dir);
+  doc->units = MS_UNITS_INTERNAL;
+  yaml_document_t ydoc;
+  if (!yaml_parser_load(parser, &ydoc)) {
+    int line = (int)parser->problem_mark.line + 1, col = (int)parser->problem_mark.column + 1;
+    dk_error_at(e, name, line, col, "YAML syntax error: %s%s%s",
+                parser->problem ? parser->problem : "cannot parse",
+                parser->context ? " " : "", parser->context ? parser->context : "");
+    dk_free(doc);
+    return NULL;
+  }
+  build_state st = {.ydoc = &ydoc, .doc = doc, .e = e};
+  yaml_node_t *root = yaml_document_get_root_node(&ydoc);
+  if (!root) {
+    doc->root = dk_node_new(DK_MAP, 1, 1, "");
+  } else {
+    doc->root = build(&st, 1, "", 0);
+    if (!doc->root || st.failed) {
+      yaml_document_delete(&ydoc);
+      dk_free(doc);
+      return NULL;
+    }
+    if (doc->root->kind != DK_MAP) {
+      dk_error(e, doc, doc->root, "a deck must be a mapping of keys (e.g. 'materials:'), "
+                                  "found a %s",
+               doc->root->kind == DK_SEQ ? "list" : "single value");
+      yaml_document_delete(&ydoc);
+      dk_free(doc);
+      return NULL;
+    }
+  }
+  yaml_document_delete(&ydoc);
+  /* A second YAML document in the same file is almost certainly a mistake. */
+  yaml_document_t extra;
+  if (yaml_parser_load(parser, &extra)) {
+    yaml_node_t *r = yaml_document_get_root_node(&extra);
+    if (r) dk_error_at(e, name, (int)r->start_mark.line + 1, (int)r->start_mark.column + 1,
+                       "a deck holds one YAML document; found a second one ('---')");
+    yaml_document_delete(&extra);
+  } else {
+    int line = (int)parser->problem_mark.line + 1, col = (int)parser->problem_mark.column + 1;
+    dk_error_at(e, name, line, col, "YAML syntax error: %s",
+                parser->problem ? parser->problem : "cannot parse");
+  }
+  return doc;
+}
+
+dk_doc *dk_load(const char *path, dk_errors *e) {
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    dk_error_at(e, path, 0, 0, "cannot open the deck file");
+    return NULL;
+  }
+  yaml_parser_t parser;
+  yaml_parser_initialize(&parser);
+  yaml_parser_set_input_file(&parser, f);
+  char *dir = dir_of(path);
+  dk_doc *doc = load_from_parser(&parser, path, dir, e);
+  free(dir);
+  yaml_parser_delete(&parser);
+  fclose(f);
+  return doc;
+}
+
+dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e) {
+  yaml_parser_t parser;
+  yaml_parser_initialize(&parser);
+  yaml_parser_set_input_string(&parser, (const unsigned char *)text, strlen(text));
+  dk_doc *doc = load_from_parser(&parser, name ? name : "<string>", ".", e);
+  yaml_parser_delete(&parser);
+  return doc;
+}
+
+void dk_free(dk_doc *doc) {
+  if (!doc) return;
+  node_free(doc->root);
+  free(doc->file);
+  free(doc->dir);
+  free(doc);
+}
+
+const dk_node *dk_root(const dk_doc *doc) { return doc->root; }
+const char *dk_file(const dk_doc *doc) { return doc->file; }
+const char *dk_dir(const dk_doc *doc) { return doc->dir; }
+ms_unit_system dk_units(const dk_doc *doc) { return doc->units; }
+
+char *dk_resolve_path(const dk_doc *doc, const char *path) {
+  if (path[0] == '/' || !doc->dir[0]) return ms_strdup(path);
+  size_t n = strlen(doc->dir) + strlen(path) + 2;
+  char *p = ms_calloc(n, 1);
+  snprintf(p, n, "%s/%s", doc->dir, path);
+  return p;
+}
+
+dk_kind dk_node_kind(const dk_node *n) { return n->kind; }
+int dk_node_line(const dk_node *n) { return n->line; }
+int dk_node_col(const dk_node *n) { return n->col; }
+const char *dk_scalar(const dk_node *n) { return n && n->kind == DK_SCALAR ? n->value : NULL; }
+size_t dk_seq_len(const dk_node *n) { return n && n->kind == DK_SEQ ? n->n : 0; }
+const dk_node *dk_seq_at(const dk_node *n, size_t i) {
+  return n && n->kind == DK_SEQ && i < n->n ? n->items[i] : NULL;
+}
+size_t dk_map_len(const dk_node *n) { return n && n->kind == DK_MAP ? n->n : 0; }
+const char *dk_map_key(const dk_node *n, size_t i) {
+  return n && n->kind == DK_MAP && i < n->n ? n->keys[i] : NULL;
+}
+const dk_node *dk_map_value(const dk_node *n, size_t i) {
+  if (!n || n->kind != DK_MAP || i >= n->n) return NULL;
+  ((dk_node *)n)->used[i] = true;
+  return n->items[i];
+}
+
+static void remember_asked(dk_node *map, const char *key) {
+  for (size_t i = 0; i < map->nasked; i++)
+    if (!strcmp(map->asked[i], key)) return;
+  map->asked = ms_realloc(map->asked, map->nasked + 1, sizeof *map->asked);
+  map->asked[map->nasked++] = ms_strdup(key);
+}
+
+const dk_node *dk_get(const dk_node *cmap, const char *key) {
+  if (!cmap || cmap->kind != DK_MAP) return NULL;
+  dk_node *map = (dk_node *)cmap; /* asking for a key is recorded, the content is not changed */
+  remember_asked(map, key);
+  for (size_t i = 0; i < map->n; i++) {
+    if (!strcmp(map->keys[i], key)) {
+      map->used[i] = true;
+      return map->items[i];
+    }
+  }
+  return NULL;
+}
+
+static const char *kind_word(dk_kind k) {
+  return k == DK_MAP ? "a mapping" : k == DK_SEQ ? "a list" : "a single value";
+}
+
+bool dk_expect_map(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what) {
+  if (n && n->kind == DK_MAP) return true;
+  if (n)
+    dk_error(e, doc, n, "%s: expected a mapping of keys, found %s", what, kind_word(n->kind));
+  return false;
+}
+
+bool dk_expect_seq(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what) {
+  if (n && n->kind == DK_SEQ) return true;
+  if (n) dk_error(e, doc, n, "%s: expected a list, found %s", what, kind_word(n->kind));
+  return false;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Unknown keys                                                                                */
+
+static size_t edit_distance(const char *a, const char *b) {
+  size_t la = strlen(a), lb = strlen(b);
+  if (la > 63 || lb > 63) return 99;
+  size_t d[64][64];
+  for (size_t i = 0; i <= la; i++) d[i][0] = i;
+  for (size_t j = 0; j <= lb; j++) d[0][j] = j;
+  for (size_t i = 1; i <= la; i++)
+    for (size_t j = 1; j <= lb; j++) {
+      size_t sub = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+      size_t del = d[i - 1][j] + 1, ins = d[i][j - 1] + 1;
+      d[i][j] = sub < del ? (sub < ins ? sub : ins) : (del < ins ? del : ins);
+    }
+  return d[la][lb];
+}
+
+static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
+  if (n->kind == DK_SEQ) {
+    for (size_t i = 0; i < n->n; i++) report_unused(e, doc, n->items[i]);
+    return;
+  }
+  if (n->kind != DK_MAP) return;
+  for (size_t i = 0; i < n->n; i++) {
+    if (n->used[i]) {
+      report_unused(e, doc, n->items[i]);
+      continue;
+    }
+    char expected[1024] = "";
+    const char *best = NULL;
+    size_t best_d = 3;
+    for (size_t j = 0; j < n->nasked; j++) {
+      size_t len = strlen(expected);
+      snprintf(expected + len, sizeof expected - len, "%s%s", j ? ", " : "", n->asked[j]);
+      size_t dist = edit_distance(n->keys[i], n->asked[j]);
+      bool present = false;
+      for (size_t k = 0; k < n->n; k++)
+        if (!strcmp(n->keys[k], n->asked[j])) present = true;
+      if (dist < best_d && !present) {
+        best_d = dist;
+        best = n->asked[j];
+      }
+    }
+    const char *where = n->path[0] ? n->path : "top level";
+    if (best)
+      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (did you mean '%s'?)", where,
+               n->keys[i], best);
+    else if (n->nasked)
+      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (expected one of: %s)", where,
+               n->keys[i], expected);
+    else
+      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (not used by this problem)", where,
+               n->keys[i]);
+  }
+}
+
+void dk_report_unused(dk_errors *e, const dk_doc *doc) {
+  if (doc && doc->root) report_unused(e, doc, doc->root);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Resolved deck                                                                               */
+
+static bool needs_quotes(const char *s) {
+  if (!s[0]) return true;
+  if (strchr("-?:,[]{}#&*!|>'\"%@` ", s[0])) {
+    /* a leading '-' followed by a digit is a number */
+    if (!(s[0] == '-' && s[1] >= '0' && s[1] <= '9')) return true;
+  }
+  for (const char *c = s; *c; c++)
+    if (*c == ':' || *c == '#' || *c == '\n' || *c == '"' || *c == '\\' ||
+        (unsigned char)*c < 0x20)
+      return true;
+  size_t n = strlen(s);
+  return s[n - 1] == ' ';
+}
+
+static void emit_scalar(FILE *f, const dk_node *n) {
+  const char *s = n->value;
+  if (!n->quoted && !needs_quotes(s)) {
+    fputs(s, f);
+    return;
+  }
+  fputc('"', f);
+  for (const char *c = s; *c; c++) {
+    if (*c == '"' || *c == '\\')
+      fprintf(f, "\\%c", *c);
+    else if (*c == '\n')
+      fputs("\\n", f);
+    else if ((unsigned char)*c < 0x20)
+      fprintf(f, "\\x%02x", (unsigned char)*c);
+    else
+      fputc(*c, f);
+  }
+  fputc('"', f);
+}
+
+static void emit(FILE *f, const dk_node *n, int indent) {
+  for (size_t i = 0; i < n->n; i++) {
+    const dk_node *c = n->items[i];
+    if (n->kind == DK_MAP)
+      fprintf(f, "%*s%s:", indent, "", n->keys[i]);
+    else
+      fprintf(f, "%*s-", indent, "");
+    if (c->kind == DK_SCALAR) {
+      fputc(' ', f);
+      emit_scalar(f, c);
+      if (n->kind == DK_MAP && n->is_default[i]) fputs("  # default", f);
+      fputc('\n', f);
+    } else if (c->n == 0) {
+      fputs(c->kind == DK_MAP ? " {}\n" : " []\n", f);
+    } else {
+      fputc('\n', f);
+      emit(f, c, indent + 2);
+    }
+  }
+}
+
+ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
+  ms_afile af;
+  ms_status s = ms_afile_open(&af, path);
+  if (s) return s;
+  fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING,
+          doc->file);
+  fprintf(af.f, "# Every key the run used, with defaults filled in (marked '# default').\n");
+  emit(af.f, doc->root, 0);
+  return ms_afile_commit(&af);
+}

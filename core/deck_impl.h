@@ -1,0 +1,32 @@
+/* Private layout of the deck tree (core/deck.c, core/deck_read.c). */
+#ifndef MSCALE_DECK_IMPL_H
+#define MSCALE_DECK_IMPL_H
+
+#include "core.h"
+
+struct dk_node {
+  dk_kind kind;
+  int line, col;   /* 1-based position in the deck */
+  char *path;      /* e.g. "materials[0].eos.rho0", for messages */
+  char *value;     /* scalar text */
+  bool quoted;     /* scalar was quoted in the deck */
+  size_t n, cap;   /* children */
+  dk_node **items; /* map values or list items */
+  char **keys;     /* map keys */
+  bool *used;      /* map: a reader asked for this key */
+  bool *is_default;/* map: the value was filled in by a reader's default */
+  char **asked;    /* map: every key a reader asked for (for "did you mean") */
+  size_t nasked;
+};
+
+struct dk_doc {
+  char *file, *dir;
+  dk_node *root;
+  ms_unit_system units;
+};
+
+dk_node *dk_node_new(dk_kind kind, int line, int col, const char *path);
+void dk_node_append(dk_node *parent, const char *key, dk_node *child, bool used, bool is_default);
+char *dk_child_path(const char *parent, const char *key, size_t index);
+
+#endif

@@ -1,0 +1,234 @@
+/* HDF5 output (temporary name + rename) and input for post-processing. */
+#include "core.h"
+
+#include <hdf5.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct ms_h5 {
+  hid_t file;
+  char *path, *tmp_path;
+};
+
+struct ms_h5r {
+  hid_t file;
+  char *path;
+};
+
+static void quiet_hdf5(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
+
+ms_h5 *ms_h5_create(const char *path) {
+  quiet_hdf5();
+  ms_h5 *h = ms_calloc(1, sizeof *h);
+  h->path = ms_strdup(path);
+  h->tmp_path = ms_calloc(strlen(path) + 6, 1);
+  sprintf(h->tmp_path, "%s.part", path);
+  h->file = H5Fcreate(h->tmp_path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (h->file < 0) {
+    fprintf(stderr, "mscale: cannot create HDF5 file '%s'\n", h->tmp_path);
+    free(h->path);
+    free(h->tmp_path);
+    free(h);
+    return NULL;
+  }
+  return h;
+}
+
+static hid_t link_props(void) {
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  return lcpl;
+}
+
+static ms_status write_units(hid_t obj, const char *units) {
+  if (!units) return MS_OK;
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, strlen(units) + 1);
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t attr = H5Acreate2(obj, "units", type, space, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = attr >= 0 ? H5Awrite(attr, type, units) : -1;
+  if (attr >= 0) H5Aclose(attr);
+  H5Sclose(space);
+  H5Tclose(type);
+  return rc < 0 ? MS_ERR_IO : MS_OK;
+}
+
+static ms_status write_dataset(ms_h5 *h, const char *name, int rank, const hsize_t *dims,
+                               hid_t memtype, hid_t filetype, const void *data, const char *units) {
+  hid_t space = H5Screate_simple(rank, dims, NULL);
+  hid_t lcpl = link_props();
+  hid_t ds = H5Dcreate2(h->file, name, filetype, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = -1;
+  if (ds >= 0) {
+    rc = H5Dwrite(ds, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+    if (rc >= 0 && write_units(ds, units)) rc = -1;
+    H5Dclose(ds);
+  }
+  H5Pclose(lcpl);
+  H5Sclose(space);
+  if (rc < 0) {
+    fprintf(stderr, "mscale: cannot write dataset '%s' to '%s'\n", name, h->tmp_path);
+    return MS_ERR_IO;
+  }
+  return MS_OK;
+}
+
+ms_status ms_h5_write_doubles(ms_h5 *h, const char *name, size_t n0, size_t n1, const double *data,
+                              const char *units) {
+  hsize_t dims[2] = {n0, n1};
+  return write_dataset(h, name, n1 > 1 ? 2 : 1, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, data,
+                       units);
+}
+
+ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *data) {
+  hsize_t dims[1] = {n};
+  return write_dataset(h, name, 1, dims, H5T_NATIVE_INT64, H5T_STD_I64LE, data, NULL);
+}
+
+static hid_t open_object(hid_t file, const char *obj) {
+  if (!obj || !obj[0] || !strcmp(obj, "/")) return H5Oopen(file, "/", H5P_DEFAULT);
+  if (H5Lexists(file, obj, H5P_DEFAULT) <= 0) {
+    hid_t lcpl = link_props();
+    hid_t g = H5Gcreate2(file, obj, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+    H5Pclose(lcpl);
+    return g;
+  }
+  return H5Oopen(file, obj, H5P_DEFAULT);
+}
+
+ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v) {
+  hid_t o = open_object(h->file, obj);
+  if (o < 0) return MS_ERR_IO;
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(o, attr, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = a >= 0 ? H5Awrite(a, H5T_NATIVE_DOUBLE, &v) : -1;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Oclose(o);
+  return rc < 0 ? MS_ERR_IO : MS_OK;
+}
+
+ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const char *v) {
+  hid_t o = open_object(h->file, obj);
+  if (o < 0) return MS_ERR_IO;
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, strlen(v) + 1);
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(o, attr, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = a >= 0 ? H5Awrite(a, type, v) : -1;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Oclose(o);
+  return rc < 0 ? MS_ERR_IO : MS_OK;
+}
+
+ms_status ms_h5_close(ms_h5 *h) {
+  if (!h) return MS_ERR_IO;
+  ms_status s = H5Fclose(h->file) < 0 ? MS_ERR_IO : MS_OK;
+  if (!s && rename(h->tmp_path, h->path) != 0) s = MS_ERR_IO;
+  if (s) {
+    fprintf(stderr, "mscale: cannot complete HDF5 file '%s'\n", h->path);
+    remove(h->tmp_path);
+  }
+  free(h->path);
+  free(h->tmp_path);
+  free(h);
+  return s;
+}
+
+void ms_h5_abort(ms_h5 *h) {
+  if (!h) return;
+  H5Fclose(h->file);
+  remove(h->tmp_path);
+  free(h->path);
+  free(h->tmp_path);
+  free(h);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+
+ms_h5r *ms_h5_open_read(const char *path, dk_errors *e) {
+  quiet_hdf5();
+  if (H5Fis_hdf5(path) <= 0) {
+    dk_error_at(e, path, 0, 0, "not a readable HDF5 file");
+    return NULL;
+  }
+  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) {
+    dk_error_at(e, path, 0, 0, "cannot open the HDF5 file");
+    return NULL;
+  }
+  ms_h5r *h = ms_calloc(1, sizeof *h);
+  h->file = f;
+  h->path = ms_strdup(path);
+  return h;
+}
+
+bool ms_h5_exists(ms_h5r *h, const char *name) {
+  /* H5Lexists needs every intermediate group to exist: walk the path. */
+  char buf[512];
+  snprintf(buf, sizeof buf, "%s", name);
+  for (char *p = buf + 1; *p; p++) {
+    if (*p == '/') {
+      *p = 0;
+      if (H5Lexists(h->file, buf, H5P_DEFAULT) <= 0) return false;
+      *p = '/';
+    }
+  }
+  return H5Lexists(h->file, buf, H5P_DEFAULT) > 0;
+}
+
+ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
+                             dk_errors *e) {
+  *data = NULL;
+  *n0 = *n1 = 0;
+  if (!ms_h5_exists(h, name)) {
+    dk_error_at(e, h->path, 0, 0, "dataset '%s' is missing", name);
+    return MS_ERR_INPUT;
+  }
+  hid_t ds = H5Dopen2(h->file, name, H5P_DEFAULT);
+  if (ds < 0) {
+    dk_error_at(e, h->path, 0, 0, "'%s' is not a dataset", name);
+    return MS_ERR_INPUT;
+  }
+  hid_t space = H5Dget_space(ds);
+  hid_t type = H5Dget_type(ds);
+  int rank = H5Sget_simple_extent_ndims(space);
+  hsize_t dims[2] = {0, 1};
+  ms_status s = MS_OK;
+  if (rank < 1 || rank > 2 || H5Tget_class(type) != H5T_FLOAT) {
+    dk_error_at(e, h->path, 0, 0, "dataset '%s' must be a 1D or 2D floating-point array", name);
+    s = MS_ERR_INPUT;
+  } else {
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    if (rank == 1) dims[1] = 1;
+    /* refuse absurd sizes before allocating (a damaged or hostile file) */
+    if (dims[0] > ((hsize_t)1 << 34) / (dims[1] ? dims[1] : 1)) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' is implausibly large", name);
+      s = MS_ERR_INPUT;
+    } else {
+      double *buf = ms_calloc((size_t)(dims[0] * dims[1]), sizeof *buf);
+      if (H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+        dk_error_at(e, h->path, 0, 0, "cannot read dataset '%s'", name);
+        free(buf);
+        s = MS_ERR_INPUT;
+      } else {
+        *data = buf;
+        *n0 = (size_t)dims[0];
+        *n1 = (size_t)dims[1];
+      }
+    }
+  }
+  H5Tclose(type);
+  H5Sclose(space);
+  H5Dclose(ds);
+  return s;
+}
+
+void ms_h5_close_read(ms_h5r *h) {
+  if (!h) return;
+  H5Fclose(h->file);
+  free(h->path);
+  free(h);
+}

@@ -1,0 +1,64 @@
+/* The MPI layer: the only file of mscale that includes <mpi.h>. Every collective here is a
+ * thin typed wrapper; physics code calls these and never MPI directly. */
+#include "core.h"
+
+#include <mpi.h>
+
+static bool mpi_started_here = false;
+
+ms_status par_init(int *argc, char ***argv, ms_ctx *ctx) {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) {
+    if (MPI_Init(argc, argv) != MPI_SUCCESS) return MS_ERR_INTERNAL;
+    mpi_started_here = true;
+  }
+  MPI_Comm_rank(MPI_COMM_WORLD, &ctx->rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ctx->size);
+  return MS_OK;
+}
+
+void par_finalize(void) {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (mpi_started_here && !finalized) MPI_Finalize();
+}
+
+static bool active(void) {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  return initialized && !finalized;
+}
+
+void par_barrier(void) {
+  if (active()) MPI_Barrier(MPI_COMM_WORLD);
+}
+
+static double reduce_double(double v, MPI_Op op) {
+  double r = v;
+  if (active()) MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, op, MPI_COMM_WORLD);
+  return r;
+}
+
+double par_sum_double(double v) { return reduce_double(v, MPI_SUM); }
+double par_max_double(double v) { return reduce_double(v, MPI_MAX); }
+double par_min_double(double v) { return reduce_double(v, MPI_MIN); }
+
+long par_sum_long(long v) {
+  long r = v;
+  if (active()) MPI_Allreduce(&v, &r, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  return r;
+}
+
+int par_max_int(int v) {
+  int r = v;
+  if (active()) MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  return r;
+}
+
+ms_status par_agree_status(ms_status s) { return (ms_status)par_max_int((int)s); }
+
+void par_bcast_doubles(double *v, size_t n, int root) {
+  if (active()) MPI_Bcast(v, (int)n, MPI_DOUBLE, root, MPI_COMM_WORLD);
+}
