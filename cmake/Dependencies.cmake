@@ -41,7 +41,7 @@ mscale_need(OpenMP_C_FOUND "libgomp1 (part of gcc)" "OpenMP")
 
 add_library(mscale_hdf5 INTERFACE)
 target_include_directories(mscale_hdf5 INTERFACE ${HDF5_C_INCLUDE_DIRS})
-target_link_libraries(mscale_hdf5 INTERFACE ${HDF5_C_LIBRARIES})
+target_link_libraries(mscale_hdf5 INTERFACE ${HDF5_C_LIBRARIES} MPI::MPI_C)
 target_compile_definitions(mscale_hdf5 INTERFACE ${HDF5_C_DEFINITIONS})
 
 if(MSCALE_TESTS)

@@ -193,6 +193,8 @@ static dk_node *build(build_state *st, int index, const char *path, int depth) {
       dk_node *c = build(st, pr->value, cp, depth + 1);
       free(cp);
       if (!c) break;
+      c->key_line = kl;
+      c->key_col = kc;
       dk_node_append(n, key, c, false, false);
     }
     return n;

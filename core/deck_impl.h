@@ -7,6 +7,7 @@
 struct dk_node {
   dk_kind kind;
   int line, col;   /* 1-based position in the deck */
+  int key_line, key_col; /* position of the key naming this node in its parent map (0: none) */
   char *path;      /* e.g. "materials[0].eos.rho0", for messages */
   char *value;     /* scalar text */
   bool quoted;     /* scalar was quoted in the deck */

@@ -19,7 +19,10 @@ static const char *where(const dk_node *map, const char *key, char *buf, size_t 
 
 static void missing(dk_errors *e, const dk_doc *doc, const dk_node *map, const char *key,
                     const char *expected) {
-  if (map && map->path[0])
+  if (map && map->path[0] && map->key_line > 0)
+    dk_error_at(e, doc->file, map->key_line, map->key_col, "%s: missing required key '%s' (%s)",
+                map->path, key, expected);
+  else if (map && map->path[0])
     dk_error(e, doc, map, "%s: missing required key '%s' (%s)", map->path, key, expected);
   else
     dk_error(e, doc, map, "missing required top-level key '%s' (%s)", key, expected);

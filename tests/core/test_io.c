@@ -1,0 +1,158 @@
+/* Output and input helpers: atomic files, tables with FILE:LINE errors, HDF5 round trip. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <cmocka.h>
+
+#include <hdf5.h>
+
+#include "core.h"
+
+static void write_file(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+}
+
+static bool has_error(const dk_errors *e, const char *needle) {
+  for (size_t i = 0; i < e->n; i++)
+    if (strstr(e->msg[i], needle)) return true;
+  return false;
+}
+
+/* An aborted write leaves neither the final file nor the temporary; a committed one replaces
+ * the old content only at commit. */
+static void test_atomic_file(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test_atomic.txt";
+  write_file(path, "finished\n");
+  ms_afile af;
+  assert_int_equal(ms_afile_open(&af, path), MS_OK);
+  fputs("partial", af.f);
+  fflush(af.f);
+  char buf[64] = "";
+  FILE *f = fopen(path, "r");
+  assert_non_null(fgets(buf, sizeof buf, f));
+  fclose(f);
+  assert_string_equal(buf, "finished\n"); /* still the old content while writing */
+  ms_afile_abort(&af);
+  assert_int_equal(access("/tmp/mscale_test_atomic.txt.part", F_OK), -1);
+  assert_int_equal(ms_afile_open(&af, path), MS_OK);
+  fputs("new\n", af.f);
+  assert_int_equal(ms_afile_commit(&af), MS_OK);
+  f = fopen(path, "r");
+  assert_non_null(fgets(buf, sizeof buf, f));
+  fclose(f);
+  assert_string_equal(buf, "new\n");
+  remove(path);
+}
+
+static void test_table_reader(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test_table.csv";
+  dk_errors e;
+  double *d;
+  size_t nr, nc;
+  write_file(path, "# comment\nt,u\n0, 1\n0.5 2\n1.0,3\n");
+  dk_errors_init(&e);
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_OK);
+  assert_int_equal(nr, 3);
+  assert_int_equal(nc, 2);
+  assert_true(d[4] == 1.0 && d[5] == 3.0);
+  free(d);
+  /* a truncated last row */
+  write_file(path, "0 1\n0.5 2\n1.0\n");
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "mscale_test_table.csv:3:1: expected 2 columns"));
+  /* a word in the data */
+  write_file(path, "0 1\n0.5 abc\n");
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "mscale_test_table.csv:2:5: expected a number, found 'abc'"));
+  /* NaN is not data */
+  write_file(path, "0 1\n0.5 nan\n");
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, ":2:1: column 2 is not a finite number"));
+  /* too few columns, empty file, missing file */
+  write_file(path, "1\n2\n");
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  write_file(path, "# nothing\n");
+  assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "no data rows"));
+  assert_int_equal(ms_read_table("/nonexistent/x.csv", 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "/nonexistent/x.csv: cannot open"));
+  dk_errors_free(&e);
+  remove(path);
+}
+
+static void test_hdf5_round_trip(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test.h5";
+  ms_h5 *h = ms_h5_create(path);
+  assert_non_null(h);
+  double x[6] = {1, 2, 3, 4, 5, 6};
+  int64_t id[3] = {7, 8, 9};
+  assert_int_equal(ms_h5_write_doubles(h, "/particles/x", 3, 2, x, "cm"), MS_OK);
+  assert_int_equal(ms_h5_write_ints(h, "/particles/id", 3, id), MS_OK);
+  assert_int_equal(ms_h5_attr_double(h, "/", "time", 0.25), MS_OK);
+  assert_int_equal(access("/tmp/mscale_test.h5.part", F_OK), 0); /* not final before close */
+  assert_int_equal(ms_h5_close(h), MS_OK);
+  assert_int_equal(access("/tmp/mscale_test.h5.part", F_OK), -1);
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_h5r *r = ms_h5_open_read(path, &e);
+  assert_non_null(r);
+  double *back;
+  size_t n0, n1;
+  assert_int_equal(ms_h5_read_doubles(r, "/particles/x", &back, &n0, &n1, &e), MS_OK);
+  assert_int_equal(n0, 3);
+  assert_int_equal(n1, 2);
+  assert_memory_equal(back, x, sizeof x);
+  free(back);
+  assert_false(ms_h5_exists(r, "/nothing/here"));
+  assert_int_equal(ms_h5_read_doubles(r, "/nothing/here", &back, &n0, &n1, &e), MS_ERR_INPUT);
+  assert_int_equal(ms_h5_read_doubles(r, "/particles/id", &back, &n0, &n1, &e), MS_ERR_INPUT);
+  ms_h5_close_read(r);
+  /* the units attribute is there for h5py users */
+  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t ds = H5Dopen2(f, "/particles/x", H5P_DEFAULT);
+  assert_true(H5Aexists(ds, "units") > 0);
+  H5Dclose(ds);
+  H5Fclose(f);
+  /* a file that is not HDF5 */
+  write_file("/tmp/mscale_test_not.h5", "hello");
+  assert_null(ms_h5_open_read("/tmp/mscale_test_not.h5", &e));
+  assert_true(has_error(&e, "not a readable HDF5 file"));
+  dk_errors_free(&e);
+  remove(path);
+  remove("/tmp/mscale_test_not.h5");
+}
+
+static void test_xdmf(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test.xmf";
+  ms_xdmf_attr a[2] = {{"velocity", "/particles/v", 3, false}, {"rho", "/cells/rho", 1, true}};
+  assert_int_equal(ms_xdmf_write_points(path, "snap.h5", "/particles/x", 4, 3, 1.5, 2, a), MS_OK);
+  FILE *f = fopen(path, "r");
+  char buf[8192];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  buf[n] = 0;
+  fclose(f);
+  assert_non_null(strstr(buf, "TopologyType=\"Polyline\" NumberOfElements=\"3\""));
+  assert_non_null(strstr(buf, "snap.h5:/particles/x"));
+  assert_non_null(strstr(buf, "Attribute Name=\"rho\" AttributeType=\"Scalar\" Center=\"Cell\""));
+  assert_non_null(strstr(buf, "<Time Value=\"1.5\"/>"));
+  remove(path);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_atomic_file), cmocka_unit_test(test_table_reader),
+      cmocka_unit_test(test_hdf5_round_trip), cmocka_unit_test(test_xdmf)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
