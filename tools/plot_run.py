@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""Turn an mscale run directory into PNG plots (written next to the data, under plots/).
+
+Usage: /usr/bin/python3 tools/plot_run.py OUTDIR
+
+Recognises the outputs of each problem type by file name and calls the matching plotter in
+tools/ (plot_*.py). Uses Debian's numpy, h5py and matplotlib only.
+"""
+import glob
+import importlib.util
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def read_csv(path):
+    """Read an mscale CSV: '#' comment lines (title, units), a header line, numeric rows."""
+    units = {}
+    with open(path) as f:
+        lines = [ln for ln in f]
+    comments = [ln[1:].strip() for ln in lines if ln.startswith("#")]
+    for c in comments:
+        if c.startswith("units:"):
+            for item in c[len("units:"):].split(","):
+                item = item.strip()
+                if "[" in item:
+                    name, unit = item.split("[", 1)
+                    units[name.strip()] = unit.rstrip("]")
+    body = [ln for ln in lines if not ln.startswith("#")]
+    names = body[0].strip().split(",")
+    data = np.loadtxt(body[1:], delimiter=",", ndmin=2)
+    return names, data, units, (comments[0] if comments else "")
+
+
+def label(name, units):
+    return f"{name} [{units[name]}]" if name in units else name
+
+
+def plot_hugoniots(outdir, plotdir):
+    files = sorted(glob.glob(os.path.join(outdir, "hugoniot_*.csv")))
+    if not files:
+        return []
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for path in files:
+        names, d, units, _ = read_csv(path)
+        col = {n: i for i, n in enumerate(names)}
+        mat = os.path.basename(path)[len("hugoniot_"):-4]
+        ax1.plot(d[:, col["up"]], d[:, col["Us"]], "o-", label=mat)
+        ax2.plot(d[:, col["rho"]], d[:, col["P"]], "o-", label=mat)
+    ax1.set_xlabel(label("up", units)); ax1.set_ylabel(label("Us", units)); ax1.legend()
+    ax2.set_xlabel(label("rho", units)); ax2.set_ylabel(label("P", units)); ax2.legend()
+    ax1.set_title("Shock velocity vs particle velocity"); ax2.set_title("Hugoniot P(rho)")
+    fig.tight_layout()
+    out = os.path.join(plotdir, "hugoniot.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
+
+
+def load_plugin(name):
+    path = os.path.join(HERE, name)
+    if not os.path.exists(path):
+        return None
+    spec = importlib.util.spec_from_file_location(name[:-3], path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def main():
+    if len(sys.argv) != 2 or sys.argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return 0 if len(sys.argv) == 2 else 2
+    outdir = sys.argv[1]
+    if not os.path.isdir(outdir):
+        print(f"plot_run: '{outdir}' is not a directory", file=sys.stderr)
+        return 2
+    plotdir = os.path.join(outdir, "plots")
+    os.makedirs(plotdir, exist_ok=True)
+    made = plot_hugoniots(outdir, plotdir)
+    # Plotters of the other modules: each offers plot_run(outdir, plotdir) -> list of files.
+    for plugin in ("plot_xt.py", "plot_particles.py", "plot_spectrum.py", "plot_coupled.py"):
+        mod = load_plugin(plugin)
+        if mod is not None and hasattr(mod, "plot_run"):
+            made += mod.plot_run(outdir, plotdir) or []
+    for m in made:
+        print(f"plot_run: wrote {m}")
+    if not made:
+        print(f"plot_run: nothing to plot in {outdir}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
