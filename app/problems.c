@@ -8,7 +8,7 @@
 #ifdef MSCALE_HAVE_CONTINUUM
 #include "cont.h"
 #endif
-#ifdef MSCALE_HAVE_PARTICLES
+#if defined(MSCALE_HAVE_PARTICLES_CD) || defined(MSCALE_HAVE_PARTICLES_DM)
 #include "ptl.h"
 #endif
 
@@ -35,10 +35,12 @@ static const problem_type problem_types[] = {
     {"continuum", "1D Lagrangian gas dynamics (cross scheme)", (problem_read_fn)cont_problem_read,
      (problem_run_fn)cont_problem_run, (problem_free_fn)cont_problem_free},
 #endif
-#ifdef MSCALE_HAVE_PARTICLES
+#ifdef MSCALE_HAVE_PARTICLES_CD
     {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)",
      (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
      (problem_free_fn)cd_problem_free},
+#endif
+#ifdef MSCALE_HAVE_PARTICLES_DM
     {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes",
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
      (problem_free_fn)dm_problem_free},
