@@ -13,8 +13,391 @@
 
 /* === Cluster dynamics (cd_) === */
 
+/* Cluster dynamics (paper 002, DESIGN.md §5.1): particles ("clusters") of size r0 on a close-packed
+ * lattice interact through pair potentials built from an EOS cold curve; docs/particles-cd.md.
+ * Units are the internal ones (g, cm, 10 µs: velocity km/s, energy kJ... see DESIGN.md §2).
+ *
+ * Generic particle storage (ptl_) comes first: structure-of-arrays, sized once. */
+
+enum {
+  PTL_DRIVEN = 1u,  /* moves with a prescribed velocity (piston); forces on it are only recorded */
+  PTL_SURFACE = 2u, /* tagged at set-up as the free-surface layer (free-surface velocity) */
+  PTL_REMOVED = 4u  /* left the run (not integrated, not listed) */
+};
+
+typedef struct ptl_state {
+  size_t n, cap;        /* particles in use / allocated (never grows during a run) */
+  int dim;              /* 3 (fcc) or 2 (triangular, plane strain: z == 0, vz == 0) */
+  double *x, *y, *z;    /* positions, cm */
+  double *vx, *vy, *vz; /* velocities, km/s */
+  double *fx, *fy, *fz; /* forces, g·cm/(10 µs)² */
+  double *mass;         /* g */
+  int64_t *gid;         /* global id (creation order) */
+  uint8_t *mat;         /* material index (< CD_MAX_MATERIALS) */
+  uint8_t *flags;       /* PTL_* bits */
+} ptl_state;
+
+ptl_state *ptl_state_create(size_t cap, int dim);
+void ptl_state_free(ptl_state *s);
+/* Append one particle at rest; returns its index, or (size_t)-1 if the capacity is exhausted. */
+size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat);
+/* Bytes held by the arrays above (for the memory-per-particle figure). */
+size_t ptl_state_bytes(const ptl_state *s);
+
+/* splitmix64 (the benchmark's generator): u_k in [0,1) is the k-th output (k from 0) of the
+ * generator started from `seed` (bench/cd_lammps, /work/shared/bench/cd_lammps.md). */
+double ptl_splitmix64_uniform(uint64_t seed, uint64_t k);
+
+/* ---- lattices ---- */
+typedef enum cd_lattice { CD_LATTICE_FCC = 0, CD_LATTICE_TRI2D } cd_lattice;
+
+/* Cluster mass and reference volume per particle for nearest-neighbour distance r0:
+ * fcc m = ρ0 r0³/√2; 2D triangular m = ρ0 (√3/2) r0² h, h = the plane-strain thickness. */
+double cd_cluster_volume(cd_lattice lat, double r0, double thickness);
+
+/* fcc lattice of nx×ny×nz cubic cells (cubic constant a = √2 r0) with the benchmark's order:
+ * basis atom fastest, then cell x, y, z; basis (0,0,0), (½,½,0), (½,0,½), (0,½,½); positions
+ * (cell + basis + shift)·a + origin. Appends to s with the given mass/material. */
+size_t cd_lattice_fcc(ptl_state *s, int nx, int ny, int nz, const double shift[3],
+                      const double origin[3], double r0, double mass, int mat);
+/* Triangular lattice (2D) of nx×ny rectangular cells (r0 × √3 r0, 2 particles each). */
+size_t cd_lattice_tri(ptl_state *s, int nx, int ny, const double shift[2], const double origin[2],
+                      double r0, double mass, int mat);
+
+/* ---- pair potentials (DESIGN.md §5.1) ---- */
+/* fcc:  E(r) = (√2 ρ0 r0³/12) ε_x((r0/r)³),  f(r) = −dE/dr = (√2/4) r² P_x((r0/r)³);
+ * 2D:   E(r) = (m/3) ε_x((r0/r)²),           f(r) = r h P_x((r0/r)²)/√3 (docs/particles-cd.md).
+ * Tabulated once as a cubic Hermite interpolant of E in s = r² (values and exact slopes
+ * dE/ds = −f/(2r) at the nodes); the force used is F/r = −2 dE/ds of the SAME cubic, so the
+ * force is the exact derivative of the energy that is reported. */
+typedef struct cd_pair_table {
+  int nint;          /* intervals in s */
+  double s_lo, h, inv_h;
+  double rc, rc2;    /* cutoff (hard truncation) */
+  double r0;         /* nearest-neighbour distance at rest */
+  double e_rc;       /* E(rc): energy a pair takes with it when it leaves the cutoff */
+  double *fcoef;     /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
+  double *ecoef;     /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
+  size_t n_below;    /* diagnostics: evaluations below s_lo (polynomial extrapolation) */
+} cd_pair_table;
+
+/* Reference (untabulated) pair energy and force from an EOS cold curve. */
+double cd_pair_energy_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
+                            double r);
+double cd_pair_force_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
+                           double r);
+/* Build the table for materials a and b (b == a: the material's own potential; otherwise the
+ * mixing rule E_ab = ½(E_a + E_b), whose attractive branch (E' < 0, r > r0) is scaled by
+ * `attraction` in [0, 1] so an interface can be weaker than either bulk). r_min: inner end
+ * (clamped to the EOS's cold-curve range). nint: intervals (0: default 4096).
+ * MS_ERR_INPUT if the cold curve is missing or not finite on [r_min, rc]. */
+ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, cd_lattice lat,
+                              double r0, double thickness, double rc, double r_min,
+                              double attraction, int nint);
+void cd_pair_table_free(cd_pair_table *t);
+double cd_pair_table_energy(const cd_pair_table *t, double r); /* 0 beyond rc */
+double cd_pair_table_force(const cd_pair_table *t, double r);  /* scalar f, + = repulsive */
+
+/* ---- the simulation ---- */
+enum { CD_MAX_MATERIALS = 8 };
+
+typedef enum cd_bc { CD_BC_FREE = 0, CD_BC_PERIODIC, CD_BC_WALL } cd_bc;
+
+/* Cutoff treatment (DESIGN.md §5.1, "known trap"):
+ *  CD_CUTOFF_PLAIN  — every pair closer than R_c interacts (the benchmark's model);
+ *  CD_CUTOFF_BONDED — interaction partners fixed at set-up (pairs closer than R_c then);
+ *                     a bond farther than R_c breaks for good; non-bonded pairs (and broken
+ *                     bonds) only repel, through the compressive branch r < r0. */
+typedef enum cd_cutoff_mode { CD_CUTOFF_PLAIN = 0, CD_CUTOFF_BONDED } cd_cutoff_mode;
+
+typedef struct cd_box {
+  double lo[3], hi[3]; /* periodic period / wall positions (unused for free axes) */
+  cd_bc bc[3];
+} cd_box;
+
+typedef struct cd_config {
+  double r0;               /* nearest-neighbour distance (cluster size a) */
+  double skin;             /* Verlet skin (list radius = max R_c + skin) */
+  double dt;               /* time step */
+  cd_cutoff_mode cutoff;
+  double damping_gamma;    /* Γ of eq. 6 (paper 002), 1/time; 0 = off */
+  int sort_every;          /* reserved */
+} cd_config;
+
+/* Velocity history of the piston: piecewise linear u(t) through (t_k, u_k), constant beyond
+ * the ends; direction is a unit vector. */
+typedef struct cd_history {
+  size_t n;
+  double *t, *u;
+} cd_history;
+double cd_history_eval(const cd_history *h, double t);
+/* ∫_{t0}^{t1} u dt of the piecewise-linear history (exact). */
+double cd_history_integral(const cd_history *h, double t0, double t1);
+/* Reads a CSV/whitespace table with columns t, u (internal units; `si` converts s, m/s).
+ * Errors: fewer than 1 row, t not strictly increasing (a jump in time). */
+ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e);
+void cd_history_free(cd_history *h);
+
+typedef struct cd_energy {
+  double kinetic;      /* ½ m v² of integrated (non-driven) particles */
+  double potential;    /* Σ pair energies of pairs inside their cutoff */
+  double dissipated;   /* energy removed by the relative-velocity damping */
+  double broken;       /* energy carried away by pairs/bonds leaving the cutoff */
+  double piston_work;  /* work done on the particles by driven (piston) particles */
+  double wall_work;    /* 0 (specular walls do no work); kept for the balance's form */
+  double total;        /* kinetic + potential + dissipated + broken − piston_work */
+  double momentum[3];  /* Σ m v of integrated particles */
+} cd_energy;
+
+typedef struct cd_neigh cd_neigh; /* link cells + Verlet lists (particles/neighbour.c) */
+
+typedef struct cd_sim {
+  ptl_state *p;                 /* owned */
+  cd_box box;
+  cd_config cfg;
+  int nmat;
+  cd_pair_table *pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* [a][b] == [b][a], owned */
+  double rc_max;
+  cd_neigh *nl;
+  double t;
+  long step;
+  /* piston */
+  cd_history piston;            /* u(t) of every PTL_DRIVEN particle */
+  double piston_dir[3];
+  size_t n_driven;
+  int32_t *driven;              /* indices of driven particles */
+  /* balance accumulators */
+  double dissipated, piston_work, broken_bonded;
+  long n_inside0[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* pairs inside R_c at start (plain) */
+  bool have_inside0;
+  double *scratch;              /* 3N, damping velocity increments (NULL if no damping) */
+  int32_t *partners;            /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
+  long n_broken_bonds;
+  double wall_time_force, wall_time_neigh;
+} cd_sim;
+
+enum { CD_MAX_PARTNERS = 16 };
+
+/* Takes ownership of p. Tables are set afterwards with cd_sim_set_pair; cd_sim_init then
+ * builds the lists (and, in bonded mode, the partner lists) and the first forces. */
+cd_sim *cd_sim_create(ptl_state *p, const cd_box *box, const cd_config *cfg, int nmat);
+/* Takes ownership of t (heap allocated); a != b sets both [a][b] and [b][a]. */
+void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t);
+/* Piston: every PTL_DRIVEN particle moves with u(t)·dir (history copied). */
+void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]);
+ms_status cd_sim_init(cd_sim *s);
+void cd_sim_free(cd_sim *s);
+/* One velocity-Verlet step (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN. */
+ms_status cd_sim_step(cd_sim *s);
+/* Energies and momentum at the current state (one extra pass over the pairs). */
+void cd_sim_energy(cd_sim *s, cd_energy *out);
+/* Compression-positive virial stress of the whole system (the pressure tensor)
+ * P_ab = (1/V)[Σ m v_a v_b + ½ Σ_pairs f(r) r_a r_b / r]; V given by the caller.
+ * s[0..5] = xx, yy, zz, xy, yz, zx. */
+void cd_sim_virial(cd_sim *s, double volume, double stress[6]);
+/* Per-particle virial W_i (energy units; stress_i = W_i/V_i), 6 components each, [N][6]. */
+void cd_sim_particle_virial(cd_sim *s, double *w);
+/* Von Mises intensity σ_u of a symmetric tensor (DESIGN.md §5.1, eq. 4 corrected). */
+double cd_von_mises(const double s[6]);
+/* Mean velocity of the PTL_SURFACE particles along `axis` (NaN if none). */
+double cd_free_surface_velocity(const cd_sim *s, int axis);
+/* Neighbour-list statistics: rebuilds so far, pairs listed, bytes held. */
+long cd_sim_rebuilds(const cd_sim *s);
+size_t cd_sim_pairs(const cd_sim *s);
+size_t cd_sim_bytes(const cd_sim *s);
+
+/* Binned 1D profile along `axis` over [lo, hi) with nbin bins of cross-section `area`
+ * (cm² in 3D; in 2D: width × thickness). Per bin: count, density, mean velocity (3), and the
+ * compression-positive stress (xx, yy, zz, xy, yz, zx, with the kinetic part relative to the
+ * bin's mean velocity) and σ_u. out has nbin rows of CD_PROFILE_NCOL doubles. */
+enum { CD_PROFILE_NCOL = 13 };
+extern const char *const cd_profile_columns[CD_PROFILE_NCOL];
+void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area, double *out);
+/* Shock front along `axis`: scanning bins from `lo` upward, the first position where the
+ * bin-mean velocity along axis falls below frac·u_ref (linear interpolation between bin
+ * centres); NaN if not found. */
+double cd_front_position(const double *profile, int nbin, double lo, double hi, double u_ref,
+                         double frac);
+/* HDF5 particle snapshot (positions, velocities, material, gid, per-particle σ_u and
+ * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
+ms_status cd_write_snapshot(cd_sim *s, const char *path);
+
+/* ---- deck problem `cluster_dynamics` (docs/input-cd.md) ---- */
+typedef struct cd_problem cd_problem;
+cd_problem *cd_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                            dk_errors *e);
+ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p);
+void cd_problem_free(cd_problem *p);
+
+
 /* === Symplectic RKN integrators (rkn_) === */
 
+/* Explicit symplectic Runge–Kutta–Nyström schemes for r'' = a(r) (DESIGN.md §5.2, paper 000 §2).
+ * An m-stage scheme is given by α, γ (β_l = γ_l(1 − α_l), a_lk = γ_k(α_l − α_k) for k < l):
+ *   q_l     = r + Δt α_l u + Δt² Σ_{k<l} a_lk a(q_k)
+ *   r^{n+1} = r + Δt u + Δt² Σ β_l a(q_l),   u^{n+1} = u + Δt Σ γ_l a(q_l).
+ * The integrator works on flat arrays of `ndof` doubles, so any particle model (DM, cluster
+ * dynamics) can use it through an acceleration callback. */
+typedef enum rkn_kind {
+  RKN_VERLET = 0, /* 1 stage, order 2 (position Verlet) */
+  RKN_SIA4,       /* 3 stages, order 4 (Candy–Rozmus) */
+  RKN_RKN4,       /* 3 stages, order 4 */
+  RKN_RKN4_CONJ,  /* 3 stages, order 4 (every √3 of RKN4 with the opposite sign) */
+  RKN_KIND_COUNT
+} rkn_kind;
+
+typedef struct rkn_scheme {
+  rkn_kind kind;
+  const char *name; /* deck name: verlet, sia4, rkn4, rkn4_conjugate */
+  int stages;       /* force evaluations per step */
+  int order;
+  double alpha[3], gamma[3];
+} rkn_scheme;
+
+/* NULL-terminated deck names indexed by rkn_kind (for dk_read_enum). */
+extern const char *const rkn_scheme_names[];
+const rkn_scheme *rkn_scheme_get(rkn_kind kind);
+
+/* Acceleration a = F/m of configuration q at (stage) time t; `acc` has ndof entries. */
+typedef ms_status (*rkn_accel_fn)(void *user, double t, const double *q, double *acc);
+/* Optional constraint hook: overwrite prescribed degrees of freedom with their values at time t,
+ * in the stage positions q (u == NULL) and at the end of the step (q = r^{n+1}, u = u^{n+1}). */
+typedef void (*rkn_constrain_fn)(void *user, double t, double *q, double *u);
+
+typedef struct rkn_integrator rkn_integrator;
+rkn_integrator *rkn_create(rkn_kind kind, size_t ndof);
+void rkn_destroy(rkn_integrator *ig);
+const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
+/* One step t -> t + dt of (r, u) in place. No allocation. Loops are OpenMP-parallel over dofs
+ * with a static schedule (results do not depend on the thread count). */
+ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
+                   rkn_accel_fn accel, rkn_constrain_fn constrain, void *user);
+
 /* === Hamiltonian discrete model (dm_) === */
+
+/* The least-squares deformation-gradient particle model of paper 000 §1 with the exact pairwise
+ * Hamiltonian force (DESIGN.md §5.2; docs/particles-dm.md). Small-strain linear elasticity:
+ *   A_i = Σ_k ξ_ik⊗ξ_ik,  C_i = Σ_k (w_k − w_i)⊗(A_i⁻¹ξ_ik),  E_i = sym C_i,
+ *   σ_i = λ_i tr(E_i) I + 2G_i E_i,  H = Σ m_i|u_i|²/2 + Σ V_i σ_i:E_i/2,
+ *   F_i = −∂H/∂w_i = Σ_{k∈N_i} (P_i + P_k) ξ_ik,  P_i = V_i σ_i A_i⁻¹   (families are symmetric).
+ * dim = 1: a chain along x (σ_xx = (K + 4G/3) E_xx, = E for ν = 0); dim = 2: plane strain in x–y;
+ * dim = 3: full 3D. Vectors are always stored with 3 components (unused ones stay 0). */
+
+typedef enum dm_bc {
+  DM_FREE = 0,      /* moves under the model's forces */
+  DM_FIXED = 1,     /* u = 0, w held at its initial value (fixed particle layers) */
+  DM_PRESCRIBED = 2, /* w(t) given by the model's prescribed-displacement callback */
+  DM_MIRROR = 3      /* ghost: w = S w_partner (S = diag(msign)), a mirror image across a wall
+                      * (S = −I: clamped wall, u = 0 on it) or a symmetry plane (S flips the
+                      * normal component only); excluded from energies and momenta */
+} dm_bc;
+
+/* Particle data (structure of arrays; X, w, u are [n][3]). Units: cm, km/s, g, cm³, GPa. */
+typedef struct dm_state {
+  size_t n;
+  int dim;
+  double *X;       /* reference positions */
+  double *w;       /* displacements */
+  double *u;       /* velocities (momentum p = m u) */
+  double *mass;    /* m_i */
+  double *vol;     /* V_i = m_i / ρ_i⁰ */
+  double *K, *G;   /* bulk and shear moduli per particle (material interfaces) */
+  uint8_t *bc;     /* dm_bc */
+  uint32_t *partner; /* DM_MIRROR: the real particle mirrored */
+  int8_t *msign;     /* DM_MIRROR: [n][3] sign per component */
+} dm_state;
+
+void dm_state_alloc(dm_state *s, size_t n, int dim); /* zeroed arrays */
+void dm_state_free(dm_state *s);
+
+typedef struct dm_options {
+  double horizon;  /* δ_r (cm): N_i = {k ≠ i : |X_k − X_i| < δ_r} (periodic images included) */
+  double box[3];   /* periodic length per axis, 0 = not periodic (X must lie in [0, box)) */
+  double cond_max; /* largest accepted condition number of A_i (0 → default 1e8) */
+  double hourglass; /* stabilisation coefficient c_s (0 = off; docs/particles-dm.md) */
+} dm_options;
+
+/* Prescribed displacement: fill w (3 components) of particle i at time t. */
+typedef void (*dm_prescribe_fn)(void *user, size_t i, const double X[3], double t, double w[3]);
+
+typedef struct dm_model {
+  dm_state *s; /* not owned */
+  dm_options opt;
+  /* Families in CSR form: the bonds of i are nbr[start[i] .. start[i+1]), sorted by index;
+   * img[b] codes the periodic image of the neighbour (13 = same image). */
+  size_t *start;
+  uint32_t *nbr;
+  uint8_t *img;
+  double shift[27][3];
+  size_t nbonds;
+  double *Ainv;  /* [n][9] A_i⁻¹ (zero outside the dim×dim block) */
+  double *cond;  /* [n] condition number of A_i */
+  double *kappa; /* [n] hourglass stiffness c_s G_i V_i / tr A_i (0 when off) */
+  /* Work and output arrays, filled by dm_forces: */
+  double *C;     /* [n][9] displacement gradient C_i (row a: ∂w_a, column b: ∂/∂X_b) */
+  double *sigma; /* [n][9] stress σ_i (symmetric; GPa) */
+  double *Q;     /* [n][9] V_i σ_i A_i⁻¹ − κ_i C_i */
+  double *energy; /* [n] V_i U_i (+ hourglass energy), kJ */
+  dm_prescribe_fn prescribe;
+  void *prescribe_user;
+} dm_model;
+
+/* Builds the families with a cell list and precomputes A_i⁻¹. Singular or ill-conditioned A_i
+ * (too few or coplanar/collinear neighbours) are reported through ctx (each with the particle's
+ * position, up to 20) and make this return NULL with *status = MS_ERR_INPUT; *first_bad (if
+ * not NULL) is the first such particle. Other errors: bad options (MS_ERR_INPUT). */
+dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *status,
+                    size_t *first_bad);
+void dm_destroy(dm_model *m);
+
+/* Forces F = −∂H/∂w at displacement w (both [n][3]); fills m->C, sigma, Q, energy.
+ * OpenMP-parallel over particles; each particle sums its own bonds in a fixed order, so the
+ * result is independent of the thread count. */
+void dm_forces(dm_model *m, const double *w, double *F);
+/* Elastic (+ hourglass) energy Σ V_i U_i of displacement w (kJ) over all particles except
+ * mirror ghosts; also fills m->C, sigma. Without ghosts this is exactly the H whose gradient
+ * dm_forces returns. */
+double dm_potential_energy(dm_model *m, const double *w);
+double dm_kinetic_energy(const dm_state *s); /* Σ m|u|²/2 (mirror ghosts excluded) */
+/* Total linear momentum Σ m u and the reference angular momentum J = Σ X × m u, which the
+ * small-strain Hamiltonian conserves exactly (docs/particles-dm.md). */
+void dm_momenta(const dm_state *s, double P[3], double J[3]);
+/* Cauchy stress Σ_i = σ_i (I + C_iᵀ) / det(I + C_i) (paper 000 §1), [n][9], from the last
+ * dm_forces / dm_potential_energy call. */
+void dm_cauchy_stress(const dm_model *m, double *S);
+/* Zero-energy-mode indicator: sqrt(Σ_i Σ_k |z_ik|² / Σ_i Σ_k |w_k − w_i|²) with z_ik the
+ * least-squares residual w_k − w_i − C_i ξ_ik (0 for any linear field, 1 for a pure
+ * hourglass pattern). Uses m->C of the last force call. */
+double dm_hourglass_indicator(const dm_model *m, const double *w);
+
+/* The RKN acceleration callback over the flat array q = w[n][3] (user = dm_model *):
+ * a = F/m for free particles, 0 for fixed/prescribed ones and for components ≥ dim. */
+ms_status dm_accel(void *user, double t, const double *q, double *acc);
+/* The RKN constraint callback: sets prescribed particles' w (and u by central difference when
+ * u != NULL) from m->prescribe, then mirror ghosts from their partners. A mirror ghost layer
+ * must be two horizons thick so that the ghosts next to the wall have complete families. */
+void dm_constrain(void *user, double t, double *q, double *u);
+
+/* Exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
+/* §5.1 rod 0<x<2L, fixed ends, triangle initial displacement (series, nterms terms). */
+double dm_exact_rod_triangle(double x, double t, double L, double eps, double c, int nterms);
+/* §5.1 smooth data: w = εL sin(πx/2L) cos(πct/2L). */
+double dm_exact_rod_sine(double x, double t, double L, double eps, double c);
+/* §5.2 harmonic wave ε sin(8πx/L) in 0<x<L (medium 1) hitting the contact x = L with medium 2;
+ * normal stress σ(x,t) = E ∂w/∂x from d'Alembert's solution (the printed formulas miss a
+ * factor ω and a sign; docs/particles-dm.md). Valid while no wave reaches x = 2L. */
+double dm_exact_contact_stress(double x, double t, double L, double eps, double rho1, double E1,
+                               double rho2, double E2);
+/* §5.3 spherical wave from a source w(r0, t) = w0(1 − cos ωt): radial displacement w(r,t),
+ * radial velocity u(r,t). cl = longitudinal wave speed. */
+void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl,
+                     double *w, double *u);
+
+/* Deck problem type `discrete_model` (docs/input-dm.md). */
+typedef struct dm_problem dm_problem;
+dm_problem *dm_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                            dk_errors *e);
+ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p);
+void dm_problem_free(dm_problem *p);
 
 #endif /* MSCALE_PTL_H */

@@ -1,0 +1,123 @@
+/* rkn.c — explicit symplectic Runge–Kutta–Nyström integrators (DESIGN.md §5.2, paper 000 §2).
+ *
+ * Coefficients: Verlet α = ½, γ = 1. SIA4 (Candy & Rozmus 1991) as printed in paper 000.
+ * RKN4 and its conjugate: the printed coefficients are garbled; DESIGN.md §5.2 gives
+ * α = ((3±√3)/6, (3∓√3)/6, (3±√3)/6), γ = ((3∓2√3)/12, ½, (3±2√3)/12), which satisfy every
+ * 4th-order RKN condition (checked numerically in tests/particles/test_rkn_order.c).
+ */
+#include "ptl.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+const char *const rkn_scheme_names[] = {"verlet", "sia4", "rkn4", "rkn4_conjugate", NULL};
+
+static rkn_scheme schemes[RKN_KIND_COUNT];
+static int schemes_ready = 0;
+
+static void schemes_init(void) {
+  /* Built at run time because the coefficients contain cube and square roots. */
+  const double c1 = cbrt(2.0), c2 = cbrt(4.0), s3 = sqrt(3.0);
+  schemes[RKN_VERLET] = (rkn_scheme){RKN_VERLET, "verlet", 1, 2, {0.5, 0, 0}, {1.0, 0, 0}};
+  double g1 = c1 / 3.0 + c2 / 6.0 + 2.0 / 3.0;
+  schemes[RKN_SIA4] = (rkn_scheme){RKN_SIA4,
+                                   "sia4",
+                                   3,
+                                   4,
+                                   {c1 / 6.0 + c2 / 12.0 + 1.0 / 3.0, 0.5,
+                                    2.0 / 3.0 - c1 / 6.0 - c2 / 12.0},
+                                   {g1, -1.0 / 3.0 - 2.0 * c1 / 3.0 - c2 / 3.0, g1}};
+  schemes[RKN_RKN4] = (rkn_scheme){RKN_RKN4,
+                                   "rkn4",
+                                   3,
+                                   4,
+                                   {(3 + s3) / 6, (3 - s3) / 6, (3 + s3) / 6},
+                                   {(3 - 2 * s3) / 12, 0.5, (3 + 2 * s3) / 12}};
+  schemes[RKN_RKN4_CONJ] = (rkn_scheme){RKN_RKN4_CONJ,
+                                        "rkn4_conjugate",
+                                        3,
+                                        4,
+                                        {(3 - s3) / 6, (3 + s3) / 6, (3 - s3) / 6},
+                                        {(3 + 2 * s3) / 12, 0.5, (3 - 2 * s3) / 12}};
+  schemes_ready = 1;
+}
+
+const rkn_scheme *rkn_scheme_get(rkn_kind kind) {
+  if ((int)kind < 0 || kind >= RKN_KIND_COUNT) return NULL;
+#pragma omp critical(rkn_schemes_init)
+  if (!schemes_ready) schemes_init();
+  return &schemes[kind];
+}
+
+struct rkn_integrator {
+  rkn_scheme s;
+  size_t ndof;
+  double *q;      /* stage positions */
+  double *acc[3]; /* stage accelerations a(q_l) */
+};
+
+rkn_integrator *rkn_create(rkn_kind kind, size_t ndof) {
+  const rkn_scheme *s = rkn_scheme_get(kind);
+  if (!s || ndof == 0) return NULL;
+  rkn_integrator *ig = ms_calloc(1, sizeof *ig);
+  ig->s = *s;
+  ig->ndof = ndof;
+  ig->q = ms_aligned_alloc(ndof, sizeof(double));
+  for (int l = 0; l < s->stages; ++l) ig->acc[l] = ms_aligned_alloc(ndof, sizeof(double));
+  return ig;
+}
+
+void rkn_destroy(rkn_integrator *ig) {
+  if (!ig) return;
+  free(ig->q);
+  for (int l = 0; l < 3; ++l) free(ig->acc[l]);
+  free(ig);
+}
+
+const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig) { return &ig->s; }
+
+ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
+                   rkn_accel_fn accel, rkn_constrain_fn constrain, void *user) {
+  const rkn_scheme *s = &ig->s;
+  const long n = (long)ig->ndof;
+  const double dt2 = dt * dt;
+  double *q = ig->q;
+  for (int l = 0; l < s->stages; ++l) {
+    /* q_l = r + Δt α_l u + Δt² Σ_{k<l} γ_k (α_l − α_k) a_k */
+    double alpha = s->alpha[l];
+    double c[3] = {0, 0, 0};
+    for (int k = 0; k < l; ++k) c[k] = dt2 * s->gamma[k] * (s->alpha[l] - s->alpha[k]);
+    const double *a0 = ig->acc[0], *a1 = ig->acc[1];
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      double v = r[i] + dt * alpha * u[i];
+      if (l > 0) v += c[0] * a0[i];
+      if (l > 1) v += c[1] * a1[i];
+      q[i] = v;
+    }
+    double tl = t + alpha * dt;
+    if (constrain) constrain(user, tl, q, NULL);
+    ms_status st = accel(user, tl, q, ig->acc[l]);
+    if (st != MS_OK) return st;
+  }
+  /* r += Δt u + Δt² Σ β_l a_l;  u += Δt Σ γ_l a_l  (β_l = γ_l (1 − α_l)) */
+  double b[3] = {0, 0, 0}, g[3] = {0, 0, 0};
+  for (int l = 0; l < s->stages; ++l) {
+    b[l] = dt2 * s->gamma[l] * (1.0 - s->alpha[l]);
+    g[l] = dt * s->gamma[l];
+  }
+  const int m = s->stages;
+  const double *a0 = ig->acc[0], *a1 = ig->acc[1], *a2 = ig->acc[2];
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    double dr = b[0] * a0[i], du = g[0] * a0[i];
+    if (m > 1) {
+      dr += b[1] * a1[i] + b[2] * a2[i];
+      du += g[1] * a1[i] + g[2] * a2[i];
+    }
+    r[i] += dt * u[i] + dr;
+    u[i] += du;
+  }
+  if (constrain) constrain(user, t + dt, r, u);
+  return MS_OK;
+}
