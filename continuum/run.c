@@ -1,0 +1,174 @@
+/* run.c — running a continuum deck: the time loop with output events, the x–t diagram data,
+ * the energy/momentum balance in the log and the instability guard. */
+#include "cont_run.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* x–t diagram data: frames of (coarsened) node positions, density and pressure. Grids finer
+ * than XT_MAX_COLUMNS cells are coarsened by merging `stride` cells (mass-weighted density,
+ * volume-weighted pressure) so the file stays small. */
+enum { XT_MAX_COLUMNS = 2000 };
+
+typedef struct xt_data {
+  size_t stride, ncol, nframes, cap;
+  double *t, *x, *rho, *p;
+} xt_data;
+
+static void xt_init(xt_data *xt, const cont_grid *g, size_t frames) {
+  memset(xt, 0, sizeof *xt);
+  xt->stride = (g->ncells + XT_MAX_COLUMNS - 1) / XT_MAX_COLUMNS;
+  if (xt->stride < 1) xt->stride = 1;
+  xt->ncol = (g->ncells + xt->stride - 1) / xt->stride;
+  xt->cap = frames + 2;
+  xt->t = ms_calloc(xt->cap, sizeof(double));
+  xt->x = ms_calloc(xt->cap * (xt->ncol + 1), sizeof(double));
+  xt->rho = ms_calloc(xt->cap * xt->ncol, sizeof(double));
+  xt->p = ms_calloc(xt->cap * xt->ncol, sizeof(double));
+}
+
+static void xt_add(xt_data *xt, const cont_grid *g) {
+  if (xt->nframes >= xt->cap) return;
+  size_t f = xt->nframes++, nc = xt->ncol;
+  xt->t[f] = g->t;
+  for (size_t k = 0; k < nc; ++k) {
+    size_t a = k * xt->stride, b = a + xt->stride < g->ncells ? a + xt->stride : g->ncells;
+    double m = 0, v = 0, pv = 0;
+    for (size_t i = a; i < b; ++i) {
+      m += g->mass[i];
+      v += g->vol[i];
+      pv += g->p[i] * g->vol[i];
+    }
+    xt->x[f * (nc + 1) + k] = g->x[a];
+    xt->rho[f * nc + k] = m / v;
+    xt->p[f * nc + k] = pv / v;
+  }
+  xt->x[f * (nc + 1) + nc] = g->x[g->ncells];
+}
+
+static ms_status xt_write(const ms_ctx *ctx, const xt_data *xt, int quantity) {
+  char *path = ms_out_path(ctx, "xt.h5");
+  ms_h5 *h = ms_h5_create(path);
+  free(path);
+  if (!h) return MS_ERR_IO;
+  size_t nf = xt->nframes, nc = xt->ncol;
+  ms_status s = ms_h5_write_doubles(h, "t", nf, 1, xt->t, ms_unit_label(MS_DIM_TIME));
+  if (!s) s = ms_h5_write_doubles(h, "x", nf, nc + 1, xt->x, ms_unit_label(MS_DIM_LENGTH));
+  if (!s) s = ms_h5_write_doubles(h, "rho", nf, nc, xt->rho, ms_unit_label(MS_DIM_DENSITY));
+  if (!s) s = ms_h5_write_doubles(h, "p", nf, nc, xt->p, ms_unit_label(MS_DIM_PRESSURE));
+  if (!s) s = ms_h5_attr_string(h, "/", "quantity", quantity ? "p" : "rho");
+  if (!s) s = ms_h5_attr_double(h, "/", "cell_stride", (double)xt->stride);
+  if (!s) return ms_h5_close(h);
+  ms_h5_abort(h);
+  return s;
+}
+
+static void xt_free(xt_data *xt) {
+  free(xt->t);
+  free(xt->x);
+  free(xt->rho);
+  free(xt->p);
+}
+
+static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double mom0) {
+  cont_balance b = cont_grid_balance(g);
+  double total = b.internal + b.kinetic;
+  double scale = fabs(e0) > 0 ? fabs(e0) : (fabs(total) > 0 ? fabs(total) : 1.0);
+  double drift = (total - b.work - e0) / scale;
+  ms_log(ctx, MS_LOG_INFO,
+         "continuum t = %.6g step %ld: energy internal %.9g + kinetic %.9g = %.9g, boundary work "
+         "%.6g, relative drift %.2e",
+         g->t, g->step, b.internal, b.kinetic, total, b.work, drift);
+  if (g->geometry == CONT_PLANAR) {
+    double mscale = fabs(mom0) > 0 ? fabs(mom0) : 1.0;
+    ms_log(ctx, MS_LOG_INFO,
+           "continuum t = %.6g: momentum %.9g, boundary impulse %.6g, drift %.2e (scale %.3g)",
+           g->t, b.momentum, b.impulse, (b.momentum - b.impulse - mom0) / mscale, mscale);
+  }
+}
+
+ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
+  cont_grid *g = p->grid;
+  ms_status s = MS_OK;
+  cont_balance b0 = cont_grid_balance(g);
+  double e0 = b0.internal + b0.kinetic, mom0 = b0.momentum;
+  ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g",
+         g->ncells, g->nregions,
+         g->geometry == CONT_PLANAR ? "planar" : g->geometry == CONT_CYLINDRICAL ? "cylindrical"
+                                                                                 : "spherical",
+         p->t_end);
+
+  xt_data xt;
+  xt_init(&xt, g, p->xt_frames > 0 ? (size_t)p->xt_frames : 0);
+  if (p->xt_frames > 0) xt_add(&xt, g);
+  double frame_dt = p->xt_frames > 0 ? p->t_end / (double)p->xt_frames : INFINITY;
+  long next_frame = 1;
+
+  size_t next_out = 0;
+  while (next_out < p->n_out && p->out_times[next_out] <= 0.0) {
+    char stem[32];
+    snprintf(stem, sizeof stem, "profile_%04zu", next_out);
+    s = cont_write_profile(ctx, g, stem);
+    if (s) goto done;
+    ++next_out;
+  }
+
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "continuum", 0.0, p->t_end);
+  while (g->t < p->t_end) {
+    double target = p->t_end;
+    if (next_out < p->n_out && p->out_times[next_out] < target) target = p->out_times[next_out];
+    double tf = (double)next_frame * frame_dt;
+    if (tf < target) target = tf;
+    double left = target - g->t;
+    double lim = left;
+    if (g->dt_next < left && g->dt_next > 0.5 * left) lim = 0.5 * left; /* no sliver steps */
+    s = cont_grid_step(g, lim);
+    if (s != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "continuum: %s", cont_grid_error(g));
+      ms_status s2 = cont_write_profile(ctx, g, "profile_unstable");
+      if (s2 == MS_OK)
+        ms_log(ctx, MS_LOG_ERROR, "continuum: final state written to profile_unstable.h5/.csv");
+      cont_write_histories(ctx, g, p->history_stride);
+      break;
+    }
+    if (lim == left && g->dt_last == lim) g->t = target; /* land exactly */
+    if (g->t >= target) {
+      if (next_out < p->n_out && g->t >= p->out_times[next_out]) {
+        char stem[32];
+        snprintf(stem, sizeof stem, "profile_%04zu", next_out);
+        s = cont_write_profile(ctx, g, stem);
+        if (s) break;
+        log_balance(ctx, g, e0, mom0);
+        ++next_out;
+      }
+      while ((double)next_frame * frame_dt <= g->t * (1 + 1e-12)) {
+        xt_add(&xt, g);
+        ++next_frame;
+      }
+    }
+    ms_progress_update(&prog, g->t, g->step);
+    if (p->max_steps > 0 && g->step >= p->max_steps) {
+      ms_log(ctx, MS_LOG_WARN, "continuum: stopped after max_steps = %ld at t = %g", p->max_steps,
+             g->t);
+      break;
+    }
+  }
+  ms_progress_finish(&prog, g->t, g->step);
+  if (s == MS_OK) {
+    log_balance(ctx, g, e0, mom0);
+    s = cont_write_profile(ctx, g, "profile_final");
+    if (!s) s = cont_write_histories(ctx, g, p->history_stride);
+    if (!s && p->xt_frames > 0) s = xt_write(ctx, &xt, p->xt_quantity);
+    if (!s)
+      ms_log(ctx, MS_LOG_INFO, "continuum: done, %ld steps to t = %g", g->step, g->t);
+  } else if (s == MS_ERR_UNSTABLE && p->xt_frames > 0) {
+    xt_add(&xt, g);
+    xt_write(ctx, &xt, p->xt_quantity);
+  }
+done:
+  xt_free(&xt);
+  return s;
+}
