@@ -173,6 +173,8 @@ typedef struct cd_sim {
   double *scratch;              /* 3N, damping velocity increments (NULL if no damping) */
   int32_t *partners;            /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
   long n_broken_bonds;
+  struct cd_layer_sums *sums;   /* per-layer accumulators of the kernels */
+  int sums_cap;
   double wall_time_force, wall_time_neigh;
 } cd_sim;
 

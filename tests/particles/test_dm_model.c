@@ -1,0 +1,299 @@
+/* Hamiltonian discrete model (DESIGN.md §5.2): force = −∇H, conservation laws, bounded energy,
+ * linear-field exactness, detection of singular shape matrices, thread-count independence. */
+#include <math.h>
+#include <omp.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "ptl.h"
+
+static uint64_t rng_state = 12345;
+static double urand(void) { /* splitmix64 → [0, 1) */
+  uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return (double)(z >> 11) * 0x1p-53;
+}
+
+/* Simple-cubic block nx×ny×nz (spacing h) in `dim` dimensions, reference positions perturbed by
+ * up to ±jitter·h, random moduli (so that interfaces between unlike particles are exercised). */
+static void make_block(dm_state *s, int dim, int nx, int ny, int nz, double h, double jitter) {
+  size_t n = (size_t)nx * ny * nz;
+  dm_state_alloc(s, n, dim);
+  size_t i = 0;
+  for (int c = 0; c < nz; ++c)
+    for (int b = 0; b < ny; ++b)
+      for (int a = 0; a < nx; ++a, ++i) {
+        int idx[3] = {a, b, c};
+        for (int d = 0; d < dim; ++d) s->X[3 * i + d] = (idx[d] + jitter * (2 * urand() - 1)) * h;
+        s->vol[i] = pow(h, dim);
+        s->mass[i] = (2.0 + 6.0 * urand()) * s->vol[i];
+        s->K[i] = 50.0 + 100.0 * urand();
+        s->G[i] = 20.0 + 60.0 * urand();
+      }
+}
+
+static void random_field(dm_state *s, double *v, double amp) {
+  for (size_t i = 0; i < s->n; ++i)
+    for (int d = 0; d < s->dim; ++d) v[3 * i + d] = amp * (2 * urand() - 1);
+}
+
+/* F = −∂H/∂w by central differences. H is exactly quadratic in w, so the difference quotient
+ * has no truncation error; what remains is round-off ~ 1e-16·H/δ, far below the 1e-6 relative
+ * bound of the issue (which therefore tests the force formula, e.g. the dropped k-terms of the
+ * printed eq. (6) give O(1) errors). */
+static void check_fd(int dim, int nx, int ny, int nz, double hourglass) {
+  dm_state s;
+  const double h = 0.1;
+  make_block(&s, dim, nx, ny, nz, h, 0.15);
+  random_field(&s, s.w, 1e-3 * h);
+  dm_options opt = {.horizon = 2.2 * h, .hourglass = hourglass};
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ms_status st;
+  dm_model *m = dm_create(&s, &opt, &ctx, &st, NULL);
+  assert_non_null(m);
+  double *F = calloc(3 * s.n, sizeof(double));
+  dm_forces(m, s.w, F);
+  double fbig = 0.0, errmax = 0.0;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int a = 0; a < dim; ++a) fbig = fmax(fbig, fabs(F[3 * i + a]));
+  const double delta = 1e-4 * h;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int a = 0; a < dim; ++a) {
+      double w0 = s.w[3 * i + a];
+      s.w[3 * i + a] = w0 + delta;
+      double Hp = dm_potential_energy(m, s.w);
+      s.w[3 * i + a] = w0 - delta;
+      double Hm = dm_potential_energy(m, s.w);
+      s.w[3 * i + a] = w0;
+      double fd = -(Hp - Hm) / (2 * delta);
+      errmax = fmax(errmax, fabs(fd - F[3 * i + a]));
+    }
+  printf("dim %d, %zu particles, %zu bonds, hourglass %g: max|F_fd - F|/max|F| = %.2e\n", dim,
+         s.n, m->nbonds, hourglass, errmax / fbig);
+  assert_true(fbig > 0.0);
+  assert_true(errmax / fbig < 1e-6);
+  free(F);
+  dm_destroy(m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+}
+
+static void test_force_is_minus_grad_H(void **state) {
+  (void)state;
+  check_fd(3, 5, 4, 4, 0.0);
+  check_fd(3, 5, 4, 4, 0.5);
+  check_fd(2, 7, 6, 1, 0.0);
+  check_fd(1, 12, 1, 1, 0.0);
+  check_fd(1, 12, 1, 1, 1.0);
+}
+
+/* The model reproduces any linear displacement field exactly (paper 000 §1, after eq. 2) —
+ * on every particle, including the boundary ones with one-sided families — and the forces of
+ * a homogeneous strain vanish on interior particles. */
+static void test_linear_field_exact(void **state) {
+  (void)state;
+  dm_state s;
+  make_block(&s, 3, 6, 6, 6, 1.0, 0.2);
+  const double Cb[9] = {1e-3, 2e-4, -3e-4, 5e-4, -2e-3, 1e-4, -4e-4, 3e-4, 7e-4};
+  for (size_t i = 0; i < s.n; ++i)
+    for (int a = 0; a < 3; ++a)
+      s.w[3 * i + a] = Cb[3 * a] * s.X[3 * i] + Cb[3 * a + 1] * s.X[3 * i + 1] +
+                       Cb[3 * a + 2] * s.X[3 * i + 2];
+  dm_options opt = {.horizon = 1.8, .hourglass = 1.0};
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  assert_non_null(m);
+  double *F = calloc(3 * s.n, sizeof(double));
+  dm_forces(m, s.w, F);
+  double err = 0;
+  for (size_t i = 0; i < s.n; ++i)
+    for (int c = 0; c < 9; ++c) err = fmax(err, fabs(m->C[9 * i + c] - Cb[c]));
+  /* round-off relative to |C| ~ 1e-3 */
+  assert_true(err < 1e-15);
+  /* hourglass indicator: exactly 0 for a linear field (up to round-off) */
+  assert_true(dm_hourglass_indicator(m, s.w) < 1e-10);
+  free(F);
+  dm_destroy(m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+}
+
+/* Linear momentum Σ m u and reference angular momentum J = Σ X × m u are exact invariants
+ * (pairwise antisymmetric bond forces; Σ_k ξ_ik × σ_i A_i⁻¹ ξ_ik = ε:σ_i = 0). Checked over
+ * 2000 steps of every scheme from random w and u; tolerance 1e-12 relative to Σ m|u| (Σ m|u||X|),
+ * i.e. accumulated round-off. The current-configuration angular momentum Σ (X + w) × m u is
+ * conserved only to O(strain) by the small-strain model (docs/particles-dm.md). */
+static void test_momenta_conserved(void **state) {
+  (void)state;
+  for (int k = 0; k < RKN_KIND_COUNT; ++k) {
+    dm_state s;
+    make_block(&s, 3, 5, 5, 5, 0.1, 0.15);
+    random_field(&s, s.w, 1e-4);
+    random_field(&s, s.u, 1e-2);
+    dm_options opt = {.horizon = 0.22, .hourglass = k == 1 ? 0.5 : 0.0};
+    ms_ctx ctx;
+    ms_ctx_init_serial(&ctx);
+    dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+    assert_non_null(m);
+    double P0[3], J0[3], P[3], J[3];
+    dm_momenta(&s, P0, J0);
+    double pscale = 0, jscale = 0;
+    for (size_t i = 0; i < s.n; ++i) {
+      double um = s.mass[i] * sqrt(s.u[3 * i] * s.u[3 * i] + s.u[3 * i + 1] * s.u[3 * i + 1] +
+                                   s.u[3 * i + 2] * s.u[3 * i + 2]);
+      pscale += um;
+      jscale += um * 0.5;
+    }
+    rkn_integrator *ig = rkn_create((rkn_kind)k, 3 * s.n);
+    const double dt = 2e-3; /* c ≈ 5, h = 0.1: well inside the stability limit */
+    for (int step = 0; step < 2000; ++step)
+      assert_int_equal(rkn_step(ig, step * dt, dt, s.w, s.u, dm_accel, dm_constrain, m), MS_OK);
+    dm_momenta(&s, P, J);
+    double dP = 0, dJ = 0;
+    for (int a = 0; a < 3; ++a) dP = fmax(dP, fabs(P[a] - P0[a])), dJ = fmax(dJ, fabs(J[a] - J0[a]));
+    printf("%-15s |dP|/sum m|u| = %.2e, |dJ|/scale = %.2e\n", rkn_scheme_get(k)->name,
+           dP / pscale, dJ / jscale);
+    assert_true(dP / pscale < 1e-12);
+    assert_true(dJ / jscale < 1e-12);
+    rkn_destroy(ig);
+    dm_destroy(m);
+    dm_state_free(&s);
+    ms_ctx_close(&ctx);
+  }
+}
+
+/* Bounded energy error over 1e5 Verlet steps of a free 4×4×4 block (random initial data): the
+ * error oscillates (bounded by twice its maximum over the first 1000 steps) and its mean over
+ * the last tenth of the run differs from the first tenth by < 10 % of that bound: no drift. */
+static void test_energy_no_drift(void **state) {
+  (void)state;
+  dm_state s;
+  make_block(&s, 3, 4, 4, 4, 0.1, 0.1);
+  random_field(&s, s.w, 1e-4);
+  random_field(&s, s.u, 1e-3);
+  dm_options opt = {.horizon = 0.16};
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  assert_non_null(m);
+  rkn_integrator *ig = rkn_create(RKN_VERLET, 3 * s.n);
+  double E0 = dm_kinetic_energy(&s) + dm_potential_energy(m, s.w);
+  const double dt = 4e-3; /* ~ 1/5 of the Verlet limit for c_max ≈ 7, h = 0.1 */
+  const long nsteps = 100000, tenth = nsteps / 10;
+  double max_first = 0, max_all = 0, mean_first = 0, mean_last = 0;
+  for (long step = 0; step < nsteps; ++step) {
+    rkn_step(ig, step * dt, dt, s.w, s.u, dm_accel, dm_constrain, m);
+    double err = (dm_kinetic_energy(&s) + dm_potential_energy(m, s.w) - E0) / E0;
+    if (step < 1000) max_first = fmax(max_first, fabs(err));
+    max_all = fmax(max_all, fabs(err));
+    if (step < tenth) mean_first += err / tenth;
+    if (step >= nsteps - tenth) mean_last += err / tenth;
+  }
+  printf("energy: max rel error first 1000 steps %.3e, over 1e5 steps %.3e, drift of mean %.3e\n",
+         max_first, max_all, mean_last - mean_first);
+  assert_true(max_all < 2.0 * max_first);
+  assert_true(fabs(mean_last - mean_first) < 0.2 * max_first);
+  rkn_destroy(ig);
+  dm_destroy(m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+}
+
+/* A planar sheet of particles in a 3D model has singular A_i: set-up must refuse it and name
+ * a particle; so must an isolated particle in 1D. */
+static void test_singular_shape_detected(void **state) {
+  (void)state;
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.verbosity = MS_LOG_ERROR;
+  dm_state s;
+  make_block(&s, 3, 4, 4, 1, 1.0, 0.0);
+  dm_options opt = {.horizon = 1.5};
+  ms_status st = MS_OK;
+  size_t bad = (size_t)-1;
+  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_int_equal(st, MS_ERR_INPUT);
+  assert_true(bad < s.n);
+  dm_state_free(&s);
+  /* Nearly coplanar: one layer displaced by 1e-6 h out of plane -> condition number ~1e12 */
+  make_block(&s, 3, 4, 4, 2, 1.0, 0.0);
+  for (size_t i = 16; i < 32; ++i) s.X[3 * i + 2] = 1e-6;
+  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_int_equal(st, MS_ERR_INPUT);
+  dm_state_free(&s);
+  /* 1D: two particles farther apart than the horizon */
+  dm_state_alloc(&s, 2, 1);
+  s.X[3] = 2.0;
+  for (int i = 0; i < 2; ++i) s.mass[i] = s.vol[i] = s.K[i] = s.G[i] = 1.0;
+  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_int_equal(bad, 0);
+  dm_state_free(&s);
+  /* and a well-posed block is accepted */
+  make_block(&s, 3, 3, 3, 3, 1.0, 0.1);
+  dm_model *m = dm_create(&s, &opt, &ctx, &st, NULL);
+  assert_non_null(m);
+  assert_int_equal(st, MS_OK);
+  dm_destroy(m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+}
+
+/* Periodic families: a uniform sc lattice in a periodic box has the full 18-neighbour family
+ * (horizon 1.5 h) on every particle, and a periodic linear-in-sine field gives equal forces
+ * to particles with the same x. Also: forces are bitwise identical on 1 and 2 threads. */
+static void test_periodic_and_threads(void **state) {
+  (void)state;
+  dm_state s;
+  const int nc = 6;
+  const double h = 0.5;
+  make_block(&s, 3, nc, nc, nc, h, 0.0);
+  for (size_t i = 0; i < s.n; ++i) {
+    for (int a = 0; a < 3; ++a) s.X[3 * i + a] += 0.5 * h;
+    s.K[i] = 100, s.G[i] = 50;
+    s.w[3 * i] = 1e-3 * sin(2 * M_PI * s.X[3 * i] / (nc * h));
+  }
+  dm_options opt = {.horizon = 1.5 * h, .box = {nc * h, nc * h, nc * h}};
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  assert_non_null(m);
+  for (size_t i = 0; i < s.n; ++i) assert_int_equal(m->start[i + 1] - m->start[i], 18);
+  double *F1 = calloc(3 * s.n, sizeof(double)), *F2 = calloc(3 * s.n, sizeof(double));
+  omp_set_num_threads(1);
+  dm_forces(m, s.w, F1);
+  omp_set_num_threads(2);
+  dm_forces(m, s.w, F2);
+  assert_memory_equal(F1, F2, 3 * s.n * sizeof(double));
+  for (size_t i = 0; i < s.n; ++i) {
+    size_t j = i % nc; /* same x column, first row */
+    assert_true(fabs(F1[3 * i] - F1[3 * j]) < 1e-12 * fabs(F1[3 * 1]) + 1e-300);
+    assert_true(fabs(F1[3 * i + 1]) < 1e-12 * fabs(F1[3 * 1]) + 1e-300);
+  }
+  free(F1);
+  free(F2);
+  dm_destroy(m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_force_is_minus_grad_H),
+      cmocka_unit_test(test_linear_field_exact),
+      cmocka_unit_test(test_momenta_conserved),
+      cmocka_unit_test(test_energy_no_drift),
+      cmocka_unit_test(test_singular_shape_detected),
+      cmocka_unit_test(test_periodic_and_threads),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
