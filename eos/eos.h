@@ -25,12 +25,20 @@ typedef struct eos eos_t;
  * gamma_rho_const: if true, Γρ = Γ0ρ0 (Γ = Γ0 ρ0/ρ); otherwise Γ is constant. */
 eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const);
 eos_t *eos_create_mg_linear(double rho0, double c0, double s, double gamma0);
+/* Ideal gas P = (γ−1)ρe. rho0 is the reference (ambient) density; the reference pressure is
+ * p0 (eos_create_ideal_gas: 1 atm = 1.01325e-4 GPa), so eos_c0 = sqrt(γ p0/ρ0). */
 eos_t *eos_create_ideal_gas(double gamma, double rho0);
+eos_t *eos_create_ideal_gas_ref(double gamma, double rho0, double p0);
+/* Small-strain elastic solid (docs/eos.md): P = K(1 − ρ0/ρ), independent of e; its cold
+ * energy ε_x = K(1 − 1/δ)²/(2ρ0) is the strain energy ½Kθ² per unit mass, θ = 1 − 1/δ. */
 eos_t *eos_create_linear_elastic(double rho0, double bulk_modulus);
 /* Tabulated cold curve from a file in the Table-1 format (docs/eos.md); gamma as for MG. */
 eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_const, dk_errors *e);
-/* Full (rho, e) table from text or HDF5 (by extension .h5); format in docs/eos.md. */
+/* Full (rho, e) table from text or HDF5 (by extension .h5 / .hdf5); format in docs/eos.md.
+ * Bilinear interpolation of P and c²; NaN outside the table. */
 eos_t *eos_create_table_full(const char *path, dk_errors *e);
+/* Write a full table (EOS_TABLE_FULL) as text or HDF5 (by extension). */
+ms_status eos_table_write(const eos_t *table, const char *path);
 /* Build a full table by sampling another EOS on a grid (used by tests and `mscale eos-table`). */
 eos_t *eos_create_table_from(const eos_t *src, double rho_min, double rho_max, size_t nrho,
                              double e_min, double e_max, size_t ne);
@@ -41,6 +49,9 @@ const char *eos_kind_name(eos_kind k);
 double eos_rho0(const eos_t *eos);     /* reference density (g/cm³) */
 double eos_c0(const eos_t *eos);       /* reference (bulk) sound speed at rho0, e = 0 (km/s) */
 bool eos_has_cold_curve(const eos_t *eos);
+/* Range of δ where the cold curve is defined (tables, tabulated isentropes); ±INFINITY for
+ * analytic curves. Returns false (and NaNs) if the EOS has no cold curve. */
+bool eos_cold_range(const eos_t *eos, double *delta_min, double *delta_max);
 
 /* Single-state queries. */
 double eos_pressure(const eos_t *eos, double rho, double e);
@@ -62,21 +73,41 @@ ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *
 typedef struct eos_material {
   char *name;
   eos_t *eos;
-  /* Optional strength/elastic data used by the particle models (0 if not given). */
-  double shear_modulus; /* G, GPa */
+  /* Optional data used by other modules (0 if not given). */
+  double shear_modulus; /* G, GPa (particle models, strength) */
+  double viscosity;     /* dynamic viscosity μ, g/(cm·10µs) (gas drag on ejecta) */
+  int line, col;        /* where the entry starts in the deck */
 } eos_material;
+
+/* A deck-defined mixture (top-level `mixtures:`) for the Kuropatenko rule. */
+typedef struct eos_mixture {
+  char *name;
+  size_t ncomp;
+  size_t *comp;  /* indices into eos_materials.m */
+  double *alpha; /* volume fractions, sum 1 */
+} eos_mixture;
 
 typedef struct eos_materials {
   size_t n;
   eos_material *m;
+  size_t nmix;
+  eos_mixture *mix;
+  /* Names of entries that had errors (left out of m[]); eos_materials_find does not report
+   * them again as unknown. */
+  size_t nbroken;
+  char **broken;
 } eos_materials;
 
-/* Read `materials:` from the deck root; every problem goes to *e. Returns NULL only if the
- * section is absent or not a list (error recorded). */
+/* Read `materials:` (and the optional `mixtures:`) from the deck root; every problem goes to *e.
+ * Keys the reader does not know inside these sections are reported here (with the list of
+ * accepted keys) and marked used, so dk_report_unused does not repeat them. Returns NULL only
+ * if the section is absent or not a list (error recorded); otherwise entries with errors are
+ * left out (e->n tells whether anything went wrong). */
 eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e);
 /* Look a material up by name; records "unknown material 'x' (known: a, b)" at `where`. */
 const eos_material *eos_materials_find(const eos_materials *mats, const char *name,
                                        dk_errors *e, const dk_doc *doc, const dk_node *where);
+const eos_mixture *eos_mixtures_find(const eos_materials *mats, const char *name);
 void eos_materials_free(eos_materials *mats);
 
 /* ------------------------------------------------------------------------------------------ */
@@ -90,11 +121,22 @@ typedef struct eos_hugoniot_point {
  * bracketing fallback). MS_ERR_SOLVER if a point cannot be found (index reported via log). */
 ms_status eos_hugoniot(const eos_t *eos, double rho0, double e0, size_t n, const double *up,
                        eos_hugoniot_point *out);
+/* The Hugoniot state at a given shock pressure p > P0 (bracketing + Brent). */
+ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, double p,
+                                   eos_hugoniot_point *out);
 
 /* Kuropatenko mixture rule (paper 002 §1.2): 1/(D − u) = Σ α_i/(D_i − u_i), with equal pressure
  * in every component. Given the mixture particle velocity u (the components' u_i follow from
  * pressure equilibrium), returns D. alpha = volume fractions (sum 1). */
 ms_status eos_kuropatenko(size_t ncomp, const eos_t *const *comp, const double *alpha, double u,
                           double *D, double *p);
+/* The same at a given pressure: each component's Hugoniot at p (from ρ0_i = eos_rho0, e = 0)
+ * gives D_i − u_i; D − u = 1/Σ α_i/(D_i − u_i) and p − P0 = ρ0 D u with ρ0 = Σ α_i ρ0_i.
+ * Fills the mixture state (up = u, us = D, p, rho = ρ0 D/(D − u), e − e0 from the energy jump). */
+ms_status eos_kuropatenko_at_pressure(size_t ncomp, const eos_t *const *comp, const double *alpha,
+                                      double p, eos_hugoniot_point *out);
+/* Mixture Hugoniot for a list of u (wraps eos_kuropatenko). */
+ms_status eos_kuropatenko_hugoniot(size_t ncomp, const eos_t *const *comp, const double *alpha,
+                                   size_t n, const double *up, eos_hugoniot_point *out);
 
 #endif /* MSCALE_EOS_H */

@@ -1,0 +1,194 @@
+/* eos_analytic.c — the analytic EOS kinds (DESIGN.md §3, docs/eos.md):
+ *   Mie–Grüneisen cold-curve form, Mie–Grüneisen linear Us–up form, ideal gas, linear elastic. */
+#include "eos_impl.h"
+
+/* ------------------------------------------------------------------------------------------ */
+/* Mie–Grüneisen, cold-curve form (paper 002 §1.2 parameters; DESIGN.md §3):
+ *   P_x(δ) = (ρ0c0²/n)(δⁿ − 1),  ε_x(δ) = (c0²/n)[δⁿ⁻¹/(n−1) + 1/δ − n/(n−1)],
+ *   P = P_x + G(ρ)(e − ε_x). */
+
+typedef struct mg_cold {
+  double c0, n;
+  eos_gruneisen g;
+} mg_cold;
+
+static double mg_cold_px(const eos_t *eos, double delta) {
+  const mg_cold *m = eos->data;
+  return eos->rho0 * m->c0 * m->c0 / m->n * (pow(delta, m->n) - 1.0);
+}
+
+static double mg_cold_ex(const eos_t *eos, double delta) {
+  const mg_cold *m = eos->data;
+  double n = m->n;
+  return m->c0 * m->c0 / n * (pow(delta, n - 1.0) / (n - 1.0) + 1.0 / delta - n / (n - 1.0));
+}
+
+static double mg_cold_pressure(const eos_t *eos, double rho, double e) {
+  const mg_cold *m = eos->data;
+  double delta = rho / eos->rho0;
+  return eos_mg_pressure_from_cold(&m->g, rho, e, mg_cold_px(eos, delta), mg_cold_ex(eos, delta));
+}
+
+static double mg_cold_c2(const eos_t *eos, double rho, double e) {
+  const mg_cold *m = eos->data;
+  double delta = rho / eos->rho0;
+  double dpx = eos->rho0 * m->c0 * m->c0 * pow(delta, m->n - 1.0); /* dP_x/dδ */
+  return eos_mg_c2_from_cold(&m->g, eos->rho0, rho, e, dpx, mg_cold_ex(eos, delta));
+}
+
+static const eos_ops mg_cold_ops = {mg_cold_pressure, mg_cold_c2, mg_cold_px, mg_cold_ex, NULL,
+                                    NULL};
+
+eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const) {
+  if (!(rho0 > 0.0) || !(c0 > 0.0) || !(n > 1.0) || !(gamma0 >= 0.0) || !isfinite(rho0) ||
+      !isfinite(c0) || !isfinite(n) || !isfinite(gamma0))
+    return NULL;
+  mg_cold m = {c0, n, {gamma0, rho0, gamma_rho_const}};
+  eos_t *eos = eos_alloc(EOS_MG_COLD, &mg_cold_ops, rho0, &m, sizeof m);
+  eos->c0 = c0;
+  return eos;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Mie–Grüneisen, linear Us–up form (DESIGN.md §3): with η = 1 − ρ0/ρ,
+ *   P_H = ρ0c0²η/(1 − sη)²,  e_H = P_H η/(2ρ0)  (Hugoniot from (ρ0, e = 0, P = 0)),
+ *   P = P_H + Γ0ρ0 (e − e_H). Defined for 1 − sη > 0 (ρ below the limiting compression
+ *   ρ0 s/(s − 1)); NaN beyond. The cold curve is the isentrope through (ρ0, 0). */
+
+typedef struct mg_linear {
+  double c0, s, gamma0;
+} mg_linear;
+
+static bool mg_linear_ref(const eos_t *eos, double rho, double *ph, double *eh, double *dph,
+                          double *deh) {
+  const mg_linear *m = eos->data;
+  double rho0 = eos->rho0, eta = 1.0 - rho0 / rho, den = 1.0 - m->s * eta;
+  if (!(den > 0.0)) return false;
+  double k = rho0 * m->c0 * m->c0;
+  *ph = k * eta / (den * den);
+  *eh = *ph * eta / (2.0 * rho0);
+  double dph_deta = k * (1.0 + m->s * eta) / (den * den * den);
+  double deta_drho = rho0 / (rho * rho);
+  *dph = dph_deta * deta_drho;                                      /* dP_H/dρ */
+  *deh = (dph_deta * eta + *ph) / (2.0 * rho0) * deta_drho;         /* de_H/dρ */
+  return true;
+}
+
+static double mg_linear_pressure(const eos_t *eos, double rho, double e) {
+  const mg_linear *m = eos->data;
+  double ph, eh, dph, deh;
+  if (!mg_linear_ref(eos, rho, &ph, &eh, &dph, &deh)) return NAN;
+  return ph + m->gamma0 * eos->rho0 * (e - eh);
+}
+
+/* ∂P/∂ρ|_e = P_H' − G e_H', ∂P/∂e|_ρ = G = Γ0ρ0. */
+static double mg_linear_c2(const eos_t *eos, double rho, double e) {
+  const mg_linear *m = eos->data;
+  double ph, eh, dph, deh;
+  if (!mg_linear_ref(eos, rho, &ph, &eh, &dph, &deh)) return NAN;
+  double G = m->gamma0 * eos->rho0, p = ph + G * (e - eh);
+  return dph - G * deh + p / (rho * rho) * G;
+}
+
+static const eos_ops mg_linear_ops = {mg_linear_pressure, mg_linear_c2,
+                                      eos_isentrope_cold_pressure, eos_isentrope_cold_energy,
+                                      NULL, NULL};
+
+/* Range of the tabulated isentrope (docs/eos.md): compression up to 3 or 95 % of the limiting
+ * compression s/(s−1); tension down to 10 % above the spinodal δ = s/(s+1) of the reference
+ * curve (where ∂P_H/∂ρ = 0), and not below 0.5. */
+eos_t *eos_create_mg_linear(double rho0, double c0, double s, double gamma0) {
+  if (!(rho0 > 0.0) || !(c0 > 0.0) || !(s >= 0.0) || !(gamma0 >= 0.0) || !isfinite(rho0) ||
+      !isfinite(c0) || !isfinite(s) || !isfinite(gamma0))
+    return NULL;
+  mg_linear m = {c0, s, gamma0};
+  eos_t *eos = eos_alloc(EOS_MG_LINEAR, &mg_linear_ops, rho0, &m, sizeof m);
+  eos->c0 = c0;
+  double dmax = 3.0, dmin = 0.5;
+  if (s > 1.0) dmax = fmin(dmax, 0.95 * s / (s - 1.0));
+  if (s > 0.0) dmin = fmax(dmin, 1.1 * s / (s + 1.0));
+  if (eos_build_isentrope_cold(eos, dmin, dmax, 2000) != MS_OK) {
+    eos_destroy(eos);
+    return NULL;
+  }
+  return eos;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Ideal gas: P = (γ−1)ρe, c² = γ(γ−1)e = γP/ρ; domain e ≥ 0. Cold curve P_x = ε_x = 0. */
+
+typedef struct ideal_gas {
+  double gamma, p0;
+} ideal_gas;
+
+static double ideal_pressure(const eos_t *eos, double rho, double e) {
+  const ideal_gas *g = eos->data;
+  return e >= 0.0 ? (g->gamma - 1.0) * rho * e : NAN;
+}
+
+static double ideal_c2(const eos_t *eos, double rho, double e) {
+  const ideal_gas *g = eos->data;
+  return e >= 0.0 ? g->gamma * (g->gamma - 1.0) * e : NAN;
+}
+
+static double zero_cold(const eos_t *eos, double delta) { return 0.0; }
+
+static const eos_ops ideal_ops = {ideal_pressure, ideal_c2, zero_cold, zero_cold, NULL, NULL};
+
+eos_t *eos_create_ideal_gas_ref(double gamma, double rho0, double p0) {
+  if (!(gamma > 1.0) || !(rho0 > 0.0) || !(p0 >= 0.0) || !isfinite(gamma) || !isfinite(rho0) ||
+      !isfinite(p0))
+    return NULL;
+  ideal_gas g = {gamma, p0};
+  eos_t *eos = eos_alloc(EOS_IDEAL_GAS, &ideal_ops, rho0, &g, sizeof g);
+  eos->c0 = sqrt(gamma * p0 / rho0);
+  eos->delta_min = 0.0;
+  return eos;
+}
+
+eos_t *eos_create_ideal_gas(double gamma, double rho0) {
+  return eos_create_ideal_gas_ref(gamma, rho0, 1.01325e-4); /* 1 atm in GPa */
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Linear elastic solid (paper 000 rod tests), docs/eos.md: volumetric strain θ = 1 − ρ0/ρ
+ * (positive in compression; −tr E of the discrete model to first order),
+ *   P = P_x = Kθ,  ε_x = ∫₁^δ P_x/(ρ0 d²) dd = Kθ²/(2ρ0),  c² = dP/dρ = Kρ0/ρ²;
+ * no thermal pressure (Γ = 0), so P does not depend on e. */
+
+typedef struct lin_elastic {
+  double K;
+} lin_elastic;
+
+static double elastic_px(const eos_t *eos, double delta) {
+  const lin_elastic *l = eos->data;
+  return l->K * (1.0 - 1.0 / delta);
+}
+
+static double elastic_ex(const eos_t *eos, double delta) {
+  const lin_elastic *l = eos->data;
+  double theta = 1.0 - 1.0 / delta;
+  return l->K * theta * theta / (2.0 * eos->rho0);
+}
+
+static double elastic_pressure(const eos_t *eos, double rho, double e) {
+  return elastic_px(eos, rho / eos->rho0);
+}
+
+static double elastic_c2(const eos_t *eos, double rho, double e) {
+  const lin_elastic *l = eos->data;
+  return l->K * eos->rho0 / (rho * rho);
+}
+
+static const eos_ops elastic_ops = {elastic_pressure, elastic_c2, elastic_px, elastic_ex, NULL,
+                                    NULL};
+
+eos_t *eos_create_linear_elastic(double rho0, double bulk_modulus) {
+  if (!(rho0 > 0.0) || !(bulk_modulus > 0.0) || !isfinite(rho0) || !isfinite(bulk_modulus))
+    return NULL;
+  lin_elastic l = {bulk_modulus};
+  eos_t *eos = eos_alloc(EOS_LINEAR_ELASTIC, &elastic_ops, rho0, &l, sizeof l);
+  eos->c0 = sqrt(bulk_modulus / rho0);
+  eos->delta_min = 0.0;
+  return eos;
+}
