@@ -247,14 +247,25 @@ ms_status cont_grid_step(cont_grid *g, double dt_limit) {
       if (nN1 == Nn) predict_node(g, N, dt, t1);
     }
 
-    /* C1: half-step cells. */
+    /* C1: half-step cells. The work of the first half step uses pⁿ and the viscosity of the
+     * predicted velocities û, so that q·ΔV ≤ 0 (q from a different velocity field could do
+     * negative work and drive a cold gas to e < 0). */
     bool neg = false;
-    for (size_t i = fC1; i < nC1; ++i) {
-      double xl = x[i] + 0.5 * dt * upm[i], xr = x[i + 1] + 0.5 * dt * upm[i + 1];
-      double vh = volume_between(xl, xr, k);
-      neg |= !(vh > 0.0);
-      rh[i] = m[i] / vh;
-      eh[i] = e[i] - qh[i] * (vh - vol[i]) / m[i];
+    {
+      const double cq = g->q_quad, cl = g->q_lin;
+      for (size_t i = fC1; i < nC1; ++i) {
+        double xl = x[i] + 0.5 * dt * upm[i], xr = x[i + 1] + 0.5 * dt * upm[i + 1];
+        double vh = volume_between(xl, xr, k);
+        neg |= !(vh > 0.0);
+        rh[i] = m[i] / vh;
+        double du = upm[i + 1] - upm[i];
+        double adu = du < 0.0 ? -du : 0.0;
+        double qhat = rho[i] * adu * (cq * adu + cl * c[i]);
+        /* ΔV in the same face-area × velocity form as the corrector (not V^{n+½} − Vⁿ, whose
+         * rounding can disagree in sign with Δû and let q do negative work in a cold gas) */
+        double dv = 0.5 * dt * (am[i + 1] * upm[i + 1] - am[i] * upm[i]);
+        eh[i] = e[i] - (p[i] + qhat) * dv / m[i];
+      }
     }
     if (neg) {
       for (size_t i = fC1; i < nC1; ++i) {
