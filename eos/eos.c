@@ -195,6 +195,8 @@ static size_t integrate_isentrope(const eos_t *eos, double dend, size_t nstep, d
   return m;
 }
 
+/* If the isentrope leaves the domain on one side right away (e.g. a table whose e range starts
+ * at 0 while the isentrope dips below 0 near ρ0), the cold curve covers the other side only. */
 ms_status eos_build_isentrope_cold(eos_t *eos, double dmin, double dmax, size_t nstep) {
   double *xs = ms_calloc(nstep + 1, sizeof *xs), *ys = ms_calloc(nstep + 1, sizeof *ys),
          *ds = ms_calloc(nstep + 1, sizeof *ds);
@@ -204,8 +206,8 @@ ms_status eos_build_isentrope_cold(eos_t *eos, double dmin, double dmax, size_t 
   size_t nc = integrate_isentrope(eos, dmax, nstep, xc, yc, dc); /* compression side */
   ms_status st = MS_OK;
   eos_hermite_free(&eos->isentrope);
-  if (ns < 2 || nc < 2) {
-    st = MS_ERR_INPUT; /* no neighbourhood of δ = 1 inside the domain */
+  if (ns < 1 || nc < 1 || ns + nc < 3) {
+    st = MS_ERR_INPUT; /* (ρ0, 0) is outside the domain, or nothing around it is inside */
     eos->delta_min = eos->delta_max = NAN;
   } else {
     eos_hermite *h = &eos->isentrope;
