@@ -313,7 +313,6 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
     const char *name = NULL;
     dk_read_string(e, doc, item, "name", true, NULL, &name);
     if (name) {
-      snprintf(what, sizeof what, "material '%s'", name);
       int first = name_line(list, i, name);
       if (first)
         dk_error(e, doc, dk_get(item, "name"),
@@ -328,10 +327,13 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
       dk_read_double(e, doc, item, "viscosity", MS_DIM_VISCOSITY, true, 0, 0.0, INFINITY, &visc);
     const dk_node *eosmap = dk_get(item, "eos");
     eos_t *eos = NULL;
+    char eos_what[96];
+    snprintf(eos_what, sizeof eos_what, "%s.eos", what);
     if (!eosmap)
-      dk_error(e, doc, item, "%s: missing required key 'eos' (a mapping {type: ..., ...})", what);
-    else if (dk_expect_map(e, doc, eosmap, "eos"))
-      eos = read_eos(e, doc, eosmap, what);
+      dk_error(e, doc, item, "%s%s%s%s: missing required key 'eos' (a mapping {type: ..., ...})",
+               what, name ? " ('" : "", name ? name : "", name ? "')" : "");
+    else if (dk_expect_map(e, doc, eosmap, eos_what))
+      eos = read_eos(e, doc, eosmap, eos_what);
     if (!eos || e->n != nerr0) {
       eos_destroy(eos);
       /* a duplicate is not "broken": the first definition stands */
