@@ -186,7 +186,12 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
     dk_error(e, doc, L, "layer %zu (%s): give cells or cell_size, not both", k, name);
   } else if (cells_n) {
     long nc = 0;
-    if (dk_read_int(e, doc, L, "cells", true, 0, 1, 100000000, &nc)) spec->ncells = nc;
+    if (dk_read_int(e, doc, L, "cells", true, 0, 0, 100000000, &nc)) {
+      if (nc < 1)
+        dk_error(e, doc, cells_n, "layer %zu (%s): cells = %ld, a layer needs at least one cell",
+                 k, name, nc);
+      spec->ncells = nc;
+    }
   } else if (size_n) {
     double h = 0;
     if (dk_read_positive(e, doc, L, "cell_size", MS_DIM_LENGTH, true, 0, &h) && th > 0.0) {
