@@ -1,0 +1,305 @@
+/* cpl.h — the one public header of the coupling library (DESIGN.md §6, docs/coupling.md).
+ *
+ * What lives here:
+ *   - fragments: bonds |r_i − r_k| ≤ b·a, connected components by union–find over a cell-list
+ *     pair search (or over a neighbour list supplied by the particle code), per-fragment
+ *     statistics, the spectrum N(g) and the distributions ejecta experiments report;
+ *   - gas drag on fragments (Schiller–Naumann, or pure Stokes for reference tests);
+ *   - transport of detached fragments as point masses through a gas given by a callback, to a
+ *     detector plane, integrated with SUNDIALS CVODE (BDF: small fragments make the ODE stiff);
+ *   - the piston drive built from a tagged grid node's history (displacement-preserving), and the
+ *     interfaces the one-way drive and two-way coupling expect from the grid and the particles.
+ *
+ * Units are internal (DESIGN.md §2): g, cm, 10 µs; velocity km/s, viscosity g/(cm·10 µs),
+ * force g·cm/(10 µs)², energy kJ.
+ */
+#ifndef MSCALE_CPL_H
+#define MSCALE_CPL_H
+
+#include "core.h"
+
+/* ========================================================================================== */
+/* Union–find (disjoint sets) with path compression and union by size.                        */
+
+typedef struct cpl_uf {
+  size_t n;
+  size_t *parent; /* parent[i] == i for a root */
+  size_t *size;   /* set size, valid at roots */
+} cpl_uf;
+
+/* n singletons; uf must be zeroed or previously initialised (storage is reused). */
+void cpl_uf_init(cpl_uf *uf, size_t n);
+void cpl_uf_free(cpl_uf *uf);
+size_t cpl_uf_find(cpl_uf *uf, size_t i);
+/* Merge the sets of i and k; true if they were different sets. */
+bool cpl_uf_union(cpl_uf *uf, size_t i, size_t k);
+
+/* ========================================================================================== */
+/* Fragments                                                                                   */
+
+/* A read-only view of particles in structure-of-arrays form (matches ptl_state). z, vx, vy,
+ * vz may be NULL (taken as 0: 2D runs, or positions only). `skip` (optional) excludes
+ * particles (e.g. removed or piston particles): they belong to no fragment (id −1). */
+typedef struct cpl_particles {
+  size_t n;
+  const double *x, *y, *z;    /* cm */
+  const double *vx, *vy, *vz; /* km/s */
+  const double *mass;         /* g */
+  const uint8_t *skip;
+} cpl_particles;
+
+/* Periodic box: axis k is periodic with period period[k] > 0 starting at lo[k]; period 0 =
+ * open axis. The bond length must be below half of every period (minimum image). */
+typedef struct cpl_box {
+  double lo[3];
+  double period[3];
+} cpl_box;
+
+typedef struct cpl_fragment_opts {
+  double bond;    /* b: bond criterion |r_i − r_k| ≤ b·a (> 0) */
+  double spacing; /* a: lattice spacing / cluster size, cm (> 0) */
+  double rho0;    /* reference density for equivalent diameters, g/cm³ (≤ 0: diameters NaN) */
+  cpl_box box;    /* zero = open in every direction */
+} cpl_fragment_opts;
+
+/* Fragments of one particle configuration. Fragment k is numbered in the order of its smallest
+ * particle index (deterministic, independent of the search order and the thread count).
+ * Per-fragment arrays are length n. Centres of mass on periodic axes are computed from
+ * positions unwrapped around the fragment's circular mean and wrapped back into the box. */
+typedef struct cpl_fragments {
+  size_t n_particles; /* particles in the configuration (length of id) */
+  size_t n;           /* fragments */
+  int64_t *id;        /* [n_particles] fragment of each particle, −1 for skipped */
+  int64_t *first;     /* smallest particle index in the fragment */
+  int64_t *count;     /* particles in the fragment (g) */
+  double *mass;       /* g */
+  double *diameter;   /* equivalent diameter d = (6 m/(π ρ0))^{1/3}, cm */
+  double *cx, *cy, *cz; /* centre of mass, cm */
+  double *vx, *vy, *vz; /* centre-of-mass velocity, km/s */
+  double *rg;           /* radius of gyration sqrt(Σ m |r − r_c|² / M), cm */
+  long n_bonds;         /* bonded pairs found (cell search: each pair once; CSR: list entries) */
+  /* scratch kept between calls (no reallocation when the particle count does not grow) */
+  size_t cap_particles, cap_fragments, cap_cells;
+  cpl_uf uf;
+  size_t *cell_of, *cell_start, *cell_items;
+  double *work;
+} cpl_fragments;
+
+void cpl_fragments_init(cpl_fragments *f);
+void cpl_fragments_free(cpl_fragments *f);
+/* Find the fragments with the coupling module's own cell-list pair search.
+ * MS_ERR_INPUT: non-finite positions/masses, bad options, bond ≥ half a period. */
+ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p,
+                             const cpl_fragment_opts *o);
+/* Same with candidate pairs from a neighbour list in CSR form (e.g. the particle code's Verlet
+ * lists, any radius ≥ b·a): the candidates of i are nbr[start[i] .. start[i+1]); each bonded
+ * pair must appear at least once in either direction. The bond criterion is still checked. */
+ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
+                                 const cpl_fragment_opts *o, const size_t *start,
+                                 const int32_t *nbr);
+/* Per-fragment statistics from a labelling f->id already filled (used by the two finders;
+ * public so that a distributed finder can reuse it). */
+void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o);
+
+/* Spectrum N(g): rows g ascending with count > 0; mass = total mass of those fragments. */
+typedef struct cpl_spectrum {
+  size_t n;
+  int64_t *g, *count;
+  double *mass;
+} cpl_spectrum;
+void cpl_spectrum_build(const cpl_fragments *f, cpl_spectrum *s);
+void cpl_spectrum_free(cpl_spectrum *s);
+
+/* Which fragments count as ejecta: centre of mass beyond the plane n·r > plane, optionally
+ * leaving out the largest fragment (the bulk of the sample). */
+typedef struct cpl_ejecta_sel {
+  double normal[3]; /* unit normal pointing away from the sample (default +x) */
+  double plane;     /* cm (-INFINITY: no plane) */
+  bool exclude_largest;
+} cpl_ejecta_sel;
+void cpl_ejecta_sel_default(cpl_ejecta_sel *s); /* +x, no plane, exclude the largest */
+bool cpl_is_ejecta(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s);
+/* Total ejected mass (for the ejected-mass-vs-time history). */
+double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s);
+
+/* CSV writers (core's units header; `f` may be stdout or an ms_afile's FILE).
+ *   spectrum:    g,count,mass
+ *   table:       id,count,mass,d,x,y,z,vx,vy,vz,rg        (one row per fragment)
+ *   cumulative:  mass,N_ge,M_ge   N(≥m) and the mass in fragments ≥ m, m descending
+ *   histogram:   lo,hi,count,mass  logarithmic bins of mass or diameter (nbins > 0)
+ *   ejecta:      v,M_ge            cumulative ejected mass with normal velocity ≥ v */
+void cpl_write_spectrum(FILE *out, const cpl_fragments *f, const char *title);
+void cpl_write_fragment_table(FILE *out, const cpl_fragments *f, const char *title);
+void cpl_write_cumulative(FILE *out, const cpl_fragments *f, const char *title);
+typedef enum cpl_hist_of { CPL_HIST_MASS = 0, CPL_HIST_DIAMETER } cpl_hist_of;
+void cpl_write_histogram(FILE *out, const cpl_fragments *f, cpl_hist_of what, int nbins,
+                         const char *title);
+void cpl_write_ejecta_velocity(FILE *out, const cpl_fragments *f, const cpl_ejecta_sel *s,
+                               const char *title);
+
+/* ========================================================================================== */
+/* Gas drag (DESIGN.md §6; Schiller–Naumann as in the Logos multiphase paper, seed 004)        */
+
+/* Gas state at a point: density g/cm³, velocity km/s, pressure GPa, dynamic viscosity
+ * g/(cm·10 µs) (air at 300 K: 1.8e-5 Pa·s = 1.8e-9 internal). */
+typedef struct cpl_gas {
+  double rho, u[3], p, mu;
+} cpl_gas;
+
+typedef enum cpl_drag_law {
+  CPL_DRAG_SCHILLER_NAUMANN = 0, /* C_D = 24/Re (1 + 0.15 Re^0.687), Re < 1000; 0.44 above */
+  CPL_DRAG_STOKES,               /* C_D = 24/Re at every Re (reference tests, analytic) */
+  CPL_DRAG_NONE
+} cpl_drag_law;
+extern const char *const cpl_drag_law_names[]; /* "schiller_naumann", "stokes", "none", NULL */
+
+/* Drag coefficient C_D(Re) (Re > 0). */
+double cpl_drag_coefficient(cpl_drag_law law, double re);
+/* Drag factor f = C_D Re / 24 (1 in the Stokes limit; finite at Re = 0). */
+double cpl_drag_factor(cpl_drag_law law, double re);
+/* Reynolds number Re = ρ_g |v_r| d / μ_g. */
+double cpl_reynolds(const cpl_gas *g, double d, const double v[3]);
+/* Drag force on a sphere of diameter d moving with v: F = ½ ρ_g C_D (π d²/4) |v_r| v_r with
+ * v_r = u_g − v, evaluated as F = 3π μ d f(Re) v_r (finite at v_r → 0). */
+void cpl_drag_force(cpl_drag_law law, const cpl_gas *g, double d, const double v[3],
+                    double F[3]);
+/* Stokes relaxation time τ = ρ_p d²/(18 μ) (seed 004, Logos paper). */
+double cpl_stokes_time(double rho_p, double d, double mu);
+
+/* Gas state at position x and time t. Returns false where there is no gas (no drag there). */
+typedef bool (*cpl_gas_fn)(void *user, const double x[3], double t, cpl_gas *out);
+
+/* Particle phase (DESIGN.md §6: the force is shared over the fragment's particles): add to
+ * particle i's force m_i/M times its fragment's drag, the fragment moving with its centre-of-
+ * mass velocity with diameter f->diameter (so f must have been found with rho0 > 0). Only the
+ * fragments selected by `sel` feel drag (NULL: all). fz may be NULL (2D). Uses f's scratch,
+ * allocates nothing. */
+void cpl_drag_fragments(cpl_drag_law law, cpl_fragments *f, const cpl_particles *p,
+                        const cpl_ejecta_sel *sel, cpl_gas_fn gas, void *gas_user, double t,
+                        double *fx, double *fy, double *fz);
+
+/* ========================================================================================== */
+/* Transport of fragments to a detector (coupling/transport.c, SUNDIALS CVODE BDF)             */
+
+/* Momentum and energy the gas must receive (two-way transport): over [t0, t1] a fragment's
+ * momentum changed by dp and its kinetic energy by de; the gas at x (the fragment's mid-step
+ * position) gets −dp and −de. */
+typedef void (*cpl_gas_return_fn)(void *user, const double x[3], double t0, double t1,
+                                  const double dp[3], double de);
+
+typedef struct cpl_transport_opts {
+  cpl_drag_law law;
+  double rho_p;         /* fragment material density (diameter from mass), g/cm³ */
+  double det_normal[3]; /* detector plane: arrival when normal·x ≥ det_x (normal unit) */
+  double det_x;         /* cm */
+  double rtol, atol_x, atol_v; /* CVODE tolerances (0: 1e-8, 1e-10 cm, 1e-10 km/s) */
+  long max_steps;       /* per fragment and advance call (0: 100000) */
+} cpl_transport_opts;
+void cpl_transport_opts_default(cpl_transport_opts *o);
+
+typedef enum cpl_frag_state {
+  CPL_FLYING = 0,
+  CPL_ARRIVED,  /* crossed the detector plane */
+  CPL_FAILED    /* the integrator failed (reported through cpl_transport_error) */
+} cpl_frag_state;
+
+typedef struct cpl_transport cpl_transport;
+cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas, void *gas_user);
+void cpl_transport_free(cpl_transport *tr);
+/* Optional momentum/energy return to the gas. */
+void cpl_transport_set_return(cpl_transport *tr, cpl_gas_return_fn fn, void *user);
+/* Add a fragment (mass g, position cm, velocity km/s) at time t0; returns its index.
+ * A fragment already beyond the plane arrives at t0. */
+size_t cpl_transport_add(cpl_transport *tr, double mass, const double x[3], const double v[3],
+                         double t0);
+/* Add every fragment of f selected by sel (NULL: all); returns how many were added. */
+size_t cpl_transport_add_fragments(cpl_transport *tr, const cpl_fragments *f,
+                                   const cpl_ejecta_sel *sel, double t0);
+/* Advance every flying fragment to t_end (each with its own CVODE history, kept between calls
+ * so small windows cost little). MS_ERR_SOLVER if any fragment's integration failed (the
+ * others are still advanced). */
+ms_status cpl_transport_advance(cpl_transport *tr, double t_end);
+const char *cpl_transport_error(const cpl_transport *tr);
+
+typedef struct cpl_flight {
+  cpl_frag_state state;
+  double mass, diameter;
+  double t, x[3], v[3];         /* current (or arrival) time, position, velocity */
+  double t_arrival, v_arrival[3]; /* NaN until arrival */
+  long steps;                   /* CVODE steps so far */
+} cpl_flight;
+size_t cpl_transport_count(const cpl_transport *tr);
+cpl_flight cpl_transport_get(const cpl_transport *tr, size_t i);
+/* CSV: id,mass,d,t_arrival,vx,vy,vz (arrived fragments only, in index order). */
+void cpl_write_arrivals(FILE *out, const cpl_transport *tr, const char *title);
+
+/* ========================================================================================== */
+/* Piston drive from a tagged grid node (one-way drive, docs/coupling.md)                       */
+
+/* The tagged node's history (t_k, x_k, u_k), k = 0..n−1, as the grid records it, turned into a
+ * piston velocity whose integral reproduces the node's displacement exactly: on [t_k, t_k+1]
+ *   u(t) = u_k + (u_k+1 − u_k) s + c_k,  s = (t − t_k)/(t_k+1 − t_k),
+ *   c_k = (x_k+1 − x_k)/(t_k+1 − t_k) − ½(u_k + u_k+1),
+ * so ∫ u dt over any interval [t_k, t_j] equals x_j − x_k. For the conservative cross scheme,
+ * which moves nodes with ½(uⁿ + uⁿ⁺¹), c_k vanishes to round-off and u(t) is the piecewise-
+ * linear history itself; max |c_k| is reported as a consistency check. Constant beyond the
+ * ends (the last velocity). */
+typedef struct cpl_piston {
+  size_t n;
+  double *t, *x, *u, *c;
+  double max_correction; /* max |c_k|, km/s */
+} cpl_piston;
+/* MS_ERR_INPUT if n < 1, t not strictly increasing, or any value not finite. Arrays copied. */
+ms_status cpl_piston_build(cpl_piston *p, size_t n, const double *t, const double *x,
+                           const double *u);
+void cpl_piston_free(cpl_piston *p);
+double cpl_piston_velocity(const cpl_piston *p, double t);
+/* Displacement x(t) − x(t_0) (exact integral of cpl_piston_velocity). */
+double cpl_piston_displacement(const cpl_piston *p, double t);
+
+/* ========================================================================================== */
+/* Interfaces expected from the grid and the particles (docs/coupling.md §Interfaces)           *
+ *
+ * The coupling layer talks to the other modules only through these callback tables, so that
+ * it does not depend on their internals; the `coupled` problem fills them from cont_grid_* and
+ * cd_sim_* calls.
+ *
+ * Grid side (continuum):                                                                      */
+typedef struct cpl_grid_ops {
+  void *grid;
+  double (*time)(void *grid);
+  /* Advance the grid to t_end exactly (sub-cycling inside the grid is its own business). */
+  ms_status (*advance_to)(void *grid, double t_end);
+  /* Tagged node: position and velocity now. */
+  void (*node_state)(void *grid, size_t node, double *x, double *u);
+  /* History of the tagged node so far (arrays owned by the grid). */
+  size_t (*node_history)(void *grid, size_t tag, const double **t, const double **x,
+                         const double **u);
+  /* Two-way: traction on the interface node (force per unit face area, + towards +x), kept
+   * until changed; and the momentum/energy the grid's boundaries have received so far. */
+  void (*set_node_traction)(void *grid, size_t node, double traction);
+  /* Gas state at a position (the ambient gas layer): the cpl_gas_fn of drag and transport. */
+  cpl_gas_fn gas;
+  /* Two-way transport: deposit momentum/energy into the gas cell containing x. */
+  cpl_gas_return_fn deposit;
+} cpl_grid_ops;
+
+/* Particle side (cluster dynamics or the discrete model): */
+typedef struct cpl_particle_ops {
+  void *sim;
+  double (*time)(void *sim);
+  /* Piston velocity along the drive axis as a function of time (the particle code keeps it). */
+  void (*set_piston)(void *sim, const cpl_piston *piston, const double dir[3]);
+  ms_status (*advance_to)(void *sim, double t_end);
+  /* Current particles (view valid until the next advance). */
+  cpl_particles (*view)(void *sim);
+  /* Lattice spacing a (cm). */
+  double (*spacing)(void *sim);
+  /* Two-way: force the particles exert on the piston layer over the last advance, averaged in
+   * time (so the impulse is exact), and the work it did. */
+  void (*piston_reaction)(void *sim, double *force, double *work);
+  /* Mean free-surface velocity along the drive axis (for the drive check). */
+  double (*free_surface_velocity)(void *sim);
+} cpl_particle_ops;
+
+#endif /* MSCALE_CPL_H */

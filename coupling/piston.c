@@ -1,0 +1,74 @@
+/* Piston velocity from a tagged grid node's history, preserving the node's displacement
+ * (the one-way drive of DESIGN.md §6; formula in cpl.h and docs/coupling.md). */
+#include "cpl_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void cpl_piston_free(cpl_piston *p) {
+  if (!p) return;
+  free(p->t);
+  free(p->x);
+  free(p->u);
+  free(p->c);
+  memset(p, 0, sizeof *p);
+}
+
+ms_status cpl_piston_build(cpl_piston *p, size_t n, const double *t, const double *x,
+                           const double *u) {
+  memset(p, 0, sizeof *p);
+  if (n < 1 || !t || !x || !u) return MS_ERR_INPUT;
+  for (size_t k = 0; k < n; k++) {
+    if (!isfinite(t[k]) || !isfinite(x[k]) || !isfinite(u[k])) return MS_ERR_INPUT;
+    if (k && !(t[k] > t[k - 1])) return MS_ERR_INPUT;
+  }
+  p->n = n;
+  p->t = ms_calloc(n, sizeof *p->t);
+  p->x = ms_calloc(n, sizeof *p->x);
+  p->u = ms_calloc(n, sizeof *p->u);
+  p->c = ms_calloc(n, sizeof *p->c);
+  memcpy(p->t, t, n * sizeof *t);
+  memcpy(p->x, x, n * sizeof *x);
+  memcpy(p->u, u, n * sizeof *u);
+  for (size_t k = 0; k + 1 < n; k++) {
+    /* constant correction that makes ∫ over the interval equal the recorded displacement */
+    p->c[k] = (x[k + 1] - x[k]) / (t[k + 1] - t[k]) - 0.5 * (u[k] + u[k + 1]);
+    if (fabs(p->c[k]) > p->max_correction) p->max_correction = fabs(p->c[k]);
+  }
+  return MS_OK;
+}
+
+/* Interval k with t_k ≤ t < t_k+1 (binary search); n−1 past the end. */
+static size_t interval(const cpl_piston *p, double t) {
+  size_t lo = 0, hi = p->n - 1;
+  if (t >= p->t[hi]) return hi;
+  while (hi - lo > 1) {
+    size_t mid = (lo + hi) / 2;
+    if (p->t[mid] <= t)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
+double cpl_piston_velocity(const cpl_piston *p, double t) {
+  if (!p->n) return 0.0;
+  if (t <= p->t[0]) return p->u[0];
+  size_t k = interval(p, t);
+  if (k == p->n - 1) return p->u[k];
+  double s = (t - p->t[k]) / (p->t[k + 1] - p->t[k]);
+  return p->u[k] + (p->u[k + 1] - p->u[k]) * s + p->c[k];
+}
+
+double cpl_piston_displacement(const cpl_piston *p, double t) {
+  if (!p->n) return 0.0;
+  if (t <= p->t[0]) return p->u[0] * (t - p->t[0]); /* constant before the start */
+  size_t k = interval(p, t);
+  if (k == p->n - 1) return p->x[k] - p->x[0] + p->u[k] * (t - p->t[k]);
+  double h = t - p->t[k], dt = p->t[k + 1] - p->t[k];
+  /* exact integral of the linear-plus-constant velocity over [t_k, t] */
+  double part = h * (p->u[k] + p->c[k]) + 0.5 * (p->u[k + 1] - p->u[k]) * h * h / dt;
+  return p->x[k] - p->x[0] + part;
+}
