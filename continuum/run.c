@@ -162,8 +162,6 @@ ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
     s = cont_write_profile(ctx, g, "profile_final");
     if (!s) s = cont_write_histories(ctx, g, p->history_stride);
     if (!s && p->xt_frames > 0) s = xt_write(ctx, &xt, p->xt_quantity);
-    if (!s)
-      ms_log(ctx, MS_LOG_INFO, "continuum: done, %ld steps to t = %g", g->step, g->t);
   } else if (s == MS_ERR_UNSTABLE && p->xt_frames > 0) {
     xt_add(&xt, g);
     xt_write(ctx, &xt, p->xt_quantity);

@@ -1,0 +1,85 @@
+#!/usr/bin/python3
+"""x–t diagram of a continuum run (density or pressure on the moving Lagrangian grid).
+
+Usage:  /usr/bin/python3 tools/plot_xt.py OUTDIR [--quantity density|pressure] [--log]
+                                          [--tags] [-o FILE.png]
+
+Reads OUTDIR/xt.h5 (written by `mscale run` for `problem: continuum`, see
+docs/input-continuum.md): t [nf], x [nf][ncol+1] node positions, rho and p [nf][ncol].
+Each frame's cells are drawn as quadrilaterals between consecutive frames, so the picture
+follows the material (contacts are sharp lines). With --tags the tagged nodes' histories
+(history.h5) are overlaid. Writes OUTDIR/xt_<quantity>.png unless -o is given.
+Needs Debian's numpy, h5py and matplotlib (run with /usr/bin/python3).
+"""
+import argparse
+import os
+import sys
+
+import h5py
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import LogNorm  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("outdir")
+    ap.add_argument("--quantity", choices=["density", "pressure"], default=None,
+                    help="default: the deck's output.xt_quantity")
+    ap.add_argument("--log", action="store_true", help="logarithmic colour scale")
+    ap.add_argument("--tags", action="store_true", help="overlay tagged-node trajectories")
+    ap.add_argument("-o", "--output", default=None)
+    a = ap.parse_args()
+
+    path = os.path.join(a.outdir, "xt.h5")
+    if not os.path.exists(path):
+        sys.exit(f"plot_xt: {path} not found (set output.xt_frames > 0 in the deck)")
+    with h5py.File(path, "r") as f:
+        t = f["t"][()].ravel()
+        x = f["x"][()]
+        q_attr = f.attrs.get("quantity", b"rho")
+        q_attr = q_attr.decode() if isinstance(q_attr, bytes) else str(q_attr)
+        quantity = a.quantity or ("pressure" if q_attr == "p" else "density")
+        data = f["p" if quantity == "pressure" else "rho"][()]
+        tunit = f["t"].attrs.get("units", b"10us")
+        tunit = tunit.decode() if isinstance(tunit, bytes) else str(tunit)
+    if len(t) < 2:
+        sys.exit("plot_xt: fewer than two frames in xt.h5")
+    # Quadrilateral mesh in (x, t): frame k's nodes against times between frames.
+    tb = np.empty(len(t) + 1)
+    tb[1:-1] = 0.5 * (t[1:] + t[:-1])
+    tb[0], tb[-1] = t[0], t[-1]
+    xb = np.empty((len(t) + 1, x.shape[1]))
+    xb[1:-1] = 0.5 * (x[1:] + x[:-1])
+    xb[0], xb[-1] = x[0], x[-1]
+    T = np.repeat(tb[:, None], x.shape[1], axis=1)
+
+    fig, ax = plt.subplots(figsize=(8, 6))
+    norm = None
+    if a.log:
+        pos = data[data > 0]
+        norm = LogNorm(vmin=pos.min(), vmax=pos.max()) if pos.size else None
+    mesh = ax.pcolormesh(xb, T, data, shading="flat", cmap="viridis", norm=norm)
+    label = "density [g/cm^3]" if quantity == "density" else "pressure [GPa]"
+    fig.colorbar(mesh, ax=ax, label=label)
+    if a.tags:
+        hpath = os.path.join(a.outdir, "history.h5")
+        if os.path.exists(hpath):
+            with h5py.File(hpath, "r") as h:
+                for name in h:
+                    ax.plot(h[name]["x"][()].ravel(), h[name]["t"][()].ravel(), lw=1.0,
+                            label=name)
+            ax.legend(loc="upper left", fontsize=8)
+    ax.set_xlabel("x [cm]")
+    ax.set_ylabel(f"t [{tunit}]")
+    ax.set_title(f"x–t diagram: {quantity}")
+    out = a.output or os.path.join(a.outdir, f"xt_{quantity}.png")
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    print(out)
+
+
+if __name__ == "__main__":
+    main()
