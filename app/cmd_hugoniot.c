@@ -20,11 +20,13 @@ static void hugoniot_usage(FILE *f) {
           "  --up LIST         particle velocities in km/s (> 0): '0.5,1,2' or a range\n"
           "                    'FIRST:LAST:COUNT' (COUNT evenly spaced values)\n"
           "  --rho0 X          initial density, g/cm^3 (default: the EOS's rho0)\n"
-          "  --e0 Y            initial specific internal energy, kJ/g (default 0)\n"
+          "  --e0 Y            initial specific internal energy, kJ/g (default: the EOS's\n"
+          "                    reference e0: 0 for condensed matter, p0/((gamma-1) rho0)\n"
+          "                    for an ideal gas)\n"
           "  --mixture MIX     Kuropatenko mixture: the name of an entry of the deck's\n"
           "                    mixtures: list, or 'NAME:ALPHA,NAME:ALPHA,...' with volume\n"
           "                    fractions ALPHA (sum 1) of deck materials. Components start\n"
-          "                    from their reference state (rho0_i, e = 0).\n"
+          "                    from their reference states (rho0_i, e0_i).\n"
           "  -h, --help        this text\n\n"
           "Exit codes: 0 success, 1 a point has no solution (e.g. outside a table),\n"
           "2 bad usage or bad deck (messages DECK:LINE:COL: ...).\n");
@@ -195,9 +197,9 @@ int cmd_hugoniot(int argc, char **argv) {
     hugoniot_usage(stderr);
     return 2;
   }
-  double rho0_opt = NAN, e0 = 0.0;
+  double rho0_opt = NAN, e0_opt = NAN;
   if ((rho0_s && (!parse_number(rho0_s, &rho0_opt) || !(rho0_opt > 0.0))) ||
-      (e0_s && !parse_number(e0_s, &e0))) {
+      (e0_s && !parse_number(e0_s, &e0_opt))) {
     fprintf(stderr, "mscale hugoniot: --rho0 must be a number > 0 and --e0 a number\n");
     return 2;
   }
@@ -243,6 +245,7 @@ int cmd_hugoniot(int argc, char **argv) {
       goto done;
     }
     double rho0 = isnan(rho0_opt) ? eos_rho0(m->eos) : rho0_opt;
+    double e0 = isnan(e0_opt) ? eos_e0(m->eos) : e0_opt;
     double p0 = eos_pressure(m->eos, rho0, e0);
     if (!isfinite(p0)) {
       fprintf(stderr, "mscale hugoniot: the initial state rho0 = %g g/cm^3, e0 = %g kJ/g is "

@@ -44,6 +44,7 @@ const char *eos_kind_name(eos_kind k) {
 
 double eos_rho0(const eos_t *eos) { return eos->rho0; }
 double eos_c0(const eos_t *eos) { return eos->c0; }
+double eos_e0(const eos_t *eos) { return eos->e0; }
 
 bool eos_has_cold_curve(const eos_t *eos) {
   return eos->ops->cold_pressure != NULL && !isnan(eos->delta_min);

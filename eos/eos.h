@@ -47,7 +47,11 @@ void eos_destroy(eos_t *eos);
 eos_kind eos_get_kind(const eos_t *eos);
 const char *eos_kind_name(eos_kind k);
 double eos_rho0(const eos_t *eos);     /* reference density (g/cm³) */
-double eos_c0(const eos_t *eos);       /* reference (bulk) sound speed at rho0, e = 0 (km/s) */
+double eos_c0(const eos_t *eos);       /* reference sound speed c(rho0, e0) (km/s) */
+/* Reference specific internal energy e0 (kJ/g): 0 for condensed matter (the cold curve's zero),
+ * p0/((γ−1)ρ0) for an ideal gas. The reference state (rho0, e0) is the default initial state of
+ * Hugoniots and of mixture components. */
+double eos_e0(const eos_t *eos);
 bool eos_has_cold_curve(const eos_t *eos);
 /* Range of δ where the cold curve is defined (tables, tabulated isentropes); ±INFINITY for
  * analytic curves. Returns false (and NaNs) if the EOS has no cold curve. */
@@ -130,7 +134,8 @@ ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, dou
  * pressure equilibrium), returns D. alpha = volume fractions (sum 1). */
 ms_status eos_kuropatenko(size_t ncomp, const eos_t *const *comp, const double *alpha, double u,
                           double *D, double *p);
-/* The same at a given pressure: each component's Hugoniot at p (from ρ0_i = eos_rho0, e = 0)
+/* The same at a given pressure: each component's Hugoniot at p (from its reference state
+ * ρ0_i = eos_rho0, e0_i = eos_e0)
  * gives D_i − u_i; D − u = 1/Σ α_i/(D_i − u_i) and p − P0 = ρ0 D u with ρ0 = Σ α_i ρ0_i.
  * Fills the mixture state (up = u, us = D, p, rho = ρ0 D/(D − u), e − e0 from the energy jump). */
 ms_status eos_kuropatenko_at_pressure(size_t ncomp, const eos_t *const *comp, const double *alpha,

@@ -142,6 +142,7 @@ eos_t *eos_create_ideal_gas_ref(double gamma, double rho0, double p0) {
   ideal_gas g = {gamma, p0};
   eos_t *eos = eos_alloc(EOS_IDEAL_GAS, &ideal_ops, rho0, &g, sizeof g);
   eos->c0 = sqrt(gamma * p0 / rho0);
+  eos->e0 = p0 / ((gamma - 1.0) * rho0);
   eos->delta_min = 0.0;
   return eos;
 }

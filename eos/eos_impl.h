@@ -62,7 +62,7 @@ double eos_mg_c2_from_cold(const eos_gruneisen *g, double rho0, double rho, doub
 struct eos {
   eos_kind kind;
   const eos_ops *ops;
-  double rho0, c0;
+  double rho0, c0, e0;
   /* Cold curve range in δ (±inf if analytic everywhere; NaN if there is none). */
   double delta_min, delta_max;
   /* The isentrope through (ρ0, e = 0) used as the cold curve of EOSs that have no explicit one

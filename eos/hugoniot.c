@@ -219,8 +219,9 @@ ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, dou
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Kuropatenko rule (paper 002 §1.2, docs/eos.md). Components start at (ρ0_i = eos_rho0, e = 0)
- * with pressures P0_i; the mixture starts at ρ0 = Σ α_i ρ0_i, P0 = Σ α_i P0_i. */
+/* Kuropatenko rule (paper 002 §1.2, docs/eos.md). Components start at their reference states
+ * (ρ0_i, e0_i) = (eos_rho0, eos_e0) with pressures P0_i; the mixture starts at
+ * ρ0 = Σ α_i ρ0_i, P0 = Σ α_i P0_i. */
 
 static ms_status check_fractions(size_t ncomp, const eos_t *const *comp, const double *alpha) {
   if (ncomp == 0) return MS_ERR_INPUT;
@@ -237,7 +238,7 @@ static void mixture_reference(size_t ncomp, const eos_t *const *comp, const doub
   *rho0 = *p0 = 0.0;
   for (size_t i = 0; i < ncomp; ++i) {
     *rho0 += alpha[i] * eos_rho0(comp[i]);
-    *p0 += alpha[i] * eos_pressure(comp[i], eos_rho0(comp[i]), 0.0);
+    *p0 += alpha[i] * eos_pressure(comp[i], eos_rho0(comp[i]), eos_e0(comp[i]));
   }
 }
 
@@ -253,7 +254,7 @@ ms_status eos_kuropatenko_at_pressure(size_t ncomp, const eos_t *const *comp, co
   for (size_t i = 0; i < ncomp; ++i) {
     if (alpha[i] == 0.0) continue;
     eos_hugoniot_point hi;
-    st = eos_hugoniot_at_pressure(comp[i], eos_rho0(comp[i]), 0.0, p, &hi);
+    st = eos_hugoniot_at_pressure(comp[i], eos_rho0(comp[i]), eos_e0(comp[i]), p, &hi);
     if (st != MS_OK) return st;
     sum += alpha[i] / (hi.us - hi.up);
   }
@@ -297,7 +298,8 @@ static ms_status kuropatenko_point(size_t ncomp, const eos_t *const *comp, const
   double rho0, p0, inv_c = 0.0;
   mixture_reference(ncomp, comp, alpha, &rho0, &p0);
   for (size_t i = 0; i < ncomp; ++i)
-    if (alpha[i] > 0.0) inv_c += alpha[i] / eos_sound_speed(comp[i], eos_rho0(comp[i]), 0.0);
+    if (alpha[i] > 0.0)
+      inv_c += alpha[i] / eos_sound_speed(comp[i], eos_rho0(comp[i]), eos_e0(comp[i]));
   double c = 1.0 / inv_c; /* acoustic Kuropatenko speed, 1/C = Σ α_i/C_i */
   kur_problem k = {ncomp, comp, alpha, u, MS_OK};
   /* u_mix(p) increases from 0 at p = P0; expand the upper bracket until it passes u. */

@@ -82,6 +82,17 @@ static void test_ideal_gas(void **state) {
   /* Strong-shock limit: ρ/ρ0 → (γ+1)/(γ−1) = 4; at up/c0 ≈ 21 it is 3.98. */
   assert_true(fabs(h[4].rho / rho0 - 4.0) < 0.03);
   eos_destroy(gas);
+  /* The reference state of a gas given by (ρ0, p0): e0 = p0/((γ−1)ρ0), c0 = sqrt(γ p0/ρ0). */
+  eos_t *air = eos_create_ideal_gas_ref(1.4, 1.225e-3, 1.01325e-4);
+  double ea = eos_e0(air), ca = eos_c0(air);
+  assert_true(fabs(ea - 1.01325e-4 / (0.4 * 1.225e-3)) < 1e-15);
+  assert_true(fabs(ca - eos_sound_speed(air, 1.225e-3, ea)) < 1e-14);
+  double u1 = 0.5;
+  eos_hugoniot_point ha;
+  assert_int_equal(eos_hugoniot(air, 1.225e-3, ea, 1, &u1, &ha), MS_OK);
+  double aa = 2.4 / 4, usa = aa * u1 + sqrt(aa * aa * u1 * u1 + ca * ca);
+  assert_true(fabs(ha.us - usa) < 1e-10 * usa);
+  eos_destroy(air);
 }
 
 /* Hugoniot at a given pressure is the inverse of the up parametrisation (Brent, 1e-15). */
