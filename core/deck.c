@@ -430,47 +430,90 @@ void dk_report_unused(dk_errors *e, const dk_doc *doc) {
 /* ------------------------------------------------------------------------------------------ */
 /* Resolved deck                                                                               */
 
+/* Decode one UTF-8 sequence at s (libyaml hands out valid UTF-8); returns its length and the
+ * code point in *cp, or 1 and the raw byte for an invalid sequence. */
+static int utf8_decode(const unsigned char *s, unsigned long *cp) {
+  int len = s[0] < 0x80 ? 1 : (s[0] & 0xE0) == 0xC0 ? 2 : (s[0] & 0xF0) == 0xE0 ? 3
+                                                   : (s[0] & 0xF8) == 0xF0 ? 4 : 0;
+  if (len == 0) {
+    *cp = s[0];
+    return 1;
+  }
+  unsigned long c = len == 1 ? s[0] : s[0] & (0x7F >> len);
+  for (int i = 1; i < len; i++) {
+    if ((s[i] & 0xC0) != 0x80) {
+      *cp = s[0];
+      return 1;
+    }
+    c = (c << 6) | (s[i] & 0x3F);
+  }
+  *cp = c;
+  return len;
+}
+
+/* Characters YAML allows verbatim inside a double-quoted scalar (YAML 1.1 "printable", minus
+ * the line separators NEL, LS, PS and the BOM, which a reader would fold or drop). */
+static bool yaml_printable(unsigned long c) {
+  if (c == 0x85 || c == 0x2028 || c == 0x2029 || c == 0xFEFF) return false;
+  return (c >= 0x20 && c <= 0x7E) || (c >= 0xA0 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) ||
+         (c >= 0x10000 && c <= 0x10FFFF);
+}
+
 static bool needs_quotes(const char *s) {
   if (!s[0]) return true;
   if (strchr("-?:,[]{}#&*!|>'\"%@` ", s[0])) {
     /* a leading '-' followed by a digit is a number */
     if (!(s[0] == '-' && s[1] >= '0' && s[1] <= '9')) return true;
   }
-  for (const char *c = s; *c; c++)
-    if (*c == ':' || *c == '#' || *c == '\n' || *c == '"' || *c == '\\' ||
-        (unsigned char)*c < 0x20)
-      return true;
+  for (const unsigned char *c = (const unsigned char *)s; *c;) {
+    unsigned long cp;
+    c += utf8_decode(c, &cp);
+    if (cp == ':' || cp == '#' || cp == '"' || cp == '\\' || !yaml_printable(cp)) return true;
+  }
   size_t n = strlen(s);
   return s[n - 1] == ' ';
 }
 
-static void emit_scalar(FILE *f, const dk_node *n) {
-  const char *s = n->value;
-  if (!n->quoted && !needs_quotes(s)) {
+/* A key or a scalar value, double-quoted with escapes when plain text would not read back the
+ * same (the resolved deck must load again: tests/reliability, fuzz/fuzz_deck.c). */
+static void emit_text(FILE *f, const char *s, bool force_quotes) {
+  if (!force_quotes && !needs_quotes(s)) {
     fputs(s, f);
     return;
   }
   fputc('"', f);
-  for (const char *c = s; *c; c++) {
-    if (*c == '"' || *c == '\\')
-      fprintf(f, "\\%c", *c);
-    else if (*c == '\n')
+  for (const unsigned char *c = (const unsigned char *)s; *c;) {
+    unsigned long cp;
+    int len = utf8_decode(c, &cp);
+    if (cp == '"' || cp == '\\')
+      fprintf(f, "\\%c", (int)cp);
+    else if (cp == '\n')
       fputs("\\n", f);
-    else if ((unsigned char)*c < 0x20)
-      fprintf(f, "\\x%02x", (unsigned char)*c);
+    else if (yaml_printable(cp))
+      fwrite(c, 1, (size_t)len, f);
+    else if (cp <= 0xFF)
+      fprintf(f, "\\x%02lx", cp);
+    else if (cp <= 0xFFFF)
+      fprintf(f, "\\u%04lx", cp);
     else
-      fputc(*c, f);
+      fprintf(f, "\\U%08lx", cp);
+    c += len;
   }
   fputc('"', f);
 }
 
+static void emit_scalar(FILE *f, const dk_node *n) { emit_text(f, n->value, n->quoted); }
+
 static void emit(FILE *f, const dk_node *n, int indent) {
   for (size_t i = 0; i < n->n; i++) {
     const dk_node *c = n->items[i];
-    if (n->kind == DK_MAP)
-      fprintf(f, "%*s%s:", indent, "", n->keys[i]);
-    else
-      fprintf(f, "%*s-", indent, "");
+    fprintf(f, "%*s", indent, "");
+    if (n->kind == DK_MAP) {
+      emit_text(f, n->keys[i], false);
+      fputc(':', f);
+    } else {
+      fputc('-', f);
+    }
     if (c->kind == DK_SCALAR) {
       fputc(' ', f);
       emit_scalar(f, c);
