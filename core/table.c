@@ -8,7 +8,26 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { TABLE_MAX_COLS = 64 };
+enum { TABLE_MAX_COLS = 64, TABLE_MAX_LINE = 1 << 16 };
+
+/* One line into buf (without its '\n'); returns its length, -1 at end of file. A line that
+ * does not fit sets *too_long and stops reading, so a file without line breaks (a binary file,
+ * /dev/zero) cannot make the reader allocate or loop without bound. */
+static long read_line(FILE *f, char *buf, long cap, bool *too_long) {
+  long n = 0;
+  int c;
+  *too_long = false;
+  while ((c = getc(f)) != EOF && c != '\n') {
+    if (n == cap - 1) {
+      *too_long = true;
+      break;
+    }
+    buf[n++] = (char)c;
+  }
+  if (c == EOF && n == 0) return -1;
+  buf[n] = 0;
+  return n;
+}
 
 /* Split a line into numbers; returns the count, or -1 (with *bad set) on a non-number. */
 static int split_numbers(char *line, double *v, int max, char **bad) {
@@ -40,15 +59,28 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
     dk_error_at(e, path, 0, 0, "cannot open the table file: %s", strerror(errno));
     return MS_ERR_INPUT;
   }
-  char *line = NULL;
-  size_t cap = 0, rows = 0, rcap = 0;
+  char *line = ms_calloc(TABLE_MAX_LINE, 1);
+  size_t rows = 0, rcap = 0;
   int cols = -1, lineno = 0;
   bool header_allowed = true;
   double *out = NULL, v[TABLE_MAX_COLS];
   ms_status s = MS_OK;
-  while (getline(&line, &cap, f) != -1) {
+  long len;
+  bool too_long;
+  while ((len = read_line(f, line, TABLE_MAX_LINE, &too_long)) != -1) {
     lineno++;
-    if (strlen(line) == 0) continue;
+    if (too_long) {
+      dk_error_at(e, path, lineno, 1, "line longer than %d characters (not a text table?)",
+                  TABLE_MAX_LINE - 1);
+      s = MS_ERR_INPUT;
+      break;
+    }
+    if (strlen(line) != (size_t)len) { /* a binary file, or text damaged by NUL bytes */
+      dk_error_at(e, path, lineno, (int)strlen(line) + 1,
+                  "a NUL byte in a text table (binary or damaged file?)");
+      s = MS_ERR_INPUT;
+      break;
+    }
     char *p = line;
     while (isspace((unsigned char)*p)) p++;
     if (!*p || *p == '#') continue;
@@ -58,6 +90,7 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
       header_allowed = false; /* a line of column names */
       continue;
     }
+    if (n == 0) continue; /* only separators (",,,," rows of spreadsheet exports) */
     header_allowed = false;
     if (n < 0) {
       char tok[32];

@@ -80,9 +80,80 @@ static void test_resolved_deck_round_trip(void **state) {
   dk_errors_free(&e);
 }
 
+/* fuzz_table, crashes/fuzz_table/separator-row-min-cols-0.csv: a row of separators only
+ * (",,,,") was a data row with zero columns, accepted as a 0-column table; text after a NUL
+ * byte was silently dropped; a file without line breaks was read into one unbounded line. */
+static void test_table_separator_rows_skipped(void **state) {
+  (void)state;
+  char *path = scratch("sep.csv");
+  const char *text = "x,y\n,,,\n1,2\n ; ,\n3,4\n,,\n";
+  write_text(path, text, strlen(text));
+  dk_errors e;
+  dk_errors_init(&e);
+  double *t;
+  size_t nr, nc;
+  assert_int_equal(ms_read_table(path, 0, &t, &nr, &nc, &e), MS_OK);
+  assert_int_equal(nr, 2);
+  assert_int_equal(nc, 2);
+  assert_true(t[0] == 1 && t[3] == 4);
+  free(t);
+  /* nothing but separators: no data rows */
+  write_text(path, ",,,\n;;\n", 7);
+  assert_int_equal(ms_read_table(path, 0, &t, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "no data rows"));
+  remove(path);
+  free(path);
+  dk_errors_free(&e);
+}
+
+static void test_table_nul_byte_is_an_error(void **state) {
+  (void)state;
+  char *path = scratch("nul.csv");
+  const char text[] = "1 2\n3 4\n5\0 6\n";
+  write_text(path, text, sizeof text - 1);
+  dk_errors e;
+  dk_errors_init(&e);
+  double *t;
+  size_t nr, nc;
+  assert_int_equal(ms_read_table(path, 2, &t, &nr, &nc, &e), MS_ERR_INPUT);
+  dk_errors_print(&e, stderr);
+  char where[4200];
+  snprintf(where, sizeof where, "%s:3:2: a NUL byte", path);
+  assert_true(has_error(&e, where));
+  remove(path);
+  free(path);
+  dk_errors_free(&e);
+}
+
+static void test_table_line_too_long(void **state) {
+  (void)state;
+  char *path = scratch("long.csv");
+  size_t n = 200000;
+  char *text = malloc(n);
+  for (size_t i = 0; i < n; i++) text[i] = i % 2 ? ' ' : '1';
+  write_text(path, text, n);
+  free(text);
+  dk_errors e;
+  dk_errors_init(&e);
+  double *t;
+  size_t nr, nc;
+  assert_int_equal(ms_read_table(path, 1, &t, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, ":1:1: line longer than"));
+  /* /dev/zero has neither line breaks nor an end: the reader must stop on its own */
+  dk_errors_free(&e);
+  assert_int_equal(ms_read_table("/dev/zero", 1, &t, &nr, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "/dev/zero:1:1: line longer than"));
+  remove(path);
+  free(path);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resolved_deck_round_trip),
+      cmocka_unit_test(test_table_separator_rows_skipped),
+      cmocka_unit_test(test_table_nul_byte_is_an_error),
+      cmocka_unit_test(test_table_line_too_long),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
