@@ -253,6 +253,11 @@ ms_h5r *ms_h5_open_read(const char *path, dk_errors *e);
 ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
                              dk_errors *e);
 bool ms_h5_exists(ms_h5r *h, const char *name);
+/* Reads a scalar numeric attribute `attr` of the object `obj` (group or dataset; "/" = root).
+ * MS_ERR_INPUT with a message naming the file if it is absent or not a number; e may be NULL
+ * to probe quietly. */
+ms_status ms_h5_read_attr_double(ms_h5r *h, const char *obj, const char *attr, double *v,
+                                 dk_errors *e);
 void ms_h5_close_read(ms_h5r *h);
 
 /* XDMF sidecar describing datasets in an HDF5 file so ParaView can open it.

@@ -226,6 +226,34 @@ ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t 
   return s;
 }
 
+ms_status ms_h5_read_attr_double(ms_h5r *h, const char *obj, const char *attr, double *v,
+                                 dk_errors *e) {
+  const char *o = obj && obj[0] ? obj : "/";
+  if (strcmp(o, "/") && !ms_h5_exists(h, o)) {
+    if (e) dk_error_at(e, h->path, 0, 0, "'%s' is missing (looking for its attribute '%s')", o, attr);
+    return MS_ERR_INPUT;
+  }
+  if (H5Aexists_by_name(h->file, o, attr, H5P_DEFAULT) <= 0) {
+    if (e) dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is missing", attr, o);
+    return MS_ERR_INPUT;
+  }
+  hid_t a = H5Aopen_by_name(h->file, o, attr, H5P_DEFAULT, H5P_DEFAULT);
+  ms_status s = MS_ERR_INPUT;
+  if (a >= 0) {
+    hid_t space = H5Aget_space(a), type = H5Aget_type(a);
+    H5T_class_t cls = H5Tget_class(type);
+    if (H5Sget_simple_extent_npoints(space) == 1 && (cls == H5T_FLOAT || cls == H5T_INTEGER) &&
+        H5Aread(a, H5T_NATIVE_DOUBLE, v) >= 0)
+      s = MS_OK;
+    H5Tclose(type);
+    H5Sclose(space);
+    H5Aclose(a);
+  }
+  if (s != MS_OK && e)
+    dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is not a single number", attr, o);
+  return s;
+}
+
 void ms_h5_close_read(ms_h5r *h) {
   if (!h) return;
   H5Fclose(h->file);
