@@ -1,0 +1,306 @@
+/* mscale spectrum SNAPSHOT.h5 [--bond B]: the fragment spectrum N(g) of a particle snapshot as
+ * CSV on stdout (header `g,count,mass`), DESIGN.md §8. Snapshot layout: docs/coupling.md. */
+#include "commands.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef MSCALE_HAVE_COUPLING
+#include "cpl.h"
+
+int cmd_spectrum(int argc, char **argv);
+
+/* Default bond factor b: the cluster-dynamics cutoff R_c = 1.2 a of the benchmark
+ * (DESIGN.md §5.1), so fragments are the components of the interacting-pair graph. */
+#define SPECTRUM_DEFAULT_BOND 1.2
+
+static void spectrum_usage(FILE *f) {
+  fprintf(f,
+          "Usage: mscale spectrum SNAPSHOT.h5 [--bond B] [--spacing A] [--rho0 RHO]\n"
+          "                       [--period PX,PY,PZ] [--fragments FILE]\n\n"
+          "Fragment spectrum of a particle snapshot: particles i, k are bonded when\n"
+          "|r_i - r_k| <= B*A; fragments are the connected components. Prints CSV on stdout:\n"
+          "'#' comment lines (title, units), then the header g,count,mass and one row per\n"
+          "fragment size g (clusters) with the number of fragments and their total mass [g].\n\n"
+          "Options:\n"
+          "  --bond B          bond factor b (default %.1f, the cluster-dynamics cutoff)\n"
+          "  --spacing A       lattice spacing a [cm]; default: attribute r0 of /particles\n"
+          "  --rho0 RHO        reference density [g/cm^3] for equivalent diameters in\n"
+          "                    --fragments; default: attribute rho0 of /particles if present\n"
+          "  --period PX,PY,PZ periodic box lengths [cm] (0 = open axis); default: attributes\n"
+          "                    period_x/y/z (and lo_x/y/z) of /particles if present, else open\n"
+          "  --fragments FILE  also write the per-fragment table (id,count,mass,d,x,y,z,vx,vy,\n"
+          "                    vz,rg) to FILE\n\n"
+          "Snapshot datasets: /particles/x [n][3] cm, /particles/mass [n] g, optional\n"
+          "/particles/v [n][3] km/s (docs/coupling.md). Exit 0 ok, 1 I/O failure, 2 bad\n"
+          "usage or a bad snapshot (missing dataset, wrong shape, non-finite value).\n",
+          SPECTRUM_DEFAULT_BOND);
+}
+
+/* Parse a positive finite number; false otherwise. */
+static bool parse_positive(const char *s, double *out) {
+  char *end;
+  double v = strtod(s, &end);
+  if (end == s || *end || !isfinite(v) || !(v > 0)) return false;
+  *out = v;
+  return true;
+}
+
+static bool parse_triple(const char *s, double out[3]) {
+  char *end;
+  for (int k = 0; k < 3; k++) {
+    out[k] = strtod(s, &end);
+    if (end == s || !isfinite(out[k]) || out[k] < 0) return false;
+    if (k < 2) {
+      if (*end != ',') return false;
+      s = end + 1;
+    }
+  }
+  return *end == 0;
+}
+
+typedef struct snapshot {
+  size_t n;
+  double *x, *y, *z, *vx, *vy, *vz, *mass;
+} snapshot;
+
+static void snapshot_free(snapshot *s) {
+  free(s->x);
+  free(s->y);
+  free(s->z);
+  free(s->vx);
+  free(s->vy);
+  free(s->vz);
+  free(s->mass);
+}
+
+/* Read and check the datasets; every problem goes to e (naming the file). */
+static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_errors *e) {
+  memset(s, 0, sizeof *s);
+  double *xyz = NULL, *vel = NULL, *m = NULL;
+  size_t nx = 0, cx = 0, nv = 0, cv = 0, nm = 0, cm = 0;
+  ms_status st = ms_h5_read_doubles(h, "/particles/x", &xyz, &nx, &cx, e);
+  ms_status sm = ms_h5_read_doubles(h, "/particles/mass", &m, &nm, &cm, e);
+  bool have_v = ms_h5_exists(h, "/particles/v");
+  ms_status sv = have_v ? ms_h5_read_doubles(h, "/particles/v", &vel, &nv, &cv, e) : MS_OK;
+  bool ok = st == MS_OK && sm == MS_OK && sv == MS_OK;
+  if (st == MS_OK && cx != 2 && cx != 3) {
+    dk_error_at(e, path, 0, 0, "dataset '/particles/x' must have shape [n][3] (or [n][2]), not [%zu][%zu]", nx, cx);
+    ok = false;
+  }
+  if (sm == MS_OK && cm != 1) {
+    dk_error_at(e, path, 0, 0, "dataset '/particles/mass' must have shape [n], not [%zu][%zu]", nm, cm);
+    ok = false;
+  }
+  if (st == MS_OK && sm == MS_OK && nm != nx) {
+    dk_error_at(e, path, 0, 0, "'/particles/mass' has %zu entries but '/particles/x' has %zu particles", nm, nx);
+    ok = false;
+  }
+  if (have_v && sv == MS_OK && st == MS_OK && (nv != nx || (cv != 2 && cv != 3))) {
+    dk_error_at(e, path, 0, 0, "dataset '/particles/v' must have shape [%zu][3], not [%zu][%zu]", nx, nv, cv);
+    ok = false;
+  }
+  if (ok) {
+    size_t n = nx;
+    s->n = n;
+    s->x = ms_calloc(n + 1, sizeof(double));
+    s->y = ms_calloc(n + 1, sizeof(double));
+    s->z = ms_calloc(n + 1, sizeof(double));
+    s->vx = ms_calloc(n + 1, sizeof(double));
+    s->vy = ms_calloc(n + 1, sizeof(double));
+    s->vz = ms_calloc(n + 1, sizeof(double));
+    s->mass = ms_calloc(n + 1, sizeof(double));
+    size_t bad_x = 0, bad_v = 0, bad_m = 0, first_x = 0, first_v = 0, first_m = 0;
+    for (size_t i = 0; i < n; i++) {
+      s->x[i] = xyz[i * cx];
+      s->y[i] = xyz[i * cx + 1];
+      s->z[i] = cx == 3 ? xyz[i * cx + 2] : 0.0;
+      if (!isfinite(s->x[i]) || !isfinite(s->y[i]) || !isfinite(s->z[i])) {
+        if (!bad_x++) first_x = i;
+      }
+      if (vel) {
+        s->vx[i] = vel[i * cv];
+        s->vy[i] = vel[i * cv + 1];
+        s->vz[i] = cv == 3 ? vel[i * cv + 2] : 0.0;
+        if (!isfinite(s->vx[i]) || !isfinite(s->vy[i]) || !isfinite(s->vz[i])) {
+          if (!bad_v++) first_v = i;
+        }
+      }
+      s->mass[i] = m[i];
+      if (!isfinite(m[i]) || !(m[i] > 0)) {
+        if (!bad_m++) first_m = i;
+      }
+    }
+    if (bad_x) {
+      dk_error_at(e, path, 0, 0, "'/particles/x': %zu particle(s) with a non-finite position (first: particle %zu)", bad_x, first_x);
+      ok = false;
+    }
+    if (bad_v) {
+      dk_error_at(e, path, 0, 0, "'/particles/v': %zu particle(s) with a non-finite velocity (first: particle %zu)", bad_v, first_v);
+      ok = false;
+    }
+    if (bad_m) {
+      dk_error_at(e, path, 0, 0, "'/particles/mass': %zu particle(s) with a mass that is not a positive number (first: particle %zu)", bad_m, first_m);
+      ok = false;
+    }
+  }
+  free(xyz);
+  free(vel);
+  free(m);
+  return ok ? MS_OK : MS_ERR_INPUT;
+}
+
+int cmd_spectrum(int argc, char **argv) {
+  if (app_wants_help(argc, argv)) {
+    spectrum_usage(stdout);
+    return 0;
+  }
+  const char *path = NULL, *table_path = NULL;
+  double bond = SPECTRUM_DEFAULT_BOND, spacing = NAN, rho0 = NAN;
+  double period[3] = {NAN, NAN, NAN};
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    bool has_value = i + 1 < argc;
+    if (!strcmp(a, "--bond") && has_value) {
+      if (!parse_positive(argv[++i], &bond)) {
+        fprintf(stderr, "mscale spectrum: --bond needs a positive number, not '%s'\n", argv[i]);
+        return 2;
+      }
+    } else if (!strcmp(a, "--spacing") && has_value) {
+      if (!parse_positive(argv[++i], &spacing)) {
+        fprintf(stderr, "mscale spectrum: --spacing needs a positive length in cm, not '%s'\n",
+                argv[i]);
+        return 2;
+      }
+    } else if (!strcmp(a, "--rho0") && has_value) {
+      if (!parse_positive(argv[++i], &rho0)) {
+        fprintf(stderr, "mscale spectrum: --rho0 needs a positive density, not '%s'\n", argv[i]);
+        return 2;
+      }
+    } else if (!strcmp(a, "--period") && has_value) {
+      if (!parse_triple(argv[++i], period)) {
+        fprintf(stderr, "mscale spectrum: --period needs PX,PY,PZ (cm, >= 0), not '%s'\n",
+                argv[i]);
+        return 2;
+      }
+    } else if (!strcmp(a, "--fragments") && has_value) {
+      table_path = argv[++i];
+    } else if (a[0] == '-' && a[1]) {
+      fprintf(stderr, "mscale spectrum: unknown or incomplete option '%s'\n\n", a);
+      spectrum_usage(stderr);
+      return 2;
+    } else if (!path) {
+      path = a;
+    } else {
+      fprintf(stderr, "mscale spectrum: more than one snapshot given ('%s', '%s')\n", path, a);
+      return 2;
+    }
+  }
+  if (!path) {
+    spectrum_usage(stderr);
+    return 2;
+  }
+
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_h5r *h = ms_h5_open_read(path, &e);
+  snapshot s;
+  memset(&s, 0, sizeof s);
+  ms_status st = h ? snapshot_read(h, path, &s, &e) : MS_ERR_INPUT;
+  cpl_fragment_opts o;
+  memset(&o, 0, sizeof o);
+  if (h) {
+    /* lattice spacing: command line, else the snapshot's r0 attribute */
+    if (isnan(spacing)) {
+      double v;
+      if (ms_h5_read_attr_double(h, "/particles", "r0", &v, NULL) == MS_OK ||
+          ms_h5_read_attr_double(h, "/", "r0", &v, NULL) == MS_OK) {
+        spacing = v;
+        if (!(isfinite(v) && v > 0)) {
+          dk_error_at(&e, path, 0, 0, "attribute r0 (lattice spacing) must be a positive length, not %g", v);
+          st = MS_ERR_INPUT;
+        }
+      } else {
+        dk_error_at(&e, path, 0, 0, "no lattice spacing: the attribute r0 of '/particles' is missing (give --spacing A)");
+        st = MS_ERR_INPUT;
+      }
+    }
+    if (isnan(rho0)) {
+      double v;
+      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0) rho0 = v;
+    }
+    static const char *const pnames[3] = {"period_x", "period_y", "period_z"};
+    static const char *const lnames[3] = {"lo_x", "lo_y", "lo_z"};
+    for (int k = 0; k < 3; k++) {
+      double v = 0;
+      if (isnan(period[k]))
+        period[k] = ms_h5_read_attr_double(h, "/particles", pnames[k], &v, NULL) == MS_OK ? v : 0;
+      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK) o.box.lo[k] = v;
+      if (!(period[k] >= 0) || !isfinite(period[k])) {
+        dk_error_at(&e, path, 0, 0, "attribute %s must be >= 0 (0 = open axis)", pnames[k]);
+        st = MS_ERR_INPUT;
+      }
+    }
+  }
+  o.bond = bond;
+  o.spacing = spacing;
+  o.rho0 = isnan(rho0) ? 0.0 : rho0;
+  for (int k = 0; k < 3; k++) o.box.period[k] = period[k] > 0 ? period[k] : 0.0;
+  if (st == MS_OK)
+    for (int k = 0; k < 3; k++)
+      if (o.box.period[k] > 0 && !(2 * bond * spacing < o.box.period[k])) {
+        dk_error_at(&e, path, 0, 0, "bond length b*a = %g cm is not below half the period %g cm of axis %c", bond * spacing, o.box.period[k], "xyz"[k]);
+        st = MS_ERR_INPUT;
+      }
+  if (h) ms_h5_close_read(h);
+
+  int rc = 0;
+  if (st != MS_OK) {
+    dk_errors_print(&e, stderr);
+    rc = 2;
+  } else {
+    cpl_particles p = {s.n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.mass, NULL};
+    cpl_fragments f;
+    cpl_fragments_init(&f);
+    st = cpl_fragments_find(&f, &p, &o);
+    if (st != MS_OK) {
+      fprintf(stderr, "%s: the fragment search refused the snapshot (%s)\n", path, ms_status_str(st));
+      rc = ms_exit_code(st);
+    } else {
+      char title[1024];
+      snprintf(title, sizeof title, "fragment spectrum N(g) of %s: %zu particles, %zu fragments, bond b*a = %g*%g cm", path, s.n, f.n, bond, spacing);
+      cpl_write_spectrum(stdout, &f, title);
+      if (fflush(stdout) != 0) rc = 1;
+      if (table_path) {
+        ms_afile af;
+        if (ms_afile_open(&af, table_path) != MS_OK) {
+          fprintf(stderr, "mscale spectrum: cannot write '%s'\n", table_path);
+          rc = 1;
+        } else {
+          cpl_write_fragment_table(af.f, &f, NULL);
+          if (ms_afile_commit(&af) != MS_OK) {
+            fprintf(stderr, "mscale spectrum: cannot write '%s'\n", table_path);
+            rc = 1;
+          }
+        }
+      }
+    }
+    cpl_fragments_free(&f);
+  }
+  snapshot_free(&s);
+  dk_errors_free(&e);
+  return rc;
+}
+
+#else /* built without the coupling library */
+
+int cmd_spectrum(int argc, char **argv);
+int cmd_spectrum(int argc, char **argv) {
+  (void)argc;
+  (void)argv;
+  fprintf(stderr, "mscale spectrum: this build has no coupling library\n");
+  return 1;
+}
+
+#endif
