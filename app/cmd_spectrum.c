@@ -42,7 +42,8 @@ static void spectrum_usage(FILE *f) {
 static bool parse_positive(const char *s, double *out) {
   char *end;
   double v = strtod(s, &end);
-  if (end == s || *end || !isfinite(v) || !(v > 0)) return false;
+  if (end == s || *end || !isfinite(v) || !(v > 0))
+    return false;
   *out = v;
   return true;
 }
@@ -51,9 +52,11 @@ static bool parse_triple(const char *s, double out[3]) {
   char *end;
   for (int k = 0; k < 3; k++) {
     out[k] = strtod(s, &end);
-    if (end == s || !isfinite(out[k]) || out[k] < 0) return false;
+    if (end == s || !isfinite(out[k]) || out[k] < 0)
+      return false;
     if (k < 2) {
-      if (*end != ',') return false;
+      if (*end != ',')
+        return false;
       s = end + 1;
     }
   }
@@ -86,19 +89,24 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
   ms_status sv = have_v ? ms_h5_read_doubles(h, "/particles/v", &vel, &nv, &cv, e) : MS_OK;
   bool ok = st == MS_OK && sm == MS_OK && sv == MS_OK;
   if (st == MS_OK && cx != 2 && cx != 3) {
-    dk_error_at(e, path, 0, 0, "dataset '/particles/x' must have shape [n][3] (or [n][2]), not [%zu][%zu]", nx, cx);
+    dk_error_at(e, path, 0, 0,
+                "dataset '/particles/x' must have shape [n][3] (or [n][2]), not [%zu][%zu]", nx,
+                cx);
     ok = false;
   }
   if (sm == MS_OK && cm != 1) {
-    dk_error_at(e, path, 0, 0, "dataset '/particles/mass' must have shape [n], not [%zu][%zu]", nm, cm);
+    dk_error_at(e, path, 0, 0, "dataset '/particles/mass' must have shape [n], not [%zu][%zu]", nm,
+                cm);
     ok = false;
   }
   if (st == MS_OK && sm == MS_OK && nm != nx) {
-    dk_error_at(e, path, 0, 0, "'/particles/mass' has %zu entries but '/particles/x' has %zu particles", nm, nx);
+    dk_error_at(e, path, 0, 0,
+                "'/particles/mass' has %zu entries but '/particles/x' has %zu particles", nm, nx);
     ok = false;
   }
   if (have_v && sv == MS_OK && st == MS_OK && (nv != nx || (cv != 2 && cv != 3))) {
-    dk_error_at(e, path, 0, 0, "dataset '/particles/v' must have shape [%zu][3], not [%zu][%zu]", nx, nv, cv);
+    dk_error_at(e, path, 0, 0, "dataset '/particles/v' must have shape [%zu][3], not [%zu][%zu]",
+                nx, nv, cv);
     ok = false;
   }
   if (ok) {
@@ -117,31 +125,43 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
       s->y[i] = xyz[i * cx + 1];
       s->z[i] = cx == 3 ? xyz[i * cx + 2] : 0.0;
       if (!isfinite(s->x[i]) || !isfinite(s->y[i]) || !isfinite(s->z[i])) {
-        if (!bad_x++) first_x = i;
+        if (!bad_x++)
+          first_x = i;
       }
       if (vel) {
         s->vx[i] = vel[i * cv];
         s->vy[i] = vel[i * cv + 1];
         s->vz[i] = cv == 3 ? vel[i * cv + 2] : 0.0;
         if (!isfinite(s->vx[i]) || !isfinite(s->vy[i]) || !isfinite(s->vz[i])) {
-          if (!bad_v++) first_v = i;
+          if (!bad_v++)
+            first_v = i;
         }
       }
       s->mass[i] = m[i];
       if (!isfinite(m[i]) || !(m[i] > 0)) {
-        if (!bad_m++) first_m = i;
+        if (!bad_m++)
+          first_m = i;
       }
     }
     if (bad_x) {
-      dk_error_at(e, path, 0, 0, "'/particles/x': %zu particle(s) with a non-finite position (first: particle %zu)", bad_x, first_x);
+      dk_error_at(
+          e, path, 0, 0,
+          "'/particles/x': %zu particle(s) with a non-finite position (first: particle %zu)", bad_x,
+          first_x);
       ok = false;
     }
     if (bad_v) {
-      dk_error_at(e, path, 0, 0, "'/particles/v': %zu particle(s) with a non-finite velocity (first: particle %zu)", bad_v, first_v);
+      dk_error_at(
+          e, path, 0, 0,
+          "'/particles/v': %zu particle(s) with a non-finite velocity (first: particle %zu)", bad_v,
+          first_v);
       ok = false;
     }
     if (bad_m) {
-      dk_error_at(e, path, 0, 0, "'/particles/mass': %zu particle(s) with a mass that is not a positive number (first: particle %zu)", bad_m, first_m);
+      dk_error_at(e, path, 0, 0,
+                  "'/particles/mass': %zu particle(s) with a mass that is not a positive number "
+                  "(first: particle %zu)",
+                  bad_m, first_m);
       ok = false;
     }
   }
@@ -180,8 +200,7 @@ int cmd_spectrum(int argc, char **argv) {
       }
     } else if (!strcmp(a, "--period") && has_value) {
       if (!parse_triple(argv[++i], period)) {
-        fprintf(stderr, "mscale spectrum: --period needs PX,PY,PZ (cm, >= 0), not '%s'\n",
-                argv[i]);
+        fprintf(stderr, "mscale spectrum: --period needs PX,PY,PZ (cm, >= 0), not '%s'\n", argv[i]);
         return 2;
       }
     } else if (!strcmp(a, "--fragments") && has_value) {
@@ -218,17 +237,21 @@ int cmd_spectrum(int argc, char **argv) {
           ms_h5_read_attr_double(h, "/", "r0", &v, NULL) == MS_OK) {
         spacing = v;
         if (!(isfinite(v) && v > 0)) {
-          dk_error_at(&e, path, 0, 0, "attribute r0 (lattice spacing) must be a positive length, not %g", v);
+          dk_error_at(&e, path, 0, 0,
+                      "attribute r0 (lattice spacing) must be a positive length, not %g", v);
           st = MS_ERR_INPUT;
         }
       } else {
-        dk_error_at(&e, path, 0, 0, "no lattice spacing: the attribute r0 of '/particles' is missing (give --spacing A)");
+        dk_error_at(
+            &e, path, 0, 0,
+            "no lattice spacing: the attribute r0 of '/particles' is missing (give --spacing A)");
         st = MS_ERR_INPUT;
       }
     }
     if (isnan(rho0)) {
       double v;
-      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0) rho0 = v;
+      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0)
+        rho0 = v;
     }
     static const char *const pnames[3] = {"period_x", "period_y", "period_z"};
     static const char *const lnames[3] = {"lo_x", "lo_y", "lo_z"};
@@ -236,7 +259,8 @@ int cmd_spectrum(int argc, char **argv) {
       double v = 0;
       if (isnan(period[k]))
         period[k] = ms_h5_read_attr_double(h, "/particles", pnames[k], &v, NULL) == MS_OK ? v : 0;
-      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK) o.box.lo[k] = v;
+      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK)
+        o.box.lo[k] = v;
       if (!(period[k] >= 0) || !isfinite(period[k])) {
         dk_error_at(&e, path, 0, 0, "attribute %s must be >= 0 (0 = open axis)", pnames[k]);
         st = MS_ERR_INPUT;
@@ -246,14 +270,18 @@ int cmd_spectrum(int argc, char **argv) {
   o.bond = bond;
   o.spacing = spacing;
   o.rho0 = isnan(rho0) ? 0.0 : rho0;
-  for (int k = 0; k < 3; k++) o.box.period[k] = period[k] > 0 ? period[k] : 0.0;
+  for (int k = 0; k < 3; k++)
+    o.box.period[k] = period[k] > 0 ? period[k] : 0.0;
   if (st == MS_OK)
     for (int k = 0; k < 3; k++)
       if (o.box.period[k] > 0 && !(2 * bond * spacing < o.box.period[k])) {
-        dk_error_at(&e, path, 0, 0, "bond length b*a = %g cm is not below half the period %g cm of axis %c", bond * spacing, o.box.period[k], "xyz"[k]);
+        dk_error_at(&e, path, 0, 0,
+                    "bond length b*a = %g cm is not below half the period %g cm of axis %c",
+                    bond * spacing, o.box.period[k], "xyz"[k]);
         st = MS_ERR_INPUT;
       }
-  if (h) ms_h5_close_read(h);
+  if (h)
+    ms_h5_close_read(h);
 
   int rc = 0;
   if (st != MS_OK) {
@@ -265,13 +293,17 @@ int cmd_spectrum(int argc, char **argv) {
     cpl_fragments_init(&f);
     st = cpl_fragments_find(&f, &p, &o);
     if (st != MS_OK) {
-      fprintf(stderr, "%s: the fragment search refused the snapshot (%s)\n", path, ms_status_str(st));
+      fprintf(stderr, "%s: the fragment search refused the snapshot (%s)\n", path,
+              ms_status_str(st));
       rc = ms_exit_code(st);
     } else {
       char title[1024];
-      snprintf(title, sizeof title, "fragment spectrum N(g) of %s: %zu particles, %zu fragments, bond b*a = %g*%g cm", path, s.n, f.n, bond, spacing);
+      snprintf(title, sizeof title,
+               "fragment spectrum N(g) of %s: %zu particles, %zu fragments, bond b*a = %g*%g cm",
+               path, s.n, f.n, bond, spacing);
       cpl_write_spectrum(stdout, &f, title);
-      if (fflush(stdout) != 0) rc = 1;
+      if (fflush(stdout) != 0)
+        rc = 1;
       if (table_path) {
         ms_afile af;
         if (ms_afile_open(&af, table_path) != MS_OK) {

@@ -67,13 +67,13 @@ typedef struct cpl_fragment_opts {
  * Per-fragment arrays are length n. Centres of mass on periodic axes are computed from
  * positions unwrapped around the fragment's circular mean and wrapped back into the box. */
 typedef struct cpl_fragments {
-  size_t n_particles; /* particles in the configuration (length of id) */
-  size_t n;           /* fragments */
-  int64_t *id;        /* [n_particles] fragment of each particle, −1 for skipped */
-  int64_t *first;     /* smallest particle index in the fragment */
-  int64_t *count;     /* particles in the fragment (g) */
-  double *mass;       /* g */
-  double *diameter;   /* equivalent diameter d = (6 m/(π ρ0))^{1/3}, cm */
+  size_t n_particles;   /* particles in the configuration (length of id) */
+  size_t n;             /* fragments */
+  int64_t *id;          /* [n_particles] fragment of each particle, −1 for skipped */
+  int64_t *first;       /* smallest particle index in the fragment */
+  int64_t *count;       /* particles in the fragment (g) */
+  double *mass;         /* g */
+  double *diameter;     /* equivalent diameter d = (6 m/(π ρ0))^{1/3}, cm */
   double *cx, *cy, *cz; /* centre of mass, cm */
   double *vx, *vy, *vz; /* centre-of-mass velocity, km/s */
   double *rg;           /* radius of gyration sqrt(Σ m |r − r_c|² / M), cm */
@@ -89,8 +89,7 @@ void cpl_fragments_init(cpl_fragments *f);
 void cpl_fragments_free(cpl_fragments *f);
 /* Find the fragments with the coupling module's own cell-list pair search.
  * MS_ERR_INPUT: non-finite positions/masses, bad options, bond ≥ half a period. */
-ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p,
-                             const cpl_fragment_opts *o);
+ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o);
 /* Same with candidate pairs from a neighbour list in CSR form (e.g. the particle code's Verlet
  * lists, any radius ≥ b·a): the candidates of i are nbr[start[i] .. start[i+1]); each bonded
  * pair must appear at least once in either direction. The bond criterion is still checked. */
@@ -161,8 +160,7 @@ double cpl_drag_factor(cpl_drag_law law, double re);
 double cpl_reynolds(const cpl_gas *g, double d, const double v[3]);
 /* Drag force on a sphere of diameter d moving with v: F = ½ ρ_g C_D (π d²/4) |v_r| v_r with
  * v_r = u_g − v, evaluated as F = 3π μ d f(Re) v_r (finite at v_r → 0). */
-void cpl_drag_force(cpl_drag_law law, const cpl_gas *g, double d, const double v[3],
-                    double F[3]);
+void cpl_drag_force(cpl_drag_law law, const cpl_gas *g, double d, const double v[3], double F[3]);
 /* Stokes relaxation time τ = ρ_p d²/(18 μ) (seed 004, Logos paper). */
 double cpl_stokes_time(double rho_p, double d, double mu);
 
@@ -189,18 +187,18 @@ typedef void (*cpl_gas_return_fn)(void *user, const double x[3], double t0, doub
 
 typedef struct cpl_transport_opts {
   cpl_drag_law law;
-  double rho_p;         /* fragment material density (diameter from mass), g/cm³ */
-  double det_normal[3]; /* detector plane: arrival when normal·x ≥ det_x (normal unit) */
-  double det_x;         /* cm */
+  double rho_p;                /* fragment material density (diameter from mass), g/cm³ */
+  double det_normal[3];        /* detector plane: arrival when normal·x ≥ det_x (normal unit) */
+  double det_x;                /* cm */
   double rtol, atol_x, atol_v; /* CVODE tolerances (0: 1e-8, 1e-10 cm, 1e-10 km/s) */
-  long max_steps;       /* per fragment and advance call (0: 100000) */
+  long max_steps;              /* per fragment and advance call (0: 100000) */
 } cpl_transport_opts;
 void cpl_transport_opts_default(cpl_transport_opts *o);
 
 typedef enum cpl_frag_state {
   CPL_FLYING = 0,
-  CPL_ARRIVED,  /* crossed the detector plane */
-  CPL_FAILED    /* the integrator failed (reported through cpl_transport_error) */
+  CPL_ARRIVED, /* crossed the detector plane */
+  CPL_FAILED   /* the integrator failed (reported through cpl_transport_error) */
 } cpl_frag_state;
 
 typedef struct cpl_transport cpl_transport;
@@ -224,9 +222,9 @@ const char *cpl_transport_error(const cpl_transport *tr);
 typedef struct cpl_flight {
   cpl_frag_state state;
   double mass, diameter;
-  double t, x[3], v[3];         /* current (or arrival) time, position, velocity */
+  double t, x[3], v[3];           /* current (or arrival) time, position, velocity */
   double t_arrival, v_arrival[3]; /* NaN until arrival */
-  long steps;                   /* CVODE steps so far */
+  long steps;                     /* CVODE steps so far */
 } cpl_flight;
 size_t cpl_transport_count(const cpl_transport *tr);
 cpl_flight cpl_transport_get(const cpl_transport *tr, size_t i);

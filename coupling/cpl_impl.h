@@ -13,7 +13,6 @@
 /* The largest fragment by mass (lowest id on ties); (size_t)-1 if there is none. */
 size_t cpl_largest_fragment(const cpl_fragments *f);
 /* cpl_is_ejecta with the largest fragment already known. */
-bool cpl_is_ejecta_with(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s,
-                        size_t largest);
+bool cpl_is_ejecta_with(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s, size_t largest);
 
 #endif

@@ -31,7 +31,8 @@ void cpl_uf_free(cpl_uf *uf) {
 
 size_t cpl_uf_find(cpl_uf *uf, size_t i) {
   size_t root = i;
-  while (uf->parent[root] != root) root = uf->parent[root];
+  while (uf->parent[root] != root)
+    root = uf->parent[root];
   /* path compression: every node on the path points at the root */
   while (uf->parent[i] != root) {
     size_t next = uf->parent[i];
@@ -43,7 +44,8 @@ size_t cpl_uf_find(cpl_uf *uf, size_t i) {
 
 bool cpl_uf_union(cpl_uf *uf, size_t i, size_t k) {
   size_t a = cpl_uf_find(uf, i), b = cpl_uf_find(uf, k);
-  if (a == b) return false;
+  if (a == b)
+    return false;
   /* union by size keeps the trees O(log n) deep even before compression */
   if (uf->size[a] < uf->size[b]) {
     size_t t = a;
@@ -76,7 +78,8 @@ static void free_fragment_arrays(cpl_fragments *f) {
 }
 
 void cpl_fragments_free(cpl_fragments *f) {
-  if (!f) return;
+  if (!f)
+    return;
   free(f->id);
   free_fragment_arrays(f);
   free(f->cell_of);
@@ -86,9 +89,9 @@ void cpl_fragments_free(cpl_fragments *f) {
   memset(f, 0, sizeof *f);
 }
 
-
 static void reserve_particles(cpl_fragments *f, size_t n) {
-  if (f->cap_particles >= n && f->id) return;
+  if (f->cap_particles >= n && f->id)
+    return;
   size_t cap = n ? n : 1;
   free(f->id);
   free(f->cell_of);
@@ -100,7 +103,8 @@ static void reserve_particles(cpl_fragments *f, size_t n) {
 }
 
 static void reserve_fragments(cpl_fragments *f, size_t n) {
-  if (f->cap_fragments >= n && f->count) return;
+  if (f->cap_fragments >= n && f->count)
+    return;
   size_t cap = n ? n : 1;
   free_fragment_arrays(f);
   f->first = ms_calloc(cap, sizeof *f->first);
@@ -124,17 +128,22 @@ static void reserve_fragments(cpl_fragments *f, size_t n) {
 static inline double coord(const double *a, size_t i) { return a ? a[i] : 0.0; }
 
 static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o) {
-  if (!p || !o || (p->n && (!p->x || !p->y || !p->mass))) return MS_ERR_INPUT;
-  if (!(o->bond > 0) || !(o->spacing > 0) || !isfinite(o->bond * o->spacing)) return MS_ERR_INPUT;
+  if (!p || !o || (p->n && (!p->x || !p->y || !p->mass)))
+    return MS_ERR_INPUT;
+  if (!(o->bond > 0) || !(o->spacing > 0) || !isfinite(o->bond * o->spacing))
+    return MS_ERR_INPUT;
   double L = o->bond * o->spacing;
   for (int k = 0; k < 3; k++) {
     double P = o->box.period[k];
-    if (P < 0 || !isfinite(P) || !isfinite(o->box.lo[k])) return MS_ERR_INPUT;
+    if (P < 0 || !isfinite(P) || !isfinite(o->box.lo[k]))
+      return MS_ERR_INPUT;
     /* minimum image is only unambiguous if a bond is shorter than half a period */
-    if (P > 0 && !(2 * L < P)) return MS_ERR_INPUT;
+    if (P > 0 && !(2 * L < P))
+      return MS_ERR_INPUT;
   }
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i]) continue;
+    if (p->skip && p->skip[i])
+      continue;
     if (!isfinite(p->x[i]) || !isfinite(p->y[i]) || !isfinite(coord(p->z, i)) ||
         !isfinite(p->mass[i]) || p->mass[i] < 0)
       return MS_ERR_INPUT;
@@ -144,7 +153,8 @@ static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o)
 
 /* Component of a separation vector along axis k reduced to the minimum image. */
 static inline double min_image(double d, double period) {
-  if (period > 0) d -= period * nearbyint(d / period);
+  if (period > 0)
+    d -= period * nearbyint(d / period);
   return d;
 }
 
@@ -164,7 +174,8 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
   size_t n = p->n;
   /* root -> id: reuse cell_of as the map (values (size_t)-1 = unassigned) */
   size_t *root_id = f->cell_of;
-  for (size_t i = 0; i < n; i++) root_id[i] = (size_t)-1;
+  for (size_t i = 0; i < n; i++)
+    root_id[i] = (size_t)-1;
   size_t nfrag = 0;
   for (size_t i = 0; i < n; i++) {
     if (p->skip && p->skip[i]) {
@@ -172,7 +183,8 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
       continue;
     }
     size_t r = cpl_uf_find(&f->uf, i);
-    if (root_id[r] == (size_t)-1) root_id[r] = nfrag++;
+    if (root_id[r] == (size_t)-1)
+      root_id[r] = nfrag++;
     f->id[i] = (int64_t)root_id[r];
   }
   f->n_particles = n;
@@ -194,16 +206,20 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
   const double *pos[3] = {p->x, p->y, p->z};
   size_t active = 0;
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i]) continue;
+    if (p->skip && p->skip[i])
+      continue;
     active++;
     for (int k = 0; k < 3; k++) {
       double v = coord(pos[k], i);
-      if (v < bmin[k]) bmin[k] = v;
-      if (v > bmax[k]) bmax[k] = v;
+      if (v < bmin[k])
+        bmin[k] = v;
+      if (v > bmax[k])
+        bmax[k] = v;
     }
   }
   if (!active)
-    for (int k = 0; k < 3; k++) bmin[k] = bmax[k] = 0;
+    for (int k = 0; k < 3; k++)
+      bmin[k] = bmax[k] = 0;
   /* cell width w ≥ L; grow w until the cell count is at most ~2 per active particle */
   double w = L;
   size_t cap = 2 * (active ? active : 1) + 64;
@@ -213,10 +229,12 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
       double P = o->box.period[k];
       double ext = P > 0 ? P : bmax[k] - bmin[k];
       double nk = floor(ext / w);
-      if (nk < 1) nk = 1;
+      if (nk < 1)
+        nk = 1;
       total *= nk;
     }
-    if (total <= (double)cap) break;
+    if (total <= (double)cap)
+      break;
     w *= 1.5;
   }
   size_t ncell = 1;
@@ -225,7 +243,8 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
     g->periodic[k] = P > 0;
     double ext = P > 0 ? P : bmax[k] - bmin[k];
     size_t nk = (size_t)floor(ext / w);
-    if (nk < 1) nk = 1;
+    if (nk < 1)
+      nk = 1;
     g->nc[k] = nk;
     g->lo[k] = P > 0 ? o->box.lo[k] : bmin[k];
     /* periodic: cells tile the period exactly (width P/nk ≥ w ≥ L) */
@@ -249,7 +268,8 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
       long ck = (long)floor(s);
       if (g->periodic[k]) {
         ck %= (long)g->nc[k];
-        if (ck < 0) ck += (long)g->nc[k];
+        if (ck < 0)
+          ck += (long)g->nc[k];
       } else if (ck >= (long)g->nc[k]) {
         ck = (long)g->nc[k] - 1; /* the last cell takes the upper edge (and the remainder) */
       } else if (ck < 0) {
@@ -261,7 +281,8 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
     f->cell_of[i] = cell;
     f->cell_start[cell + 1]++;
   }
-  for (size_t c = 0; c < ncell; c++) f->cell_start[c + 1] += f->cell_start[c];
+  for (size_t c = 0; c < ncell; c++)
+    f->cell_start[c + 1] += f->cell_start[c];
   return ncell;
 }
 
@@ -272,10 +293,12 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   size_t *start = f->cell_start;
   for (size_t i = 0; i < p->n; i++) {
     size_t c = f->cell_of[i];
-    if (c == (size_t)-1) continue;
+    if (c == (size_t)-1)
+      continue;
     f->cell_items[start[c]++] = i;
   }
-  for (size_t c = ncell; c > 0; c--) start[c] = start[c - 1];
+  for (size_t c = ncell; c > 0; c--)
+    start[c] = start[c - 1];
   start[0] = 0;
 
   double L = o->bond * o->spacing, L2 = L * L;
@@ -284,7 +307,8 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
     for (size_t cy = 0; cy < g->nc[1]; cy++)
       for (size_t cx = 0; cx < g->nc[0]; cx++) {
         size_t c = (cz * g->nc[1] + cy) * g->nc[0] + cx;
-        if (start[c] == start[c + 1]) continue;
+        if (start[c] == start[c + 1])
+          continue;
         /* the distinct neighbour cells (a periodic axis with < 3 cells repeats indices) */
         size_t nbr[27];
         int nn = 0;
@@ -303,12 +327,15 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
                   q[k] = (q[k] % nk + nk) % nk;
                 }
               }
-              if (!ok) continue;
+              if (!ok)
+                continue;
               size_t cn = ((size_t)q[2] * g->nc[1] + (size_t)q[1]) * g->nc[0] + (size_t)q[0];
               bool seen = false;
               for (int m = 0; m < nn; m++)
-                if (nbr[m] == cn) seen = true;
-              if (!seen) nbr[nn++] = cn;
+                if (nbr[m] == cn)
+                  seen = true;
+              if (!seen)
+                nbr[nn++] = cn;
             }
         for (size_t a = start[c]; a < start[c + 1]; a++) {
           size_t i = f->cell_items[a];
@@ -316,7 +343,8 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
             size_t cn = nbr[m];
             for (size_t b = start[cn]; b < start[cn + 1]; b++) {
               size_t k = f->cell_items[b];
-              if (k <= i) continue; /* each unordered pair once */
+              if (k <= i)
+                continue; /* each unordered pair once */
               if (bonded(p, &o->box, L2, i, k)) {
                 nb++;
                 cpl_uf_union(&f->uf, i, k);
@@ -328,10 +356,10 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   f->n_bonds = nb;
 }
 
-ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p,
-                             const cpl_fragment_opts *o) {
+ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
   ms_status s = check_input(p, o);
-  if (s != MS_OK) return s;
+  if (s != MS_OK)
+    return s;
   reserve_particles(f, p->n);
   cell_grid g;
   size_t ncell = build_cells(f, p, o, &g);
@@ -346,18 +374,23 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
                                  const cpl_fragment_opts *o, const size_t *start,
                                  const int32_t *nbr) {
   ms_status s = check_input(p, o);
-  if (s != MS_OK) return s;
-  if (p->n && (!start || !nbr)) return MS_ERR_INPUT;
+  if (s != MS_OK)
+    return s;
+  if (p->n && (!start || !nbr))
+    return MS_ERR_INPUT;
   reserve_particles(f, p->n);
   cpl_uf_init(&f->uf, p->n);
   double L = o->bond * o->spacing, L2 = L * L;
   long nb = 0;
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i]) continue;
+    if (p->skip && p->skip[i])
+      continue;
     for (size_t b = start[i]; b < start[i + 1]; b++) {
       int32_t k = nbr[b];
-      if (k < 0 || (size_t)k >= p->n || (size_t)k == i) continue;
-      if (p->skip && p->skip[k]) continue;
+      if (k < 0 || (size_t)k >= p->n || (size_t)k == i)
+        continue;
+      if (p->skip && p->skip[k])
+        continue;
       if (bonded(p, &o->box, L2, i, (size_t)k)) {
         nb++;
         cpl_uf_union(&f->uf, i, (size_t)k);
@@ -391,10 +424,12 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   /* pass 1: counts, masses, momentum, circular sums on periodic axes */
   for (size_t i = 0; i < p->n; i++) {
     int64_t id = f->id[i];
-    if (id < 0) continue;
+    if (id < 0)
+      continue;
     size_t k = (size_t)id;
     double m = p->mass[i];
-    if (f->first[k] < 0) f->first[k] = (int64_t)i;
+    if (f->first[k] < 0)
+      f->first[k] = (int64_t)i;
     f->count[k]++;
     f->mass[k] += m;
     f->vx[k] += m * coord(p->vx, i);
@@ -425,18 +460,21 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
         ref[a] = o->box.lo[a] + P * th / two_pi;
       }
     }
-    for (int a = 0; a < 3; a++) w[k * CPL_WORK_COLS + 6 + a] = ref[a];
+    for (int a = 0; a < 3; a++)
+      w[k * CPL_WORK_COLS + 6 + a] = ref[a];
     /* position sums (unwrapped) go to columns 0..2 */
     w[k * CPL_WORK_COLS + 0] = w[k * CPL_WORK_COLS + 1] = w[k * CPL_WORK_COLS + 2] = 0;
     /* also fall back to the first particle as the reference on open axes (round-off) */
     size_t i0 = (size_t)f->first[k];
     for (int a = 0; a < 3; a++)
-      if (!(o->box.period[a] > 0)) w[k * CPL_WORK_COLS + 6 + a] = coord(pos[a], i0);
+      if (!(o->box.period[a] > 0))
+        w[k * CPL_WORK_COLS + 6 + a] = coord(pos[a], i0);
   }
   /* pass 2: mass-weighted unwrapped positions relative to the reference */
   for (size_t i = 0; i < p->n; i++) {
     int64_t id = f->id[i];
-    if (id < 0) continue;
+    if (id < 0)
+      continue;
     size_t k = (size_t)id;
     double m = p->mass[i];
     for (int a = 0; a < 3; a++) {
@@ -455,7 +493,8 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
       double P = o->box.period[a];
       if (P > 0) {
         x = o->box.lo[a] + fmod(x - o->box.lo[a], P);
-        if (x < o->box.lo[a]) x += P;
+        if (x < o->box.lo[a])
+          x += P;
       }
       c[a][k] = x;
     }
@@ -464,7 +503,8 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   /* pass 3: radius of gyration about the centre (in the same unwrapped frame) */
   for (size_t i = 0; i < p->n; i++) {
     int64_t id = f->id[i];
-    if (id < 0) continue;
+    if (id < 0)
+      continue;
     size_t k = (size_t)id;
     double r2 = 0;
     for (int a = 0; a < 3; a++) {
@@ -474,5 +514,6 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
     }
     f->rg[k] += p->mass[i] * r2;
   }
-  for (size_t k = 0; k < nf; k++) f->rg[k] = f->mass[k] > 0 ? sqrt(f->rg[k] / f->mass[k]) : 0.0;
+  for (size_t k = 0; k < nf; k++)
+    f->rg[k] = f->mass[k] > 0 ? sqrt(f->rg[k] / f->mass[k]) : 0.0;
 }

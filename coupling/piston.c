@@ -7,7 +7,8 @@
 #include <string.h>
 
 void cpl_piston_free(cpl_piston *p) {
-  if (!p) return;
+  if (!p)
+    return;
   free(p->t);
   free(p->x);
   free(p->u);
@@ -18,10 +19,13 @@ void cpl_piston_free(cpl_piston *p) {
 ms_status cpl_piston_build(cpl_piston *p, size_t n, const double *t, const double *x,
                            const double *u) {
   memset(p, 0, sizeof *p);
-  if (n < 1 || !t || !x || !u) return MS_ERR_INPUT;
+  if (n < 1 || !t || !x || !u)
+    return MS_ERR_INPUT;
   for (size_t k = 0; k < n; k++) {
-    if (!isfinite(t[k]) || !isfinite(x[k]) || !isfinite(u[k])) return MS_ERR_INPUT;
-    if (k && !(t[k] > t[k - 1])) return MS_ERR_INPUT;
+    if (!isfinite(t[k]) || !isfinite(x[k]) || !isfinite(u[k]))
+      return MS_ERR_INPUT;
+    if (k && !(t[k] > t[k - 1]))
+      return MS_ERR_INPUT;
   }
   p->n = n;
   p->t = ms_calloc(n, sizeof *p->t);
@@ -34,7 +38,8 @@ ms_status cpl_piston_build(cpl_piston *p, size_t n, const double *t, const doubl
   for (size_t k = 0; k + 1 < n; k++) {
     /* constant correction that makes ∫ over the interval equal the recorded displacement */
     p->c[k] = (x[k + 1] - x[k]) / (t[k + 1] - t[k]) - 0.5 * (u[k] + u[k + 1]);
-    if (fabs(p->c[k]) > p->max_correction) p->max_correction = fabs(p->c[k]);
+    if (fabs(p->c[k]) > p->max_correction)
+      p->max_correction = fabs(p->c[k]);
   }
   return MS_OK;
 }
@@ -42,7 +47,8 @@ ms_status cpl_piston_build(cpl_piston *p, size_t n, const double *t, const doubl
 /* Interval k with t_k ≤ t < t_k+1 (binary search); n−1 past the end. */
 static size_t interval(const cpl_piston *p, double t) {
   size_t lo = 0, hi = p->n - 1;
-  if (t >= p->t[hi]) return hi;
+  if (t >= p->t[hi])
+    return hi;
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
     if (p->t[mid] <= t)
@@ -54,19 +60,25 @@ static size_t interval(const cpl_piston *p, double t) {
 }
 
 double cpl_piston_velocity(const cpl_piston *p, double t) {
-  if (!p->n) return 0.0;
-  if (t <= p->t[0]) return p->u[0];
+  if (!p->n)
+    return 0.0;
+  if (t <= p->t[0])
+    return p->u[0];
   size_t k = interval(p, t);
-  if (k == p->n - 1) return p->u[k];
+  if (k == p->n - 1)
+    return p->u[k];
   double s = (t - p->t[k]) / (p->t[k + 1] - p->t[k]);
   return p->u[k] + (p->u[k + 1] - p->u[k]) * s + p->c[k];
 }
 
 double cpl_piston_displacement(const cpl_piston *p, double t) {
-  if (!p->n) return 0.0;
-  if (t <= p->t[0]) return p->u[0] * (t - p->t[0]); /* constant before the start */
+  if (!p->n)
+    return 0.0;
+  if (t <= p->t[0])
+    return p->u[0] * (t - p->t[0]); /* constant before the start */
   size_t k = interval(p, t);
-  if (k == p->n - 1) return p->x[k] - p->x[0] + p->u[k] * (t - p->t[k]);
+  if (k == p->n - 1)
+    return p->x[k] - p->x[0] + p->u[k] * (t - p->t[k]);
   double h = t - p->t[k], dt = p->t[k + 1] - p->t[k];
   /* exact integral of the linear-plus-constant velocity over [t_k, t] */
   double part = h * (p->u[k] + p->c[k]) + 0.5 * (p->u[k + 1] - p->u[k]) * h * h / dt;

@@ -3,6 +3,7 @@
  * A good snapshot gives exactly the library's spectrum with the header `g,count,mass`; bad
  * snapshots (missing dataset, wrong shape, NaN, no lattice spacing) exit 2 with a message that
  * names the file and the problem; bad usage exits 2; --help exits 0. */
+#include <cmocka.h>
 #include <fcntl.h>
 #include <math.h>
 #include <setjmp.h>
@@ -12,7 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <cmocka.h>
 
 #include "cpl.h"
 
@@ -22,7 +22,8 @@ int cmd_spectrum(int argc, char **argv);
 int app_wants_help(int argc, char **argv);
 int app_wants_help(int argc, char **argv) {
   for (int i = 1; i < argc; i++)
-    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) return 1;
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help"))
+      return 1;
   return 0;
 }
 
@@ -37,7 +38,8 @@ static const char *tmp_name(const char *stem) {
 
 static char *read_all(const char *path) {
   FILE *f = fopen(path, "r");
-  if (!f) return calloc(1, 1);
+  if (!f)
+    return calloc(1, 1);
   fseek(f, 0, SEEK_END);
   long n = ftell(f);
   rewind(f);
@@ -56,7 +58,8 @@ static int run(char **out, char **err, int argc, const char **argv) {
   fflush(stdout);
   fflush(stderr);
   int so = dup(1), se = dup(2);
-  int fo = open(po, O_WRONLY | O_CREAT | O_TRUNC, 0644), fe = open(pe, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  int fo = open(po, O_WRONLY | O_CREAT | O_TRUNC, 0644),
+      fe = open(pe, O_WRONLY | O_CREAT | O_TRUNC, 0644);
   dup2(fo, 1);
   dup2(fe, 2);
   close(fo);
@@ -116,8 +119,10 @@ typedef enum defect {
 static void write_snapshot(const char *path, defect d) {
   double xyz[3 * NPART], vel[3 * NPART], mass[NPART];
   make_particles(xyz, vel, mass);
-  if (d == NAN_POSITION) xyz[3 * 7 + 1] = NAN;
-  if (d == NEGATIVE_MASS) mass[3] = -1;
+  if (d == NAN_POSITION)
+    xyz[3 * 7 + 1] = NAN;
+  if (d == NEGATIVE_MASS)
+    mass[3] = -1;
   ms_h5 *h = ms_h5_create(path);
   assert_non_null(h);
   if (d == X_WRONG_SHAPE)
@@ -126,10 +131,11 @@ static void write_snapshot(const char *path, defect d) {
     assert_int_equal(ms_h5_write_doubles(h, "particles/x", NPART, 3, xyz, "cm"), MS_OK);
   assert_int_equal(ms_h5_write_doubles(h, "particles/v", NPART, 3, vel, "km/s"), MS_OK);
   if (d != NO_MASS)
-    assert_int_equal(ms_h5_write_doubles(h, "particles/mass", d == MASS_SHORT ? NPART - 1 : NPART,
-                                         1, mass, "g"),
-                     MS_OK);
-  if (d != NO_SPACING) assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
+    assert_int_equal(
+        ms_h5_write_doubles(h, "particles/mass", d == MASS_SHORT ? NPART - 1 : NPART, 1, mass, "g"),
+        MS_OK);
+  if (d != NO_SPACING)
+    assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
   assert_int_equal(ms_h5_attr_double(h, "particles", "time", 0.5), MS_OK);
   assert_int_equal(ms_h5_close(h), MS_OK);
 }
@@ -160,7 +166,8 @@ static char *expected_rows(double bond) {
 }
 
 static const char *body_of(const char *csv) {
-  while (*csv == '#') csv = strchr(csv, '\n') + 1;
+  while (*csv == '#')
+    csv = strchr(csv, '\n') + 1;
   return csv;
 }
 
@@ -185,8 +192,7 @@ static void test_good_snapshot(void **state) {
   free(err);
   /* --bond 3.5: the singles (3a apart) join into one fragment of 5; the block, the chain and
    * the singles stay apart (≥ 4 a) */
-  const char *argv2[] = {"spectrum", path, "--bond", "3.5", "--fragments",
-                         table_path};
+  const char *argv2[] = {"spectrum", path, "--bond", "3.5", "--fragments", table_path};
   assert_int_equal(run(&out, &err, 6, argv2), 0);
   want = expected_rows(3.5);
   assert_string_equal(body_of(out), want);
