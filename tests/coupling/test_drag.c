@@ -4,7 +4,6 @@
  * detector arrival times against the Stokes-limit formula, momentum/energy handed back to the
  * gas, the particle-phase force sharing, and the displacement-preserving piston drive.
  * Units: g, cm, 10 µs (air: ρ = 1.2e-3 g/cm³, μ = 1.8e-5 Pa·s = 1.8e-9 g/(cm·10 µs); Pb 11.34). */
-#include <cmocka.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -12,6 +11,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+/* cmocka needs the headers above */
+#include <cmocka.h>
 
 #include "cpl.h"
 

@@ -4,7 +4,6 @@
  * by their smallest particle index), hence also the spectra. Tie distances cannot differ
  * between the two: the reference evaluates the same expression (min-image components, squared
  * distance ≤ (b·a)²) in the same floating-point operations. */
-#include <cmocka.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -12,6 +11,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+/* cmocka needs the headers above */
+#include <cmocka.h>
 
 #include "cpl.h"
 

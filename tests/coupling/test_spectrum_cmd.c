@@ -3,7 +3,6 @@
  * A good snapshot gives exactly the library's spectrum with the header `g,count,mass`; bad
  * snapshots (missing dataset, wrong shape, NaN, no lattice spacing) exit 2 with a message that
  * names the file and the problem; bad usage exits 2; --help exits 0. */
-#include <cmocka.h>
 #include <fcntl.h>
 #include <math.h>
 #include <setjmp.h>
@@ -13,6 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+/* cmocka needs the headers above */
+#include <cmocka.h>
 
 #include "cpl.h"
 
