@@ -96,10 +96,17 @@ ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *
                    double *c, size_t *bad) {
   const eos_ops *ops = eos->ops;
   for (size_t i = 0; i < n; ++i) {
-    double r = rho[i], ei = e[i];
-    double pi = (r > 0.0 && isfinite(ei)) ? ops->pressure(eos, r, ei) : NAN;
+    double r = rho[i], ei = e[i], pi = NAN, c2 = NAN;
+    if (r > 0.0 && isfinite(ei)) {
+      if (c && ops->eval) {
+        ops->eval(eos, r, ei, &pi, &c2);
+      } else {
+        pi = ops->pressure(eos, r, ei);
+        if (c && !isnan(pi)) c2 = ops->sound_speed2(eos, r, ei);
+      }
+    }
     p[i] = pi;
-    if (c) c[i] = isnan(pi) ? NAN : sound_speed_policy(eos, ops->sound_speed2(eos, r, ei));
+    if (c) c[i] = isnan(pi) ? NAN : sound_speed_policy(eos, c2);
     if (isnan(pi) || (c && isnan(c[i]))) {
       if (bad) *bad = i;
       return MS_ERR_UNSTABLE;

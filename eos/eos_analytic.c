@@ -10,6 +10,7 @@
 typedef struct mg_cold {
   double c0, n;
   eos_gruneisen g;
+  int n1_int; /* n − 1 if it is a small integer (fast powers in eos_eval), else 0 */
 } mg_cold;
 
 static double mg_cold_px(const eos_t *eos, double delta) {
@@ -36,14 +37,34 @@ static double mg_cold_c2(const eos_t *eos, double rho, double e) {
   return eos_mg_c2_from_cold(&m->g, eos->rho0, rho, e, dpx, mg_cold_ex(eos, delta));
 }
 
+/* δ^k: repeated multiplication for small integer k (Pb has n = 3), pow otherwise. */
+static inline double power(double delta, double k, int k_int) {
+  if (k_int <= 0) return pow(delta, k);
+  double r = delta;
+  for (int i = 1; i < k_int; ++i) r *= delta;
+  return r;
+}
+
+/* Fused P and c² with one power δⁿ⁻¹. */
+static void mg_cold_eval(const eos_t *eos, double rho, double e, double *p, double *c2) {
+  const mg_cold *m = eos->data;
+  double n = m->n, c02 = m->c0 * m->c0, delta = rho / eos->rho0;
+  double dn1 = power(delta, n - 1.0, m->n1_int), dn = dn1 * delta;
+  double px = eos->rho0 * c02 / n * (dn - 1.0);
+  double ex = c02 / n * (dn1 / (n - 1.0) + 1.0 / delta - n / (n - 1.0));
+  *p = eos_mg_pressure_from_cold(&m->g, rho, e, px, ex);
+  *c2 = eos_mg_c2_from_cold(&m->g, eos->rho0, rho, e, eos->rho0 * c02 * dn1, ex);
+}
+
 static const eos_ops mg_cold_ops = {mg_cold_pressure, mg_cold_c2, mg_cold_px, mg_cold_ex, NULL,
-                                    NULL};
+                                    NULL, mg_cold_eval};
 
 eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const) {
   if (!(rho0 > 0.0) || !(c0 > 0.0) || !(n > 1.0) || !(gamma0 >= 0.0) || !isfinite(rho0) ||
       !isfinite(c0) || !isfinite(n) || !isfinite(gamma0))
     return NULL;
-  mg_cold m = {c0, n, {gamma0, rho0, gamma_rho_const}};
+  mg_cold m = {c0, n, {gamma0, rho0, gamma_rho_const}, 0};
+  if (n == floor(n) && n <= 17.0) m.n1_int = (int)n - 1;
   eos_t *eos = eos_alloc(EOS_MG_COLD, &mg_cold_ops, rho0, &m, sizeof m);
   eos->c0 = c0;
   return eos;
@@ -90,9 +111,22 @@ static double mg_linear_c2(const eos_t *eos, double rho, double e) {
   return dph - G * deh + p / (rho * rho) * G;
 }
 
-static const eos_ops mg_linear_ops = {mg_linear_pressure, mg_linear_c2,
+static void mg_linear_eval(const eos_t *eos, double rho, double e, double *p, double *c2) {
+  const mg_linear *m = eos->data;
+  double ph, eh, dph, deh;
+  if (!mg_linear_ref(eos, rho, &ph, &eh, &dph, &deh)) {
+    *p = *c2 = NAN;
+    return;
+  }
+  double G = m->gamma0 * eos->rho0;
+  *p = ph + G * (e - eh);
+  *c2 = dph - G * deh + *p / (rho * rho) * G;
+}
+
+static const eos_ops mg_linear_ops = {mg_linear_pressure,        mg_linear_c2,
                                       eos_isentrope_cold_pressure, eos_isentrope_cold_energy,
-                                      NULL, NULL};
+                                      NULL,                        NULL,
+                                      mg_linear_eval};
 
 /* Range of the tabulated isentrope (docs/eos.md): compression up to 3 or 95 % of the limiting
  * compression s/(s−1); tension down to 10 % above the spinodal δ = s/(s+1) of the reference
@@ -133,7 +167,7 @@ static double ideal_c2(const eos_t *eos, double rho, double e) {
 
 static double zero_cold(const eos_t *eos, double delta) { return 0.0; }
 
-static const eos_ops ideal_ops = {ideal_pressure, ideal_c2, zero_cold, zero_cold, NULL, NULL};
+static const eos_ops ideal_ops = {ideal_pressure, ideal_c2, zero_cold, zero_cold, NULL, NULL, NULL};
 
 eos_t *eos_create_ideal_gas_ref(double gamma, double rho0, double p0) {
   if (!(gamma > 1.0) || !(rho0 > 0.0) || !(p0 >= 0.0) || !isfinite(gamma) || !isfinite(rho0) ||
@@ -182,7 +216,7 @@ static double elastic_c2(const eos_t *eos, double rho, double e) {
 }
 
 static const eos_ops elastic_ops = {elastic_pressure, elastic_c2, elastic_px, elastic_ex, NULL,
-                                    NULL};
+                                    NULL, NULL};
 
 eos_t *eos_create_linear_elastic(double rho0, double bulk_modulus) {
   if (!(rho0 > 0.0) || !(bulk_modulus > 0.0) || !isfinite(rho0) || !isfinite(bulk_modulus))

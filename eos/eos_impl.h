@@ -26,6 +26,9 @@ typedef struct eos_ops {
   double (*cold_energy)(const eos_t *eos, double delta);
   double (*temperature)(const eos_t *eos, double rho, double e); /* NULL: unknown */
   void (*free_data)(eos_t *eos);                                 /* NULL: nothing to free */
+  /* Optional fused P and c² for eos_eval's loop (shares powers, table lookups); NULL: the two
+   * calls above. Must give the same values as pressure() and sound_speed2(). */
+  void (*eval)(const eos_t *eos, double rho, double e, double *p, double *c2);
 } eos_ops;
 
 /* A cubic-Hermite tabulated curve y(x) with slopes y'(x) at the nodes; x strictly increasing.

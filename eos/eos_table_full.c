@@ -48,6 +48,21 @@ static double tf_c2(const eos_t *eos, double rho, double e) {
   return bilinear(t, t->c2, rho, e);
 }
 
+/* Fused: one cell lookup for P and c². */
+static void tf_eval(const eos_t *eos, double rho, double e, double *p, double *c2) {
+  const table_full *t = eos->data;
+  size_t i, j;
+  double a, b;
+  if (!locate(t->rho, t->nr, rho, &i, &a) || !locate(t->e, t->ne, e, &j, &b)) {
+    *p = *c2 = NAN;
+    return;
+  }
+  size_t k0 = i * t->ne + j, k1 = k0 + t->ne;
+  double w00 = (1 - a) * (1 - b), w01 = (1 - a) * b, w10 = a * (1 - b), w11 = a * b;
+  *p = w00 * t->P[k0] + w01 * t->P[k0 + 1] + w10 * t->P[k1] + w11 * t->P[k1 + 1];
+  *c2 = w00 * t->c2[k0] + w01 * t->c2[k0 + 1] + w10 * t->c2[k1] + w11 * t->c2[k1 + 1];
+}
+
 static void tf_free(eos_t *eos) {
   table_full *t = eos->data;
   if (!t) return;
@@ -55,7 +70,7 @@ static void tf_free(eos_t *eos) {
 }
 
 static const eos_ops table_full_ops = {tf_pressure, tf_c2, eos_isentrope_cold_pressure,
-                                       eos_isentrope_cold_energy, NULL, tf_free};
+                                       eos_isentrope_cold_energy, NULL, tf_free, tf_eval};
 
 /* Nodal c² from centred differences of P (one-sided, first order, on the edges). */
 static void nodal_c2_from_p(table_full *t) {
