@@ -1,0 +1,225 @@
+#!/usr/bin/python3
+"""Plot fragment spectra, size/velocity distributions and detector arrivals (docs/coupling.md).
+
+Usage:
+  /usr/bin/python3 tools/plot_spectrum.py RUNDIR            # PNGs into RUNDIR/plots/
+  /usr/bin/python3 tools/plot_spectrum.py SPECTRUM.csv [-o OUT.png]
+                                     # one CSV from `mscale spectrum SNAP.h5 > SPECTRUM.csv`
+
+In a run directory it looks for the coupling outputs by name (any that exist):
+  spectrum*.csv          g,count,mass             fragment spectrum N(g)
+  fragments*.csv         id,count,mass,d,...      per-fragment table
+  cumulative*.csv        mass,N_ge,M_ge           cumulative N(>=m)
+  mass_hist*.csv, diameter_hist*.csv  lo,hi,count,mass
+  ejecta_velocity*.csv   v,M_ge                   cumulative ejected mass vs velocity
+  ejecta_mass.csv        t,M_ej                   ejected mass vs time
+  arrivals.csv           id,mass,d,t_arrival,...  fragments at the detector plane
+Also offers plot_run(outdir, plotdir) for tools/plot_run.py. Debian's numpy/matplotlib only.
+"""
+import glob
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def read_csv(path):
+    """An mscale CSV: '#' comment lines (title, units), a header line, numeric rows.
+    Returns (columns by name, units by name, title)."""
+    with open(path) as f:
+        lines = f.readlines()
+    comments = [ln[1:].strip() for ln in lines if ln.startswith("#")]
+    units = {}
+    for c in comments:
+        if c.startswith("units:"):
+            for item in c[len("units:"):].split(","):
+                if "[" in item:
+                    name, unit = item.split("[", 1)
+                    units[name.strip()] = unit.strip().rstrip("]")
+    body = [ln for ln in lines if not ln.startswith("#") and ln.strip()]
+    if not body:
+        raise ValueError(f"{path}: no header line")
+    names = body[0].strip().split(",")
+    data = np.loadtxt(body[1:], delimiter=",", ndmin=2) if len(body) > 1 else np.zeros((0, len(names)))
+    cols = {n: data[:, i] for i, n in enumerate(names)}
+    return cols, units, (comments[0] if comments else os.path.basename(path))
+
+
+def lab(name, units):
+    return f"{name} [{units[name]}]" if name in units else name
+
+
+def plot_spectrum_axes(ax, path):
+    c, u, title = read_csv(path)
+    if len(c["g"]) == 0:
+        ax.text(0.5, 0.5, "no fragments", ha="center", transform=ax.transAxes)
+        return
+    ax.loglog(c["g"], c["count"], "o", ms=4, label="N(g): fragments of g clusters")
+    ax2 = ax.twinx()
+    ax2.loglog(c["g"], c["mass"], "s", ms=3, color="tab:red", alpha=0.6, label="mass in size g")
+    ax2.set_ylabel(lab("mass", u), color="tab:red")
+    ax.set_xlabel("g (clusters per fragment)")
+    ax.set_ylabel("N(g)")
+    ax.set_title(title if len(title) < 70 else title[:67] + "...", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def plot_spectrum_file(path, out):
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    plot_spectrum_axes(ax, path)
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+def first(outdir, pattern):
+    files = sorted(glob.glob(os.path.join(outdir, pattern)))
+    return files[0] if files else None
+
+
+def plot_distributions(outdir, plotdir):
+    mh, dh, cu = (first(outdir, p) for p in ("mass_hist*.csv", "diameter_hist*.csv", "cumulative*.csv"))
+    if not (mh or dh or cu):
+        return []
+    fig, axs = plt.subplots(1, 3, figsize=(14, 4))
+    for ax, path, what in ((axs[0], mh, "mass"), (axs[1], dh, "equivalent diameter")):
+        if not path:
+            ax.set_visible(False)
+            continue
+        c, u, _ = read_csv(path)
+        if len(c["lo"]):
+            w = c["hi"] - c["lo"]
+            ax.bar(c["lo"], c["count"], width=w, align="edge", edgecolor="k", alpha=0.7)
+            ax.set_xscale("log")
+        ax.set_xlabel(lab("lo", u).replace("lo", what))
+        ax.set_ylabel("fragments per bin")
+        ax.set_title(f"{what} distribution")
+    if cu:
+        c, u, _ = read_csv(cu)
+        if len(c["mass"]):
+            axs[2].loglog(c["mass"], c["N_ge"], "o-", ms=3)
+        axs[2].set_xlabel(lab("mass", u))
+        axs[2].set_ylabel("N(>= m)")
+        axs[2].set_title("cumulative number of fragments")
+        axs[2].grid(True, which="both", alpha=0.3)
+    else:
+        axs[2].set_visible(False)
+    fig.tight_layout()
+    out = os.path.join(plotdir, "fragment_distributions.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
+
+
+def plot_ejecta(outdir, plotdir):
+    ev, em = first(outdir, "ejecta_velocity*.csv"), first(outdir, "ejecta_mass.csv")
+    if not (ev or em):
+        return []
+    fig, axs = plt.subplots(1, 2, figsize=(11, 4))
+    if ev:
+        c, u, _ = read_csv(ev)
+        if len(c["v"]):
+            axs[0].step(c["v"], c["M_ge"], where="post")
+        axs[0].set_xlabel(lab("v", u))
+        axs[0].set_ylabel(lab("M_ge", u).replace("M_ge", "ejected mass with velocity >= v"))
+        axs[0].set_title("cumulative ejected mass vs velocity")
+        axs[0].grid(True, alpha=0.3)
+    else:
+        axs[0].set_visible(False)
+    if em:
+        c, u, _ = read_csv(em)
+        axs[1].plot(c["t"], c["M_ej"], "o-", ms=3)
+        axs[1].set_xlabel(lab("t", u))
+        axs[1].set_ylabel(lab("M_ej", u))
+        axs[1].set_title("ejected mass vs time")
+        axs[1].grid(True, alpha=0.3)
+    else:
+        axs[1].set_visible(False)
+    fig.tight_layout()
+    out = os.path.join(plotdir, "ejecta.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
+
+
+def plot_arrivals(outdir, plotdir):
+    ar = first(outdir, "arrivals.csv")
+    if not ar:
+        return []
+    c, u, title = read_csv(ar)
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4))
+    if len(c["t_arrival"]):
+        axs[0].hist(c["t_arrival"], bins=40, weights=c["mass"], edgecolor="k", alpha=0.7)
+        sc = axs[1].scatter(c["t_arrival"], c["vx"], c=np.log10(c["d"] * 1e4), s=6, cmap="viridis")
+        fig.colorbar(sc, ax=axs[1], label="log10 d [um]")
+        axs[2].hist(c["d"] * 1e4, bins=np.logspace(np.log10(c["d"].min() * 1e4),
+                                                   np.log10(c["d"].max() * 1e4) + 1e-9, 30),
+                    edgecolor="k", alpha=0.7)
+        axs[2].set_xscale("log")
+    axs[0].set_xlabel(lab("t_arrival", u))
+    axs[0].set_ylabel("mass per bin [g]")
+    axs[0].set_title("arrival-time distribution (mass)")
+    axs[1].set_xlabel(lab("t_arrival", u))
+    axs[1].set_ylabel(lab("vx", u))
+    axs[1].set_title("arrival velocity")
+    axs[2].set_xlabel("equivalent diameter [um]")
+    axs[2].set_ylabel("fragments")
+    axs[2].set_title("sizes at the detector")
+    fig.tight_layout()
+    out = os.path.join(plotdir, "arrivals.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
+
+
+def plot_run(outdir, plotdir):
+    """Every coupling plot that the run directory has data for; returns the PNG paths."""
+    made = []
+    specs = sorted(glob.glob(os.path.join(outdir, "spectrum*.csv")))
+    for s in specs:
+        name = os.path.splitext(os.path.basename(s))[0]
+        made.append(plot_spectrum_file(s, os.path.join(plotdir, name + ".png")))
+    made += plot_distributions(outdir, plotdir)
+    made += plot_ejecta(outdir, plotdir)
+    made += plot_arrivals(outdir, plotdir)
+    return made
+
+
+def main(argv):
+    if len(argv) < 2 or argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return 0 if len(argv) >= 2 else 2
+    target = argv[1]
+    out = None
+    if len(argv) == 4 and argv[2] == "-o":
+        out = argv[3]
+    elif len(argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    try:
+        if os.path.isdir(target):
+            plotdir = os.path.join(target, "plots")
+            os.makedirs(plotdir, exist_ok=True)
+            made = plot_run(target, plotdir)
+        elif os.path.isfile(target):
+            made = [plot_spectrum_file(target, out or os.path.splitext(target)[0] + ".png")]
+        else:
+            print(f"plot_spectrum: '{target}' does not exist", file=sys.stderr)
+            return 2
+    except (ValueError, KeyError) as exc:
+        print(f"plot_spectrum: {target}: cannot read ({exc})", file=sys.stderr)
+        return 2
+    for m in made:
+        print(f"plot_spectrum: wrote {m}")
+    if not made:
+        print(f"plot_spectrum: nothing to plot in {target}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
