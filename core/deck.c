@@ -504,10 +504,12 @@ static void emit_text(FILE *f, const char *s, bool force_quotes) {
 
 static void emit_scalar(FILE *f, const dk_node *n) { emit_text(f, n->value, n->quoted); }
 
-static void emit(FILE *f, const dk_node *n, int indent) {
+/* `first_indent` is the indentation of the first line: a mapping inside a list starts on the
+ * line of its "- ". */
+static void emit(FILE *f, const dk_node *n, int indent, int first_indent) {
   for (size_t i = 0; i < n->n; i++) {
     const dk_node *c = n->items[i];
-    fprintf(f, "%*s", indent, "");
+    fprintf(f, "%*s", i ? indent : first_indent, "");
     if (n->kind == DK_MAP) {
       emit_text(f, n->keys[i], false);
       fputc(':', f);
@@ -521,9 +523,12 @@ static void emit(FILE *f, const dk_node *n, int indent) {
       fputc('\n', f);
     } else if (c->n == 0) {
       fputs(c->kind == DK_MAP ? " {}\n" : " []\n", f);
+    } else if (n->kind == DK_SEQ && c->kind == DK_MAP) {
+      fputc(' ', f);
+      emit(f, c, indent + 2, 0);
     } else {
       fputc('\n', f);
-      emit(f, c, indent + 2);
+      emit(f, c, indent + 2, indent + 2);
     }
   }
 }
@@ -535,6 +540,6 @@ ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
   fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING,
           doc->file);
   fprintf(af.f, "# Every key the run used, with defaults filled in (marked '# default').\n");
-  emit(af.f, doc->root, 0);
+  emit(af.f, doc->root, 0, 0);
   return ms_afile_commit(&af);
 }
