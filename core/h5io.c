@@ -4,6 +4,7 @@
 #include <hdf5.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 struct ms_h5 {
   hid_t file;
@@ -203,13 +204,34 @@ ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t 
   } else {
     H5Sget_simple_extent_dims(space, dims, NULL);
     if (rank == 1) dims[1] = 1;
-    /* refuse absurd sizes before allocating (a damaged or hostile file) */
-    if (dims[0] > ((hsize_t)1 << 34) / (dims[1] ? dims[1] : 1)) {
-      dk_error_at(e, h->path, 0, 0, "dataset '%s' is implausibly large", name);
+    /* Refuse sizes that cannot be real before allocating: a damaged or hostile file can declare
+     * any shape (fuzz_h5 found 2^30 x 8 declared with nothing stored -> an 8 GiB calloc). Without
+     * filters (mscale writes none) the file must store every element; with filters, at least
+     * the result must fit in half of this machine's memory. */
+    hsize_t count = dims[1] ? dims[0] * dims[1] : 0, elem = H5Tget_size(type);
+    hsize_t stored = H5Dget_storage_size(ds);
+    hid_t dcpl = H5Dget_create_plist(ds);
+    int nfilters = dcpl >= 0 ? H5Pget_nfilters(dcpl) : 0;
+    if (dcpl >= 0) H5Pclose(dcpl);
+    double ram = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
+    if (dims[1] && dims[0] > (hsize_t)SIZE_MAX / sizeof(double) / dims[1]) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' declares an impossible size", name);
+      s = MS_ERR_INPUT;
+    } else if (nfilters == 0 && (double)stored < (double)count * (double)elem) {
+      dk_error_at(e, h->path, 0, 0,
+                  "dataset '%s' of shape [%llu][%llu] stores only %llu of its %llu bytes "
+                  "(truncated or damaged file?)",
+                  name, (unsigned long long)dims[0], (unsigned long long)dims[1],
+                  (unsigned long long)stored, (unsigned long long)count * elem);
+      s = MS_ERR_INPUT;
+    } else if (ram > 0 && (double)count * sizeof(double) > 0.5 * ram) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' needs %.3g GiB, more than half of this "
+                  "machine's memory (%.3g GiB)", name,
+                  (double)count * sizeof(double) / 1073741824.0, ram / 1073741824.0);
       s = MS_ERR_INPUT;
     } else {
-      double *buf = ms_calloc((size_t)(dims[0] * dims[1]), sizeof *buf);
-      if (H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+      double *buf = calloc(count ? (size_t)count : 1, sizeof *buf);
+      if (!buf || H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
         dk_error_at(e, h->path, 0, 0, "cannot read dataset '%s'", name);
         free(buf);
         s = MS_ERR_INPUT;

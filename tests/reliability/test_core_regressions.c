@@ -13,6 +13,8 @@
 
 #include "core.h"
 
+#include <hdf5.h>
+
 static bool has_error(const dk_errors *e, const char *needle) {
   for (size_t i = 0; i < e->n; i++)
     if (strstr(e->msg[i], needle)) return true;
@@ -148,12 +150,59 @@ static void test_table_line_too_long(void **state) {
   dk_errors_free(&e);
 }
 
+/* fuzz_h5, crashes/fuzz_h5/huge-declared-chunked.bin: a chunked dataset declaring 2^30 x 8
+ * values with nothing stored made ms_h5_read_doubles calloc 8 GiB (abort instead of exit 2).
+ * Now the stored size is checked against the shape before allocating. */
+static void test_h5_declared_size_not_stored(void **state) {
+  (void)state;
+  char *path = scratch("huge.h5");
+  hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  assert_true(f >= 0);
+  hsize_t big[2] = {(hsize_t)1 << 30, 8}, chunk[2] = {4, 1}, small[1] = {3};
+  hid_t space = H5Screate_simple(2, big, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 2, chunk);
+  hid_t ds = H5Dcreate2(f, "P", H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  assert_true(ds >= 0);
+  H5Dclose(ds);
+  H5Pclose(dcpl);
+  H5Sclose(space);
+  /* a normal dataset next to it still reads */
+  double v[3] = {1, 2, 3};
+  space = H5Screate_simple(1, small, NULL);
+  ds = H5Dcreate2(f, "rho", H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+  H5Dclose(ds);
+  H5Sclose(space);
+  H5Fclose(f);
+
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_h5r *h = ms_h5_open_read(path, &e);
+  assert_non_null(h);
+  double *data;
+  size_t n0, n1;
+  assert_int_equal(ms_h5_read_doubles(h, "P", &data, &n0, &n1, &e), MS_ERR_INPUT);
+  assert_null(data);
+  dk_errors_print(&e, stderr);
+  assert_true(has_error(&e, "dataset 'P' of shape [1073741824][8] stores only 0 of its"));
+  assert_int_equal(ms_h5_read_doubles(h, "rho", &data, &n0, &n1, &e), MS_OK);
+  assert_int_equal(n0, 3);
+  assert_int_equal(n1, 1);
+  assert_true(data[2] == 3);
+  free(data);
+  ms_h5_close_read(h);
+  remove(path);
+  free(path);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resolved_deck_round_trip),
       cmocka_unit_test(test_table_separator_rows_skipped),
       cmocka_unit_test(test_table_nul_byte_is_an_error),
       cmocka_unit_test(test_table_line_too_long),
+      cmocka_unit_test(test_h5_declared_size_not_stored),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
