@@ -11,7 +11,7 @@ eos_t *eos_alloc(eos_kind kind, const eos_ops *ops, double rho0, const void *dat
   eos->ops = ops;
   eos->rho0 = rho0;
   eos->c0 = NAN;
-  eos->delta_min = -INFINITY;
+  eos->delta_min = 0.0;
   eos->delta_max = INFINITY;
   if (size > 0) {
     eos->data = ms_calloc(1, size);

@@ -53,8 +53,9 @@ double eos_c0(const eos_t *eos);       /* reference sound speed c(rho0, e0) (km/
  * Hugoniots and of mixture components. */
 double eos_e0(const eos_t *eos);
 bool eos_has_cold_curve(const eos_t *eos);
-/* Range of δ where the cold curve is defined (tables, tabulated isentropes); ±INFINITY for
- * analytic curves. Returns false (and NaNs) if the EOS has no cold curve. */
+/* Range of δ where the cold curve is defined: the table's or tabulated isentrope's range, or
+ * (0, INFINITY) for analytic curves (δ = 0 itself excluded). Returns false (and NaNs) if the
+ * EOS has no cold curve. */
 bool eos_cold_range(const eos_t *eos, double *delta_min, double *delta_max);
 
 /* Single-state queries. */

@@ -67,6 +67,7 @@ eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool 
   if (n == floor(n) && n <= 17.0) m.n1_int = (int)n - 1;
   eos_t *eos = eos_alloc(EOS_MG_COLD, &mg_cold_ops, rho0, &m, sizeof m);
   eos->c0 = c0;
+  eos->delta_min = 0.0; /* analytic for every δ > 0 */
   return eos;
 }
 
