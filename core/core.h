@@ -243,7 +243,16 @@ ms_status ms_h5_write_doubles(ms_h5 *h, const char *name, size_t n0, size_t n1, 
 ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *data);
 ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v);
 ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const char *v);
-ms_status ms_h5_close(ms_h5 *h); /* commit: close + rename */
+/* Parallel HDF5 (MPI-IO): every rank calls create, every write and close (collectively);
+ * attributes must be written with the same values on every rank. Without MPI running it is
+ * ms_h5_create. */
+ms_h5 *ms_h5_create_collective(const char *path);
+/* Each rank contributes n_local rows of a [N][ncomp] dataset, in rank order; the file is the
+ * same whatever the rank count. On a non-collective file this is an ordinary write. */
+ms_status ms_h5_write_doubles_dist(ms_h5 *h, const char *name, size_t n_local, size_t ncomp,
+                                   const double *data, const char *units);
+ms_status ms_h5_write_ints_dist(ms_h5 *h, const char *name, size_t n_local, const int64_t *data);
+ms_status ms_h5_close(ms_h5 *h); /* commit: close + rename (collective files: every rank) */
 void ms_h5_abort(ms_h5 *h);      /* close + remove temporary */
 
 /* Reading (for post-processing commands and tests). */

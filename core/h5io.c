@@ -9,6 +9,7 @@
 struct ms_h5 {
   hid_t file;
   char *path, *tmp_path;
+  bool collective; /* opened by every rank with MPI-IO (ms_h5_create_collective) */
 };
 
 struct ms_h5r {
@@ -18,13 +19,26 @@ struct ms_h5r {
 
 static void quiet_hdf5(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
 
-ms_h5 *ms_h5_create(const char *path) {
+static ms_h5 *create_file(const char *path, bool collective) {
   quiet_hdf5();
   ms_h5 *h = ms_calloc(1, sizeof *h);
   h->path = ms_strdup(path);
   h->tmp_path = ms_calloc(strlen(path) + 6, 1);
   sprintf(h->tmp_path, "%s.part", path);
-  h->file = H5Fcreate(h->tmp_path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  h->collective = collective;
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (collective) H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL);
+  h->file = H5Fcreate(h->tmp_path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  H5Pclose(fapl);
+  if (collective) {
+    /* every rank must agree that the file exists before anyone writes */
+    int ok = h->file >= 0, all = 0;
+    MPI_Allreduce(&ok, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (!all && h->file >= 0) {
+      H5Fclose(h->file);
+      h->file = -1;
+    }
+  }
   if (h->file < 0) {
     fprintf(stderr, "mscale: cannot create HDF5 file '%s'\n", h->tmp_path);
     free(h->path);
@@ -33,6 +47,14 @@ ms_h5 *ms_h5_create(const char *path) {
     return NULL;
   }
   return h;
+}
+
+ms_h5 *ms_h5_create(const char *path) { return create_file(path, false); }
+
+ms_h5 *ms_h5_create_collective(const char *path) {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  return create_file(path, initialized != 0);
 }
 
 static hid_t link_props(void) {
@@ -86,6 +108,63 @@ ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *
   return write_dataset(h, name, 1, dims, H5T_NATIVE_INT64, H5T_STD_I64LE, data, NULL);
 }
 
+/* Distributed rows: rank r writes rows [offset_r, offset_r + n_local) of a [N][ncomp] dataset,
+ * offset_r = sum of n_local over lower ranks. One collective write, so the file holds the same
+ * bytes whatever the rank count. */
+static ms_status write_rows_dist(ms_h5 *h, const char *name, size_t n_local, size_t ncomp,
+                                 hid_t memtype, hid_t filetype, const void *data,
+                                 const char *units) {
+  if (!h->collective) {
+    hsize_t dims[2] = {n_local, ncomp};
+    return write_dataset(h, name, ncomp > 1 ? 2 : 1, dims, memtype, filetype, data, units);
+  }
+  unsigned long long mine = n_local, offset = 0, total = 0;
+  MPI_Exscan(&mine, &offset, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  MPI_Allreduce(&mine, &total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  int rank_dims = ncomp > 1 ? 2 : 1;
+  hsize_t gdims[2] = {total, ncomp}, start[2] = {offset, 0}, count[2] = {n_local, ncomp};
+  hid_t fspace = H5Screate_simple(rank_dims, gdims, NULL);
+  hid_t lcpl = link_props();
+  hid_t ds = H5Dcreate2(h->file, name, filetype, fspace, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = -1;
+  if (ds >= 0) {
+    hid_t mspace = H5Screate_simple(rank_dims, count, NULL);
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL);
+    if (n_local == 0) {
+      H5Sselect_none(fspace);
+      H5Sselect_none(mspace);
+    }
+    hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
+    H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
+    rc = H5Dwrite(ds, memtype, mspace, fspace, dxpl, data);
+    H5Pclose(dxpl);
+    H5Sclose(mspace);
+    if (rc >= 0 && write_units(ds, units)) rc = -1;
+    H5Dclose(ds);
+  }
+  H5Pclose(lcpl);
+  H5Sclose(fspace);
+  int bad = rc < 0, any = 0;
+  MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (any) {
+    if (rank == 0) fprintf(stderr, "mscale: cannot write dataset '%s' to '%s'\n", name, h->tmp_path);
+    return MS_ERR_IO;
+  }
+  return MS_OK;
+}
+
+ms_status ms_h5_write_doubles_dist(ms_h5 *h, const char *name, size_t n_local, size_t ncomp,
+                                   const double *data, const char *units) {
+  return write_rows_dist(h, name, n_local, ncomp, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, data, units);
+}
+
+ms_status ms_h5_write_ints_dist(ms_h5 *h, const char *name, size_t n_local, const int64_t *data) {
+  return write_rows_dist(h, name, n_local, 1, H5T_NATIVE_INT64, H5T_STD_I64LE, data, NULL);
+}
+
 static hid_t open_object(hid_t file, const char *obj) {
   if (!obj || !obj[0] || !strcmp(obj, "/")) return H5Oopen(file, "/", H5P_DEFAULT);
   if (H5Lexists(file, obj, H5P_DEFAULT) <= 0) {
@@ -127,7 +206,25 @@ ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const c
 ms_status ms_h5_close(ms_h5 *h) {
   if (!h) return MS_ERR_IO;
   ms_status s = H5Fclose(h->file) < 0 ? MS_ERR_IO : MS_OK;
-  if (!s && rename(h->tmp_path, h->path) != 0) s = MS_ERR_IO;
+  if (h->collective) {
+    /* the file is complete only when every rank has closed it; then one rank renames it */
+    int bad = s != MS_OK, any = 0, rank = 0;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (any) s = MS_ERR_IO;
+    int renamed = 1;
+    if (!s && rank == 0) renamed = rename(h->tmp_path, h->path) == 0;
+    MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (!renamed) s = MS_ERR_IO;
+    if (s && rank != 0) { /* only rank 0 reports and cleans up */
+      free(h->path);
+      free(h->tmp_path);
+      free(h);
+      return s;
+    }
+  } else if (!s && rename(h->tmp_path, h->path) != 0) {
+    s = MS_ERR_IO;
+  }
   if (s) {
     fprintf(stderr, "mscale: cannot complete HDF5 file '%s'\n", h->path);
     remove(h->tmp_path);
