@@ -243,6 +243,35 @@ static void test_full_table_broken(void **state) {
   /* non-positive sound speed column */
   snprintf(text, sizeof text, "# rho0: 1\n1 0 1 1\n1 1 2 1\n2 0 4 -1\n2 1 5 1\n");
   expect_full_error("full_c.txt", text, 4, "sound speed must be > 0");
+  /* HDF5 tables with wrong shapes or axes */
+  {
+    const double rho3[3] = {1, 2, 3}, rho_bad[3] = {1, 3, 2}, e2[2] = {0, 1}, P4[4] = {1, 2, 4, 5};
+    const double P6[6] = {1, 2, 4, 5, 7, 8}, rho0 = 1.0;
+    struct {
+      const char *name;
+      const double *rho, *P;
+      size_t pr;
+      const char *needle;
+    } cases[] = {{"h5_shape.h5", rho3, P4, 2, "inconsistent table shapes"},
+                 {"h5_axis.h5", rho_bad, P6, 3, "rho axis must be positive and strictly increasing"}};
+    for (int k = 0; k < 2; ++k) {
+      tmp_path(path, sizeof path, cases[k].name);
+      ms_h5 *h = ms_h5_create(path);
+      assert_non_null(h);
+      assert_int_equal(ms_h5_write_doubles(h, "rho", 3, 0, cases[k].rho, "g/cm^3"), MS_OK);
+      assert_int_equal(ms_h5_write_doubles(h, "e", 2, 0, e2, "kJ/g"), MS_OK);
+      assert_int_equal(ms_h5_write_doubles(h, "P", cases[k].pr, 2, cases[k].P, "GPa"), MS_OK);
+      assert_int_equal(ms_h5_write_doubles(h, "rho0", 1, 0, &rho0, "g/cm^3"), MS_OK);
+      assert_int_equal(ms_h5_close(h), MS_OK);
+      dk_errors_init(&e);
+      assert_null(eos_create_table_full(path, &e));
+      if (!eos_test_has_error(&e, path) || !eos_test_has_error(&e, cases[k].needle)) {
+        eos_test_dump(&e);
+        fail_msg("%s: expected '%s'", cases[k].name, cases[k].needle);
+      }
+      dk_errors_free(&e);
+    }
+  }
   /* HDF5 file that does not exist */
   dk_errors_init(&e);
   tmp_path(path, sizeof path, "missing.h5");
