@@ -75,7 +75,9 @@ static void xt_free(xt_data *xt) {
 static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double mom0) {
   cont_balance b = cont_grid_balance(g);
   double total = b.internal + b.kinetic;
-  double scale = fabs(e0) > 0 ? fabs(e0) : (fabs(total) > 0 ? fabs(total) : 1.0);
+  /* scale: the largest energy in play (initial, current, or delivered by the boundaries) */
+  double scale = fmax(fmax(fabs(e0), fabs(b.internal) + b.kinetic), fabs(b.work));
+  if (!(scale > 0.0)) scale = 1.0;
   double drift = (total - b.work - e0) / scale;
   ms_log(ctx, MS_LOG_INFO,
          "continuum t = %.6g step %ld: energy internal %.9g + kinetic %.9g = %.9g, boundary work "
