@@ -136,6 +136,19 @@ void cpl_write_histogram(FILE *out, const cpl_fragments *f, cpl_hist_of what, in
 void cpl_write_ejecta_velocity(FILE *out, const cpl_fragments *f, const cpl_ejecta_sel *s,
                                const char *title);
 
+/* Particle snapshot with fragment ids (layout in docs/coupling.md §2): /particles/x, v, mass,
+ * /particles/fragment (int64, −1 = none) and fragment_id (the same as doubles, for the XDMF
+ * sidecar "<path without .h5>.xmf"), attributes time, r0, rho0, period_x.. and lo_x.. of periodic
+ * axes. f may be NULL (all ids −1). */
+typedef struct cpl_snapshot_info {
+  double time;    /* 10 µs */
+  double spacing; /* lattice spacing a, cm */
+  double rho0;    /* reference density (≤ 0: not written) */
+  cpl_box box;
+} cpl_snapshot_info;
+ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl_fragments *f,
+                             const cpl_snapshot_info *info);
+
 /* ========================================================================================== */
 /* Gas drag (DESIGN.md §6; Schiller–Naumann as in the Logos multiphase paper, seed 004)        */
 

@@ -281,11 +281,66 @@ static void test_usage(void **state) {
   free(err);
 }
 
+/* cpl_write_snapshot: the layout round-trips through `mscale spectrum` (same spectrum as the
+ * library, periodic attributes honoured) and the fragment ids stored are the library's. */
+static void test_snapshot_writer(void **state) {
+  (void)state;
+  double xyz[3 * NPART], vel[3 * NPART], mass[NPART], x[NPART], y[NPART], z[NPART];
+  make_particles(xyz, vel, mass);
+  for (int i = 0; i < NPART; i++) {
+    x[i] = xyz[3 * i];
+    y[i] = xyz[3 * i + 1];
+    z[i] = xyz[3 * i + 2];
+  }
+  cpl_particles p = {NPART, x, y, z, NULL, NULL, NULL, mass, NULL};
+  cpl_fragment_opts o = {.bond = 1.2, .spacing = A, .rho0 = 11.34};
+  o.box.period[1] = 50 * A; /* y periodic, wide enough not to change anything */
+  cpl_fragments f;
+  cpl_fragments_init(&f);
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  char path[256];
+  snprintf(path, sizeof path, "%s", tmp_name("writer.h5"));
+  cpl_snapshot_info info = {.time = 0.25, .spacing = A, .rho0 = 11.34, .box = o.box};
+  assert_int_equal(cpl_write_snapshot(path, &p, &f, &info), MS_OK);
+  char *out, *err;
+  const char *argv[] = {"spectrum", path};
+  assert_int_equal(run(&out, &err, 2, argv), 0);
+  char *want = expected_rows(1.2);
+  assert_string_equal(body_of(out), want);
+  free(want);
+  free(out);
+  free(err);
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_h5r *h = ms_h5_open_read(path, &e);
+  assert_non_null(h);
+  double *ids = NULL, v = 0;
+  size_t n0, n1;
+  assert_int_equal(ms_h5_read_doubles(h, "/particles/fragment_id", &ids, &n0, &n1, &e), MS_OK);
+  assert_int_equal(n0, NPART);
+  for (size_t i = 0; i < NPART; i++) assert_true(ids[i] == (double)f.id[i]);
+  assert_int_equal(ms_h5_read_attr_double(h, "/particles", "period_y", &v, &e), MS_OK);
+  assert_true(v == 50 * A);
+  assert_int_equal(ms_h5_read_attr_double(h, "/particles", "period_x", &v, NULL), MS_ERR_INPUT);
+  free(ids);
+  ms_h5_close_read(h);
+  dk_errors_free(&e);
+  cpl_fragments_free(&f);
+  remove(path);
+  size_t len = strlen(path);
+  strcpy(path + len - 3, ".xmf");
+  char *xmf = read_all(path);
+  assert_non_null(strstr(xmf, "particles/fragment_id"));
+  free(xmf);
+  remove(path);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_good_snapshot),
       cmocka_unit_test(test_bad_snapshots),
       cmocka_unit_test(test_usage),
+      cmocka_unit_test(test_snapshot_writer),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
