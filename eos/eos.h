@@ -11,9 +11,9 @@
 #include "core.h"
 
 typedef enum eos_kind {
-  EOS_MG_COLD,    /* Mie–Grüneisen, cold-curve form: rho0, c0, n, gamma */
+  EOS_MG_COLD,    /* Mie–Grüneisen, cold-curve form: rho0, c0, n, gamma0 */
   EOS_MG_LINEAR,  /* Mie–Grüneisen, linear Us–up reference Hugoniot: rho0, c0, s, gamma0 */
-  EOS_IDEAL_GAS,  /* gamma, (optional) reference rho0 for the cold-curve-free gas */
+  EOS_IDEAL_GAS,  /* gamma, reference (ambient) rho0 and p0 */
   EOS_TABLE_COLD, /* tabulated cold curve (delta, rho, eps_x, P_x) + Grüneisen gamma */
   EOS_TABLE_FULL, /* full table P(rho, e), c(rho, e) on a rectangular (rho, e) grid */
   EOS_LINEAR_ELASTIC /* small-strain elastic solid for the paper-000 tests: rho0, K (bulk modulus) */
@@ -21,7 +21,9 @@ typedef enum eos_kind {
 
 typedef struct eos eos_t;
 
-/* Constructors validate their parameters (MS_ERR_INPUT with a message in *e if impossible).
+/* Constructors return NULL for impossible parameters (ρ0 ≤ 0, c0 ≤ 0, n ≤ 1, Γ0 < 0, s < 0,
+ * γ ≤ 1, K ≤ 0; the deck reader reports these with their location first). Table readers record
+ * every problem of the file in *e as FILE:LINE:COL and return NULL.
  * gamma_rho_const: if true, Γρ = Γ0ρ0 (Γ = Γ0 ρ0/ρ); otherwise Γ is constant. */
 eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const);
 eos_t *eos_create_mg_linear(double rho0, double c0, double s, double gamma0);
@@ -39,7 +41,8 @@ eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_con
 eos_t *eos_create_table_full(const char *path, dk_errors *e);
 /* Write a full table (EOS_TABLE_FULL) as text or HDF5 (by extension). */
 ms_status eos_table_write(const eos_t *table, const char *path);
-/* Build a full table by sampling another EOS on a grid (used by tests and `mscale eos-table`). */
+/* Build a full table by sampling another EOS on a uniform grid (exact nodal c² from the
+ * source). NULL if a node is outside the source's domain or has c² ≤ 0 (docs/eos.md §6). */
 eos_t *eos_create_table_from(const eos_t *src, double rho_min, double rho_max, size_t nrho,
                              double e_min, double e_max, size_t ne);
 void eos_destroy(eos_t *eos);
@@ -64,11 +67,12 @@ double eos_sound_speed(const eos_t *eos, double rho, double e);
 /* Cold curve: P_x(δ) and ε_x(δ), δ = ρ/ρ0 (DESIGN.md §3). NaN if the EOS has none. */
 double eos_cold_pressure(const eos_t *eos, double delta);
 double eos_cold_energy(const eos_t *eos, double delta);
-/* Temperature if the EOS knows it, else NaN. */
+/* Temperature if the EOS knows it, else NaN (no kind carries a heat capacity yet). */
 double eos_temperature(const eos_t *eos, double rho, double e);
 
-/* Array form for the grid's hot loop: p[i], c[i] (c may be NULL) for i < n.
- * Returns MS_ERR_UNSTABLE if any state is outside the EOS's domain (index in *bad). */
+/* Array form for the grid's hot loop: p[i], c[i] (c may be NULL) for i < n; the same values as
+ * eos_pressure/eos_sound_speed (c ≥ 1e-3 c0 where P is defined, docs/eos.md §7).
+ * Returns MS_ERR_UNSTABLE at the first state outside the EOS's domain (its index in *bad). */
 ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *e, double *p,
                    double *c, size_t *bad);
 
@@ -123,21 +127,24 @@ typedef struct eos_hugoniot_point {
 } eos_hugoniot_point;
 
 /* Solve the jump conditions for each particle velocity up[i] > 0 (KINSOL, safeguarded by a
- * bracketing fallback). MS_ERR_SOLVER if a point cannot be found (index reported via log). */
+ * bracketing fallback; docs/eos.md §8). Points without a solution inside the EOS's domain get
+ * NaN in out[i] (except up) and the call returns MS_ERR_SOLVER; MS_ERR_INPUT if (rho0, e0) is
+ * outside the domain. */
 ms_status eos_hugoniot(const eos_t *eos, double rho0, double e0, size_t n, const double *up,
                        eos_hugoniot_point *out);
 /* The Hugoniot state at a given shock pressure p > P0 (bracketing + Brent). */
 ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, double p,
                                    eos_hugoniot_point *out);
 
-/* Kuropatenko mixture rule (paper 002 §1.2): 1/(D − u) = Σ α_i/(D_i − u_i), with equal pressure
- * in every component. Given the mixture particle velocity u (the components' u_i follow from
- * pressure equilibrium), returns D. alpha = volume fractions (sum 1). */
+/* Kuropatenko mixture rule (paper 002 §1.2, docs/eos.md §9): 1/(D − u) = Σ α_i/(D_i − u_i),
+ * with equal pressure in every component. Given the mixture particle velocity u (the
+ * components' u_i follow from pressure equilibrium), returns D and p. alpha = volume
+ * fractions (sum 1); MS_ERR_INPUT if they are not. */
 ms_status eos_kuropatenko(size_t ncomp, const eos_t *const *comp, const double *alpha, double u,
                           double *D, double *p);
 /* The same at a given pressure: each component's Hugoniot at p (from its reference state
- * ρ0_i = eos_rho0, e0_i = eos_e0)
- * gives D_i − u_i; D − u = 1/Σ α_i/(D_i − u_i) and p − P0 = ρ0 D u with ρ0 = Σ α_i ρ0_i.
+ * ρ0_i = eos_rho0, e0_i = eos_e0) gives D_i − u_i; D − u = 1/Σ α_i/(D_i − u_i) and
+ * p − P0 = ρ0 D u with ρ0 = Σ α_i ρ0_i, P0 = Σ α_i P0_i.
  * Fills the mixture state (up = u, us = D, p, rho = ρ0 D/(D − u), e − e0 from the energy jump). */
 ms_status eos_kuropatenko_at_pressure(size_t ncomp, const eos_t *const *comp, const double *alpha,
                                       double p, eos_hugoniot_point *out);
