@@ -230,7 +230,7 @@ static inline void gather_force(const dm_model *restrict m, const double *restri
 void dm_forces(dm_model *m, const double *w, double *F) {
   const long n = (long)m->s->n;
   const int stab = m->opt.hourglass > 0;
-#pragma omp parallel
+#pragma omp parallel if (n > 16384)
   {
 #pragma omp for schedule(static)
     for (long i = 0; i < n; ++i) strain_stress(m, w, (size_t)i);
@@ -241,7 +241,7 @@ void dm_forces(dm_model *m, const double *w, double *F) {
 
 double dm_potential_energy(dm_model *m, const double *w) {
   const long n = (long)m->s->n;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 16384)
   for (long i = 0; i < n; ++i) strain_stress(m, w, (size_t)i);
   double sum = 0.0; /* serial: the same sum on any thread count */
   for (long i = 0; i < n; ++i)
@@ -274,7 +274,7 @@ void dm_momenta(const dm_state *s, double P[3], double J[3]) {
 
 void dm_cauchy_stress(const dm_model *m, double *S) {
   const long n = (long)m->s->n;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 16384)
   for (long i = 0; i < n; ++i) {
     const double *C = &m->C[9 * i], *sg = &m->sigma[9 * i];
     double Fd[9]; /* I + Cᵀ */
@@ -290,9 +290,10 @@ void dm_cauchy_stress(const dm_model *m, double *S) {
   }
 }
 
-double dm_hourglass_indicator(const dm_model *m, const double *w) {
+double dm_hourglass_norm(const dm_model *m, const double *w, double *dw_norm) {
   double num = 0.0, den = 0.0;
   for (size_t i = 0; i < m->s->n; ++i) {
+    if (m->s->bc[i] != DM_FREE) continue;
     const double *C = &m->C[9 * i];
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
       size_t k = m->nbr[b];
@@ -306,7 +307,8 @@ double dm_hourglass_indicator(const dm_model *m, const double *w) {
       }
     }
   }
-  return den > 0 ? sqrt(num / den) : 0.0;
+  if (dw_norm) *dw_norm = sqrt(den);
+  return sqrt(num);
 }
 
 ms_status dm_accel(void *user, double t, const double *q, double *acc) {
@@ -316,7 +318,7 @@ ms_status dm_accel(void *user, double t, const double *q, double *acc) {
   const long n = (long)s->n;
   const int dim = s->dim;
   int bad = 0;
-#pragma omp parallel for schedule(static) reduction(| : bad)
+#pragma omp parallel for schedule(static) reduction(| : bad) if (n > 16384)
   for (long i = 0; i < n; ++i) {
     double inv = s->bc[i] == DM_FREE ? 1.0 / s->mass[i] : 0.0;
     for (int a = 0; a < 3; ++a) {

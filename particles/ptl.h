@@ -78,7 +78,6 @@ typedef struct cd_pair_table {
   double e_rc;       /* E(rc): energy a pair takes with it when it leaves the cutoff */
   double *fcoef;     /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
   double *ecoef;     /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
-  size_t n_below;    /* diagnostics: evaluations below s_lo (polynomial extrapolation) */
 } cd_pair_table;
 
 /* Reference (untabulated) pair energy and force from an EOS cold curve. */
@@ -121,7 +120,9 @@ typedef struct cd_config {
   double dt;               /* time step */
   cd_cutoff_mode cutoff;
   double damping_gamma;    /* Γ of eq. 6 (paper 002), 1/time; 0 = off */
-  int sort_every;          /* reserved */
+  int sort_every;          /* renumber particles into cell order every k-th list build (0: 1) */
+  cd_lattice lattice;      /* for the reference volume per particle (per-particle stress) */
+  double thickness;        /* 2D plane-strain thickness h (unused in 3D) */
 } cd_config;
 
 /* Velocity history of the piston: piecewise linear u(t) through (t_k, u_k), constant beyond
@@ -173,8 +174,11 @@ typedef struct cd_sim {
   double *scratch;              /* 3N, damping velocity increments (NULL if no damping) */
   int32_t *partners;            /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
   long n_broken_bonds;
+  bool forces_zeroed;           /* the step zeroed f in its drift loop */
+  double disp_bound;            /* Σ Δt·max|v| since the last build (cheap rebuild pre-check) */
   struct cd_layer_sums *sums;   /* per-layer accumulators of the kernels */
   int sums_cap;
+  double *pw;                   /* [N][6] per-particle virials (allocated by diagnostics) */
   double wall_time_force, wall_time_neigh;
 } cd_sim;
 
@@ -189,6 +193,9 @@ void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t);
 void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]);
 ms_status cd_sim_init(cd_sim *s);
 void cd_sim_free(cd_sim *s);
+/* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
+ * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
+ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
 /* One velocity-Verlet step (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN. */
 ms_status cd_sim_step(cd_sim *s);
 /* Energies and momentum at the current state (one extra pass over the pairs). */
@@ -197,7 +204,9 @@ void cd_sim_energy(cd_sim *s, cd_energy *out);
  * P_ab = (1/V)[Σ m v_a v_b + ½ Σ_pairs f(r) r_a r_b / r]; V given by the caller.
  * s[0..5] = xx, yy, zz, xy, yz, zx. */
 void cd_sim_virial(cd_sim *s, double volume, double stress[6]);
-/* Per-particle virial W_i (energy units; stress_i = W_i/V_i), 6 components each, [N][6]. */
+/* Per-particle virial W_i = ½ Σ_j f r_a r_b / r (energy units), [N][6] (xx yy zz xy yz zx).
+ * The per-particle stress of snapshots is (W_i + m v_a v_b)/V0 with V0 the reference volume
+ * per site (cd_cluster_volume): compression-positive, referred to the undeformed volume. */
 void cd_sim_particle_virial(cd_sim *s, double *w);
 /* Von Mises intensity σ_u of a symmetric tensor (DESIGN.md §5.1, eq. 4 corrected). */
 double cd_von_mises(const double s[6]);
@@ -215,11 +224,10 @@ size_t cd_sim_bytes(const cd_sim *s);
 enum { CD_PROFILE_NCOL = 13 };
 extern const char *const cd_profile_columns[CD_PROFILE_NCOL];
 void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area, double *out);
-/* Shock front along `axis`: scanning bins from `lo` upward, the first position where the
+/* Shock front along `axis` from a cd_profile table: scanning occupied bins upward, the first position where the
  * bin-mean velocity along axis falls below frac·u_ref (linear interpolation between bin
  * centres); NaN if not found. */
-double cd_front_position(const double *profile, int nbin, double lo, double hi, double u_ref,
-                         double frac);
+double cd_front_position(const double *profile, int nbin, int axis, double u_ref, double frac);
 /* HDF5 particle snapshot (positions, velocities, material, gid, per-particle σ_u and
  * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
 ms_status cd_write_snapshot(cd_sim *s, const char *path);
@@ -274,6 +282,9 @@ const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
  * with a static schedule (results do not depend on the thread count). */
 ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
                    rkn_accel_fn accel, rkn_constrain_fn constrain, void *user);
+/* Stability limit of a scheme: the largest ω·Δt for which r'' = −ω²r stays bounded (|tr M| < 2
+ * for the step's 2×2 amplification matrix M), found numerically; Verlet: 2. */
+double rkn_stability_limit(rkn_kind kind);
 
 /* === Hamiltonian discrete model (dm_) === */
 
@@ -367,10 +378,11 @@ void dm_momenta(const dm_state *s, double P[3], double J[3]);
 /* Cauchy stress Σ_i = σ_i (I + C_iᵀ) / det(I + C_i) (paper 000 §1), [n][9], from the last
  * dm_forces / dm_potential_energy call. */
 void dm_cauchy_stress(const dm_model *m, double *S);
-/* Zero-energy-mode indicator: sqrt(Σ_i Σ_k |z_ik|² / Σ_i Σ_k |w_k − w_i|²) with z_ik the
- * least-squares residual w_k − w_i − C_i ξ_ik (0 for any linear field, 1 for a pure
- * hourglass pattern). Uses m->C of the last force call. */
-double dm_hourglass_indicator(const dm_model *m, const double *w);
+/* Zero-energy-mode measure: returns sqrt(Σ_i Σ_k |z_ik|²) with z_ik the least-squares residual
+ * w_k − w_i − C_i ξ_ik (0 for any linear field; = sqrt(Σ|w_k − w_i|²) for a pure hourglass
+ * pattern) and sets *dw_norm = sqrt(Σ_i Σ_k |w_k − w_i|²). Sums over free particles only. Uses m->C of the
+ * last force/energy call. */
+double dm_hourglass_norm(const dm_model *m, const double *w, double *dw_norm);
 
 /* The RKN acceleration callback over the flat array q = w[n][3] (user = dm_model *):
  * a = F/m for free particles, 0 for fixed/prescribed ones and for components ≥ dim. */
@@ -401,5 +413,27 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *section, const eos_mater
                             dk_errors *e);
 ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p);
 void dm_problem_free(dm_problem *p);
+
+/* What a run measured (also written to the log and to OUTDIR/dm_summary.csv). Fields that do
+ * not apply to the deck's problem are NaN. */
+typedef struct dm_run_summary {
+  size_t particles, bonds; /* all particles incl. ghosts / fixed layers; bonds = Σ|N_i| */
+  long steps;
+  double dt, t_end;
+  double omega_dt;        /* ω_max Δt (power iteration) vs the scheme's stability limit */
+  double wall_s, particle_steps_per_s; /* time-stepping loop only */
+  double energy_err_max;  /* max |H(t) − H(0)| / H(0) over the energy samples */
+  /* zero-energy-mode indicator |z|(t) / max_t |Δw|(t) (dm_hourglass_norm) at the energy
+   * samples: first, largest and last value */
+  double hourglass_first, hourglass_max, hourglass_last;
+  double amp_err, phase_err;  /* rod, over the last 10 L/c of w(x_probe, t): A − 1 and s (units
+                               * of L/c) of the least-squares fit w ≈ A·w_exact(t − s) */
+  double peak_err;            /* rod: (max|w| − max|w_exact|)/max|w_exact| (includes ringing) */
+  double rms_err;             /* rod: rms(w − w_exact)/max|w_exact| over that window, no fit */
+  double err_l1, err_l2, err_max; /* contact: σ_xx at t_end; sphere: radial w at t_end; all
+                                   * relative to the exact solution's maximum */
+  double err_u_l2;            /* sphere: radial velocity, L2, relative to u0 = w0 ω */
+} dm_run_summary;
+const dm_run_summary *dm_problem_summary(const dm_problem *p);
 
 #endif /* MSCALE_PTL_H */

@@ -88,7 +88,7 @@ ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u
     double c[3] = {0, 0, 0};
     for (int k = 0; k < l; ++k) c[k] = dt2 * s->gamma[k] * (s->alpha[l] - s->alpha[k]);
     const double *a0 = ig->acc[0], *a1 = ig->acc[1];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 20000)
     for (long i = 0; i < n; ++i) {
       double v = r[i] + dt * alpha * u[i];
       if (l > 0) v += c[0] * a0[i];
@@ -108,7 +108,7 @@ ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u
   }
   const int m = s->stages;
   const double *a0 = ig->acc[0], *a1 = ig->acc[1], *a2 = ig->acc[2];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 20000)
   for (long i = 0; i < n; ++i) {
     double dr = b[0] * a0[i], du = g[0] * a0[i];
     if (m > 1) {
@@ -120,4 +120,40 @@ ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u
   }
   if (constrain) constrain(user, t + dt, r, u);
   return MS_OK;
+}
+
+/* |tr M(z)| of the amplification matrix of one step with ω = 1, Δt = z. */
+static double trace_amplification(const rkn_scheme *s, double z) {
+  double tr = 0.0;
+  for (int col = 0; col < 2; ++col) {
+    double r = col == 0, u = col == 1, acc[3];
+    for (int l = 0; l < s->stages; ++l) {
+      double q = r + z * s->alpha[l] * u;
+      for (int k = 0; k < l; ++k) q += z * z * s->gamma[k] * (s->alpha[l] - s->alpha[k]) * acc[k];
+      acc[l] = -q;
+    }
+    double r1 = r + z * u, u1 = u;
+    for (int l = 0; l < s->stages; ++l) {
+      r1 += z * z * s->gamma[l] * (1.0 - s->alpha[l]) * acc[l];
+      u1 += z * s->gamma[l] * acc[l];
+    }
+    tr += col == 0 ? r1 : u1;
+  }
+  return fabs(tr);
+}
+
+double rkn_stability_limit(rkn_kind kind) {
+  const rkn_scheme *s = rkn_scheme_get(kind);
+  if (!s) return 0.0;
+  double z = 0.0, step = 1e-3;
+  while (z < 10.0 && trace_amplification(s, z + step) < 2.0) z += step;
+  double lo = z, hi = z + step; /* bisect the first crossing of |tr| = 2 */
+  for (int it = 0; it < 60; ++it) {
+    double mid = 0.5 * (lo + hi);
+    if (trace_amplification(s, mid) < 2.0)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return lo;
 }
