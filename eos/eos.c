@@ -87,9 +87,20 @@ double eos_cold_energy(const eos_t *eos, double delta) {
   return eos->ops->cold_energy(eos, delta);
 }
 
+/* With a constant heat capacity the thermal energy above the 0 K curve is cv T: the cold curve
+ * ε_x (the 0 K isotherm, which is also the T = 0 isentrope, so the tabulated isentropes of the
+ * Us–up form and of tables qualify) gives T = (e − ε_x(δ))/cv; for an ideal gas T = e/cv. */
 double eos_temperature(const eos_t *eos, double rho, double e) {
-  if (!eos->ops->temperature || !(rho > 0.0)) return NAN;
-  return eos->ops->temperature(eos, rho, e);
+  if (!(rho > 0.0) || !(eos->cv > 0.0)) return NAN;
+  if (eos->ops->temperature) return eos->ops->temperature(eos, rho, e);
+  if (isnan(eos_pressure(eos, rho, e))) return NAN;
+  return (e - eos_cold_energy(eos, rho / eos->rho0)) / eos->cv;
+}
+
+ms_status eos_set_heat_capacity(eos_t *eos, double cv) {
+  if (!(cv > 0.0) || !isfinite(cv)) return MS_ERR_INPUT;
+  eos->cv = cv;
+  return MS_OK;
 }
 
 ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *e, double *p,

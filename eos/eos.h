@@ -67,8 +67,11 @@ double eos_sound_speed(const eos_t *eos, double rho, double e);
 /* Cold curve: P_x(δ) and ε_x(δ), δ = ρ/ρ0 (DESIGN.md §3). NaN if the EOS has none. */
 double eos_cold_pressure(const eos_t *eos, double delta);
 double eos_cold_energy(const eos_t *eos, double delta);
-/* Temperature if the EOS knows it, else NaN (no kind carries a heat capacity yet). */
+/* Temperature (K) with a constant specific heat cv set by eos_set_heat_capacity (deck key
+ * `cv`): T = (e − ε_x(δ))/cv above the 0 K cold curve, T = e/cv for an ideal gas. NaN if no cv
+ * was given, outside the domain, or where the EOS has no cold curve. */
 double eos_temperature(const eos_t *eos, double rho, double e);
+ms_status eos_set_heat_capacity(eos_t *eos, double cv); /* kJ/(g·K), > 0 */
 
 /* Array form for the grid's hot loop: p[i], c[i] (c may be NULL) for i < n; the same values as
  * eos_pressure/eos_sound_speed (c ≥ 1e-3 c0 where P is defined, docs/eos.md §7).

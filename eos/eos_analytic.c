@@ -168,7 +168,12 @@ static double ideal_c2(const eos_t *eos, double rho, double e) {
 
 static double zero_cold(const eos_t *eos, double delta) { return 0.0; }
 
-static const eos_ops ideal_ops = {ideal_pressure, ideal_c2, zero_cold, zero_cold, NULL, NULL, NULL};
+static double ideal_temperature(const eos_t *eos, double rho, double e) {
+  return e >= 0.0 ? e / eos->cv : NAN;
+}
+
+static const eos_ops ideal_ops = {ideal_pressure, ideal_c2,          zero_cold, zero_cold,
+                                  ideal_temperature, NULL, NULL};
 
 eos_t *eos_create_ideal_gas_ref(double gamma, double rho0, double p0) {
   if (!(gamma > 1.0) || !(rho0 > 0.0) || !(p0 >= 0.0) || !isfinite(gamma) || !isfinite(rho0) ||

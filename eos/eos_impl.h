@@ -24,7 +24,8 @@ typedef struct eos_ops {
   double (*sound_speed2)(const eos_t *eos, double rho, double e);
   double (*cold_pressure)(const eos_t *eos, double delta); /* NULL: no cold curve */
   double (*cold_energy)(const eos_t *eos, double delta);
-  double (*temperature)(const eos_t *eos, double rho, double e); /* NULL: unknown */
+  /* NULL: T = (e − ε_x(δ))/cv from the cold curve (eos_temperature) */
+  double (*temperature)(const eos_t *eos, double rho, double e);
   void (*free_data)(eos_t *eos);                                 /* NULL: nothing to free */
   /* Optional fused P and c² for eos_eval's loop (shares powers, table lookups); NULL: the two
    * calls above. Must give the same values as pressure() and sound_speed2(). */
@@ -66,6 +67,7 @@ struct eos {
   eos_kind kind;
   const eos_ops *ops;
   double rho0, c0, e0;
+  double cv; /* specific heat kJ/(g·K) for eos_temperature; 0 = unknown */
   /* Cold curve range in δ (±inf if analytic everywhere; NaN if there is none). */
   double delta_min, delta_max;
   /* The isentrope through (ρ0, e = 0) used as the cold curve of EOSs that have no explicit one

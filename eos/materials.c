@@ -20,11 +20,11 @@ static const char *const gamma_models[] = {"constant", "rho_gamma", NULL};
 
 /* Keys accepted in each eos: mapping (same order as eos_type_names). */
 static const char *const eos_keys[][8] = {
-    {"type", "rho0", "c0", "n", "gamma0", "gamma_model", NULL},
-    {"type", "rho0", "c0", "s", "gamma0", NULL},
-    {"type", "gamma", "rho0", "p0", NULL},
-    {"type", "file", "gamma0", "gamma_model", NULL},
-    {"type", "file", NULL},
+    {"type", "rho0", "c0", "n", "gamma0", "gamma_model", "cv", NULL},
+    {"type", "rho0", "c0", "s", "gamma0", "cv", NULL},
+    {"type", "gamma", "rho0", "p0", "cv", NULL},
+    {"type", "file", "gamma0", "gamma_model", "cv", NULL},
+    {"type", "file", "cv", NULL},
     {"type", "rho0", "bulk_modulus", NULL},
 };
 static const char *const material_keys[] = {"name", "eos", "shear_modulus", "viscosity", NULL};
@@ -153,6 +153,13 @@ static eos_t *read_eos(dk_errors *e, dk_doc *doc, const dk_node *eosmap, const c
   if (!eos && e->n == nerr0)
     dk_error(e, doc, eosmap, "%s: the parameters do not define a valid %s EOS", what,
              eos_type_names[type]);
+  /* Optional constant specific heat for temperatures, kJ/(g·K) (J/(kg·K) in SI decks: the
+   * conversion is that of a specific energy, kelvin being the same in both systems). */
+  if (kind != EOS_LINEAR_ELASTIC && dk_get(eosmap, "cv")) {
+    double cv = 0.0;
+    if (dk_read_positive(e, doc, eosmap, "cv", MS_DIM_SPEC_ENERGY, true, 0, &cv) && eos)
+      eos_set_heat_capacity(eos, cv);
+  }
   return eos;
 }
 

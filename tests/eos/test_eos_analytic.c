@@ -315,6 +315,28 @@ static void test_eval_array(void **state) {
   assert_null(eos_create_linear_elastic(7.85, 0.0));
 }
 
+/* Temperature with a constant specific heat: T = (e − ε_x)/cv, ideal gas T = e/cv. */
+static void test_temperature(void **state) {
+  (void)state;
+  eos_t *pb = eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false);
+  assert_true(isnan(eos_temperature(pb, 11.34, 0.1))); /* no cv given */
+  assert_int_equal(eos_set_heat_capacity(pb, 0.129e-3), MS_OK); /* lead: 129 J/(kg K) */
+  assert_int_equal(eos_set_heat_capacity(pb, -1.0), MS_ERR_INPUT);
+  for (double d = 0.9; d < 1.5; d += 0.1) {
+    double ex = eos_cold_energy(pb, d);
+    assert_true(fabs(eos_temperature(pb, 11.34 * d, ex)) < 1e-9); /* on the cold curve: 0 K */
+    assert_true(fabs(eos_temperature(pb, 11.34 * d, ex + 0.129e-3 * 300.0) - 300.0) < 1e-9);
+  }
+  eos_destroy(pb);
+  /* air: cv = 718 J/(kg K); at 1 atm, 1.225 kg/m³ the ideal-gas temperature is
+   * p0/(ρ0 (γ−1) cv) = 288.1 K */
+  eos_t *air = eos_create_ideal_gas(1.4, 1.225e-3);
+  eos_set_heat_capacity(air, 0.718e-3);
+  assert_true(fabs(eos_temperature(air, 1.225e-3, eos_e0(air)) - 288.1) < 0.1);
+  assert_true(isnan(eos_temperature(air, 1.225e-3, -0.1)));
+  eos_destroy(air);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_table1_reproduced),
@@ -326,6 +348,7 @@ int main(void) {
       cmocka_unit_test(test_linear_elastic),
       cmocka_unit_test(test_sound_speed_isentrope),
       cmocka_unit_test(test_eval_array),
+      cmocka_unit_test(test_temperature),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

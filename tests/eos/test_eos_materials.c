@@ -111,7 +111,8 @@ static void test_si_units(void **state) {
   const char *text = "units: si\n"
                      "materials:\n"
                      "  - name: al\n"
-                     "    eos: {type: mg_linear, rho0: 2703, c0: 5350, s: 1.34, gamma0: 2.0}\n"
+                     "    eos: {type: mg_linear, rho0: 2703, c0: 5350, s: 1.34, gamma0: 2.0,\n"
+                     "          cv: 900}\n"
                      "    shear_modulus: 26e9\n"
                      "  - name: air\n"
                      "    eos: {type: ideal_gas, gamma: 1.4, rho0: 1.2, p0: 2e5}\n"
@@ -127,6 +128,8 @@ static void test_si_units(void **state) {
   assert_true(fabs(eos_rho0(m->m[0].eos) - 2.703) < 1e-12);
   assert_true(fabs(eos_c0(m->m[0].eos) - 5.35) < 1e-12);
   assert_true(fabs(m->m[0].shear_modulus - 26.0) < 1e-12);
+  /* cv: J/(kg K) -> kJ/(g K) 1e-6: 900 J/(kg K) -> 9e-4; T = (e − ε_x)/cv at ρ0 */
+  assert_true(fabs(eos_temperature(m->m[0].eos, 2.703, 0.27) - 300.0) < 1e-9);
   assert_true(fabs(m->m[1].viscosity - 1.8e-9) < 1e-20);
   /* c0 = sqrt(γ p0/ρ0) = sqrt(1.4 · 2e-4 GPa / 1.2e-3 g/cm³) */
   assert_true(fabs(eos_c0(m->m[1].eos) - sqrt(1.4 * 2e-4 / 1.2e-3)) < 1e-12);
@@ -195,6 +198,8 @@ static const bad_deck bad_decks[] = {
     {"negative shear modulus", "materials:\n  - name: al\n    shear_modulus: -1\n"
                                "    eos: {type: ideal_gas, gamma: 1.4}\n",
      3, "shear_modulus: expected a number >= 0, found -1"},
+    {"cv not positive", HEAD "      type: ideal_gas\n      gamma: 1.4\n      cv: 0\n", 6,
+     "cv: expected a number > 0, found 0"},
     {"unknown key in a material", "materials:\n  - name: al\n    colour: grey\n"
                                   "    eos: {type: ideal_gas, gamma: 1.4}\n",
      3, "unknown key 'colour'"},
