@@ -1,0 +1,142 @@
+/* cd_lammps.c — problems A (bulk) and B (piston) of the LAMMPS anchor, reproduced exactly
+ * (cd_lammps.md: same particles and order, splitmix64 velocities, potential, R_c = 1.2 r0 hard
+ * cutoff, skin 0.1 r0, Δt = 0.02 r0/c0, steps), timed like LAMMPS's "Loop time".
+ *
+ *   OMP_NUM_THREADS=1 cd_lammps_bench A            # 1000 steps, 256,000 particles
+ *   OMP_NUM_THREADS=2 cd_lammps_bench B [--diag]   # 2000 steps, 320,000 particles
+ *   options: --steps N, --diag (B: z-profiles every 100 steps, shock speed D by front tracking)
+ * Prints particle-steps/s = N·steps/(loop wall time), rebuilds, bytes/particle, energies.
+ */
+#include "ptl.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+/* constants of gen_inputs.py */
+#define RHO0 2.71
+#define C0 5.35
+#define NEXP 4.0
+#define R0 5.0e-4
+#define SEED 12345ULL
+#define VAMP 0.01
+#define UP 2.0
+
+int main(int argc, char **argv) {
+  if (argc < 2 || (strcmp(argv[1], "A") && strcmp(argv[1], "B"))) {
+    fprintf(stderr, "usage: %s A|B [--steps N] [--diag]\n", argv[0]);
+    return 2;
+  }
+  const bool probB = argv[1][0] == 'B';
+  long steps = probB ? 2000 : 1000;
+  bool diag = false;
+  for (int k = 2; k < argc; k++) {
+    if (!strcmp(argv[k], "--steps") && k + 1 < argc) steps = atol(argv[++k]);
+    else if (!strcmp(argv[k], "--diag")) diag = true;
+  }
+  const double a = sqrt(2.0) * R0, rc = 1.2 * R0, skin = 0.1 * R0, dt = 0.02 * R0 / C0;
+  const double mass = RHO0 * R0 * R0 * R0 / sqrt(2.0);
+  eos_t *eos = eos_create_mg_cold(RHO0, C0, NEXP, 2.0, true);
+  const int nx = probB ? 20 : 40, nz = probB ? 200 : 40;
+  const size_t n = (size_t)4 * nx * nx * nz;
+  ptl_state *p = ptl_state_create(n, 3);
+  double shift[3] = {0.25, 0.25, probB ? 0.0 : 0.25}, origin[3] = {0, 0, 0};
+  cd_lattice_fcc(p, nx, nx, nz, shift, origin, R0, mass, 0);
+  /* v[i][c] = VAMP(2u_{3i+c} − 1), mean over mobile particles subtracted; piston at +UP z */
+  const size_t npiston = probB ? (size_t)4 * nx * nx * 2 : 0;
+  double mean[3] = {0, 0, 0};
+  double *v[3] = {p->vx, p->vy, p->vz};
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) {
+      v[c][i] = VAMP * (2.0 * ptl_splitmix64_uniform(SEED, 3 * i + c) - 1.0);
+      if (i >= npiston) mean[c] += v[c][i];
+    }
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) v[c][i] -= mean[c] / (double)(n - npiston);
+  for (size_t i = 0; i < npiston; i++) { /* iz < 2: the first 2·4·nx² particles */
+    p->flags[i] = PTL_DRIVEN;
+    p->vx[i] = p->vy[i] = 0.0;
+    p->vz[i] = UP;
+  }
+  cd_box box = {.lo = {0, 0, 0}, .hi = {nx * a, nx * a, nz * a},
+                .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, probB ? CD_BC_FREE : CD_BC_PERIODIC}};
+  cd_config cfg = {.r0 = R0, .skin = skin, .dt = dt, .cutoff = CD_CUTOFF_PLAIN,
+                   .lattice = CD_LATTICE_FCC};
+  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_pair_table *t = ms_calloc(1, sizeof *t);
+  if (cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0.0, rc, 0.5 * R0, 1.0, 0) != MS_OK) {
+    fprintf(stderr, "table failed\n");
+    return 1;
+  }
+  cd_sim_set_pair(s, 0, 0, t);
+  if (probB) {
+    double tt[1] = {0.0}, uu[1] = {UP}, dir[3] = {0, 0, 1};
+    cd_history h = {1, tt, uu};
+    cd_sim_set_piston(s, &h, dir);
+  }
+  double tw0 = ms_wall_time();
+  if (cd_sim_init(s) != MS_OK) {
+    fprintf(stderr, "init failed\n");
+    return 1;
+  }
+  double setup = ms_wall_time() - tw0;
+  cd_energy e0, e1;
+  cd_sim_energy(s, &e0);
+  printf("problem %s: N = %zu, steps = %ld, threads = %d, setup %.3f s\n", argv[1], n, steps,
+         omp_get_max_threads(), setup);
+  printf("step 0: KE %.12g PE %.12g total %.12g\n", e0.kinetic, e0.potential, e0.total);
+  const int nbin = 262;
+  const double zlo = -0.25 * a, zhi = zlo + nbin * a;
+  double *prof = diag ? ms_calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof) : NULL;
+  double tfr[64], zfr[64];
+  int nfr = 0;
+  double loop = 0.0, t0 = ms_wall_time();
+  clock_t cpu0 = clock();
+  for (long k = 1; k <= steps; k++) {
+    if (cd_sim_step(s) != MS_OK) {
+      fprintf(stderr, "unstable at step %ld\n", k);
+      return 1;
+    }
+    if (diag && k % 100 == 0) {
+      loop += ms_wall_time() - t0;
+      cd_profile(s, 2, zlo, zhi, nbin, (nx * a) * (nx * a), prof);
+      if (nfr < 64) {
+        tfr[nfr] = s->t;
+        zfr[nfr++] = cd_front_position(prof, nbin, 2, UP, 0.5);
+      }
+      cd_energy e;
+      cd_sim_energy(s, &e);
+      printf("step %ld t %.6e front %.6e KE %.10g PE %.10g broken %.6g Wp %.10g total %.10g\n", k,
+             s->t, zfr[nfr - 1], e.kinetic, e.potential, e.broken, e.piston_work, e.total);
+      t0 = ms_wall_time();
+    }
+  }
+  loop += ms_wall_time() - t0;
+  double cpu = (double)(clock() - cpu0) / CLOCKS_PER_SEC;
+  cd_sim_energy(s, &e1);
+  printf("step %ld: KE %.17g PE %.17g total %.17g (broken %.6g, piston work %.6g)\n", steps,
+         e1.kinetic, e1.potential, e1.total, e1.broken, e1.piston_work);
+  printf("loop time %.3f s (force %.3f, neighbour %.3f), rebuilds %ld, pairs %zu\n", loop,
+         s->wall_time_force, s->wall_time_neigh, cd_sim_rebuilds(s), cd_sim_pairs(s));
+  printf("process CPU time in the loop %.3f s (all threads)\n", cpu);
+  printf("bytes/particle %.1f\n", (double)cd_sim_bytes(s) / (double)n);
+  printf("particle-steps/s %.4g\n", (double)n * (double)steps / loop);
+  if (diag && nfr > 2) {
+    /* least-squares slope of z_f(t) for t >= T/4 (as analyze_shock.py) */
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    int m = 0;
+    for (int k = 0; k < nfr; k++)
+      if (tfr[k] >= 0.25 * tfr[nfr - 1] && isfinite(zfr[k])) {
+        sx += tfr[k]; sy += zfr[k]; sxx += tfr[k] * tfr[k]; sxy += tfr[k] * zfr[k]; m++;
+      }
+    double D = (m * sxy - sx * sy) / (m * sxx - sx * sx);
+    printf("shock speed D = %.4f km/s (front at vz = 0.5 u, fit t >= T/4, %d frames)\n", D, m);
+  }
+  free(prof);
+  cd_sim_free(s);
+  eos_destroy(eos);
+  return 0;
+}

@@ -1,0 +1,137 @@
+/* cd_diag.c — binned profiles, shock-front tracking and HDF5/XDMF particle snapshots.
+ *
+ * Profile stress (compression positive, i.e. the pressure tensor; Cauchy stress = −P):
+ *   P_ab(bin) = (1/V_bin) Σ_{i in bin} [ m_i (v_i − v̄)_a (v_i − v̄)_b + W_i,ab ],
+ * W_i = ½ Σ_j f(r) r_a r_b / r the particle's share of the pair virial, v̄ the bin's mean
+ * velocity; σ_u is the von Mises intensity of P (DESIGN.md §5.1). Driven (piston) particles are
+ * left out of profiles.
+ */
+#include "cd_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const cd_profile_columns[CD_PROFILE_NCOL] = {
+    "x", "count", "rho", "vx", "vy", "vz", "Pxx", "Pyy", "Pzz", "Pxy", "Pyz", "Pzx", "sigma_u"};
+
+static double *particle_virials(cd_sim *s) {
+  if (!s->pw) s->pw = ms_aligned_alloc(6 * s->p->cap, sizeof(double));
+  cd_sim_particle_virial(s, s->pw);
+  return s->pw;
+}
+
+void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area, double *out) {
+  const ptl_state *p = s->p;
+  const double *w = particle_virials(s);
+  const double *xa = axis == 0 ? p->x : (axis == 1 ? p->y : p->z);
+  const double *v[3] = {p->vx, p->vy, p->vz};
+  const double width = (hi - lo) / nbin, vol = width * area;
+  memset(out, 0, (size_t)nbin * CD_PROFILE_NCOL * sizeof *out);
+  double *mass = ms_calloc((size_t)nbin, sizeof *mass);
+  for (size_t i = 0; i < p->n; i++) {
+    if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
+    int k = (int)floor((xa[i] - lo) / width);
+    if (k < 0 || k >= nbin) continue;
+    double *row = out + (size_t)k * CD_PROFILE_NCOL;
+    row[1] += 1.0;
+    mass[k] += p->mass[i];
+    for (int c = 0; c < 3; c++) row[3 + c] += p->mass[i] * v[c][i];
+  }
+  for (int k = 0; k < nbin; k++) {
+    double *row = out + (size_t)k * CD_PROFILE_NCOL;
+    row[0] = lo + (k + 0.5) * width;
+    row[2] = mass[k] / vol;
+    for (int c = 0; c < 3; c++) row[3 + c] = mass[k] > 0 ? row[3 + c] / mass[k] : 0.0;
+  }
+  static const int ia[6] = {0, 1, 2, 0, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 0};
+  for (size_t i = 0; i < p->n; i++) {
+    if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
+    int k = (int)floor((xa[i] - lo) / width);
+    if (k < 0 || k >= nbin) continue;
+    double *row = out + (size_t)k * CD_PROFILE_NCOL;
+    double dv[3];
+    for (int c = 0; c < 3; c++) dv[c] = v[c][i] - row[3 + c];
+    for (int c = 0; c < 6; c++) row[6 + c] += p->mass[i] * dv[ia[c]] * dv[ib[c]] + w[6 * i + c];
+  }
+  for (int k = 0; k < nbin; k++) {
+    double *row = out + (size_t)k * CD_PROFILE_NCOL;
+    for (int c = 0; c < 6; c++) row[6 + c] /= vol;
+    row[12] = cd_von_mises(row + 6);
+  }
+  free(mass);
+}
+
+double cd_front_position(const double *profile, int nbin, int axis, double u_ref, double frac) {
+  const double thr = frac * u_ref;
+  double zprev = NAN, vprev = NAN;
+  for (int k = 0; k < nbin; k++) {
+    const double *row = profile + (size_t)k * CD_PROFILE_NCOL;
+    if (row[1] <= 0) continue;
+    double z = row[0], v = row[3 + axis];
+    if (isfinite(vprev) && v < thr && thr <= vprev)
+      return zprev + (thr - vprev) * (z - zprev) / (v - vprev);
+    zprev = z;
+    vprev = v;
+  }
+  return NAN;
+}
+
+ms_status cd_write_snapshot(cd_sim *s, const char *path) {
+  const ptl_state *p = s->p;
+  const size_t n = p->n;
+  const double *w = particle_virials(s);
+  const double v0 = cd_cluster_volume(s->cfg.lattice, s->cfg.r0, s->cfg.thickness);
+  double *xyz = ms_calloc(3 * n + 1, sizeof *xyz), *vel = ms_calloc(3 * n + 1, sizeof *vel);
+  double *su = ms_calloc(n + 1, sizeof *su), *pr = ms_calloc(n + 1, sizeof *pr);
+  int64_t *mat = ms_calloc(n + 1, sizeof *mat);
+  for (size_t i = 0; i < n; i++) {
+    xyz[3 * i] = p->x[i];
+    xyz[3 * i + 1] = p->y[i];
+    xyz[3 * i + 2] = p->z[i];
+    vel[3 * i] = p->vx[i];
+    vel[3 * i + 1] = p->vy[i];
+    vel[3 * i + 2] = p->vz[i];
+    double t[6];
+    for (int c = 0; c < 6; c++) t[c] = w[6 * i + c] / v0;
+    su[i] = cd_von_mises(t);
+    pr[i] = (s->p->dim == 2 ? (t[0] + t[1]) / 2.0 : (t[0] + t[1] + t[2]) / 3.0);
+    mat[i] = p->mat[i];
+  }
+  ms_status st = MS_ERR_IO;
+  ms_h5 *h = ms_h5_create(path);
+  if (h) {
+    st = ms_h5_write_doubles(h, "particles/x", n, 3, xyz, "cm");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/v", n, 3, vel, "km/s");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/mass", n, 1, p->mass, "g");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_u", n, 1, su, "GPa");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/pressure", n, 1, pr, "GPa");
+    if (st == MS_OK) st = ms_h5_write_ints(h, "particles/material", n, mat);
+    if (st == MS_OK) st = ms_h5_write_ints(h, "particles/gid", n, p->gid);
+    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", s->t);
+    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "r0", s->cfg.r0);
+    if (st == MS_OK) st = ms_h5_close(h); else ms_h5_abort(h);
+  }
+  if (st == MS_OK) {
+    /* sidecar next to the .h5, referring to it by its base name */
+    size_t len = strlen(path);
+    char *xmf = ms_calloc(len + 8, 1);
+    memcpy(xmf, path, len);
+    if (len > 3 && strcmp(path + len - 3, ".h5") == 0) len -= 3;
+    strcpy(xmf + len, ".xmf");
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    ms_xdmf_attr attr[] = {{"velocity", "particles/v", 3, false},
+                           {"sigma_u", "particles/sigma_u", 1, false},
+                           {"pressure", "particles/pressure", 1, false},
+                           {"mass", "particles/mass", 1, false}};
+    st = ms_xdmf_write_points(xmf, base, "particles/x", n, 3, s->t, 4, attr);
+    free(xmf);
+  }
+  free(xyz);
+  free(vel);
+  free(su);
+  free(pr);
+  free(mat);
+  return st;
+}

@@ -1,0 +1,93 @@
+/* cd_impl.h — private to the cluster-dynamics files of particles/: the neighbour-list layout
+ * shared by neighbour.c (build), cd_force.c (kernels) and cd_sim.c (time step).
+ *
+ * Link cells of width >= r_list = R_c,max + skin. The cells are grouped in LAYERS: one cell
+ * layer along the "slab axis" (the axis with most cells). A half list stores each pair once:
+ * under the particle whose layer is lower (layer l pairs with layer l+1, cyclically when the
+ * slab axis is periodic), and inside one layer under the particle that comes first in cell
+ * order. A layer therefore writes forces only into itself and the next layer, so layers of
+ * the same parity can run concurrently (phases: even layers, odd layers, and the last layer
+ * alone when a periodic axis has an odd number of layers). Every force component is then a sum
+ * in an order fixed by the layer layout alone: results are bitwise independent of the number of
+ * OpenMP threads (docs/particles-cd.md).
+ *
+ * Per particle (in cell order, position p): the list lives in the buffer of its layer, from
+ * first[p]: nplain[p] entries j (no periodic image: d = x_i − x_j), then nimg[p] entry pairs
+ * (j, image code): d = x_i − (x_j + shift[code]). Positions are wrapped into the periodic box at
+ * each rebuild only, so images stay valid between rebuilds. With `reorder`, a build also
+ * renumbers the particles into cell order (ptl_state arrays and partner lists permuted; gid
+ * keeps each particle's identity).
+ * In bonded mode bit 31 of a plain/image j marks a set-up partner (CD_NB_BONDED). */
+#ifndef MSCALE_CD_IMPL_H
+#define MSCALE_CD_IMPL_H
+
+#include "ptl.h"
+
+/* Loops over fewer particles than this run serially (thread start-up would dominate). */
+#define CD_PAR(n) ((long)(n) >= 8192)
+
+#define CD_NB_BONDED ((int32_t)0x40000000)
+#define CD_NB_INDEX ((int32_t)0x3fffffff)
+
+struct cd_neigh {
+  double rlist, skin;
+  int ncell[3];
+  double cell_lo[3], cell_inv_w[3];
+  int slab_axis;
+  int nlayer;
+  int nphase;
+  int phase_start[4]; /* layers of phase k: phase_layer[phase_start[k] .. phase_start[k+1]) */
+  int *phase_layer;
+  size_t ncells, cells_cap;
+  int32_t *cell_start; /* ncells + 1, into sorted */
+  int32_t *sorted;     /* particle indices in cell order (layer-major) */
+  int32_t *cell_of;    /* cell index of each particle (build scratch) */
+  int32_t *layer_start;/* nlayer + 1, into sorted */
+  int layers_cap;
+  uint32_t *first;     /* per position: offset in the layer's buffer */
+  uint16_t *nplain, *nimg;
+  int32_t **buf;       /* per layer */
+  size_t *buf_cap, *buf_len;
+  float *xb, *yb, *zb; /* positions at the last build (float: see xb_err) */
+  double xb_err;       /* bound on |x − (double)xb| from float rounding, subtracted from skin/2 */
+  double *scratch;     /* N doubles, for renumbering */
+  double shift[27][3];
+  long nbuild;
+  size_t n;            /* particles when built */
+  bool colour;         /* layers are processed in parallel phases */
+  bool overfull;       /* some particle had more than CD_MAX_CAND candidates */
+};
+
+cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin);
+void cd_neigh_free(cd_neigh *nl);
+/* Wraps positions into periodic axes, bins, builds the half lists (bonded flags from
+ * `partners` when non-NULL). MS_ERR_INPUT if a periodic period is below 2 r_list. */
+ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
+                         bool reorder);
+/* True when some particle has moved more than skin/2 since the last build. */
+bool cd_neigh_needs_rebuild(const cd_neigh *nl, const ptl_state *p);
+/* Squared displacement limit of the rebuild criterion: (skin/2 − xb_err)². */
+double cd_neigh_limit2(const cd_neigh *nl);
+size_t cd_neigh_bytes(const cd_neigh *nl);
+size_t cd_neigh_pairs(const cd_neigh *nl);
+
+/* Per-layer accumulators of the force/diagnostic kernels. */
+typedef struct cd_layer_sums {
+  double epot;
+  double vir[6];
+  double broken; /* bonded mode: energy of bonds broken in this evaluation */
+  long nbroken;
+  long inside[CD_MAX_MATERIALS * CD_MAX_MATERIALS];
+  char pad[64];
+} cd_layer_sums;
+
+/* Forces on all particles (f overwritten when write_forces; diagnostics pass false so that
+ * they never perturb the trajectory). With `sums` (nlayer entries), also the potential
+ * energy, the virial sum ½Σ f r_a r_b / r, and pairs inside each cutoff. `pw` (optional,
+ * [N][6]) receives per-particle virials. */
+void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool write_forces);
+/* Relative-velocity damping sub-step (eq. 6): v_i −= dt Γ Σ_k μ_ik/m_i (v_i − v_k) over pairs
+ * inside R_c, with μ_ik = 2 m_i m_k/(m_i + m_k); returns the kinetic energy it removed. */
+double cd_damping_step(cd_sim *s);
+
+#endif /* MSCALE_CD_IMPL_H */

@@ -1,0 +1,184 @@
+/* cd_potential.c — pair potentials from an EOS cold curve (paper 002 eqs. 1–2, DESIGN.md §5.1).
+ *
+ * fcc (12 neighbours, 6 bonds per particle, volume per particle r0³/√2):
+ *   $E(r) = \frac{\sqrt2 \rho_0 r_0^3}{12}\,\varepsilon_x(\delta)$, $\delta = (r_0/r)^3$,
+ *   $f(r) = -E'(r) = \frac{\sqrt2}{4} r^2 P_x(\delta)$   (f > 0 repulsive).
+ * 2D triangular lattice (6 neighbours, 3 bonds per particle, area (√3/2) r0², thickness h):
+ *   m = ρ0 (√3/2) r0² h, $E(r) = \frac{m}{3}\varepsilon_x(\delta)$, $\delta = (r_0/r)^2$,
+ *   $f(r) = -E'(r) = \frac{r h}{\sqrt3} P_x(\delta)$,
+ * derived in docs/particles-cd.md: dE/dr = (m/3) ε_x'(δ) dδ/dr with ε_x' = P_x/(ρ0 δ²) and
+ * dδ/dr = −2δ/r; a uniformly strained lattice then has virial pressure exactly P_x(δ).
+ *
+ * Tabulation: cubic Hermite interpolation of E in s = r² on a uniform s-grid, with the exact
+ * values E(s_k) and slopes dE/ds = −f/(2r) at the nodes. The force used by the kernels is
+ * F/r = −2 dE/ds of the same cubic (a quadratic in t), so energy and force are exactly
+ * consistent and no square root is needed. r0² is a node, where E = F = 0 exactly.
+ * With the default 4096 intervals on [(0.5 r0)², R_c²] the force agrees with the formula to
+ * ~1e-10 of max|f| (tests/particles/test_cd_potential.c).
+ */
+#include "ptl.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+double cd_cluster_volume(cd_lattice lat, double r0, double thickness) {
+  if (lat == CD_LATTICE_TRI2D) return 0.5 * sqrt(3.0) * r0 * r0 * thickness;
+  return r0 * r0 * r0 / sqrt(2.0);
+}
+
+static double lattice_delta(cd_lattice lat, double r0, double r) {
+  double q = r0 / r;
+  return lat == CD_LATTICE_TRI2D ? q * q : q * q * q;
+}
+
+double cd_pair_energy_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
+                            double r) {
+  double m = eos_rho0(eos) * cd_cluster_volume(lat, r0, thickness);
+  double bonds = lat == CD_LATTICE_TRI2D ? 3.0 : 6.0; /* bonds per particle */
+  return m / bonds * eos_cold_energy(eos, lattice_delta(lat, r0, r));
+}
+
+double cd_pair_force_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
+                           double r) {
+  double px = eos_cold_pressure(eos, lattice_delta(lat, r0, r));
+  if (lat == CD_LATTICE_TRI2D) return r * thickness * px / sqrt(3.0);
+  return sqrt(2.0) / 4.0 * r * r * px;
+}
+
+/* E and dE/ds of the mixed potential at s (before tabulation). */
+static void mixed_e_des(const eos_t *a, const eos_t *b, cd_lattice lat, double r0, double h,
+                        double attraction, double s, double *e, double *des) {
+  double r = sqrt(s);
+  double ea = cd_pair_energy_exact(a, lat, r0, h, r);
+  double fa = cd_pair_force_exact(a, lat, r0, h, r);
+  if (b != a) {
+    ea = 0.5 * (ea + cd_pair_energy_exact(b, lat, r0, h, r));
+    fa = 0.5 * (fa + cd_pair_force_exact(b, lat, r0, h, r));
+    /* Beyond r0 the mixed pair is attractive; scaling E there by `attraction` keeps E and
+     * f continuous at r0 (both vanish there). */
+    if (r > r0) {
+      ea *= attraction;
+      fa *= attraction;
+    }
+  }
+  *e = ea;
+  *des = -fa / (2.0 * r);
+}
+
+ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, cd_lattice lat,
+                              double r0, double thickness, double rc, double r_min,
+                              double attraction, int nint) {
+  *t = (cd_pair_table){0};
+  if (!a || !b || !eos_has_cold_curve(a) || !eos_has_cold_curve(b)) return MS_ERR_INPUT;
+  if (!(rc > r0) || !(r_min > 0) || !(r_min < r0)) return MS_ERR_INPUT;
+  if (nint <= 0) nint = 4096;
+  /* Clamp r_min to the cold curves' δ range. */
+  const eos_t *ab[2] = {a, b};
+  for (int k = 0; k < 2; k++) {
+    double dmin, dmax;
+    if (eos_cold_range(ab[k], &dmin, &dmax)) {
+      if (isfinite(dmax) && dmax > 1.0) {
+        double rmin_k = lat == CD_LATTICE_TRI2D ? r0 / sqrt(dmax) : r0 / cbrt(dmax);
+        if (r_min < rmin_k) r_min = rmin_k * (1.0 + 1e-12);
+      }
+      if (isfinite(dmin) && dmin > 0.0) {
+        double rmax_k = lat == CD_LATTICE_TRI2D ? r0 / sqrt(dmin) : r0 / cbrt(dmin);
+        if (rc > rmax_k * (1.0 - 1e-12)) return MS_ERR_INPUT; /* cold curve does not reach R_c */
+      }
+    }
+  }
+  double s0 = r0 * r0, shi = rc * rc, slo_want = r_min * r_min;
+  /* uniform grid with r0² on a node: h = (R_c² − r0²)/m_hi, s_lo = r0² − m_lo h */
+  double frac_hi = (shi - s0) / (shi - slo_want);
+  int m_hi = (int)ceil(frac_hi * nint);
+  if (m_hi < 1) m_hi = 1;
+  double hs = (shi - s0) / m_hi;
+  int m_lo = (int)floor((s0 - slo_want) / hs); /* s_lo >= r_min² stays in the EOS range */
+  t->nint = m_lo + m_hi;
+  t->h = hs;
+  t->inv_h = 1.0 / hs;
+  t->s_lo = s0 - m_lo * hs;
+  t->rc = rc;
+  t->rc2 = shi;
+  t->r0 = r0;
+  /* one spare interval on top: the last cubic re-centred at t = 1 (lookups of s rounding onto
+   * rc² land there and see the same polynomial) */
+  t->fcoef = ms_aligned_alloc((size_t)(t->nint + 1) * 4, sizeof(double));
+  t->ecoef = ms_aligned_alloc((size_t)(t->nint + 1) * 4, sizeof(double));
+  double e_prev = 0, d_prev = 0;
+  for (int k = 0; k <= t->nint; k++) {
+    double s = k == m_lo ? s0 : (k == t->nint ? shi : t->s_lo + k * hs);
+    double e, des;
+    mixed_e_des(a, b, lat, r0, thickness, attraction, s, &e, &des);
+    if (k == m_lo) e = des = 0.0; /* exact at rest: ε_x(1) = P_x(1) = 0 */
+    if (!isfinite(e) || !isfinite(des)) {
+      cd_pair_table_free(t);
+      return MS_ERR_INPUT;
+    }
+    des *= hs; /* slope per unit t */
+    if (k > 0) {
+      /* Hermite cubic on t in [0,1]: E = e0 + t(m0 + t(c2 + t c3)) */
+      double e0 = e_prev, m0 = d_prev, e1 = e, m1 = des;
+      double c2 = 3.0 * (e1 - e0) - 2.0 * m0 - m1;
+      double c3 = 2.0 * (e0 - e1) + m0 + m1;
+      double *ec = t->ecoef + 4 * (k - 1), *fc = t->fcoef + 4 * (k - 1);
+      ec[0] = e0;
+      ec[1] = m0;
+      ec[2] = c2;
+      ec[3] = c3;
+      /* F/r = −2 dE/ds = −(2/h) dE/dt = −(2/h)(m0 + 2 c2 t + 3 c3 t²) */
+      double g = -2.0 / hs;
+      fc[0] = g * m0;
+      fc[1] = g * 2.0 * c2;
+      fc[2] = g * 3.0 * c3;
+      fc[3] = 0.0;
+    }
+    e_prev = e;
+    d_prev = des;
+  }
+  t->e_rc = e_prev;
+  {
+    const double *e = t->ecoef + 4 * (t->nint - 1), *f = t->fcoef + 4 * (t->nint - 1);
+    double *E = t->ecoef + 4 * t->nint, *F = t->fcoef + 4 * t->nint;
+    E[0] = e[0] + e[1] + e[2] + e[3];
+    E[1] = e[1] + 2.0 * e[2] + 3.0 * e[3];
+    E[2] = e[2] + 3.0 * e[3];
+    E[3] = e[3];
+    F[0] = f[0] + f[1] + f[2];
+    F[1] = f[1] + 2.0 * f[2];
+    F[2] = f[2];
+    F[3] = 0.0;
+  }
+  return MS_OK;
+}
+
+void cd_pair_table_free(cd_pair_table *t) {
+  if (!t) return;
+  free(t->fcoef);
+  free(t->ecoef);
+  t->fcoef = t->ecoef = NULL;
+}
+
+/* Below s_lo (r < r_min) the force continues with the constant F/r of s_lo and the energy
+ * with the matching linear term, so E and F stay consistent (a safety net: r_min defaults to
+ * 0.5 r0, δ = 8 in 3D). */
+double cd_pair_table_energy(const cd_pair_table *t, double r) {
+  double s = r * r;
+  if (s >= t->rc2) return 0.0;
+  double sc = s > t->s_lo ? s : t->s_lo, u = (sc - t->s_lo) * t->inv_h;
+  int m = (int)u;
+  double w = u - m;
+  const double *c = t->ecoef + 4 * m, *f = t->fcoef + 4 * m;
+  double e = fma(w, fma(w, fma(w, c[3], c[2]), c[1]), c[0]);
+  return e - 0.5 * fma(w, fma(w, f[2], f[1]), f[0]) * (s - sc);
+}
+
+double cd_pair_table_force(const cd_pair_table *t, double r) {
+  double s = r * r;
+  if (s >= t->rc2) return 0.0;
+  double u = ((s > t->s_lo ? s : t->s_lo) - t->s_lo) * t->inv_h;
+  int m = (int)u;
+  double w = u - m;
+  const double *c = t->fcoef + 4 * m;
+  return r * fma(w, fma(w, c[2], c[1]), c[0]);
+}

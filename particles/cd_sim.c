@@ -1,0 +1,461 @@
+/* cd_sim.c — the cluster-dynamics run: set-up, velocity-Verlet step, piston, walls, balance.
+ *
+ * One step (velocity Verlet, then the damping sub-step; docs/particles-cd.md):
+ *   1. v ← v + (Δt/2) f/m, x ← x + Δt v for integrated particles (fused, with the largest
+ *      displacement since the last list build); driven (piston) particles move by ∫u dt;
+ *   2. walls reflect particles specularly;
+ *   3. the lists are rebuilt if some particle moved more than skin/2;
+ *   4. forces f(x^{n+1});
+ *   5. v ← v + (Δt/2) f/m;
+ *   6. if Γ > 0: relative-velocity damping v_i −= Δt Γ Σ_k (μ_ik/m_i)(v_i − v_k), its exact
+ *      kinetic-energy change booked as dissipated energy.
+ * Piston work: W += ½(F_old + F_new)·dir·Δs with F the force of the particles on the piston and
+ * Δs the piston displacement in the step (trapezoid rule, consistent with Verlet).
+ */
+#include "cd_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- piston history ---- */
+double cd_history_eval(const cd_history *h, double t) {
+  if (h->n == 0) return 0.0;
+  if (t <= h->t[0]) return h->u[0];
+  if (t >= h->t[h->n - 1]) return h->u[h->n - 1];
+  size_t lo = 0, hi = h->n - 1;
+  while (hi - lo > 1) {
+    size_t mid = (lo + hi) / 2;
+    if (h->t[mid] <= t) lo = mid; else hi = mid;
+  }
+  double w = (t - h->t[lo]) / (h->t[hi] - h->t[lo]);
+  return h->u[lo] + w * (h->u[hi] - h->u[lo]);
+}
+
+/* ∫ of the piecewise-linear history: sum of trapezoids over the breakpoints inside [t0, t1]. */
+double cd_history_integral(const cd_history *h, double t0, double t1) {
+  if (h->n == 0) return 0.0;
+  double acc = 0.0, ta = t0, ua = cd_history_eval(h, t0);
+  for (size_t k = 0; k < h->n; k++) {
+    if (h->t[k] <= t0) continue;
+    if (h->t[k] >= t1) break;
+    acc += 0.5 * (ua + h->u[k]) * (h->t[k] - ta);
+    ta = h->t[k];
+    ua = h->u[k];
+  }
+  return acc + 0.5 * (ua + cd_history_eval(h, t1)) * (t1 - ta);
+}
+
+void cd_history_free(cd_history *h) {
+  if (!h) return;
+  free(h->t);
+  free(h->u);
+  h->t = h->u = NULL;
+  h->n = 0;
+}
+
+ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e) {
+  double *data = NULL;
+  size_t nrow = 0, ncol = 0;
+  *h = (cd_history){0};
+  ms_status st = ms_read_table(path, 2, &data, &nrow, &ncol, e);
+  if (st != MS_OK) return st;
+  if (nrow < 1) {
+    dk_error_at(e, path, 1, 1, "piston history: no rows (need columns t, u)");
+    free(data);
+    return MS_ERR_INPUT;
+  }
+  double ft = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_TIME) : 1.0;
+  double fu = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_VELOCITY) : 1.0;
+  h->n = nrow;
+  h->t = ms_calloc(nrow, sizeof *h->t);
+  h->u = ms_calloc(nrow, sizeof *h->u);
+  for (size_t k = 0; k < nrow; k++) {
+    h->t[k] = data[k * ncol] * ft;
+    h->u[k] = data[k * ncol + 1] * fu;
+    if (!isfinite(h->t[k]) || !isfinite(h->u[k])) {
+      dk_error_at(e, path, (int)k + 1, 1, "piston history: row %zu is not finite", k + 1);
+      st = MS_ERR_INPUT;
+    } else if (k > 0 && !(h->t[k] > h->t[k - 1])) {
+      dk_error_at(e, path, (int)k + 1, 1,
+                  "piston history: time does not increase at row %zu (t = %g after %g): a "
+                  "jump in time; give u(t) as a function with strictly increasing t",
+                  k + 1, data[k * ncol], data[(k - 1) * ncol]);
+      st = MS_ERR_INPUT;
+    }
+  }
+  free(data);
+  if (st != MS_OK) cd_history_free(h);
+  return st;
+}
+
+/* ---- set-up ---- */
+cd_sim *cd_sim_create(ptl_state *p, const cd_box *box, const cd_config *cfg, int nmat) {
+  cd_sim *s = ms_calloc(1, sizeof *s);
+  s->p = p;
+  s->box = *box;
+  s->cfg = *cfg;
+  s->nmat = nmat;
+  return s;
+}
+
+void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t) {
+  if (s->pair[a][b] && s->pair[a][b] != t) {
+    cd_pair_table *old = s->pair[a][b];
+    s->pair[a][b] = s->pair[b][a] = NULL;
+    cd_pair_table_free(old);
+    free(old);
+  }
+  s->pair[a][b] = s->pair[b][a] = t;
+}
+
+void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]) {
+  cd_history_free(&s->piston);
+  s->piston.n = h->n;
+  s->piston.t = ms_calloc(h->n ? h->n : 1, sizeof(double));
+  s->piston.u = ms_calloc(h->n ? h->n : 1, sizeof(double));
+  memcpy(s->piston.t, h->t, h->n * sizeof(double));
+  memcpy(s->piston.u, h->u, h->n * sizeof(double));
+  double nrm = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  for (int a = 0; a < 3; a++) s->piston_dir[a] = nrm > 0 ? dir[a] / nrm : 0.0;
+}
+
+void cd_sim_free(cd_sim *s) {
+  if (!s) return;
+  for (int a = 0; a < CD_MAX_MATERIALS; a++)
+    for (int b = a; b < CD_MAX_MATERIALS; b++)
+      if (s->pair[a][b]) {
+        cd_pair_table_free(s->pair[a][b]);
+        free(s->pair[a][b]);
+      }
+  cd_neigh_free(s->nl);
+  cd_history_free(&s->piston);
+  free(s->driven);
+  free(s->scratch);
+  free(s->partners);
+  free(s->sums);
+  free(s->pw);
+  ptl_state_free(s->p);
+  free(s);
+}
+
+static void ensure_sums(cd_sim *s) {
+  if (s->sums_cap < s->nl->layers_cap) {
+    free(s->sums);
+    s->sums_cap = s->nl->layers_cap;
+    s->sums = ms_aligned_alloc((size_t)s->sums_cap, sizeof(cd_layer_sums));
+  }
+}
+
+static ms_status rebuild(cd_sim *s) {
+  double t0 = ms_wall_time();
+  int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 1;
+  bool reorder = s->nl->nbuild % every == 0;
+  ms_status st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
+  s->wall_time_neigh += ms_wall_time() - t0;
+  s->disp_bound = 0.0;
+  if (st != MS_OK) return st;
+  ensure_sums(s);
+  if (reorder && s->driven) /* indices changed: refresh the driven list */
+    for (size_t i = 0, k = 0; i < s->p->n; i++)
+      if (s->p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
+  return MS_OK;
+}
+
+static double driven_force(const cd_sim *s) {
+  double f = 0.0;
+  for (size_t k = 0; k < s->n_driven; k++) {
+    int32_t i = s->driven[k];
+    f += s->p->fx[i] * s->piston_dir[0] + s->p->fy[i] * s->piston_dir[1] +
+         s->p->fz[i] * s->piston_dir[2];
+  }
+  return f;
+}
+
+/* Forces for the time step; in bonded mode also books broken bonds. */
+static void step_forces(cd_sim *s) {
+  double t0 = ms_wall_time();
+  if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
+    cd_compute_forces(s, s->sums, NULL, true);
+    for (int l = 0; l < s->nl->nlayer; l++) {
+      s->broken_bonded += s->sums[l].broken;
+      s->n_broken_bonds += s->sums[l].nbroken;
+    }
+  } else {
+    cd_compute_forces(s, NULL, NULL, true);
+  }
+  s->wall_time_force += ms_wall_time() - t0;
+}
+
+ms_status cd_sim_init(cd_sim *s) {
+  ptl_state *p = s->p;
+  s->rc_max = 0.0;
+  for (int a = 0; a < s->nmat; a++)
+    for (int b = 0; b < s->nmat; b++) {
+      if (!s->pair[a][b]) return MS_ERR_INPUT;
+      if (s->pair[a][b]->rc > s->rc_max) s->rc_max = s->pair[a][b]->rc;
+    }
+  if (p->dim == 2)
+    for (size_t i = 0; i < p->n; i++) p->z[i] = p->vz[i] = 0.0;
+  s->nl = cd_neigh_create(p->cap, s->rc_max + s->cfg.skin, s->cfg.skin);
+  ms_status st = rebuild(s);
+  if (st != MS_OK) return st;
+  if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
+    /* partners: every pair closer than its R_c now */
+    s->partners = ms_aligned_alloc(p->cap * CD_MAX_PARTNERS, sizeof(int32_t));
+    for (size_t k = 0; k < p->cap * CD_MAX_PARTNERS; k++) s->partners[k] = -1;
+    const cd_neigh *nl = s->nl;
+    for (int l = 0; l < nl->nlayer; l++)
+      for (int32_t pos = nl->layer_start[l]; pos < nl->layer_start[l + 1]; pos++) {
+        int32_t i = nl->sorted[pos];
+        const int32_t *lst = nl->buf[l] + nl->first[pos];
+        int np = nl->nplain[pos], ni = nl->nimg[pos];
+        for (int k = 0; k < np + ni; k++) {
+          const int32_t *en = k < np ? lst + k : lst + np + 2 * (k - np);
+          int32_t j = *en & CD_NB_INDEX;
+          const double *sh = nl->shift[k < np ? 13 : en[1]];
+          double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1],
+                 dz = p->z[i] - p->z[j] - sh[2];
+          if (dx * dx + dy * dy + dz * dz >= s->pair[p->mat[i]][p->mat[j]]->rc2) continue;
+          int32_t *pi = s->partners + (size_t)i * CD_MAX_PARTNERS;
+          int32_t *pj = s->partners + (size_t)j * CD_MAX_PARTNERS;
+          int ki = 0, kj = 0;
+          while (ki < CD_MAX_PARTNERS && pi[ki] >= 0) ki++;
+          while (kj < CD_MAX_PARTNERS && pj[kj] >= 0) kj++;
+          if (ki == CD_MAX_PARTNERS || kj == CD_MAX_PARTNERS) return MS_ERR_INPUT;
+          pi[ki] = j;
+          pj[kj] = i;
+        }
+      }
+    st = rebuild(s);
+    if (st != MS_OK) return st;
+  }
+  if (s->cfg.damping_gamma > 0.0) s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
+  s->n_driven = 0;
+  for (size_t i = 0; i < p->n; i++)
+    if (p->flags[i] & PTL_DRIVEN) s->n_driven++;
+  s->driven = ms_calloc(s->n_driven + 1, sizeof *s->driven);
+  for (size_t i = 0, k = 0; i < p->n; i++)
+    if (p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
+  /* pairs inside R_c at the start, for the broken-pair energy of the plain cutoff */
+  cd_compute_forces(s, s->sums, NULL, false);
+  memset(s->n_inside0, 0, sizeof s->n_inside0);
+  for (int l = 0; l < s->nl->nlayer; l++)
+    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
+      s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
+  step_forces(s);
+  return MS_OK;
+}
+
+ms_status cd_sim_affine(cd_sim *s, const double lambda[3]) {
+  ptl_state *p = s->p;
+  double *xa[3] = {p->x, p->y, p->z};
+  for (int a = 0; a < 3; a++) {
+    double lo = s->box.lo[a];
+    for (size_t i = 0; i < p->n; i++) xa[a][i] = lo + lambda[a] * (xa[a][i] - lo);
+    s->box.hi[a] = lo + lambda[a] * (s->box.hi[a] - lo);
+  }
+  ms_status st = rebuild(s);
+  if (st != MS_OK) return st;
+  step_forces(s);
+  return MS_OK;
+}
+
+/* ---- time step ---- */
+ms_status cd_sim_step(cd_sim *s) {
+  ptl_state *p = s->p;
+  const double dt = s->cfg.dt, hdt = 0.5 * dt;
+  const long n = (long)p->n;
+  double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
+  double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
+  const double *restrict m = p->mass;
+  const uint8_t *restrict fl = p->flags;
+  const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
+
+  /* Driven particles: prescribed velocity for this step, zero force so the uniform loop below
+   * moves them by Δt·(∫u dt/Δt). Removed particles have f = v = 0 and stay put. */
+  double ds = 0.0, fold = 0.0, vp[3] = {0, 0, 0};
+  if (s->n_driven) {
+    ds = cd_history_integral(&s->piston, s->t, s->t + dt);
+    for (int a = 0; a < 3; a++) vp[a] = ds / dt * s->piston_dir[a];
+    fold = driven_force(s);
+    for (size_t k = 0; k < s->n_driven; k++) {
+      int32_t i = s->driven[k];
+      fx[i] = fy[i] = fz[i] = 0.0;
+      vx[i] = vp[0];
+      vy[i] = vp[1];
+      vz[i] = vp[2];
+    }
+  }
+  /* kick + drift + zero the forces, fused. The rebuild criterion (largest displacement since
+   * the list build > skin/2) needs the build positions only once the cheap bound
+   * Σ Δt·max|v| has reached skin/2; before that the loop just tracks max|v|. */
+  const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
+  bool exact = s->disp_bound >= half;
+  double dmax2 = 0.0, vmax2 = 0.0;
+  if (exact) {
+#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+    for (long i = 0; i < n; i++) {
+      const double c = hdt / m[i];
+      vx[i] += c * fx[i];
+      vy[i] += c * fy[i];
+      vz[i] += c * fz[i];
+      fx[i] = fy[i] = fz[i] = 0.0;
+      x[i] += dt * vx[i];
+      y[i] += dt * vy[i];
+      z[i] += dt * vz[i];
+      const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      dmax2 = d2 > dmax2 ? d2 : dmax2;
+    }
+  } else {
+#pragma omp parallel for schedule(static) reduction(max : vmax2) if (CD_PAR(n))
+    for (long i = 0; i < n; i++) {
+      const double c = hdt / m[i];
+      vx[i] += c * fx[i];
+      vy[i] += c * fy[i];
+      vz[i] += c * fz[i];
+      fx[i] = fy[i] = fz[i] = 0.0;
+      x[i] += dt * vx[i];
+      y[i] += dt * vy[i];
+      z[i] += dt * vz[i];
+      const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+      vmax2 = v2 > vmax2 ? v2 : vmax2;
+    }
+    s->disp_bound += dt * sqrt(vmax2);
+    if (s->disp_bound >= half || !isfinite(vmax2)) {
+      exact = true;
+#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+      for (long i = 0; i < n; i++) {
+        const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        dmax2 = d2 > dmax2 ? d2 : dmax2;
+      }
+    }
+  }
+  for (int a = 0; a < 3; a++) {
+    if (s->box.bc[a] != CD_BC_WALL) continue;
+    double *xa = a == 0 ? x : (a == 1 ? y : z), *va = a == 0 ? vx : (a == 1 ? vy : vz);
+    const double lo = s->box.lo[a], hi = s->box.hi[a];
+    for (long i = 0; i < n; i++) {
+      if (fl[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
+      if (xa[i] < lo) { xa[i] = 2.0 * lo - xa[i]; va[i] = -va[i]; }
+      if (xa[i] > hi) { xa[i] = 2.0 * hi - xa[i]; va[i] = -va[i]; }
+    }
+  }
+  if (exact && !(dmax2 <= half * half)) { /* NaN positions also trigger a rebuild */
+    ms_status st = rebuild(s);
+    if (st != MS_OK) return st;
+  }
+  s->forces_zeroed = true;
+  step_forces(s);
+#pragma omp parallel for schedule(static) if (CD_PAR(n))
+  for (long i = 0; i < n; i++) {
+    const double c = hdt / m[i];
+    vx[i] += c * fx[i];
+    vy[i] += c * fy[i];
+    vz[i] += c * fz[i];
+  }
+  if (s->n_driven) {
+    s->piston_work -= 0.5 * (fold + driven_force(s)) * ds;
+    for (size_t k = 0; k < s->n_driven; k++) {
+      int32_t i = s->driven[k];
+      vx[i] = vp[0];
+      vy[i] = vp[1];
+      vz[i] = vp[2];
+    }
+  }
+  if (s->cfg.damping_gamma > 0.0) s->dissipated += cd_damping_step(s);
+  s->t += dt;
+  s->step++;
+  if (s->step % 100 == 0) {
+    double sum = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : sum) if (CD_PAR(n))
+    for (long i = 0; i < n; i++) sum += vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+    if (!isfinite(sum)) return MS_ERR_UNSTABLE;
+  }
+  return MS_OK;
+}
+
+/* ---- diagnostics ---- */
+void cd_sim_energy(cd_sim *s, cd_energy *out) {
+  const ptl_state *p = s->p;
+  memset(out, 0, sizeof *out);
+  cd_compute_forces(s, s->sums, NULL, false);
+  double ke = 0, mom[3] = {0, 0, 0};
+  for (size_t i = 0; i < p->n; i++) {
+    if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
+    ke += 0.5 * p->mass[i] * (p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
+    mom[0] += p->mass[i] * p->vx[i];
+    mom[1] += p->mass[i] * p->vy[i];
+    mom[2] += p->mass[i] * p->vz[i];
+  }
+  double pe = 0.0;
+  long inside[CD_MAX_MATERIALS * CD_MAX_MATERIALS] = {0};
+  for (int l = 0; l < s->nl->nlayer; l++) {
+    pe += s->sums[l].epot;
+    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++) inside[k] += s->sums[l].inside[k];
+  }
+  double broken = s->broken_bonded;
+  if (s->cfg.cutoff == CD_CUTOFF_PLAIN)
+    for (int a = 0; a < s->nmat; a++)
+      for (int b = 0; b < s->nmat; b++)
+        broken += s->pair[a][b]->e_rc *
+                  (double)(s->n_inside0[a][b] - inside[a * CD_MAX_MATERIALS + b]);
+  out->kinetic = ke;
+  out->potential = pe;
+  out->dissipated = s->dissipated;
+  out->broken = broken;
+  out->piston_work = s->piston_work;
+  out->total = ke + pe + s->dissipated + broken - s->piston_work;
+  for (int a = 0; a < 3; a++) out->momentum[a] = mom[a];
+}
+
+void cd_sim_virial(cd_sim *s, double volume, double stress[6]) {
+  const ptl_state *p = s->p;
+  cd_compute_forces(s, s->sums, NULL, false);
+  double w[6] = {0, 0, 0, 0, 0, 0};
+  for (int l = 0; l < s->nl->nlayer; l++)
+    for (int c = 0; c < 6; c++) w[c] += s->sums[l].vir[c];
+  for (size_t i = 0; i < p->n; i++) {
+    if (p->flags[i] & PTL_REMOVED) continue;
+    double mi = p->mass[i], v[3] = {p->vx[i], p->vy[i], p->vz[i]};
+    w[0] += mi * v[0] * v[0];
+    w[1] += mi * v[1] * v[1];
+    w[2] += mi * v[2] * v[2];
+    w[3] += mi * v[0] * v[1];
+    w[4] += mi * v[1] * v[2];
+    w[5] += mi * v[2] * v[0];
+  }
+  for (int c = 0; c < 6; c++) stress[c] = w[c] / volume;
+}
+
+void cd_sim_particle_virial(cd_sim *s, double *w) { cd_compute_forces(s, s->sums, w, false); }
+
+double cd_von_mises(const double t[6]) {
+  double a = t[0] - t[1], b = t[1] - t[2], c = t[2] - t[0];
+  return sqrt(0.5 * (a * a + b * b + c * c + 6.0 * (t[3] * t[3] + t[4] * t[4] + t[5] * t[5])));
+}
+
+double cd_free_surface_velocity(const cd_sim *s, int axis) {
+  const ptl_state *p = s->p;
+  const double *v = axis == 0 ? p->vx : (axis == 1 ? p->vy : p->vz);
+  double sum = 0.0;
+  size_t cnt = 0;
+  for (size_t i = 0; i < p->n; i++)
+    if ((p->flags[i] & PTL_SURFACE) && !(p->flags[i] & PTL_REMOVED)) {
+      sum += v[i];
+      cnt++;
+    }
+  return cnt ? sum / (double)cnt : NAN;
+}
+
+long cd_sim_rebuilds(const cd_sim *s) { return s->nl ? s->nl->nbuild : 0; }
+size_t cd_sim_pairs(const cd_sim *s) { return s->nl ? cd_neigh_pairs(s->nl) : 0; }
+size_t cd_sim_bytes(const cd_sim *s) {
+  size_t b = ptl_state_bytes(s->p) + (s->nl ? cd_neigh_bytes(s->nl) : 0);
+  if (s->scratch) b += 3 * s->p->cap * sizeof(double);
+  if (s->partners) b += s->p->cap * CD_MAX_PARTNERS * sizeof(int32_t);
+  return b;
+}

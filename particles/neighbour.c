@@ -1,0 +1,425 @@
+/* neighbour.c — link cells and Verlet half lists with a skin (layout in cd_impl.h).
+ *
+ * A list built at time t_b holds every pair closer than r_list = R_c + skin. It stays valid
+ * while no pair that was farther than r_list at t_b can have come within R_c, which is
+ * guaranteed as long as every particle has moved less than skin/2 since t_b (two particles
+ * approach by at most the sum of their displacements). cd_neigh_needs_rebuild checks exactly
+ * that; cd_sim_step fuses the same check into its drift loop.
+ */
+#include "cd_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
+  cd_neigh *nl = ms_calloc(1, sizeof *nl);
+  nl->rlist = rlist;
+  nl->skin = skin;
+  nl->sorted = ms_calloc(cap + 1, sizeof *nl->sorted);
+  nl->cell_of = ms_calloc(cap + 1, sizeof *nl->cell_of);
+  nl->first = ms_calloc(cap + 1, sizeof *nl->first);
+  nl->nplain = ms_calloc(cap + 1, sizeof *nl->nplain);
+  nl->nimg = ms_calloc(cap + 1, sizeof *nl->nimg);
+  nl->xb = ms_calloc(cap + 1, sizeof *nl->xb);
+  nl->yb = ms_calloc(cap + 1, sizeof *nl->yb);
+  nl->zb = ms_calloc(cap + 1, sizeof *nl->zb);
+  nl->scratch = ms_calloc(cap + 1, sizeof *nl->scratch);
+  return nl;
+}
+
+void cd_neigh_free(cd_neigh *nl) {
+  if (!nl) return;
+  for (int l = 0; l < nl->layers_cap; l++) free(nl->buf[l]);
+  free(nl->buf);
+  free(nl->buf_cap);
+  free(nl->buf_len);
+  free(nl->layer_start);
+  free(nl->phase_layer);
+  free(nl->cell_start);
+  free(nl->sorted);
+  free(nl->cell_of);
+  free(nl->first);
+  free(nl->nplain);
+  free(nl->nimg);
+  free(nl->xb);
+  free(nl->yb);
+  free(nl->zb);
+  free(nl->scratch);
+  free(nl);
+}
+
+size_t cd_neigh_bytes(const cd_neigh *nl) {
+  size_t n = nl->n;
+  size_t b = n * (2 * sizeof(int32_t) + sizeof(uint32_t) + 2 * sizeof(uint16_t) +
+                  3 * sizeof(float) + sizeof(double));
+  b += (nl->ncells + 1) * sizeof(int32_t);
+  for (int l = 0; l < nl->nlayer; l++) b += nl->buf_cap[l] * sizeof(int32_t);
+  return b;
+}
+
+size_t cd_neigh_pairs(const cd_neigh *nl) {
+  size_t np = 0;
+  for (int l = 0; l < nl->nlayer; l++)
+    for (int32_t q = nl->layer_start[l]; q < nl->layer_start[l + 1]; q++)
+      np += (size_t)nl->nplain[q] + nl->nimg[q];
+  return np;
+}
+
+double cd_neigh_limit2(const cd_neigh *nl) {
+  double h = 0.5 * nl->skin - nl->xb_err;
+  return h * h;
+}
+
+bool cd_neigh_needs_rebuild(const cd_neigh *nl, const ptl_state *p) {
+  double lim2 = cd_neigh_limit2(nl);
+  double dmax2 = 0.0;
+  const double *x = p->x, *y = p->y, *z = p->z;
+  const float *xb = nl->xb, *yb = nl->yb, *zb = nl->zb;
+  long n = (long)p->n;
+#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+  for (long i = 0; i < n; i++) {
+    double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+    double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > dmax2) dmax2 = d2;
+  }
+  return dmax2 > lim2 || p->n != nl->n;
+}
+
+static bool is_partner(const int32_t *partners, int32_t i, int32_t j) {
+  const int32_t *pi = partners + (size_t)i * CD_MAX_PARTNERS;
+  for (int k = 0; k < CD_MAX_PARTNERS; k++)
+    if (pi[k] == j) return true;
+  return false;
+}
+
+/* Build the lists of one layer into its buffer; returns the entries needed (the buffer was
+ * large enough iff the result is <= its capacity). */
+/* candidates inside r_list per particle: far above any packing (fcc: 12 within 1.3 r0 even
+ * at δ = 2 with the second shell; 50 would mean near-overlapping particles) */
+#define CD_MAX_CAND 510
+
+static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
+                          const int ax[3], const int32_t *partners) {
+  const double rl2 = nl->rlist * nl->rlist;
+  const int n0 = nl->ncell[ax[0]], n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
+  const bool per[3] = {box->bc[ax[0]] == CD_BC_PERIODIC, box->bc[ax[1]] == CD_BC_PERIODIC,
+                       box->bc[ax[2]] == CD_BC_PERIODIC};
+  const double *x = p->x, *y = p->y, *z = p->z;
+  int32_t *buf = nl->buf[layer];
+  size_t cap = nl->buf_cap[layer], len = 0;
+  int32_t cand[CD_MAX_CAND + 1], img[CD_MAX_CAND + 2]; /* one particle's candidates */
+  for (int32_t pos = nl->layer_start[layer]; pos < nl->layer_start[layer + 1]; pos++) {
+    int32_t i = nl->sorted[pos];
+    int32_t c = nl->cell_of[i];
+    int k[3] = {c / (n1 * n2), (c / n2) % n1, c % n2};
+    double xi = x[i], yi = y[i], zi = z[i];
+    size_t start = len;
+    int nimg = 0, nc = 0;
+    for (int o0 = -1; o0 <= 1; o0++) {
+      int m0 = k[0] + o0, s0 = 0;
+      if (m0 < 0) { if (!per[0]) continue; m0 += n0; s0 = -1; }
+      if (m0 >= n0) { if (!per[0]) continue; m0 -= n0; s0 = 1; }
+      /* keep rule across layers (cd_impl.h) */
+      bool same_layer = (m0 == k[0]) && (s0 == 0 || n0 == 1);
+      bool next_layer;
+      if (nl->colour) {
+        int nxt = k[0] + 1;
+        if (nxt == n0) nxt = per[0] ? 0 : -1;
+        next_layer = (m0 == nxt) && !same_layer;
+        if (!same_layer && !next_layer) continue;
+      } else {
+        next_layer = false;
+      }
+      for (int o1 = -1; o1 <= 1; o1++) {
+        int m1 = k[1] + o1, s1 = 0;
+        if (m1 < 0) { if (!per[1]) continue; m1 += n1; s1 = -1; }
+        if (m1 >= n1) { if (!per[1]) continue; m1 -= n1; s1 = 1; }
+        for (int o2 = -1; o2 <= 1; o2++) {
+          int m2 = k[2] + o2, s2 = 0;
+          if (m2 < 0) { if (!per[2]) continue; m2 += n2; s2 = -1; }
+          if (m2 >= n2) { if (!per[2]) continue; m2 -= n2; s2 = 1; }
+          int sh[3] = {0, 0, 0};
+          sh[ax[0]] = s0;
+          sh[ax[1]] = s1;
+          sh[ax[2]] = s2;
+          int code = (sh[0] + 1) + 3 * (sh[1] + 1) + 9 * (sh[2] + 1);
+          double sx = nl->shift[code][0], sy = nl->shift[code][1], sz = nl->shift[code][2];
+          int32_t cell = (m0 * n1 + m1) * n2 + m2;
+          int32_t q0 = nl->cell_start[cell], q1 = nl->cell_start[cell + 1];
+          if (!next_layer && q0 <= pos) q0 = pos + 1; /* same layer (or no colouring): q > p */
+          if (code == 13) {
+            /* branchless: store every candidate, advance only for those inside r_list */
+            for (int32_t q = q0; q < q1 && nc < CD_MAX_CAND; q++) {
+              int32_t j = nl->sorted[q];
+              double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+              cand[nc] = j;
+              nc += dx * dx + dy * dy + dz * dz < rl2;
+            }
+          } else {
+            for (int32_t q = q0; q < q1 && nimg < CD_MAX_CAND / 2; q++) {
+              int32_t j = nl->sorted[q];
+              double dx = xi - (x[j] + sx), dy = yi - (y[j] + sy), dz = zi - (z[j] + sz);
+              img[2 * nimg] = j;
+              img[2 * nimg + 1] = code;
+              nimg += dx * dx + dy * dy + dz * dz < rl2;
+            }
+          }
+        }
+      }
+    }
+    if (nc >= CD_MAX_CAND || nimg >= CD_MAX_CAND / 2) nl->overfull = true;
+    if (partners) {
+      for (int q = 0; q < nc; q++)
+        if (is_partner(partners, i, cand[q])) cand[q] |= CD_NB_BONDED;
+      for (int q = 0; q < nimg; q++)
+        if (is_partner(partners, i, img[2 * q])) img[2 * q] |= CD_NB_BONDED;
+    }
+    if (len + (size_t)nc <= cap) memcpy(buf + len, cand, (size_t)nc * sizeof *cand);
+    len += (size_t)nc;
+    nl->first[pos] = (uint32_t)start;
+    nl->nplain[pos] = (uint16_t)(len - start);
+    nl->nimg[pos] = (uint16_t)nimg;
+    for (int q = 0; q < 2 * nimg; q++) {
+      if (len < cap) buf[len] = img[q];
+      len++;
+    }
+  }
+  nl->buf_len[layer] = len;
+  return len;
+}
+
+/* Renumber the particles into cell order (memory order = traversal order, so the neighbours
+ * of a particle sit next to it in memory). sorted[] becomes the identity. Removed particles
+ * go last. */
+static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int32_t nsorted) {
+  const size_t n = p->n;
+  size_t k = (size_t)nsorted;
+  for (size_t i = 0; i < n; i++)
+    if (nl->cell_of[i] < 0) nl->sorted[k++] = (int32_t)i;
+  const int32_t *perm = nl->sorted;
+  double *tmp = nl->scratch;
+  double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->fx, p->fy, p->fz, p->mass};
+  for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) {
+    double *v = arr[a];
+#pragma omp parallel for schedule(static) if (CD_PAR(n))
+    for (long q = 0; q < (long)n; q++) tmp[q] = v[perm[q]];
+    memcpy(v, tmp, n * sizeof *v);
+  }
+  int64_t *g = (int64_t *)(void *)nl->scratch;
+  for (size_t q = 0; q < n; q++) g[q] = p->gid[perm[q]];
+  memcpy(p->gid, g, n * sizeof *g);
+  uint8_t *b = (uint8_t *)(void *)nl->scratch;
+  for (size_t q = 0; q < n; q++) b[q] = p->mat[perm[q]];
+  memcpy(p->mat, b, n);
+  for (size_t q = 0; q < n; q++) b[q] = p->flags[perm[q]];
+  memcpy(p->flags, b, n);
+  int32_t *c = (int32_t *)(void *)nl->scratch;
+  for (size_t q = 0; q < n; q++) c[q] = nl->cell_of[perm[q]];
+  memcpy(nl->cell_of, c, n * sizeof *c);
+  if (partners) {
+    uint32_t *inv = nl->first;
+    for (size_t q = 0; q < n; q++) inv[perm[q]] = (uint32_t)q;
+    int32_t *rows = ms_calloc(n * CD_MAX_PARTNERS, sizeof *rows); /* bonded mode only */
+    for (size_t q = 0; q < n; q++)
+      for (int m = 0; m < CD_MAX_PARTNERS; m++) {
+        int32_t j = partners[(size_t)perm[q] * CD_MAX_PARTNERS + m];
+        rows[q * CD_MAX_PARTNERS + m] = j >= 0 ? (int32_t)inv[j] : -1;
+      }
+    memcpy(partners, rows, n * CD_MAX_PARTNERS * sizeof *rows);
+    free(rows);
+  }
+  for (size_t q = 0; q < n; q++) nl->sorted[q] = (int32_t)q;
+}
+
+ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
+                         bool reorder) {
+  const size_t n = p->n;
+  double *pos[3] = {p->x, p->y, p->z};
+  double L[3] = {0, 0, 0}, lo[3] = {0, 0, 0};
+  int nc[3];
+  for (int a = 0; a < 3; a++) {
+    if (box->bc[a] == CD_BC_PERIODIC) {
+      lo[a] = box->lo[a];
+      L[a] = box->hi[a] - box->lo[a];
+      if (!(L[a] >= 2.0 * nl->rlist)) return MS_ERR_INPUT;
+      double *xa = pos[a];
+      double la = lo[a], len = L[a];
+#pragma omp parallel for schedule(static) if (CD_PAR(n))
+      for (long i = 0; i < (long)n; i++) {
+        double w = xa[i] - la;
+        if (w < 0.0 || w >= len) xa[i] -= len * floor(w / len);
+        if (xa[i] >= la + len) xa[i] -= len; /* round-off of the line above */
+      }
+      nc[a] = (int)floor(L[a] / nl->rlist);
+      if (nc[a] < 1) nc[a] = 1;
+    } else {
+      double mn = INFINITY, mx = -INFINITY;
+      const double *xa = pos[a];
+#pragma omp parallel for schedule(static) reduction(min : mn) reduction(max : mx) if (CD_PAR(n))
+      for (long i = 0; i < (long)n; i++) {
+        if (p->flags[i] & PTL_REMOVED) continue;
+        if (xa[i] < mn) mn = xa[i];
+        if (xa[i] > mx) mx = xa[i];
+      }
+      if (!(mx >= mn)) mn = mx = 0.0;
+      lo[a] = mn;
+      L[a] = mx - mn;
+      nc[a] = (int)floor(L[a] / nl->rlist);
+      if (nc[a] < 1) nc[a] = 1;
+    }
+  }
+  /* Cap the cell count (a few far-flung particles must not create millions of empty cells). */
+  for (;;) {
+    double tot = (double)nc[0] * nc[1] * nc[2];
+    if (tot <= 2.0 * (double)n + 64.0) break;
+    int big = 0;
+    for (int a = 1; a < 3; a++)
+      if (nc[a] > nc[big]) big = a;
+    nc[big] = (nc[big] + 1) / 2;
+  }
+  for (int a = 0; a < 3; a++) {
+    nl->ncell[a] = nc[a];
+    nl->cell_lo[a] = lo[a];
+    double w = L[a] / nc[a];
+    if (w < nl->rlist) w = nl->rlist;
+    nl->cell_inv_w[a] = 1.0 / w;
+  }
+  for (int c = 0; c < 27; c++) {
+    int s[3] = {c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1};
+    for (int a = 0; a < 3; a++) nl->shift[c][a] = s[a] * L[a];
+  }
+  int ax[3] = {2, 0, 1}; /* slab axis: most cells, z on ties */
+  if (nc[1] > nc[ax[0]]) ax[0] = 1;
+  if (nc[0] > nc[ax[0]]) ax[0] = 0;
+  for (int a = 0, k = 1; a < 3; a++)
+    if (a != ax[0]) ax[k++] = a;
+  nl->slab_axis = ax[0];
+  const int n0 = nc[ax[0]], n1 = nc[ax[1]], n2 = nc[ax[2]];
+  size_t ncells = (size_t)n0 * n1 * n2;
+  if (ncells + 1 > nl->cells_cap) {
+    free(nl->cell_start);
+    nl->cells_cap = ncells + 1 + ncells / 4;
+    nl->cell_start = ms_calloc(nl->cells_cap, sizeof *nl->cell_start);
+  }
+  nl->ncells = ncells;
+  if (n0 + 1 > nl->layers_cap) {
+    int old = nl->layers_cap, cap = n0 + 1 + n0 / 4;
+    nl->buf = ms_realloc(nl->buf, (size_t)cap, sizeof *nl->buf);
+    nl->buf_cap = ms_realloc(nl->buf_cap, (size_t)cap, sizeof *nl->buf_cap);
+    nl->buf_len = ms_realloc(nl->buf_len, (size_t)cap, sizeof *nl->buf_len);
+    nl->layer_start = ms_realloc(nl->layer_start, (size_t)cap + 1, sizeof *nl->layer_start);
+    nl->phase_layer = ms_realloc(nl->phase_layer, (size_t)cap, sizeof *nl->phase_layer);
+    for (int l = old; l < cap; l++) {
+      nl->buf[l] = NULL;
+      nl->buf_cap[l] = 0;
+      nl->buf_len[l] = 0;
+    }
+    nl->layers_cap = cap;
+  }
+  nl->nlayer = n0;
+
+  /* Bin: stable counting sort into cell order. */
+  int32_t *cs = nl->cell_start;
+  memset(cs, 0, (ncells + 1) * sizeof *cs);
+  double inv[3] = {nl->cell_inv_w[ax[0]], nl->cell_inv_w[ax[1]], nl->cell_inv_w[ax[2]]};
+  double l0[3] = {lo[ax[0]], lo[ax[1]], lo[ax[2]]};
+  const double *pa0 = pos[ax[0]], *pa1 = pos[ax[1]], *pa2 = pos[ax[2]];
+#pragma omp parallel for schedule(static) if (CD_PAR(n))
+  for (long i = 0; i < (long)n; i++) {
+    if (p->flags[i] & PTL_REMOVED) {
+      nl->cell_of[i] = -1;
+      continue;
+    }
+    int k0 = (int)((pa0[i] - l0[0]) * inv[0]);
+    int k1 = (int)((pa1[i] - l0[1]) * inv[1]);
+    int k2 = (int)((pa2[i] - l0[2]) * inv[2]);
+    k0 = k0 < 0 ? 0 : (k0 >= n0 ? n0 - 1 : k0);
+    k1 = k1 < 0 ? 0 : (k1 >= n1 ? n1 - 1 : k1);
+    k2 = k2 < 0 ? 0 : (k2 >= n2 ? n2 - 1 : k2);
+    nl->cell_of[i] = (k0 * n1 + k1) * n2 + k2;
+  }
+  for (size_t i = 0; i < n; i++)
+    if (nl->cell_of[i] >= 0) cs[nl->cell_of[i] + 1]++;
+  for (size_t c = 0; c < ncells; c++) cs[c + 1] += cs[c];
+  {
+    /* cs[c] serves as the running cursor of cell c, then is shifted back by one cell */
+    for (size_t i = 0; i < n; i++) {
+      int32_t c = nl->cell_of[i];
+      if (c < 0) continue;
+      nl->sorted[cs[c]++] = (int32_t)i;
+    }
+    for (size_t c = ncells; c > 0; c--) cs[c] = cs[c - 1];
+    cs[0] = 0;
+  }
+  for (int l = 0; l <= n0; l++) nl->layer_start[l] = cs[(size_t)l * n1 * n2];
+  if (reorder) reorder_particles(nl, p, partners ? partners : NULL, cs[ncells]);
+
+  /* Colouring (cd_impl.h). */
+  const bool per0 = box->bc[ax[0]] == CD_BC_PERIODIC;
+  nl->colour = n0 >= 4;
+  if (nl->colour) {
+    int k = 0;
+    nl->phase_start[0] = 0;
+    int last_alone = per0 && (n0 % 2 == 1);
+    for (int l = 0; l < n0; l += 2)
+      if (!(last_alone && l == n0 - 1)) nl->phase_layer[k++] = l;
+    nl->phase_start[1] = k;
+    for (int l = 1; l < n0; l += 2) nl->phase_layer[k++] = l;
+    nl->phase_start[2] = k;
+    if (last_alone) nl->phase_layer[k++] = n0 - 1;
+    nl->phase_start[3] = k;
+    nl->nphase = last_alone ? 3 : 2;
+  } else {
+    for (int l = 0; l < n0; l++) nl->phase_layer[l] = l;
+    nl->phase_start[0] = 0;
+    nl->phase_start[1] = n0;
+    nl->nphase = 1;
+  }
+
+  /* Lists, layer by layer; grow the buffers that were too small and redo those layers. */
+  for (int l = 0; l < n0; l++) {
+    size_t np = (size_t)(nl->layer_start[l + 1] - nl->layer_start[l]);
+    size_t want = np * 8 + 64;
+    if (nl->buf_cap[l] < want / 2 || nl->buf[l] == NULL) {
+      free(nl->buf[l]);
+      nl->buf[l] = ms_calloc(want, sizeof(int32_t));
+      nl->buf_cap[l] = want;
+    }
+  }
+  int again;
+  nl->overfull = false;
+  do {
+    again = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : again) if (CD_PAR(p->n))
+    for (int l = 0; l < n0; l++) {
+      size_t need = build_layer(nl, p, box, l, ax, partners);
+      if (need > nl->buf_cap[l]) again++;
+    }
+    if (again)
+      for (int l = 0; l < n0; l++)
+        if (nl->buf_len[l] > nl->buf_cap[l]) {
+          size_t want = nl->buf_len[l] + nl->buf_len[l] / 4 + 64;
+          free(nl->buf[l]);
+          nl->buf[l] = ms_calloc(want, sizeof(int32_t));
+          nl->buf_cap[l] = want;
+        }
+  } while (again);
+
+  double amax = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : amax) if (CD_PAR(n))
+  for (long i = 0; i < (long)n; i++) {
+    nl->xb[i] = (float)p->x[i];
+    nl->yb[i] = (float)p->y[i];
+    nl->zb[i] = (float)p->z[i];
+    double ax = fabs(p->x[i]), ay = fabs(p->y[i]), az = fabs(p->z[i]);
+    double m = ax > ay ? ax : ay;
+    m = m > az ? m : az;
+    amax = m > amax ? m : amax;
+  }
+  /* float rounding: |x − float(x)| <= 2^-24 |x| per component, so <= √3·2^-24·max|x| */
+  nl->xb_err = 1.7320508075688772 * 0x1.0p-24 * amax * 1.01;
+  nl->n = n;
+  nl->nbuild++;
+  return nl->overfull ? MS_ERR_UNSTABLE : MS_OK; /* particles piled on top of each other */
+}

@@ -1,0 +1,230 @@
+/* Cluster-dynamics time stepping (docs/particles-cd.md): NVE energy conservation, the energy
+ * balance with relative-velocity damping (eq. 6 of paper 002), momentum conservation, forces
+ * from the Verlet lists vs brute force after many rebuilds, results independent of the number
+ * of OpenMP threads, and the piston's work balance. */
+#include <math.h>
+#include <omp.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "ptl.h"
+
+#define R0 5.0e-4
+#define C0 5.35
+
+static eos_t *al(void) { return eos_create_mg_cold(2.71, C0, 4.0, 2.0, true); }
+
+/* periodic fcc block of n³ cells with random velocities of amplitude vamp (mean removed) */
+static cd_sim *hot_block(const eos_t *eos, int n, double vamp, double gamma, double dt_frac,
+                         cd_cutoff_mode mode) {
+  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
+  ptl_state *p = ptl_state_create((size_t)4 * n * n * n, 3);
+  double sh[3] = {0.25, 0.25, 0.25}, o[3] = {0, 0, 0};
+  cd_lattice_fcc(p, n, n, n, sh, o, R0, m, 0);
+  double mean[3] = {0, 0, 0}, *v[3] = {p->vx, p->vy, p->vz};
+  for (size_t i = 0; i < p->n; i++)
+    for (int c = 0; c < 3; c++) {
+      v[c][i] = vamp * (2.0 * ptl_splitmix64_uniform(7, 3 * i + c) - 1.0);
+      mean[c] += v[c][i] / p->n;
+    }
+  for (size_t i = 0; i < p->n; i++)
+    for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
+  cd_box box = {.lo = {0, 0, 0}, .hi = {n * a, n * a, n * a},
+                .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
+  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = dt_frac * R0 / C0, .cutoff = mode,
+                   .damping_gamma = gamma, .lattice = CD_LATTICE_FCC};
+  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_pair_table *t = calloc(1, sizeof *t);
+  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  cd_sim_set_pair(s, 0, 0, t);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  return s;
+}
+
+/* Runs nsteps, samples the balance every `every` steps; returns the drift (least-squares
+ * slope × run time) and the largest deviation from the first sample, both relative to |E0|. */
+static void balance(cd_sim *s, long nsteps, int every, double *drift, double *dev, double *e0out) {
+  cd_energy e;
+  cd_sim_energy(s, &e);
+  const double e0 = e.total, scale = fabs(e.kinetic) + fabs(e.potential);
+  double st = 0, se = 0, stt = 0, ste = 0, worst = 0;
+  long m = 0;
+  for (long k = 1; k <= nsteps; k++) {
+    assert_int_equal(cd_sim_step(s), MS_OK);
+    if (k % every) continue;
+    cd_sim_energy(s, &e);
+    double d = (e.total - e0) / scale;
+    worst = fmax(worst, fabs(d));
+    st += k; se += d; stt += (double)k * k; ste += k * d; m++;
+  }
+  double slope = (m * ste - st * se) / (m * stt - st * st);
+  *drift = fabs(slope * nsteps);
+  *dev = worst;
+  if (e0out) *e0out = e0;
+}
+
+/* NVE, no damping, no bond breaking (amplitude 0.2 km/s keeps every pair far from R_c):
+ * 10⁴ steps. With the benchmark's Δt = 0.02 r0/c0 Verlet's bounded energy oscillation is
+ * ~5e-4 of the energy; its secular drift must stay below 1e-6. With Δt/40 the oscillation
+ * itself (∝ Δt², so ~3e-7) stays below 1e-6 too. */
+static void test_nve(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  double drift, dev;
+  cd_sim *s = hot_block(eos, 3, 0.2, 0.0, 0.02, CD_CUTOFF_PLAIN);
+  balance(s, 10000, 10, &drift, &dev, NULL);
+  printf("NVE dt = 0.02 r0/c0: drift %.3g, max deviation %.3g (relative), rebuilds %ld\n", drift, dev, cd_sim_rebuilds(s));
+  assert_true(drift < 1e-6);
+  cd_energy e;
+  cd_sim_energy(s, &e);
+  assert_true(e.broken == 0.0); /* no pair crossed R_c */
+  cd_sim_free(s);
+  s = hot_block(eos, 3, 0.2, 0.0, 0.0005, CD_CUTOFF_PLAIN);
+  balance(s, 10000, 10, &drift, &dev, NULL);
+  printf("NVE dt = 0.0005 r0/c0: drift %.3g, max deviation %.3g\n", drift, dev);
+  assert_true(dev < 1e-6 && drift < 1e-6);
+  cd_sim_free(s);
+  eos_destroy(eos);
+}
+
+/* With damping Γ = c0/(50 a): kinetic + potential + dissipated is conserved like the NVE
+ * energy, the damping really dissipates (more than 10 % of the initial kinetic energy over the
+ * run), and momentum is conserved to round-off. While the damping cools the lattice, Verlet's
+ * O((ωΔt)²) energy offset shrinks with it, which reads as a drift ~(ωΔt)² E0: 3.5e-5 at the
+ * benchmark's Δt, so the 1e-6 balance is checked at Δt = 0.0005 r0/c0 (offset 1600× smaller),
+ * 10⁴ steps (Γ t = 0.1). */
+static void test_damping_balance(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  double drift, dev;
+  cd_sim *s = hot_block(eos, 3, 0.2, C0 / (50 * R0), 0.0005, CD_CUTOFF_PLAIN);
+  cd_energy e0, e1;
+  cd_sim_energy(s, &e0);
+  balance(s, 10000, 10, &drift, &dev, NULL);
+  cd_sim_energy(s, &e1);
+  printf("damped: drift %.3g, max deviation %.3g, dissipated %.4g of KE0 %.4g\n", drift, dev, e1.dissipated, e0.kinetic);
+  assert_true(drift < 1e-6 && dev < 1e-6);
+  assert_true(e1.dissipated > 0.1 * e0.kinetic);
+  double pscale = 0;
+  for (size_t i = 0; i < s->p->n; i++) pscale += s->p->mass[i] * fabs(s->p->vx[i]);
+  for (int c = 0; c < 3; c++) assert_true(fabs(e1.momentum[c] - e0.momentum[c]) < 1e-12 * fmax(pscale, 1e-30) + 1e-25);
+  cd_sim_free(s);
+  eos_destroy(eos);
+}
+
+/* Forces from the Verlet lists after many rebuilds equal a brute-force sum over all pairs
+ * (minimum image) to round-off. Hot lattice (1.5 km/s) so that the lists are rebuilt often. */
+static void test_lists_vs_brute_force(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  cd_sim *s = hot_block(eos, 4, 1.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
+  for (int k = 0; k < 1500; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+  assert_true(cd_sim_rebuilds(s) > 3);
+  const ptl_state *p = s->p;
+  const double L = s->box.hi[0];
+  const cd_pair_table *t = s->pair[0][0];
+  double worst = 0, fscale = fabs(cd_pair_table_force(t, 0.9 * R0));
+  for (size_t i = 0; i < p->n; i++) {
+    double f[3] = {0, 0, 0};
+    for (size_t j = 0; j < p->n; j++) {
+      if (j == i) continue;
+      double d[3] = {p->x[i] - p->x[j], p->y[i] - p->y[j], p->z[i] - p->z[j]};
+      for (int c = 0; c < 3; c++) d[c] -= L * round(d[c] / L);
+      double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      double fr = cd_pair_table_force(t, r) / r;
+      for (int c = 0; c < 3; c++) f[c] += fr * d[c];
+    }
+    worst = fmax(worst, fabs(f[0] - p->fx[i]) + fabs(f[1] - p->fy[i]) + fabs(f[2] - p->fz[i]));
+  }
+  printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n", cd_sim_rebuilds(s), worst / fscale);
+  assert_true(worst < 1e-9 * fscale); /* only summation order differs */
+  cd_sim_free(s);
+  eos_destroy(eos);
+}
+
+/* The layer colouring makes every force sum's order independent of the thread count:
+ * bitwise identical trajectories with 1 and 2 threads (damping on: its loops too). */
+static void test_threads_bitwise(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  double *pos[2];
+  for (int run = 0; run < 2; run++) {
+    omp_set_num_threads(run + 1);
+    /* 13³ cells = 8788 particles: above the size where loops go parallel */
+    cd_sim *s = hot_block(eos, 13, 1.0, C0 / (50 * R0), 0.02, CD_CUTOFF_PLAIN);
+    for (int k = 0; k < 100; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+    size_t n = s->p->n;
+    pos[run] = malloc(3 * n * sizeof(double));
+    /* particles may be renumbered: index by gid */
+    for (size_t i = 0; i < n; i++) {
+      size_t g = (size_t)s->p->gid[i];
+      pos[run][3 * g] = s->p->x[i];
+      pos[run][3 * g + 1] = s->p->y[i];
+      pos[run][3 * g + 2] = s->p->z[i];
+    }
+    if (run == 1) assert_memory_equal(pos[0], pos[1], 3 * n * sizeof(double));
+    cd_sim_free(s);
+  }
+  free(pos[0]);
+  free(pos[1]);
+  eos_destroy(eos);
+}
+
+/* Piston (1 km/s) into a free slab: kinetic + potential + broken − piston work stays
+ * constant. Bonded mode (partners fixed at set-up): smooth forces, the shock front's Verlet
+ * error stays below 1e-5 of the work. Plain cutoff: pairs of the second shell flicker across
+ * R_c at the front (the known trap), each crossing books E(R_c) exactly but integrates a force
+ * jump f(R_c) with an O(f Δt v) error: balance to 1e-3 of the work. */
+static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_energy *e1) {
+  const int nx = 3, nz = 40;
+  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
+  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
+  double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
+  cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
+  for (size_t i = 0; i < (size_t)4 * nx * nx * 2; i++) p->flags[i] = PTL_DRIVEN;
+  cd_box box = {.hi = {nx * a, nx * a, nz * a}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = mode, .lattice = CD_LATTICE_FCC};
+  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_pair_table *t = calloc(1, sizeof *t);
+  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  cd_sim_set_pair(s, 0, 0, t);
+  double th[2] = {0, 1}, uh[2] = {1.0, 1.0}, dir[3] = {0, 0, 1};
+  cd_history h = {2, th, uh};
+  cd_sim_set_piston(s, &h, dir);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  cd_energy e0;
+  cd_sim_energy(s, &e0);
+  for (int k = 0; k < 3000; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+  cd_sim_energy(s, e1);
+  double err = (e1->total - e0.total) / e1->piston_work;
+  printf("piston (%s): work %.6g, KE %.6g PE %.6g broken %.3g, balance error %.3g of the work\n",
+         mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", e1->piston_work, e1->kinetic, e1->potential, e1->broken, err);
+  cd_sim_free(s);
+  return err;
+}
+
+static void test_piston_balance(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  cd_energy e;
+  double err = piston_run(eos, CD_CUTOFF_BONDED, &e);
+  assert_true(e.piston_work > 0);
+  assert_true(fabs(err) < 1e-5);
+  err = piston_run(eos, CD_CUTOFF_PLAIN, &e);
+  assert_true(fabs(err) < 1e-3);
+  eos_destroy(eos);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_nve), cmocka_unit_test(test_damping_balance),
+      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_piston_balance)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
