@@ -107,7 +107,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   dk_errors e;
   dk_errors_init(&e);
   ms_h5r *h = ms_h5_open_read(path, &e);
-  if (!h && !e.n) abort();
+  if (!h && !e.n) {
+    fprintf(stderr, "fuzz oracle: open failed without a message\n");
+    abort();
+  }
   if (h) {
     for (int i = 0; i < NNAMES; i++) {
       double *v = NULL;
@@ -116,11 +119,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
       bool exists = ms_h5_exists(h, names[i]);
       ms_status s = ms_h5_read_doubles(h, names[i], &v, &n0, &n1, &e);
       if (s == MS_OK) {
-        if (!exists || !v || n1 < 1 || e.n != before) abort();
+        if (!exists || !v || e.n != before) { /* n1 may be 0: a [n][0] dataset is empty */
+          fprintf(stderr, "fuzz oracle: '%s' read but exists=%d, n1=%zu, %zu new errors\n",
+                  names[i], exists, n1, e.n - before);
+          abort();
+        }
         volatile double sum = 0;
         for (size_t k = 0; k < n0 * n1; k++) sum += v[k]; /* ASan checks the size */
         (void)sum;
       } else if (e.n == before || v) {
+        fprintf(stderr, "fuzz oracle: reading '%s' failed without a message\n", names[i]);
         abort();
       }
       free(v);
@@ -132,7 +140,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
 
   dk_errors_init(&e);
   eos_t *eos = eos_create_table_full(path, &e);
-  if (!eos == !e.n) abort(); /* accepted without errors or rejected with some */
+  if (!eos == !e.n) { /* accepted without errors or rejected with some */
+    fprintf(stderr, "fuzz oracle: table %s with %zu errors\n", eos ? "accepted" : "rejected", e.n);
+    dk_errors_print(&e, stderr);
+    abort();
+  }
   fuzz_check_errors(&e, path);
   if (eos) {
     double rho0 = eos_rho0(eos);

@@ -1,0 +1,82 @@
+#!/bin/sh
+# One case of the bad-input corpus (tests/reliability/bad/, docs/reliability.md):
+#   run_bad_case.sh MSCALE CASE
+# CASE is a deck (*.yaml, run as `mscale check CASE`) or a *.case file; its leading comment
+# lines hold the directives:
+#   # expect: LINE:COL TEXT        a stderr line starts with "CASE:LINE:COL:" and contains TEXT
+#   # expect: REL:LINE:COL TEXT    the same for a data file REL (relative to CASE's folder)
+#   # expect: REL: TEXT            a whole-file message "DIR/REL: ..." containing TEXT
+#   # run: SUBCOMMAND ARGS         run `mscale SUBCOMMAND ARGS` instead of `check CASE`
+#                                  (ARGS that name files are relative to CASE's folder)
+#   # needs: WORD                  skip (exit 77) unless `mscale --help` / `mscale check --help`
+#                                  mention WORD (a problem type or subcommand not built yet)
+# Passes if mscale exits with exactly 2, every expectation is met, and stderr shows no
+# sanitizer report (a crash is a signal: exit code > 128, never 2).
+set -u
+mscale=$1 case=$2
+dir=$(cd "$(dirname "$case")" && pwd)
+case="$dir/$(basename "$case")"
+out=$(mktemp) err=$(mktemp)
+trap 'rm -f "$out" "$err"' EXIT
+
+directives=$(sed -n '/^#/!q; s/^# *//p' "$case")
+needs=$(printf '%s\n' "$directives" | sed -n 's/^needs: *//p')
+for word in $needs; do
+  # a subcommand line of `mscale --help` or a problem-type line of `mscale check --help`
+  if ! { "$mscale" --help; "$mscale" check --help; } 2>&1 |
+       grep -qE -- "(^ +| mscale )$word( |\$)"; then
+    echo "SKIP: this mscale does not offer '$word' yet"
+    exit 77
+  fi
+done
+
+run=$(printf '%s\n' "$directives" | sed -n 's/^run: *//p')
+if [ -n "$run" ]; then
+  set -- $run
+  sub=$1
+  shift
+  args=
+  for a in "$@"; do
+    case $a in -*) args="$args $a" ;; *) args="$args $dir/$a" ;; esac
+  done
+  (cd "$dir" && "$mscale" "$sub" $args) >"$out" 2>"$err"
+else
+  "$mscale" check "$case" >"$out" 2>"$err"
+fi
+rc=$?
+fail=0
+echo "--- stderr of mscale (exit $rc):"
+cat "$err"
+if [ "$rc" -ne 2 ]; then
+  echo "FAIL: exit code $rc, expected 2"
+  fail=1
+fi
+if grep -qE 'Sanitizer|runtime error:|Segmentation fault|Aborted' "$err"; then
+  echo "FAIL: sanitizer report or crash"
+  fail=1
+fi
+nexpect=0
+printf '%s\n' "$directives" | sed -n 's/^expect: *//p' > "$out.expect"
+while IFS= read -r line; do
+  [ -n "$line" ] || continue
+  nexpect=$((nexpect + 1))
+  where=${line%% *}
+  text=${line#* }
+  case $where in
+    [0-9]*:[0-9]*) prefix="$case:$where:" ;;
+    *:) prefix="$dir/$where" ;;
+    *) prefix="$dir/$where:" ;;
+  esac
+  if ! awk -v p="$prefix" -v t="$text" 'index($0, p) == 1 && index($0, t) > 0 { f = 1 }
+                                        END { exit !f }' "$err"; then
+    echo "FAIL: no stderr line starts with '$prefix' and contains '$text'"
+    fail=1
+  fi
+done < "$out.expect"
+rm -f "$out.expect"
+if [ "$nexpect" -eq 0 ]; then
+  echo "FAIL: the case states no '# expect:' line"
+  fail=1
+fi
+[ "$fail" -eq 0 ] && echo "PASS: exit 2 with the expected message(s)"
+exit $fail
