@@ -35,7 +35,7 @@ struct cont_grid {
   double *force;        /* scratch: nodal force of the current phase */
 
   /* Cells. */
-  double *mass, *vol, *rho, *e, *p, *q, *c;
+  double *mass, *inv_cell_mass, *vol, *rho, *e, *p, *q, *c;
   double *rho_half, *e_half, *p_half, *q_half; /* predictor state at t^{n+1/2} */
   int *material, *layer;
 

@@ -199,6 +199,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   g->reaction = alloc_doubles(Nn);
   g->force = alloc_doubles(Nn);
   g->mass = alloc_doubles(N);
+  g->inv_cell_mass = alloc_doubles(N);
   g->vol = alloc_doubles(N);
   g->rho = alloc_doubles(N);
   g->e = alloc_doubles(N);
@@ -254,6 +255,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
     double v = cont_cell_volume(g, g->x[i], g->x[i + 1]);
     g->vol[i] = v;
     g->mass[i] = g->rho[i] * v;
+    g->inv_cell_mass[i] = 1.0 / g->mass[i];
     double uc = s->layers[g->layer[i]].u;
     node_mass[i] += 0.5 * g->mass[i];
     node_mass[i + 1] += 0.5 * g->mass[i];
@@ -326,6 +328,7 @@ void cont_grid_destroy(cont_grid *g) {
   if (!g) return;
   double **arrays[] = {&g->x, &g->u, &g->inv_mass, &g->u_pred_mean, &g->area_mid, &g->u_mean,
                        &g->ext_traction, &g->ext_velocity, &g->reaction, &g->force, &g->mass,
+                       &g->inv_cell_mass,
                        &g->vol, &g->rho, &g->e, &g->p, &g->q, &g->c, &g->rho_half, &g->e_half,
                        &g->p_half, &g->q_half};
   for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k) free(*arrays[k]);

@@ -32,7 +32,7 @@
 #include <math.h>
 #include <stdio.h>
 
-enum { CHUNK = 1024 };
+enum { CHUNK = 512 };
 
 static inline double face_area(double x, int k) {
   switch (k) {
@@ -85,7 +85,19 @@ void cont_calc_force_for_nodes(cont_grid *g, size_t lo, size_t hi, const double 
                                double p_right, double *force_out) {
   const size_t ncells = g->ncells;
   const int k = g->area_power;
+  /* interior nodes: vectorizable loop; the ends and coupling tractions after it */
+  size_t a0 = lo > 0 ? lo : 1, b0 = hi < ncells ? hi : ncells;
+  if (area) {
+    for (size_t j = a0; j < b0; ++j) force_out[j] = area[j] * (pq_cells[j - 1] - pq_cells[j]);
+  } else {
+    for (size_t j = a0; j < b0; ++j)
+      force_out[j] = face_area(xpos[j], k) * (pq_cells[j - 1] - pq_cells[j]);
+  }
   for (size_t j = lo; j < hi; ++j) {
+    if (j != 0 && j != ncells && !g->any_ext) {
+      j = b0 - 1; /* skip the interior */
+      continue;
+    }
     double pl = j > 0 ? pq_cells[j - 1] : p_left;
     double pr = j < ncells ? pq_cells[j] : p_right;
     double a = area ? area[j] : face_area(xpos[j], k);
@@ -224,7 +236,7 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
   double *restrict x = g->x, *restrict u = g->u;
   const double *restrict im = g->inv_mass;
   double *restrict upm = g->u_pred_mean, *restrict am = g->area_mid, *restrict ubar = g->u_mean;
-  const double *restrict m = g->mass;
+  const double *restrict m = g->mass, *restrict im_c = g->inv_cell_mass;
   double *restrict vol = g->vol, *restrict rho = g->rho, *restrict e = g->e, *restrict p = g->p,
                      *restrict q = g->q, *restrict c = g->c;
   double *restrict rh = g->rho_half, *restrict eh = g->e_half, *restrict ph = g->p_half,
@@ -278,7 +290,7 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
         /* ΔV in the same face-area × velocity form as the corrector (not V^{n+½} − Vⁿ, whose
          * rounding can disagree in sign with Δû and let q do negative work in a cold gas) */
         double dv = 0.5 * dt * (am[i + 1] * upm[i + 1] - am[i] * upm[i]);
-        eh[i] = e[i] - (p[i] + qhat) * dv / m[i];
+        eh[i] = e[i] - (p[i] + qhat) * dv * im_c[i];
       }
     }
     if (neg) {
@@ -325,7 +337,7 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
 #pragma omp simd reduction(| : badc)
     for (size_t i = fC3; i < nC3; ++i) {
       double wrk = qh[i] * (am[i + 1] * ubar[i + 1] - am[i] * ubar[i]);
-      e[i] -= dt * wrk / m[i];
+      e[i] -= dt * wrk * im_c[i];
       double v = volume_between(x[i], x[i + 1], k);
       vol[i] = v;
       rho[i] = m[i] / v;
