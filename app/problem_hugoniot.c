@@ -51,7 +51,7 @@ ms_status hugoniot_problem_run(ms_ctx *ctx, void *vp) {
   ms_status s = MS_OK;
   for (size_t m = 0; m < p->nmat && !s; m++) {
     const eos_material *mat = p->mat[m];
-    s = eos_hugoniot(mat->eos, eos_rho0(mat->eos), 0.0, p->nup, p->up, pts);
+    s = eos_hugoniot(mat->eos, eos_rho0(mat->eos), eos_e0(mat->eos), p->nup, p->up, pts);
     if (s) {
       ms_log(ctx, MS_LOG_ERROR, "Hugoniot of '%s': %s", mat->name, ms_status_str(s));
       break;
@@ -64,8 +64,9 @@ ms_status hugoniot_problem_run(ms_ctx *ctx, void *vp) {
     s = ms_afile_open(&af, path);
     if (!s) {
       char title[400];
-      snprintf(title, sizeof title, "Shock Hugoniot of %s (%s EOS) from rho0 = %g g/cm^3, e0 = 0",
-               mat->name, eos_kind_name(eos_get_kind(mat->eos)), eos_rho0(mat->eos));
+      snprintf(title, sizeof title, "Shock Hugoniot of %s (%s EOS) from rho0 = %g g/cm^3, e0 = %g kJ/g",
+               mat->name, eos_kind_name(eos_get_kind(mat->eos)), eos_rho0(mat->eos),
+               eos_e0(mat->eos));
       ms_csv_header(af.f, title, 5, names, units);
       for (size_t i = 0; i < p->nup; i++) {
         double row[5] = {pts[i].up, pts[i].us, pts[i].p, pts[i].rho, pts[i].e};
