@@ -29,8 +29,9 @@ static long read_line(FILE *f, char *buf, long cap, bool *too_long) {
   return n;
 }
 
-/* Split a line into numbers; returns the count, or -1 (with *bad set) on a non-number. */
-static int split_numbers(char *line, double *v, int max, char **bad) {
+/* Split a line into numbers (start of each in at[]); returns the count, or -1 (with *bad set)
+ * on a non-number. */
+static int split_numbers(char *line, double *v, char **at, int max, char **bad) {
   int n = 0;
   char *p = line;
   for (;;) {
@@ -44,6 +45,7 @@ static int split_numbers(char *line, double *v, int max, char **bad) {
       return -1;
     }
     if (n >= max) return max + 1;
+    at[n] = p;
     v[n++] = x;
     p = end;
   }
@@ -64,6 +66,7 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
   int cols = -1, lineno = 0;
   bool header_allowed = true;
   double *out = NULL, v[TABLE_MAX_COLS];
+  char *at[TABLE_MAX_COLS];
   ms_status s = MS_OK;
   long len;
   bool too_long;
@@ -85,7 +88,7 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
     while (isspace((unsigned char)*p)) p++;
     if (!*p || *p == '#') continue;
     char *bad = NULL;
-    int n = split_numbers(p, v, TABLE_MAX_COLS, &bad);
+    int n = split_numbers(p, v, at, TABLE_MAX_COLS, &bad);
     if (n < 0 && header_allowed && isalpha((unsigned char)*p)) {
       header_allowed = false; /* a line of column names */
       continue;
@@ -108,7 +111,8 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
     }
     for (int i = 0; i < n; i++)
       if (!isfinite(v[i])) {
-        dk_error_at(e, path, lineno, 1, "column %d is not a finite number", i + 1);
+        dk_error_at(e, path, lineno, (int)(at[i] - line) + 1,
+                    "column %d is not a finite number (%g)", i + 1, v[i]);
         s = MS_ERR_INPUT;
       }
     if (s) break;

@@ -122,6 +122,11 @@ static void test_table_nul_byte_is_an_error(void **state) {
   char where[4200];
   snprintf(where, sizeof where, "%s:3:2: a NUL byte", path);
   assert_true(has_error(&e, where));
+  /* a non-finite value is reported at its own column, with the value */
+  write_text(path, "1 2\n3   inf\n", 11);
+  assert_int_equal(ms_read_table(path, 2, &t, &nr, &nc, &e), MS_ERR_INPUT);
+  snprintf(where, sizeof where, "%s:2:5: column 2 is not a finite number (inf)", path);
+  assert_true(has_error(&e, where));
   remove(path);
   free(path);
   dk_errors_free(&e);
