@@ -104,8 +104,8 @@ typedef struct cont_setup {
 void cont_setup_defaults(cont_setup *s);
 /* Solve p(ρ, e) = p for e (bracketing); false if no root is found. */
 bool cont_energy_from_pressure(const eos_t *eos, double rho, double p, double *e);
-/* Cell count of a layer given a cell size (rounded, ≥ 1) and the node index where layer k
- * starts, for deck readers that tag layer boundaries. */
+/* Index of the node where layer `layer` starts (= total cells of the layers before it;
+ * layer = nlayers gives the last node). */
 size_t cont_setup_layer_first_node(const cont_setup *s, size_t layer);
 
 /* ------------------------------------------------------------------------------------------ */

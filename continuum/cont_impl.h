@@ -46,6 +46,7 @@ struct cont_grid {
   double q_quad, q_lin, cfl, dt_max, dt_min, dt_growth;
 
   double t, dt_last, dt_next; /* dt_next: stability constraint from the end of the last step */
+  double land_time;           /* if a step is clipped to reach this time, t becomes it exactly */
   long step;
   bool any_ext;               /* some node has an external force/velocity: take the slow path */
 

@@ -132,8 +132,7 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *sec, const char *k
 
 static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
                        const eos_materials *mats, double *x_end, bool *x_known,
-                       cont_layer_spec *spec, const dk_node **where) {
-  *where = L;
+                       cont_layer_spec *spec) {
   memset(spec, 0, sizeof *spec);
   spec->grade_ratio = 1.0;
   if (!dk_expect_map(e, doc, L, "layer")) return;
@@ -227,7 +226,7 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
 
 /* A tag: {name, node} | {name, x} | {name, layer, side}. */
 static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, const cont_setup *s,
-                     const dk_node *const *layer_nodes, cont_tag_spec *tag) {
+                     cont_tag_spec *tag) {
   if (!dk_expect_map(e, doc, T, "tag")) return;
   const char *name = NULL;
   dk_read_string(e, doc, T, "name", true, NULL, &name);
@@ -282,7 +281,6 @@ static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, const cont_set
     size_t first = cont_setup_layer_first_node(s, found);
     tag->node = side == 0 ? first : first + (size_t)s->layers[found].ncells;
   }
-  (void)layer_nodes;
 }
 
 cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
@@ -318,19 +316,14 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
     size_t n = dk_seq_len(layers);
     if (n == 0) dk_error(e, doc, layers, "layers: the list is empty");
     p->layers = ms_calloc(n ? n : 1, sizeof(cont_layer_spec));
-    const dk_node **where = ms_calloc(n ? n : 1, sizeof(*where));
     for (size_t k = 0; k < n; ++k) {
-      bool first_known = x_known;
-      read_layer(e, doc, dk_seq_at(layers, k), k, mats, &x_end, &x_known, &p->layers[k],
-                 &where[k]);
+      read_layer(e, doc, dk_seq_at(layers, k), k, mats, &x_end, &x_known, &p->layers[k]);
       if (k == 0 && !xl_n) {
         /* x_left follows the first layer's `from` (or 0) */
         const dk_node *from_n = dk_get(dk_seq_at(layers, 0), "from");
         if (from_n) dk_node_double(e, doc, from_n, "from", MS_DIM_LENGTH, &s->x_left);
-        (void)first_known;
       }
     }
-    free(where);
     s->layers = p->layers;
     s->nlayers = n;
   }
@@ -402,7 +395,7 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
   if (tags && dk_expect_seq(e, doc, tags, "tags") && e->n == nerr0) {
     size_t n = dk_seq_len(tags);
     p->tags = ms_calloc(n ? n : 1, sizeof(cont_tag_spec));
-    for (size_t k = 0; k < n; ++k) read_tag(e, doc, dk_seq_at(tags, k), s, NULL, &p->tags[k]);
+    for (size_t k = 0; k < n; ++k) read_tag(e, doc, dk_seq_at(tags, k), s, &p->tags[k]);
     for (size_t k = 0; k < n; ++k)
       for (size_t j = 0; j < k; ++j)
         if (!strcmp(p->tags[j].name, p->tags[k].name))

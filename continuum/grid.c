@@ -215,6 +215,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   g->nregions = s->nlayers;
   g->regions = ms_calloc(s->nlayers, sizeof(cont_region));
   for (size_t j = 0; j < Nn; ++j) g->ext_velocity[j] = NAN;
+  g->land_time = NAN;
 
   /* Node positions and cell states, layer by layer. Node velocities: a node inside a layer
    * takes the layer's velocity; a contact node takes the mass-weighted mean of its two cells

@@ -127,6 +127,7 @@ ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
     double left = target - g->t;
     double lim = left;
     if (g->dt_next < left && g->dt_next > 0.5 * left) lim = 0.5 * left; /* no sliver steps */
+    if (lim == left) g->land_time = target;
     s = cont_grid_step(g, lim);
     if (s != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR, "continuum: %s", cont_grid_error(g));
@@ -136,7 +137,6 @@ ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
       cont_write_histories(ctx, g, p->history_stride);
       break;
     }
-    if (lim == left && g->dt_last == lim) g->t = target; /* land exactly */
     if (g->t >= target) {
       if (next_out < p->n_out && g->t >= p->out_times[next_out]) {
         char stem[32];

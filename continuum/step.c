@@ -376,7 +376,9 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
 
   g->work += work;
   g->impulse += impulse;
-  g->t = t1;
+  /* a step clipped to land on an output time ends exactly there (t0 + (T − t0) may miss T
+   * by an ulp), so histories and profiles carry the requested time */
+  g->t = (dt == dt_limit && !isnan(g->land_time)) ? g->land_time : t1;
   g->dt_last = dt;
   g->step++;
   /* growth is limited relative to the last unclipped step, so landing on an output time does
@@ -391,11 +393,14 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
 }
 
 ms_status cont_grid_step(cont_grid *g, double dt_limit) {
+  ms_status s;
   switch (g->area_power) {
-  case 0: return step_impl(g, dt_limit, 0);
-  case 1: return step_impl(g, dt_limit, 1);
-  default: return step_impl(g, dt_limit, 2);
+  case 0: s = step_impl(g, dt_limit, 0); break;
+  case 1: s = step_impl(g, dt_limit, 1); break;
+  default: s = step_impl(g, dt_limit, 2); break;
   }
+  g->land_time = NAN; /* a landing target applies to one step only, failed or not */
+  return s;
 }
 
 ms_status cont_grid_run_to(cont_grid *g, double t_end) {
@@ -405,9 +410,9 @@ ms_status cont_grid_run_to(cont_grid *g, double t_end) {
     double lim = left;
     if (g->dt_next < left && g->dt_next > 0.5 * left) lim = 0.5 * left;
     if (g->dt_next >= left) lim = left;
+    if (lim == left) g->land_time = t_end;
     ms_status s = cont_grid_step(g, lim);
     if (s != MS_OK) return s;
-    if (lim == left && g->dt_last == left) g->t = t_end;
   }
   return MS_OK;
 }
