@@ -402,6 +402,12 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
           dk_error(e, doc, dk_seq_at(tags, k), "tag name '%s' used twice", p->tags[k].name);
     s->tags = p->tags;
     s->ntags = n;
+  } else if (tags && dk_node_kind(tags) == DK_SEQ) {
+    /* layers had errors, so tags cannot be resolved: mark their keys used, so they are not
+     * also reported as unknown */
+    static const char *const keys[] = {"name", "node", "x", "layer", "side"};
+    for (size_t k = 0; k < dk_seq_len(tags); ++k)
+      for (size_t j = 0; j < sizeof keys / sizeof keys[0]; ++j) dk_get(dk_seq_at(tags, k), keys[j]);
   }
 
   if (e->n != nerr0) {
