@@ -77,7 +77,7 @@ static void test_table_reader(void **state) {
   /* NaN is not data */
   write_file(path, "0 1\n0.5 nan\n");
   assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
-  assert_true(has_error(&e, ":2:1: column 2 is not a finite number"));
+  assert_true(has_error(&e, ":2:5: column 2 is not a finite number (nan)"));
   /* too few columns, empty file, missing file */
   write_file(path, "1\n2\n");
   assert_int_equal(ms_read_table(path, 2, &d, &nr, &nc, &e), MS_ERR_INPUT);
