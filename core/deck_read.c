@@ -40,21 +40,31 @@ static void put_default(dk_doc *doc, const dk_node *cmap, const char *key, const
   (void)doc;
 }
 
-static bool parse_double(const char *s, double *out) {
-  if (!s || !s[0]) return false;
+/* A whole scalar as a double: 1 ok, 0 not a number, -1 a number outside the range of a double
+ * (1e999, 1e-400: strtod's ERANGE), which would otherwise turn silently into inf or 0. */
+static int parse_double(const char *s, double *out) {
+  if (!s || !s[0]) return 0;
   char *end;
   errno = 0;
   double v = strtod(s, &end);
+  if (end == s) return 0;
   while (*end == ' ') end++;
-  if (*end || errno == ERANGE) return false;
+  if (*end) return 0;
+  if (errno == ERANGE) return -1;
   *out = v;
-  return true;
+  return 1;
 }
 
 bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what,
                     ms_dim dim, double *out) {
   double v;
-  if (!n || n->kind != DK_SCALAR || n->quoted || !parse_double(n->value, &v)) {
+  int parsed = n && n->kind == DK_SCALAR && !n->quoted ? parse_double(n->value, &v) : 0;
+  if (parsed < 0) {
+    dk_error(e, doc, n, "%s: '%s' is outside the range of a double-precision number", what,
+             n->value);
+    return false;
+  }
+  if (parsed == 0) {
     dk_error(e, doc, n, "%s: expected a number%s%s, found %s%s%s", what,
              dim ? " in " : "", dim ? (doc->units == MS_UNITS_SI ? "SI units" : ms_unit_label(dim)) : "",
              n && n->kind == DK_SCALAR ? "'" : "",
@@ -66,7 +76,13 @@ bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const cha
     dk_error(e, doc, n, "%s: expected a finite number, found '%s'", what, n->value);
     return false;
   }
-  *out = v * ms_unit_to_internal(doc->units, dim);
+  double internal = v * ms_unit_to_internal(doc->units, dim);
+  if (!isfinite(internal)) { /* e.g. 1e305 s in an SI deck: 1e310 in units of 10 us */
+    dk_error(e, doc, n, "%s: '%s' is outside the range of a double-precision number once "
+             "converted to internal units (%s)", what, n->value, ms_unit_label(dim));
+    return false;
+  }
+  *out = internal;
   return true;
 }
 

@@ -201,6 +201,34 @@ static void test_h5_declared_size_not_stored(void **state) {
   dk_errors_free(&e);
 }
 
+/* Bad-input corpus, bad/inf_in_deck.yaml: 1e999 was reported as "expected a number" (strtod's
+ * ERANGE); a value that overflows only on unit conversion (1e305 s in an SI deck) was accepted
+ * as infinity by readers without an upper bound. */
+static void test_deck_number_out_of_range(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string("units: si\nbig: 1e999\ntiny: 1e-400\nlong: 1e305\nok: 2e-5\n",
+                               "r.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  double v;
+  const dk_node *root = dk_root(doc);
+  assert_false(dk_read_double(&e, doc, root, "big", MS_DIM_NONE, true, 0, -INFINITY, INFINITY, &v));
+  assert_false(dk_read_double(&e, doc, root, "tiny", MS_DIM_NONE, true, 0, -INFINITY, INFINITY, &v));
+  assert_false(dk_read_positive(&e, doc, root, "long", MS_DIM_TIME, true, 0, &v));
+  assert_true(dk_read_positive(&e, doc, root, "ok", MS_DIM_TIME, true, 0, &v));
+  assert_true(fabs(v - 2.0) < 1e-12); /* 2e-5 s = 2 x 10 us */
+  dk_errors_print(&e, stderr);
+  assert_int_equal(e.n, 3);
+  assert_true(has_error(&e, "r.yaml:2:6: big: '1e999' is outside the range of a double"));
+  assert_true(has_error(&e, "r.yaml:3:7: tiny: '1e-400' is outside the range"));
+  assert_true(has_error(&e, "r.yaml:4:7: long: '1e305' is outside the range of a double-precision "
+                            "number once converted to internal units"));
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resolved_deck_round_trip),
@@ -208,6 +236,7 @@ int main(void) {
       cmocka_unit_test(test_table_nul_byte_is_an_error),
       cmocka_unit_test(test_table_line_too_long),
       cmocka_unit_test(test_h5_declared_size_not_stored),
+      cmocka_unit_test(test_deck_number_out_of_range),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
