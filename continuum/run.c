@@ -91,7 +91,16 @@ static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double
   }
 }
 
+static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p);
+
+/* The 1D grid is cheap and serial: under MPI rank 0 runs it and writes every file (two ranks
+ * writing the same outputs would race); the other ranks wait and share its status. */
 ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
+  ms_status s = ctx->rank == 0 ? run_on_this_rank(ctx, p) : MS_OK;
+  return par_agree_status(s);
+}
+
+static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p) {
   cont_grid *g = p->grid;
   ms_status s = MS_OK;
   cont_balance b0 = cont_grid_balance(g);
