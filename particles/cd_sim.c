@@ -295,7 +295,7 @@ ms_status cd_sim_step(cd_sim *s) {
   bool exact = s->disp_bound >= half;
   double dmax2 = 0.0, vmax2 = 0.0;
   if (exact) {
-#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+#pragma omp parallel for simd schedule(static) reduction(max : dmax2) if (CD_PAR(n))
     for (long i = 0; i < n; i++) {
       const double c = hdt / m[i];
       vx[i] += c * fx[i];
@@ -310,7 +310,7 @@ ms_status cd_sim_step(cd_sim *s) {
       dmax2 = d2 > dmax2 ? d2 : dmax2;
     }
   } else {
-#pragma omp parallel for schedule(static) reduction(max : vmax2) if (CD_PAR(n))
+#pragma omp parallel for simd schedule(static) reduction(max : vmax2) if (CD_PAR(n))
     for (long i = 0; i < n; i++) {
       const double c = hdt / m[i];
       vx[i] += c * fx[i];
@@ -326,7 +326,7 @@ ms_status cd_sim_step(cd_sim *s) {
     s->disp_bound += dt * sqrt(vmax2);
     if (s->disp_bound >= half || !isfinite(vmax2)) {
       exact = true;
-#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+#pragma omp parallel for simd schedule(static) reduction(max : dmax2) if (CD_PAR(n))
       for (long i = 0; i < n; i++) {
         const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
         const double d2 = dx * dx + dy * dy + dz * dz;
@@ -350,7 +350,7 @@ ms_status cd_sim_step(cd_sim *s) {
   }
   s->forces_zeroed = true;
   step_forces(s);
-#pragma omp parallel for schedule(static) if (CD_PAR(n))
+#pragma omp parallel for simd schedule(static) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
     const double c = hdt / m[i];
     vx[i] += c * fx[i];

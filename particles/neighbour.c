@@ -109,27 +109,25 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   int32_t *buf = nl->buf[layer];
   size_t cap = nl->buf_cap[layer], len = 0;
   int32_t cand[CD_MAX_CAND + 1], img[CD_MAX_CAND + 2]; /* one particle's candidates */
-  for (int32_t pos = nl->layer_start[layer]; pos < nl->layer_start[layer + 1]; pos++) {
-    int32_t i = nl->sorted[pos];
-    int32_t c = nl->cell_of[i];
-    int k[3] = {c / (n1 * n2), (c / n2) % n1, c % n2};
-    double xi = x[i], yi = y[i], zi = z[i];
-    size_t start = len;
-    int nimg = 0, nc = 0;
+  /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
+   * (same layer, or no colouring) keep only q > p (cd_impl.h) */
+  struct stencil_range { int32_t q0, q1; int code; bool same; } st[27];
+  const int32_t c_begin = (int32_t)layer * n1 * n2, c_end = c_begin + n1 * n2;
+  for (int32_t c = c_begin; c < c_end; c++) {
+    if (nl->cell_start[c] == nl->cell_start[c + 1]) continue;
+    const int k[3] = {c / (n1 * n2), (c / n2) % n1, c % n2};
+    int nst = 0;
     for (int o0 = -1; o0 <= 1; o0++) {
       int m0 = k[0] + o0, s0 = 0;
       if (m0 < 0) { if (!per[0]) continue; m0 += n0; s0 = -1; }
       if (m0 >= n0) { if (!per[0]) continue; m0 -= n0; s0 = 1; }
-      /* keep rule across layers (cd_impl.h) */
       bool same_layer = (m0 == k[0]) && (s0 == 0 || n0 == 1);
-      bool next_layer;
+      bool next_layer = false;
       if (nl->colour) {
         int nxt = k[0] + 1;
         if (nxt == n0) nxt = per[0] ? 0 : -1;
         next_layer = (m0 == nxt) && !same_layer;
         if (!same_layer && !next_layer) continue;
-      } else {
-        next_layer = false;
       }
       for (int o1 = -1; o1 <= 1; o1++) {
         int m1 = k[1] + o1, s1 = 0;
@@ -144,45 +142,60 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
           sh[ax[1]] = s1;
           sh[ax[2]] = s2;
           int code = (sh[0] + 1) + 3 * (sh[1] + 1) + 9 * (sh[2] + 1);
-          double sx = nl->shift[code][0], sy = nl->shift[code][1], sz = nl->shift[code][2];
           int32_t cell = (m0 * n1 + m1) * n2 + m2;
           int32_t q0 = nl->cell_start[cell], q1 = nl->cell_start[cell + 1];
-          if (!next_layer && q0 <= pos) q0 = pos + 1; /* same layer (or no colouring): q > p */
-          if (code == 13) {
-            /* branchless: store every candidate, advance only for those inside r_list */
-            for (int32_t q = q0; q < q1 && nc < CD_MAX_CAND; q++) {
-              int32_t j = nl->sorted[q];
-              double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-              cand[nc] = j;
-              nc += dx * dx + dy * dy + dz * dz < rl2;
-            }
-          } else {
-            for (int32_t q = q0; q < q1 && nimg < CD_MAX_CAND / 2; q++) {
-              int32_t j = nl->sorted[q];
-              double dx = xi - (x[j] + sx), dy = yi - (y[j] + sy), dz = zi - (z[j] + sz);
-              img[2 * nimg] = j;
-              img[2 * nimg + 1] = code;
-              nimg += dx * dx + dy * dy + dz * dz < rl2;
-            }
-          }
+          if (q0 == q1) continue;
+          bool same = !next_layer;
+          if (nst > 0 && st[nst - 1].q1 == q0 && st[nst - 1].code == code && st[nst - 1].same == same)
+            st[nst - 1].q1 = q1; /* contiguous with the previous range: merge */
+          else
+            st[nst++] = (struct stencil_range){q0, q1, code, same};
         }
       }
     }
-    if (nc >= CD_MAX_CAND || nimg >= CD_MAX_CAND / 2) nl->overfull = true;
-    if (partners) {
-      for (int q = 0; q < nc; q++)
-        if (is_partner(partners, i, cand[q])) cand[q] |= CD_NB_BONDED;
-      for (int q = 0; q < nimg; q++)
-        if (is_partner(partners, i, img[2 * q])) img[2 * q] |= CD_NB_BONDED;
-    }
-    if (len + (size_t)nc <= cap) memcpy(buf + len, cand, (size_t)nc * sizeof *cand);
-    len += (size_t)nc;
-    nl->first[pos] = (uint32_t)start;
-    nl->nplain[pos] = (uint16_t)(len - start);
-    nl->nimg[pos] = (uint16_t)nimg;
-    for (int q = 0; q < 2 * nimg; q++) {
-      if (len < cap) buf[len] = img[q];
-      len++;
+    for (int32_t pos = nl->cell_start[c]; pos < nl->cell_start[c + 1]; pos++) {
+      const int32_t i = nl->sorted[pos];
+      const double xi = x[i], yi = y[i], zi = z[i];
+      const size_t start = len;
+      int nimg = 0, nc = 0;
+      for (int e = 0; e < nst; e++) {
+        int32_t q0 = st[e].q0, q1 = st[e].q1;
+        if (st[e].same && q0 <= pos) q0 = pos + 1;
+        if (st[e].code == 13) {
+          /* branchless: store every candidate, advance only for those inside r_list */
+          if (q1 - q0 > CD_MAX_CAND - nc) { q1 = q0 + (CD_MAX_CAND - nc); nl->overfull = true; }
+          for (int32_t q = q0; q < q1; q++) {
+            const int32_t j = nl->sorted[q];
+            const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+            cand[nc] = j;
+            nc += dx * dx + dy * dy + dz * dz < rl2;
+          }
+        } else {
+          const double *sv = nl->shift[st[e].code];
+          if (q1 - q0 > CD_MAX_CAND / 2 - nimg) { q1 = q0 + (CD_MAX_CAND / 2 - nimg); nl->overfull = true; }
+          for (int32_t q = q0; q < q1; q++) {
+            const int32_t j = nl->sorted[q];
+            const double dx = xi - (x[j] + sv[0]), dy = yi - (y[j] + sv[1]), dz = zi - (z[j] + sv[2]);
+            img[2 * nimg] = j;
+            img[2 * nimg + 1] = st[e].code;
+            nimg += dx * dx + dy * dy + dz * dz < rl2;
+          }
+        }
+      }
+      if (partners) {
+        for (int q = 0; q < nc; q++)
+          if (is_partner(partners, i, cand[q])) cand[q] |= CD_NB_BONDED;
+        for (int q = 0; q < nimg; q++)
+          if (is_partner(partners, i, img[2 * q])) img[2 * q] |= CD_NB_BONDED;
+      }
+      if (len + (size_t)nc + 2 * (size_t)nimg <= cap) {
+        memcpy(buf + len, cand, (size_t)nc * sizeof *cand);
+        memcpy(buf + len + nc, img, 2 * (size_t)nimg * sizeof *img);
+      }
+      len += (size_t)nc + 2 * (size_t)nimg;
+      nl->first[pos] = (uint32_t)start;
+      nl->nplain[pos] = (uint16_t)nc;
+      nl->nimg[pos] = (uint16_t)nimg;
     }
   }
   nl->buf_len[layer] = len;

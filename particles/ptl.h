@@ -418,6 +418,7 @@ void dm_problem_free(dm_problem *p);
  * not apply to the deck's problem are NaN. */
 typedef struct dm_run_summary {
   size_t particles, bonds; /* all particles incl. ghosts / fixed layers; bonds = Σ|N_i| */
+  size_t real_particles;   /* the lattice inside the domain (the ones that are timed) */
   long steps;
   double dt, t_end;
   double omega_dt;        /* ω_max Δt (power iteration) vs the scheme's stability limit */

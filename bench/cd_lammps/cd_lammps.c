@@ -91,7 +91,7 @@ int main(int argc, char **argv) {
   const int nbin = 262;
   const double zlo = -0.25 * a, zhi = zlo + nbin * a;
   double *prof = diag ? ms_calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof) : NULL;
-  double tfr[64], zfr[64];
+  double tfr[64], zfr[64], zfr1[64];
   int nfr = 0;
   double loop = 0.0, t0 = ms_wall_time();
   clock_t cpu0 = clock();
@@ -105,6 +105,7 @@ int main(int argc, char **argv) {
       cd_profile(s, 2, zlo, zhi, nbin, (nx * a) * (nx * a), prof);
       if (nfr < 64) {
         tfr[nfr] = s->t;
+        zfr1[nfr] = cd_front_position(prof, nbin, 2, UP, 0.1);
         zfr[nfr++] = cd_front_position(prof, nbin, 2, UP, 0.5);
       }
       cd_energy e;
@@ -125,15 +126,24 @@ int main(int argc, char **argv) {
   printf("bytes/particle %.1f\n", (double)cd_sim_bytes(s) / (double)n);
   printf("particle-steps/s %.4g\n", (double)n * (double)steps / loop);
   if (diag && nfr > 2) {
-    /* least-squares slope of z_f(t) for t >= T/4 (as analyze_shock.py) */
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    int m = 0;
-    for (int k = 0; k < nfr; k++)
-      if (tfr[k] >= 0.25 * tfr[nfr - 1] && isfinite(zfr[k])) {
-        sx += tfr[k]; sy += zfr[k]; sxx += tfr[k] * tfr[k]; sxy += tfr[k] * zfr[k]; m++;
+    /* least-squares slopes of z_f(t) as analyze_shock.py: fronts where the bin-mean vz falls
+     * below 0.1u and 0.5u, fits over t >= T/4 and t >= T/2 */
+    const double *zz[2] = {zfr1, zfr};
+    const double fr[2] = {0.1, 0.5}, from[2] = {0.25, 0.5};
+    for (int a2 = 0; a2 < 2; a2++)
+      for (int b2 = 0; b2 < 2; b2++) {
+        double sx = 0, sy = 0, sxx = 0, sxy = 0;
+        int m = 0;
+        for (int k = 0; k < nfr; k++)
+          if (tfr[k] >= from[b2] * tfr[nfr - 1] * (1 - 1e-12) && isfinite(zz[a2][k])) {
+            sx += tfr[k]; sy += zz[a2][k]; sxx += tfr[k] * tfr[k]; sxy += tfr[k] * zz[a2][k]; m++;
+          }
+        double D = (m * sxy - sx * sy) / (m * sxx - sx * sx);
+        printf("shock speed D = %.4f km/s (front at vz = %.1f u, fit t >= %.2f T, %d frames)\n", D,
+               fr[a2], from[b2], m);
       }
-    double D = (m * sxy - sx * sy) / (m * sxx - sx * sx);
-    printf("shock speed D = %.4f km/s (front at vz = 0.5 u, fit t >= T/4, %d frames)\n", D, m);
+    printf("t [10us]     zf(0.1u) [cm]  zf(0.5u) [cm]\n");
+    for (int k = 0; k < nfr; k++) printf("%.4e %.5e %.5e\n", tfr[k], zfr1[k], zfr[k]);
   }
   free(prof);
   cd_sim_free(s);
