@@ -651,6 +651,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     m->prescribe_user = p;
   }
   sum->particles = s.n;
+  sum->real_particles = nreal;
   sum->bonds = m->nbonds;
   dm_constrain(m, 0.0, s.w, s.u);
 
@@ -804,18 +805,18 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     const char *un[] = {"10 us", "kJ", "kJ", "kJ", "1"};
     write_series(ctx, "dm_energy.csv", "energy (real particles) and zero-energy-mode indicator",
                  5, nm, un, ehist, nerec);
-    const char *snm[] = {"particles", "bonds", "steps", "dt", "t_end", "omega_dt", "wall_s",
+    const char *snm[] = {"particles", "real_particles", "bonds", "steps", "dt", "t_end", "omega_dt", "wall_s",
                          "particle_steps_per_s", "energy_err_max", "hourglass_first",
                          "hourglass_max", "hourglass_last", "amp_err", "phase_err_L_over_c",
                          "peak_err", "rms_err", "err_l1", "err_l2", "err_max", "err_u_l2"};
-    const char *sun[] = {"1", "1", "1", "10 us", "10 us", "1", "s", "1/s", "1", "1", "1", "1",
+    const char *sun[] = {"1", "1", "1", "1", "10 us", "10 us", "1", "s", "1/s", "1", "1", "1", "1",
                          "1", "L/c", "1", "1", "1", "1", "1", "1"};
-    double row[20] = {(double)sum->particles, (double)sum->bonds, (double)sum->steps, sum->dt,
+    double row[21] = {(double)sum->particles, (double)sum->real_particles, (double)sum->bonds, (double)sum->steps, sum->dt,
                       sum->t_end, sum->omega_dt, sum->wall_s, sum->particle_steps_per_s,
                       sum->energy_err_max, sum->hourglass_first, sum->hourglass_max,
                       sum->hourglass_last, sum->amp_err, sum->phase_err, sum->peak_err, sum->rms_err,
                       sum->err_l1, sum->err_l2, sum->err_max, sum->err_u_l2};
-    write_series(ctx, "dm_summary.csv", "discrete model run summary", 20, snm, sun, row, 1);
+    write_series(ctx, "dm_summary.csv", "discrete model run summary", 21, snm, sun, row, 1);
   }
   free(hist);
   free(ehist);

@@ -194,11 +194,12 @@ static void test_energy_no_drift(void **state) {
   double max_first = 0, max_all = 0, mean_first = 0, mean_last = 0;
   for (long step = 0; step < nsteps; ++step) {
     rkn_step(ig, step * dt, dt, s.w, s.u, dm_accel, dm_constrain, m);
+    if (step % 10) continue; /* energy sampled every 10 steps: the test stays fast */
     double err = (dm_kinetic_energy(&s) + dm_potential_energy(m, s.w) - E0) / E0;
     if (step < 1000) max_first = fmax(max_first, fabs(err));
     max_all = fmax(max_all, fabs(err));
-    if (step < tenth) mean_first += err / tenth;
-    if (step >= nsteps - tenth) mean_last += err / tenth;
+    if (step < tenth) mean_first += err / (tenth / 10);
+    if (step >= nsteps - tenth) mean_last += err / (tenth / 10);
   }
   printf("energy: max rel error first 1000 steps %.3e, over 1e5 steps %.3e, drift of mean %.3e\n",
          max_first, max_all, mean_last - mean_first);
