@@ -171,6 +171,10 @@ size_t cont_grid_ntags(const cont_grid *g);
 /* Add a tag after creation (its history starts now); returns its index. */
 size_t cont_grid_add_tag(cont_grid *g, const char *name, size_t node);
 cont_history cont_grid_history(const cont_grid *g, size_t tag);
+/* The history at any time t in [t_0, t_last] (clamped outside): u piecewise linear between
+ * rows, x its exact integral (x_k + (t − t_k)(u_k + u(t))/2), so x(t) and u(t) stay consistent
+ * for a particle piston that samples them at its own time steps. */
+void cont_history_at(const cont_history *h, double t, double *x, double *u);
 /* Node nearest to position x (current positions). */
 size_t cont_grid_nearest_node(const cont_grid *g, double x);
 

@@ -70,3 +70,29 @@ cont_history cont_grid_history(const cont_grid *g, size_t tag) {
   h.rho_right = tg->rho_right;
   return h;
 }
+
+void cont_history_at(const cont_history *h, double t, double *x, double *u) {
+  if (h->n == 0) {
+    *x = *u = NAN;
+    return;
+  }
+  if (t <= h->t[0] || h->n == 1) {
+    *x = h->x[0];
+    *u = h->u[0];
+    return;
+  }
+  if (t >= h->t[h->n - 1]) {
+    *x = h->x[h->n - 1];
+    *u = h->u[h->n - 1];
+    return;
+  }
+  size_t lo = 0, hi = h->n - 1; /* t[lo] <= t < t[hi] */
+  while (hi - lo > 1) {
+    size_t mid = (lo + hi) / 2;
+    if (h->t[mid] <= t) lo = mid; else hi = mid;
+  }
+  double dt = t - h->t[lo], w = dt / (h->t[hi] - h->t[lo]);
+  double ut = h->u[lo] + w * (h->u[hi] - h->u[lo]);
+  *u = ut;
+  *x = h->x[lo] + 0.5 * dt * (h->u[lo] + ut);
+}

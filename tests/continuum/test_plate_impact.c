@@ -108,6 +108,17 @@ static void test_symmetric_al_impact(void **state) {
   /* round-off of 10³ additions; the landing steps at t1, t2 use exact times */
   assert_true(fabs(xint - hist.x[last]) < 1e-12);
 
+  /* Interpolation for a particle piston: at the recorded times it returns the rows; between
+   * rows u is linear (1e-14: round-off of u ~ 1). */
+  for (size_t k = 0; k + 1 < hist.n; k += 97) {
+    double xk, uk, xm, um2;
+    cont_history_at(&hist, hist.t[k], &xk, &uk);
+    assert_true(xk == hist.x[k] && uk == hist.u[k]);
+    cont_history_at(&hist, 0.5 * (hist.t[k] + hist.t[k + 1]), &xm, &um2);
+    assert_true(fabs(um2 - 0.5 * (hist.u[k] + hist.u[k + 1])) < 1e-14);
+    /* the contact moves forward (u ≈ 1 > 0): the midpoint lies between the rows */
+    assert_true(xm > hist.x[k] && xm < hist.x[k + 1]);
+  }
   /* Sampling the state at a position inside the shocked target. */
   cont_sample smp;
   assert_true(cont_grid_sample(g, xc + 0.5 * (xs2 - xc), &smp));
