@@ -74,11 +74,11 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
     h->t[k] = data[k * ncol] * ft;
     h->u[k] = data[k * ncol + 1] * fu;
     if (!isfinite(h->t[k]) || !isfinite(h->u[k])) {
-      dk_error_at(e, path, (int)k + 1, 1, "piston history: row %zu is not finite", k + 1);
+      dk_error_at(e, path, (int)k + 1, 1, "piston history: data row %zu is not finite", k + 1);
       st = MS_ERR_INPUT;
     } else if (k > 0 && !(h->t[k] > h->t[k - 1])) {
       dk_error_at(e, path, (int)k + 1, 1,
-                  "piston history: time does not increase at row %zu (t = %g after %g): a "
+                  "piston history: time does not increase at data row %zu (t = %g after %g): a "
                   "jump in time; give u(t) as a function with strictly increasing t",
                   k + 1, data[k * ncol], data[(k - 1) * ncol]);
       st = MS_ERR_INPUT;

@@ -1,0 +1,674 @@
+/* cd_problem.c — the `cluster_dynamics` deck problem (docs/input-cd.md): read and check the
+ * section, fill the regions with a lattice, run, and write energy balance, profiles, front
+ * positions and HDF5/XDMF snapshots into the output directory.
+ *
+ * Every problem in the section is recorded as a deck error (FILE:LINE:COL), never the first
+ * only: overlapping regions of different materials, fewer than 2 lattice periods across a
+ * periodic dimension, R_c not above the nearest-neighbour distance, a piston history whose
+ * time does not increase.
+ */
+#include "cd_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { CD_MAX_REGIONS = 32 };
+typedef enum { SHAPE_BOX = 0, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_HALFSPACE } region_shape;
+static const char *const shape_names[] = {"box", "sphere", "cylinder", "halfspace", NULL};
+typedef enum { SURF_FLAT = 0, SURF_SINE, SURF_RANDOM } surface_kind;
+static const char *const surface_names[] = {"flat", "sine", "random", NULL};
+static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
+static const char *const mode_names[] = {"plain", "bonded", NULL};
+
+typedef struct cd_region {
+  int mat;                    /* index into the problem's material list */
+  region_shape shape;
+  double lo[3], hi[3];        /* box */
+  double center[3], radius;   /* sphere, cylinder (axis `axis`) */
+  int axis;                   /* cylinder axis; halfspace normal axis */
+  double plane;               /* halfspace: x_axis < plane */
+  double velocity[3];
+  bool piston;
+  surface_kind surface;       /* box: profile of the hi face along `surface_axis` */
+  int surface_axis, surface_along;
+  double amplitude, wavelength;
+  uint64_t seed;
+  const dk_node *node;
+} cd_region;
+
+struct cd_problem {
+  int dim;
+  cd_lattice lattice;
+  double r0, thickness, rc, skin, courant, dt, t_end, r_min, damping_j, attraction_default;
+  int table_intervals;
+  cd_cutoff_mode mode;
+  cd_box box;
+  double origin[3];
+  int nmat;
+  const eos_material *mat[CD_MAX_MATERIALS];
+  double rc_pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS], attraction[CD_MAX_MATERIALS][CD_MAX_MATERIALS];
+  int nreg;
+  cd_region reg[CD_MAX_REGIONS];
+  cd_history piston;
+  double piston_dir[3];
+  double thermal_amp;
+  uint64_t thermal_seed;
+  int out_every, profile_axis, profile_bins, snapshots;
+  double front_u; /* reference velocity for front tracking (piston velocity by default) */
+};
+
+static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc,
+                          const dk_node *at, const char *name, dk_errors *e) {
+  for (int k = 0; k < p->nmat; k++)
+    if (strcmp(p->mat[k]->name, name) == 0) return k;
+  const eos_material *m = eos_materials_find(mats, name, e, doc, at);
+  if (!m) return -1;
+  if (p->nmat == CD_MAX_MATERIALS) {
+    dk_error(e, doc, at, "at most %d materials in one cluster-dynamics run", CD_MAX_MATERIALS);
+    return -1;
+  }
+  if (!eos_has_cold_curve(m->eos)) {
+    dk_error(e, doc, at, "material '%s' has no cold curve (its EOS is %s): cluster dynamics "
+             "needs P_x(delta) and eps_x(delta)", name, eos_kind_name(eos_get_kind(m->eos)));
+    return -1;
+  }
+  p->mat[p->nmat] = m;
+  return p->nmat++;
+}
+
+static bool read_vec(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, int dim,
+                     ms_dim unit, bool required, const double *def, double out[3]) {
+  double *v = NULL;
+  size_t n = 0;
+  const dk_node *node = dk_get(map, key);
+  if (!node) {
+    if (required) {
+      dk_error(e, doc, map, "missing '%s' (a list of %d numbers)", key, dim);
+      return false;
+    }
+    for (int a = 0; a < 3; a++) out[a] = def ? def[a] : 0.0;
+    return true;
+  }
+  if (!dk_read_double_list(e, doc, map, key, unit, true, &v, &n)) return false;
+  bool ok = (int)n == dim;
+  if (!ok) dk_error(e, doc, node, "'%s' needs %d components (dimension %d), got %zu", key, dim, dim, n);
+  for (int a = 0; a < 3; a++) out[a] = ok && a < dim ? v[a] : (def ? def[a] : 0.0);
+  free(v);
+  return ok;
+}
+
+static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, const dk_node *rn,
+                        dk_errors *e) {
+  if (!dk_expect_map(e, doc, rn, "region")) return;
+  if (p->nreg == CD_MAX_REGIONS) {
+    dk_error(e, doc, rn, "at most %d regions", CD_MAX_REGIONS);
+    return;
+  }
+  cd_region *r = &p->reg[p->nreg];
+  memset(r, 0, sizeof *r);
+  r->node = rn;
+  const char *mname = NULL;
+  if (dk_read_string(e, doc, rn, "material", true, NULL, &mname))
+    r->mat = material_index(p, mats, doc, dk_get(rn, "material"), mname, e);
+  else
+    r->mat = -1;
+  int shape = 0;
+  dk_read_enum(e, doc, rn, "shape", false, SHAPE_BOX, shape_names, &shape);
+  r->shape = (region_shape)shape;
+  const int d = p->dim;
+  switch (r->shape) {
+  case SHAPE_BOX:
+    read_vec(e, doc, rn, "lo", d, MS_DIM_LENGTH, true, NULL, r->lo);
+    read_vec(e, doc, rn, "hi", d, MS_DIM_LENGTH, true, NULL, r->hi);
+    for (int a = 0; a < d; a++)
+      if (!(r->hi[a] > r->lo[a])) dk_error(e, doc, rn, "box region: hi must exceed lo on every axis");
+    break;
+  case SHAPE_SPHERE:
+    read_vec(e, doc, rn, "center", d, MS_DIM_LENGTH, true, NULL, r->center);
+    dk_read_positive(e, doc, rn, "radius", MS_DIM_LENGTH, true, 0, &r->radius);
+    break;
+  case SHAPE_CYLINDER: {
+    long ax = 2;
+    read_vec(e, doc, rn, "center", d, MS_DIM_LENGTH, true, NULL, r->center);
+    dk_read_positive(e, doc, rn, "radius", MS_DIM_LENGTH, true, 0, &r->radius);
+    dk_read_int(e, doc, rn, "axis", false, d == 2 ? 2 : 2, 0, 2, &ax);
+    r->axis = (int)ax;
+    read_vec(e, doc, rn, "lo", d, MS_DIM_LENGTH, false, (double[3]){-INFINITY, -INFINITY, -INFINITY}, r->lo);
+    read_vec(e, doc, rn, "hi", d, MS_DIM_LENGTH, false, (double[3]){INFINITY, INFINITY, INFINITY}, r->hi);
+    break;
+  }
+  case SHAPE_HALFSPACE: {
+    long ax = 0;
+    dk_read_int(e, doc, rn, "axis", false, 0, 0, d - 1, &ax);
+    r->axis = (int)ax;
+    dk_read_double(e, doc, rn, "below", MS_DIM_LENGTH, true, 0, -INFINITY, INFINITY, &r->plane);
+    break;
+  }
+  }
+  read_vec(e, doc, rn, "velocity", d, MS_DIM_VELOCITY, false, NULL, r->velocity);
+  dk_read_bool(e, doc, rn, "piston", false, false, &r->piston);
+  const dk_node *sn = dk_get(rn, "surface");
+  if (sn && dk_expect_map(e, doc, sn, "surface")) {
+    int sk = 0;
+    long ax = d - 1, along = 0, seed = 1;
+    dk_read_enum(e, doc, sn, "profile", true, SURF_FLAT, surface_names, &sk);
+    dk_read_int(e, doc, sn, "axis", false, d - 1, 0, d - 1, &ax);
+    dk_read_int(e, doc, sn, "along", false, 0, 0, d - 1, &along);
+    dk_read_double(e, doc, sn, "amplitude", MS_DIM_LENGTH, true, 0, 0, INFINITY, &r->amplitude);
+    dk_read_positive(e, doc, sn, "wavelength", MS_DIM_LENGTH, true, 0, &r->wavelength);
+    dk_read_int(e, doc, sn, "seed", false, 1, 0, 1L << 40, &seed);
+    if (r->shape != SHAPE_BOX) dk_error(e, doc, sn, "a surface profile applies to box regions");
+    if (ax == along) dk_error(e, doc, sn, "surface: 'along' must differ from 'axis'");
+    r->surface = (surface_kind)sk;
+    r->surface_axis = (int)ax;
+    r->surface_along = (int)along;
+    r->seed = (uint64_t)seed;
+  }
+  p->nreg++;
+}
+
+/* Height of a box region's profiled hi face at coordinate s along the surface. Random: a sum of
+ * 8 sine modes with wavelengths λ/1..λ/8, amplitudes ∝ 1/k and random phases, scaled to the
+ * given peak amplitude (a smooth random roughness). */
+static double surface_height(const cd_region *r, double s) {
+  const double two_pi = 6.283185307179586;
+  if (r->surface == SURF_SINE) return r->amplitude * sin(two_pi * s / r->wavelength);
+  if (r->surface == SURF_RANDOM) {
+    double h = 0, norm = 0;
+    for (int k = 1; k <= 8; k++) {
+      double ph = two_pi * ptl_splitmix64_uniform(r->seed, (uint64_t)k);
+      h += sin(two_pi * k * s / r->wavelength + ph) / k;
+      norm += 1.0 / k;
+    }
+    return r->amplitude * h / norm;
+  }
+  return 0.0;
+}
+
+static bool region_contains(const cd_region *r, const double x[3], int dim) {
+  switch (r->shape) {
+  case SHAPE_BOX:
+    for (int a = 0; a < dim; a++) {
+      double hi = r->hi[a];
+      if (r->surface != SURF_FLAT && a == r->surface_axis) hi += surface_height(r, x[r->surface_along]);
+      if (x[a] < r->lo[a] || x[a] >= hi) return false;
+    }
+    return true;
+  case SHAPE_SPHERE: {
+    double d2 = 0;
+    for (int a = 0; a < dim; a++) d2 += (x[a] - r->center[a]) * (x[a] - r->center[a]);
+    return d2 < r->radius * r->radius;
+  }
+  case SHAPE_CYLINDER: {
+    double d2 = 0;
+    for (int a = 0; a < dim; a++) {
+      if (a == r->axis) {
+        if (x[a] < r->lo[a] || x[a] >= r->hi[a]) return false;
+        continue;
+      }
+      d2 += (x[a] - r->center[a]) * (x[a] - r->center[a]);
+    }
+    return d2 < r->radius * r->radius;
+  }
+  case SHAPE_HALFSPACE:
+    return x[r->axis] < r->plane;
+  }
+  return false;
+}
+
+/* lattice period along each axis: fcc cubic constant a = √2 r0; triangular r0 × √3 r0 */
+static void lattice_period(const cd_problem *p, double per[3]) {
+  if (p->lattice == CD_LATTICE_FCC) {
+    per[0] = per[1] = per[2] = sqrt(2.0) * p->r0;
+  } else {
+    per[0] = p->r0;
+    per[1] = sqrt(3.0) * p->r0;
+    per[2] = 1.0;
+  }
+}
+
+cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
+                            dk_errors *e) {
+  size_t nerr0 = e->n;
+  cd_problem *p = ms_calloc(1, sizeof *p);
+  long dim = 3;
+  dk_read_int(e, doc, sec, "dimension", false, 3, 2, 3, &dim);
+  p->dim = (int)dim;
+  p->lattice = dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC;
+  dk_read_positive(e, doc, sec, "r0", MS_DIM_LENGTH, true, 0, &p->r0);
+  if (dim == 2) dk_read_positive(e, doc, sec, "thickness", MS_DIM_LENGTH, false, p->r0, &p->thickness);
+  else p->thickness = p->r0;
+  const dk_node *rcn = dk_get(sec, "cutoff");
+  dk_read_double(e, doc, sec, "cutoff", MS_DIM_NONE, false, 1.2, -INFINITY, INFINITY, &p->rc);
+  if (!(p->rc > 1.0))
+    dk_error(e, doc, rcn ? rcn : sec, "cutoff R_c/r0 = %g must exceed 1 (the nearest-neighbour "
+             "distance): below it the lattice has no bonds", p->rc);
+  int mode = CD_CUTOFF_BONDED;
+  dk_read_enum(e, doc, sec, "cutoff_mode", false, CD_CUTOFF_BONDED, mode_names, &mode);
+  p->mode = (cd_cutoff_mode)mode;
+  dk_read_double(e, doc, sec, "skin", MS_DIM_NONE, false, 0.1, 1e-3, 1.0, &p->skin);
+  dk_read_double(e, doc, sec, "courant", MS_DIM_NONE, false, 0.02, 1e-5, 0.2, &p->courant);
+  dk_read_double(e, doc, sec, "dt", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &p->dt);
+  dk_read_positive(e, doc, sec, "t_end", MS_DIM_TIME, true, 0, &p->t_end);
+  dk_read_double(e, doc, sec, "r_min", MS_DIM_NONE, false, 0.5, 0.1, 0.95, &p->r_min);
+  long nint = 4096;
+  dk_read_int(e, doc, sec, "table_intervals", false, 4096, 64, 1 << 22, &nint);
+  p->table_intervals = (int)nint;
+  dk_read_double(e, doc, sec, "damping", MS_DIM_NONE, false, 0.0, 0.0, 1e6, &p->damping_j);
+
+  /* box */
+  const dk_node *bn = dk_get(sec, "box");
+  if (!bn) dk_error(e, doc, sec, "missing 'box' (lo, hi, boundary)");
+  else if (dk_expect_map(e, doc, bn, "box")) {
+    read_vec(e, doc, bn, "lo", p->dim, MS_DIM_LENGTH, true, NULL, p->box.lo);
+    read_vec(e, doc, bn, "hi", p->dim, MS_DIM_LENGTH, true, NULL, p->box.hi);
+    const dk_node *bcn = dk_get(bn, "boundary");
+    if (!bcn) dk_error(e, doc, bn, "missing 'boundary' (one of free|periodic|wall per axis)");
+    else if (dk_expect_seq(e, doc, bcn, "boundary")) {
+      if ((int)dk_seq_len(bcn) != p->dim)
+        dk_error(e, doc, bcn, "'boundary' needs %d entries", p->dim);
+      for (size_t a = 0; a < dk_seq_len(bcn) && a < 3; a++) {
+        const char *v = dk_scalar(dk_seq_at(bcn, a));
+        int k = -1;
+        for (int c = 0; v && bc_names[c]; c++)
+          if (!strcmp(v, bc_names[c])) k = c;
+        if (k < 0) dk_error(e, doc, dk_seq_at(bcn, a), "boundary '%s': expected free, periodic or wall", v ? v : "?");
+        else p->box.bc[a] = (cd_bc)k;
+      }
+    }
+    read_vec(e, doc, bn, "lattice_origin", p->dim, MS_DIM_LENGTH, false, p->box.lo, p->origin);
+    for (int a = 0; a < p->dim; a++)
+      if (!(p->box.hi[a] > p->box.lo[a])) dk_error(e, doc, bn, "box: hi must exceed lo on axis %d", a);
+    /* periodic axes must hold a whole number of lattice periods, at least 2 */
+    double per[3];
+    lattice_period(p, per);
+    for (int a = 0; a < p->dim && p->r0 > 0; a++) {
+      if (p->box.bc[a] != CD_BC_PERIODIC) continue;
+      double L = p->box.hi[a] - p->box.lo[a], q = L / per[a];
+      if (fabs(q - round(q)) > 1e-6 * q)
+        dk_error(e, doc, bn, "periodic axis %d: length %g is not a whole number of lattice periods "
+                 "(%g)", a, L, per[a]);
+      if (round(q) < 2)
+        dk_error(e, doc, bn, "periodic axis %d: fewer than 2 lattice periods (%.3g) across it: "
+                 "a particle would interact with its own image", a, q);
+      else if (L < 2.0 * (p->rc + p->skin) * p->r0)
+        dk_error(e, doc, bn, "periodic axis %d: length %g below 2 (R_c + skin) = %g", a, L,
+                 2.0 * (p->rc + p->skin) * p->r0);
+    }
+  }
+  if (p->dim == 2) {
+    p->box.bc[2] = CD_BC_FREE;
+    p->box.lo[2] = p->box.hi[2] = 0.0;
+  }
+
+  /* regions */
+  const dk_node *rl = dk_get(sec, "regions");
+  if (!rl) dk_error(e, doc, sec, "missing 'regions' (list of material regions)");
+  else if (dk_expect_seq(e, doc, rl, "regions"))
+    for (size_t k = 0; k < dk_seq_len(rl); k++) read_region(p, mats, doc, dk_seq_at(rl, k), e);
+
+  /* interfaces (per material pair) */
+  for (int a = 0; a < CD_MAX_MATERIALS; a++)
+    for (int b = 0; b < CD_MAX_MATERIALS; b++) {
+      p->rc_pair[a][b] = p->rc;
+      p->attraction[a][b] = 1.0;
+    }
+  const dk_node *il = dk_get(sec, "interfaces");
+  if (il && dk_expect_seq(e, doc, il, "interfaces"))
+    for (size_t k = 0; k < dk_seq_len(il); k++) {
+      const dk_node *in = dk_seq_at(il, k);
+      if (!dk_expect_map(e, doc, in, "interface")) continue;
+      const dk_node *mn = dk_get(in, "materials");
+      int ia = -1, ib = -1;
+      if (!mn || dk_node_kind(mn) != DK_SEQ || dk_seq_len(mn) != 2) {
+        dk_error(e, doc, mn ? mn : in, "interface: 'materials' must list two material names");
+      } else {
+        const char *na = dk_scalar(dk_seq_at(mn, 0)), *nb = dk_scalar(dk_seq_at(mn, 1));
+        if (na) ia = material_index(p, mats, doc, dk_seq_at(mn, 0), na, e);
+        if (nb) ib = material_index(p, mats, doc, dk_seq_at(mn, 1), nb, e);
+      }
+      double rc = p->rc, att = 1.0;
+      dk_read_double(e, doc, in, "cutoff", MS_DIM_NONE, false, p->rc, 1.0 + 1e-9, 3.0, &rc);
+      dk_read_double(e, doc, in, "attraction", MS_DIM_NONE, false, 1.0, 0.0, 1.0, &att);
+      if (ia >= 0 && ib >= 0) {
+        p->rc_pair[ia][ib] = p->rc_pair[ib][ia] = rc;
+        p->attraction[ia][ib] = p->attraction[ib][ia] = att;
+      }
+    }
+
+  /* piston */
+  const dk_node *pn = dk_get(sec, "piston");
+  bool any_piston = false;
+  for (int k = 0; k < p->nreg; k++) any_piston |= p->reg[k].piston;
+  if (pn && dk_expect_map(e, doc, pn, "piston")) {
+    read_vec(e, doc, pn, "direction", p->dim, MS_DIM_NONE, true, NULL, p->piston_dir);
+    const dk_node *vn = dk_get(pn, "velocity"), *hn = dk_get(pn, "history");
+    if ((vn != NULL) == (hn != NULL))
+      dk_error(e, doc, pn, "piston: give exactly one of 'velocity' (constant) or 'history' (CSV t,u)");
+    if (vn) {
+      double u = 0;
+      dk_read_double(e, doc, pn, "velocity", MS_DIM_VELOCITY, true, 0, -INFINITY, INFINITY, &u);
+      p->piston.n = 1;
+      p->piston.t = ms_calloc(1, sizeof(double));
+      p->piston.u = ms_calloc(1, sizeof(double));
+      p->piston.u[0] = u;
+    } else if (hn) {
+      const char *file = NULL;
+      if (dk_read_string(e, doc, pn, "history", true, NULL, &file)) {
+        char *path = dk_resolve_path(doc, file);
+        if (cd_history_read(&p->piston, path, dk_units(doc) == MS_UNITS_SI, e) != MS_OK)
+          dk_error(e, doc, hn, "piston history '%s' rejected (see the message above: it needs "
+                   "columns t, u with t strictly increasing)", path);
+        free(path);
+      }
+    }
+    if (!any_piston) dk_error(e, doc, pn, "piston given but no region has 'piston: true'");
+  } else if (any_piston) {
+    dk_error(e, doc, sec, "a region has 'piston: true' but there is no 'piston:' section");
+  }
+  double fu = p->piston.n ? fabs(p->piston.u[p->piston.n - 1]) : 0.0;
+  dk_read_double(e, doc, sec, "front_velocity", MS_DIM_VELOCITY, false, fu, 0, INFINITY, &p->front_u);
+
+  const dk_node *tn = dk_get(sec, "thermal");
+  if (tn && dk_expect_map(e, doc, tn, "thermal")) {
+    long seed = 12345;
+    dk_read_double(e, doc, tn, "amplitude", MS_DIM_VELOCITY, true, 0, 0, INFINITY, &p->thermal_amp);
+    dk_read_int(e, doc, tn, "seed", false, 12345, 0, 1L << 40, &seed);
+    p->thermal_seed = (uint64_t)seed;
+  }
+
+  long every = 100, axis = p->dim - 1, bins = 100, snaps = 0;
+  const dk_node *on = dk_get(sec, "output");
+  if (on && dk_expect_map(e, doc, on, "output")) {
+    dk_read_int(e, doc, on, "every", false, 100, 1, 1L << 40, &every);
+    dk_read_int(e, doc, on, "profile_axis", false, p->dim - 1, 0, p->dim - 1, &axis);
+    dk_read_int(e, doc, on, "profile_bins", false, 100, 1, 1000000, &bins);
+    dk_read_int(e, doc, on, "snapshots", false, 0, 0, 100000, &snaps);
+  }
+  p->out_every = (int)every;
+  p->profile_axis = (int)axis;
+  p->profile_bins = (int)bins;
+  p->snapshots = (int)snaps;
+
+  /* overlapping regions of different materials: some lattice site inside both */
+  if (e->n == nerr0 && p->nreg > 1) {
+    double per[3];
+    lattice_period(p, per);
+    long ncell[3] = {1, 1, 1};
+    for (int a = 0; a < p->dim; a++) ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
+    bool reported[CD_MAX_REGIONS][CD_MAX_REGIONS] = {{false}};
+    const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+    const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
+    int nb = p->dim == 3 ? 4 : 2;
+    for (long iz = 0; iz < ncell[2]; iz++)
+      for (long iy = 0; iy < ncell[1]; iy++)
+        for (long ix = 0; ix < ncell[0]; ix++)
+          for (int b = 0; b < nb; b++) {
+            const double *bs = p->dim == 3 ? fcc[b] : tri[b];
+            double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
+                           p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
+            int first = -1;
+            for (int k = 0; k < p->nreg; k++) {
+              if (!region_contains(&p->reg[k], x, p->dim)) continue;
+              if (first < 0) { first = k; continue; }
+              if (p->reg[k].mat != p->reg[first].mat && !reported[first][k]) {
+                reported[first][k] = true;
+                dk_error(e, doc, p->reg[k].node, "region %d (material '%s') overlaps region %d "
+                         "(material '%s'), e.g. at (%g, %g, %g): regions of different materials "
+                         "must not overlap", k + 1, p->mat[p->reg[k].mat]->name, first + 1,
+                         p->mat[p->reg[first].mat]->name, x[0], x[1], x[2]);
+              }
+            }
+          }
+  }
+  if (e->n > nerr0) {
+    cd_problem_free(p);
+    return NULL;
+  }
+  return p;
+}
+
+void cd_problem_free(cd_problem *p) {
+  if (!p) return;
+  cd_history_free(&p->piston);
+  free(p);
+}
+
+/* Fill the regions (first containing region wins; overlaps of the same material are fine). */
+static ptl_state *build_particles(const cd_problem *p) {
+  double per[3];
+  lattice_period(p, per);
+  long ncell[3] = {1, 1, 1};
+  for (int a = 0; a < p->dim; a++) ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
+  const int nb = p->dim == 3 ? 4 : 2;
+  const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
+  const double vol = cd_cluster_volume(p->lattice, p->r0, p->thickness);
+  size_t count = 0;
+  for (int pass = 0; pass < 2; pass++) { /* count, then fill */
+    ptl_state *s = pass ? ptl_state_create(count, p->dim) : NULL;
+    count = 0;
+    for (long iz = 0; iz < ncell[2]; iz++)
+      for (long iy = 0; iy < ncell[1]; iy++)
+        for (long ix = 0; ix < ncell[0]; ix++)
+          for (int b = 0; b < nb; b++) {
+            const double *bs = p->dim == 3 ? fcc[b] : tri[b];
+            double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
+                           p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
+            bool inside = true;
+            for (int a = 0; a < p->dim; a++)
+              if (x[a] < p->box.lo[a] || x[a] >= p->box.hi[a]) inside = false;
+            if (!inside) continue;
+            for (int k = 0; k < p->nreg; k++) {
+              const cd_region *r = &p->reg[k];
+              if (!region_contains(r, x, p->dim)) continue;
+              if (pass) {
+                size_t i = ptl_state_add(s, x[0], x[1], x[2], eos_rho0(p->mat[r->mat]->eos) * vol, r->mat);
+                s->vx[i] = r->velocity[0];
+                s->vy[i] = r->velocity[1];
+                s->vz[i] = r->velocity[2];
+                if (r->piston) s->flags[i] |= PTL_DRIVEN;
+              }
+              count++;
+              break;
+            }
+          }
+    if (pass) return s;
+  }
+  return NULL;
+}
+
+static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, double vfs) {
+  double row[11] = {s->t, e->kinetic, e->potential, e->dissipated, e->broken, e->piston_work,
+                    e->total, e->momentum[0], e->momentum[1], e->momentum[2], vfs};
+  ms_csv_row(f, 11, row);
+}
+
+ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
+  ptl_state *ps = build_particles(p);
+  if (!ps || ps->n == 0) {
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: the regions contain no lattice site");
+    ptl_state_free(ps);
+    return MS_ERR_INPUT;
+  }
+  /* thermal velocities (splitmix64, mean removed over integrated particles) */
+  if (p->thermal_amp > 0) {
+    double mean[3] = {0, 0, 0}, *v[3] = {ps->vx, ps->vy, ps->vz};
+    size_t nm = 0;
+    for (size_t i = 0; i < ps->n; i++) {
+      if (ps->flags[i] & PTL_DRIVEN) continue;
+      for (int c = 0; c < p->dim; c++) {
+        double dv = p->thermal_amp * (2.0 * ptl_splitmix64_uniform(p->thermal_seed, 3 * i + c) - 1.0);
+        v[c][i] += dv;
+        mean[c] += dv;
+      }
+      nm++;
+    }
+    for (size_t i = 0; i < ps->n; i++)
+      if (!(ps->flags[i] & PTL_DRIVEN))
+        for (int c = 0; c < p->dim; c++) v[c][i] -= mean[c] / (double)(nm ? nm : 1);
+  }
+  /* free-surface layer: particles within r0 of the farthest one along the piston direction */
+  double dir[3] = {p->piston_dir[0], p->piston_dir[1], p->piston_dir[2]};
+  int axis = p->profile_axis;
+  if (p->piston.n) {
+    double smax = -INFINITY;
+    for (size_t i = 0; i < ps->n; i++) {
+      double sx = ps->x[i] * dir[0] + ps->y[i] * dir[1] + ps->z[i] * dir[2];
+      if (sx > smax) smax = sx;
+    }
+    for (size_t i = 0; i < ps->n; i++) {
+      double sx = ps->x[i] * dir[0] + ps->y[i] * dir[1] + ps->z[i] * dir[2];
+      if (sx > smax - p->r0 && !(ps->flags[i] & PTL_DRIVEN)) ps->flags[i] |= PTL_SURFACE;
+    }
+  }
+  double c0max = 0;
+  for (int k = 0; k < p->nmat; k++) c0max = fmax(c0max, eos_c0(p->mat[k]->eos));
+  cd_config cfg = {.r0 = p->r0, .skin = p->skin * p->r0,
+                   .dt = p->dt > 0 ? p->dt : p->courant * p->r0 / c0max, .cutoff = p->mode,
+                   .damping_gamma = p->damping_j > 0 ? c0max / (p->damping_j * p->r0) : 0.0,
+                   .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness};
+  cd_sim *s = cd_sim_create(ps, &p->box, &cfg, p->nmat);
+  for (int a = 0; a < p->nmat; a++)
+    for (int b = a; b < p->nmat; b++) {
+      cd_pair_table *t = ms_calloc(1, sizeof *t);
+      if (cd_pair_table_build(t, p->mat[a]->eos, p->mat[b]->eos, p->lattice, p->r0, p->thickness,
+                              p->rc_pair[a][b] * p->r0, p->r_min * p->r0, p->attraction[a][b],
+                              p->table_intervals) != MS_OK) {
+        ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot tabulate the pair potential of '%s'-'%s' "
+               "on [r_min, R_c] (cold curve undefined there?)", p->mat[a]->name, p->mat[b]->name);
+        free(t);
+        cd_sim_free(s);
+        return MS_ERR_INPUT;
+      }
+      cd_sim_set_pair(s, a, b, t);
+    }
+  if (p->piston.n) cd_sim_set_piston(s, &p->piston, dir);
+  ms_status st = cd_sim_init(s);
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
+    cd_sim_free(s);
+    return st;
+  }
+  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
+         "%s cutoff, damping Gamma = %g, %zu bytes/particle", ps->n, p->nmat, cfg.dt, p->rc,
+         mode_names[p->mode], cfg.damping_gamma, cd_sim_bytes(s) / ps->n);
+
+  /* outputs */
+  ms_afile fe = {0}, fp = {0}, ff = {0};
+  char *path = ms_out_path(ctx, "cd_energy.csv");
+  st = ms_afile_open(&fe, path);
+  free(path);
+  if (st == MS_OK) {
+    path = ms_out_path(ctx, "cd_profiles.csv");
+    st = ms_afile_open(&fp, path);
+    free(path);
+  }
+  if (st == MS_OK) {
+    path = ms_out_path(ctx, "cd_front.csv");
+    st = ms_afile_open(&ff, path);
+    free(path);
+  }
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot open output files");
+    if (fe.f) ms_afile_abort(&fe);
+    if (fp.f) ms_afile_abort(&fp);
+    cd_sim_free(s);
+    return st;
+  }
+  static const char *const ecol[] = {"t", "kinetic", "potential", "dissipated", "broken",
+                                     "piston_work", "total", "px", "py", "pz", "v_free_surface"};
+  static const char *const eunit[] = {"10us", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2",
+                                      "g(km/s)^2", "g(km/s)^2", "g km/s", "g km/s", "g km/s", "km/s"};
+  ms_csv_header(fe.f, "cluster dynamics energy balance (total = kinetic + potential + dissipated "
+                "+ broken - piston_work)", 11, ecol, eunit);
+  const char *pcol[CD_PROFILE_NCOL + 1] = {"t"};
+  const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm", "-", "g/cm^3", "km/s", "km/s", "km/s",
+                                            "GPa", "GPa", "GPa", "GPa", "GPa", "GPa", "GPa"};
+  for (int c = 0; c < CD_PROFILE_NCOL; c++) pcol[c + 1] = cd_profile_columns[c];
+  ms_csv_header(fp.f, "cluster dynamics binned profiles (stress compression-positive)",
+                CD_PROFILE_NCOL + 1, pcol, punit);
+  static const char *const fcol[] = {"t", "front"}, *const funit[] = {"10us", "cm"};
+  ms_csv_header(ff.f, "shock front: where the bin-mean velocity along the profile axis falls "
+                "below half the front_velocity", 2, fcol, funit);
+
+  double lo = p->box.lo[axis], hi = p->box.hi[axis];
+  if (p->box.bc[axis] != CD_BC_PERIODIC) { /* free axis: the extent may grow; pad by 50 % */
+    double L = hi - lo;
+    hi += 0.5 * L;
+  }
+  double area = 1.0;
+  for (int a = 0; a < p->dim; a++)
+    if (a != axis) area *= p->box.hi[a] - p->box.lo[a];
+  if (p->dim == 2) area *= p->thickness;
+  double *prof = ms_calloc((size_t)p->profile_bins * CD_PROFILE_NCOL, sizeof *prof);
+  const long nsteps = (long)ceil(p->t_end / cfg.dt - 1e-9);
+  const long snap_every = p->snapshots > 0 ? (nsteps + p->snapshots - 1) / p->snapshots : 0;
+  double tf[4096], zf[4096];
+  int nf = 0;
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "cluster_dynamics", 0.0, nsteps * cfg.dt);
+  for (long k = 0; k <= nsteps && st == MS_OK; k++) {
+    if (k > 0) st = cd_sim_step(s);
+    if (st != MS_OK) break;
+    bool out = k % p->out_every == 0 || k == nsteps;
+    if (out) {
+      cd_energy en;
+      cd_sim_energy(s, &en);
+      write_energy_row(fe.f, s, &en, cd_free_surface_velocity(s, axis));
+      cd_profile(s, axis, lo, hi, p->profile_bins, area, prof);
+      for (int b = 0; b < p->profile_bins; b++) {
+        double row[CD_PROFILE_NCOL + 1];
+        row[0] = s->t;
+        memcpy(row + 1, prof + (size_t)b * CD_PROFILE_NCOL, CD_PROFILE_NCOL * sizeof(double));
+        if (row[2] > 0) ms_csv_row(fp.f, CD_PROFILE_NCOL + 1, row);
+      }
+      if (p->front_u > 0) {
+        double z = cd_front_position(prof, p->profile_bins, axis, p->front_u, 0.5);
+        double row[2] = {s->t, z};
+        ms_csv_row(ff.f, 2, row);
+        if (isfinite(z) && nf < 4096) {
+          tf[nf] = s->t;
+          zf[nf++] = z;
+        }
+      }
+      ms_progress_update(&prog, s->t, k);
+    }
+    if (snap_every && (k % snap_every == 0 || k == nsteps)) {
+      char name[64];
+      snprintf(name, sizeof name, "cd_snap_%06ld.h5", k);
+      char *sp = ms_out_path(ctx, name);
+      if (cd_write_snapshot(s, sp) != MS_OK) st = MS_ERR_IO;
+      free(sp);
+    }
+  }
+  ms_progress_finish(&prog, s->t, s->step);
+  if (nf > 3) {
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    int m = 0;
+    for (int k = 0; k < nf; k++)
+      if (tf[k] >= 0.25 * tf[nf - 1]) {
+        sx += tf[k]; sy += zf[k]; sxx += tf[k] * tf[k]; sxy += tf[k] * zf[k]; m++;
+      }
+    if (m > 2)
+      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: shock speed D = %.4f km/s (front fit over t >= T/4)",
+             (m * sxy - sx * sy) / (m * sxx - sx * sx));
+  }
+  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %ld steps, %ld list builds, %ld broken bonds, wall "
+         "force %.2f s, lists %.2f s", s->step, cd_sim_rebuilds(s), s->n_broken_bonds,
+         s->wall_time_force, s->wall_time_neigh);
+  free(prof);
+  if (st == MS_OK) {
+    st = ms_afile_commit(&fe);
+    if (st == MS_OK) st = ms_afile_commit(&fp); else ms_afile_abort(&fp);
+    if (st == MS_OK) st = ms_afile_commit(&ff); else ms_afile_abort(&ff);
+  } else {
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: stopped at t = %g (%s)", s->t, ms_status_str(st));
+    ms_afile_abort(&fe);
+    ms_afile_abort(&fp);
+    ms_afile_abort(&ff);
+  }
+  cd_sim_free(s);
+  return st;
+}
