@@ -15,7 +15,7 @@ mkdir -p "$corpus" "$work/artifacts"
 scratch=/dev/shm/mscale-fuzz-scratch
 [ -d /dev/shm ] || scratch="$work/scratch"
 mkdir -p "$scratch"
-cp "$src"/eos/data/* "$scratch"/
+cp "$src"/eos/data/* "$src"/inputs/*.csv "$scratch"/ 2>/dev/null || true
 mkdir -p "$scratch/data"
 cp "$src"/tests/reliability/bad/data/* "$scratch/data"/
 if [ -z "$(ls -A "$corpus")" ]; then
