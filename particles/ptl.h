@@ -422,7 +422,8 @@ typedef struct dm_run_summary {
   long steps;
   double dt, t_end;
   double omega_dt;        /* ω_max Δt (power iteration) vs the scheme's stability limit */
-  double wall_s, particle_steps_per_s; /* time-stepping loop only */
+  double wall_s, particle_steps_per_s; /* time-stepping loop only (real particles) */
+  double cpu_s;           /* process CPU time of that loop, all threads (load-independent) */
   double energy_err_max;  /* max |H(t) − H(0)| / H(0) over the energy samples */
   /* zero-energy-mode indicator |z|(t) / max_t |Δw|(t) (dm_hourglass_norm) at the energy
    * samples: first, largest and last value */

@@ -44,10 +44,11 @@ int main(int argc, char **argv) {
   ms_ctx_init_serial(&ctx);
   ms_status st = dm_problem_run(&ctx, p);
   const dm_run_summary *s = dm_problem_summary(p);
-  printf("dm_peri particles=%zu bonds=%zu steps=%ld threads=%d loop_s=%.3f "
-         "particle_steps_per_s=%.4g\n",
-         s->real_particles, s->bonds, s->steps, omp_get_max_threads(), s->wall_s,
-         s->particle_steps_per_s);
+  printf("dm_peri particles=%zu bonds=%zu steps=%ld threads=%d loop_s=%.3f loop_cpu_s=%.3f "
+         "particle_steps_per_s=%.4g particle_steps_per_cpu_s=%.4g\n",
+         s->real_particles, s->bonds, s->steps, omp_get_max_threads(), s->wall_s, s->cpu_s,
+         s->particle_steps_per_s,
+         s->cpu_s > 0 ? (double)s->real_particles * s->steps / s->cpu_s : 0.0);
   dm_problem_free(p);
   eos_materials_free(mats);
   dk_free(doc);
