@@ -13,17 +13,22 @@
 #include <math.h>
 #include <string.h>
 
-/* Hot path: one table, plain cutoff, forces only (the benchmark's model). s is clamped to
- * [s_lo, rc²) before the lookup (one max instead of two index clamps; the table has one spare
- * interval at the top for s rounding onto rc²), fma() makes the Horner steps single roundings. */
+/* Hot path: one table, plain cutoff, forces only (the benchmark's model). The table has one
+ * spare interval at the top for s rounding onto rc²; fma() makes the Horner steps single
+ * roundings. */
 static inline void pair_fast(double s, double dx, double dy, double dz, double slo, double ih,
                              const double *restrict fc, double *fxi, double *fyi, double *fzi,
                              double *fxj, double *fyj, double *fzj) {
-  const double u = ((s > slo ? s : slo) - slo) * ih; /* not fmax(): a libm call */
-  const int m = (int)u;
-  const double w = u - m;
-  const double *c = fc + 4 * m;
-  const double fr = fma(w, fma(w, c[2], c[1]), c[0]);
+  double fr;
+  if (s >= slo) {
+    const double u = (s - slo) * ih;
+    const int m = (int)u;
+    const double w = u - m;
+    const double *c = fc + 4 * m;
+    fr = fma(w, fma(w, c[2], c[1]), c[0]);
+  } else { /* below r_min: linear continuation of F/r in s (cd_potential.c) */
+    fr = fma((s - slo) * ih, fc[1], fc[0]);
+  }
   *fxi = fma(fr, dx, *fxi);
   *fyi = fma(fr, dy, *fyi);
   *fzi = fma(fr, dz, *fzi);
@@ -67,14 +72,22 @@ static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_ta
 
 /* F/r at s (same arithmetic as pair_fast) and optionally the energy (cd_potential.c). */
 static inline double tab_force(const cd_pair_table *t, double s, double *e) {
-  const double sc = s > t->s_lo ? s : t->s_lo, u = (sc - t->s_lo) * t->inv_h;
-  const int m = (int)u;
-  const double w = u - m;
-  const double *c = t->fcoef + 4 * m;
-  const double fr = fma(w, fma(w, c[2], c[1]), c[0]);
+  double w, fr;
+  int m = 0;
+  if (s >= t->s_lo) {
+    const double u = (s - t->s_lo) * t->inv_h;
+    m = (int)u;
+    w = u - m;
+    const double *c = t->fcoef + 4 * m;
+    fr = fma(w, fma(w, c[2], c[1]), c[0]);
+  } else { /* below r_min: linear F/r, quadratic E (cd_potential.c) */
+    w = (s - t->s_lo) * t->inv_h;
+    fr = fma(w, t->fcoef[1], t->fcoef[0]);
+  }
   if (e) {
     const double *ec = t->ecoef + 4 * m;
-    *e = fma(w, fma(w, fma(w, ec[3], ec[2]), ec[1]), ec[0]) - 0.5 * fr * (s - sc);
+    *e = s >= t->s_lo ? fma(w, fma(w, fma(w, ec[3], ec[2]), ec[1]), ec[0])
+                      : fma(w, fma(w, ec[2], ec[1]), ec[0]);
   }
   return fr;
 }

@@ -159,26 +159,34 @@ void cd_pair_table_free(cd_pair_table *t) {
   t->fcoef = t->ecoef = NULL;
 }
 
-/* Below s_lo (r < r_min) the force continues with the constant F/r of s_lo and the energy
- * with the matching linear term, so E and F stay consistent (a safety net: r_min defaults to
- * 0.5 r0, δ = 8 in 3D). */
+/* Below s_lo (r < r_min, outside the table) the first interval continues as its Taylor
+ * polynomial at s_lo cut after the quadratic term of E: E = e0 + e1 w + e2 w², F/r = f0 + f1 w
+ * (w = (s − s_lo)/h < 0), so F/r keeps growing linearly as s falls and E stays consistent
+ * (a safety net: r_min defaults to 0.5 r0, i.e. δ = 8; a tabulated cold curve may end sooner,
+ * Table 1 of paper 002 at 0.75 r0). */
 double cd_pair_table_energy(const cd_pair_table *t, double r) {
   double s = r * r;
   if (s >= t->rc2) return 0.0;
-  double sc = s > t->s_lo ? s : t->s_lo, u = (sc - t->s_lo) * t->inv_h;
+  const double *c = t->ecoef;
+  if (s < t->s_lo) {
+    double w = (s - t->s_lo) * t->inv_h;
+    return fma(w, fma(w, c[2], c[1]), c[0]);
+  }
+  double u = (s - t->s_lo) * t->inv_h;
   int m = (int)u;
   double w = u - m;
-  const double *c = t->ecoef + 4 * m, *f = t->fcoef + 4 * m;
-  double e = fma(w, fma(w, fma(w, c[3], c[2]), c[1]), c[0]);
-  return e - 0.5 * fma(w, fma(w, f[2], f[1]), f[0]) * (s - sc);
+  c += 4 * m;
+  return fma(w, fma(w, fma(w, c[3], c[2]), c[1]), c[0]);
 }
 
 double cd_pair_table_force(const cd_pair_table *t, double r) {
   double s = r * r;
   if (s >= t->rc2) return 0.0;
-  double u = ((s > t->s_lo ? s : t->s_lo) - t->s_lo) * t->inv_h;
+  const double *c = t->fcoef;
+  if (s < t->s_lo) return r * fma((s - t->s_lo) * t->inv_h, c[1], c[0]);
+  double u = (s - t->s_lo) * t->inv_h;
   int m = (int)u;
   double w = u - m;
-  const double *c = t->fcoef + 4 * m;
+  c += 4 * m;
   return r * fma(w, fma(w, c[2], c[1]), c[0]);
 }

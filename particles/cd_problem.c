@@ -30,6 +30,7 @@ typedef struct cd_region {
   double plane;               /* halfspace: x_axis < plane */
   double velocity[3];
   bool piston;
+  bool matrix;                /* fills only the sites no other region takes (no overlap check) */
   surface_kind surface;       /* box: profile of the hi face along `surface_axis` */
   int surface_axis, surface_along;
   double amplitude, wavelength;
@@ -148,6 +149,7 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
   }
   read_vec(e, doc, rn, "velocity", d, MS_DIM_VELOCITY, false, NULL, r->velocity);
   dk_read_bool(e, doc, rn, "piston", false, false, &r->piston);
+  dk_read_bool(e, doc, rn, "matrix", false, false, &r->matrix);
   const dk_node *sn = dk_get(rn, "surface");
   if (sn && dk_expect_map(e, doc, sn, "surface")) {
     int sk = 0;
@@ -410,7 +412,7 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
                            p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
             int first = -1;
             for (int k = 0; k < p->nreg; k++) {
-              if (!region_contains(&p->reg[k], x, p->dim)) continue;
+              if (p->reg[k].matrix || !region_contains(&p->reg[k], x, p->dim)) continue;
               if (first < 0) { first = k; continue; }
               if (p->reg[k].mat != p->reg[first].mat && !reported[first][k]) {
                 reported[first][k] = true;
@@ -435,7 +437,8 @@ void cd_problem_free(cd_problem *p) {
   free(p);
 }
 
-/* Fill the regions (first containing region wins; overlaps of the same material are fine). */
+/* Fill the regions: a site belongs to the first ordinary region containing it (overlaps of the
+ * same material are fine), else to the first `matrix` region containing it. */
 static ptl_state *build_particles(const cd_problem *p) {
   double per[3];
   lattice_period(p, per);
@@ -460,9 +463,10 @@ static ptl_state *build_particles(const cd_problem *p) {
             for (int a = 0; a < p->dim; a++)
               if (x[a] < p->box.lo[a] || x[a] >= p->box.hi[a]) inside = false;
             if (!inside) continue;
-            for (int k = 0; k < p->nreg; k++) {
+            for (int kk = 0; kk < 2 * p->nreg; kk++) { /* ordinary regions, then matrices */
+              const int k = kk % p->nreg;
               const cd_region *r = &p->reg[k];
-              if (!region_contains(r, x, p->dim)) continue;
+              if (r->matrix != (kk >= p->nreg) || !region_contains(r, x, p->dim)) continue;
               if (pass) {
                 size_t i = ptl_state_add(s, x[0], x[1], x[2], eos_rho0(p->mat[r->mat]->eos) * vol, r->mat);
                 s->vx[i] = r->velocity[0];

@@ -133,7 +133,38 @@ static void test_bad_input(void **state) {
   unlink(hist);
 }
 
+/* every example deck inputs/cd-*.yaml reads without errors (they are documentation) */
+static void test_example_decks(void **state) {
+  (void)state;
+  const char *src = getenv("MSCALE_SOURCE_DIR");
+  static const char *const names[] = {"cd-piston-al.yaml", "cd-piston-history.yaml", "cd-dusting.yaml",
+                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml"};
+  for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/inputs/%s", src ? src : "../..", names[k]);
+    dk_errors e;
+    dk_errors_init(&e);
+    dk_doc *doc = dk_load(path, &e);
+    assert_non_null(doc);
+    dk_read_units(doc, &e);
+    eos_materials *m = eos_materials_read(doc, &e);
+    const dk_node *root = dk_root(doc);
+    dk_get(root, "problem");
+    cd_problem *p = cd_problem_read(doc, dk_get(root, "cluster_dynamics"), m, &e);
+    dk_report_unused(&e, doc);
+    printf("%s: %zu errors\n", names[k], e.n);
+    dk_errors_print(&e, stdout);
+    assert_int_equal(e.n, 0);
+    assert_non_null(p);
+    cd_problem_free(p);
+    eos_materials_free(m);
+    dk_free(doc);
+    dk_errors_free(&e);
+  }
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_good_deck_runs), cmocka_unit_test(test_bad_input)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_good_deck_runs), cmocka_unit_test(test_bad_input),
+                                     cmocka_unit_test(test_example_decks)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
