@@ -11,6 +11,12 @@ typedef struct cont_region {
   int material;
 } cont_region;
 
+/* The step sweeps the grid in chunks of CONT_CHUNK nodes (step.c). Its scratch arrays are
+ * chunk-local windows of CONT_WINDOW entries: global index j lives at [j + CONT_HALO − origin],
+ * and the last CONT_HALO entries are carried into the next window, so scratch data never
+ * travels to main memory. */
+enum { CONT_CHUNK = 512, CONT_HALO = 4, CONT_WINDOW = CONT_CHUNK + 2 * CONT_HALO };
+
 typedef struct cont_tag {
   char *name;
   size_t node;
@@ -26,17 +32,18 @@ struct cont_grid {
   /* Nodes (structure of arrays, 64-byte aligned). */
   double *x, *u;        /* state at tⁿ */
   double *inv_mass;     /* 1 / nodal mass (½ of each neighbouring cell) */
-  double *u_pred_mean;  /* predictor ½(uⁿ + u*) */
-  double *area_mid;     /* face area between xⁿ and x* (mean-value form, see step.c) */
-  double *u_mean;       /* corrector ½(uⁿ + uⁿ⁺¹) */
+  double *u_pred_mean;  /* window: predictor ½(uⁿ + u*) */
+  double *area_mid;     /* window: face area between xⁿ and x* (mean-value form, see step.c) */
+  double *u_mean;       /* window: corrector ½(uⁿ + uⁿ⁺¹) */
   double *ext_traction; /* coupling: extra force per face area (0 = none) */
   double *ext_velocity; /* coupling: prescribed velocity (NAN = free) */
   double *reaction;     /* coupling: constraint force per face area in the last step */
   double *force;        /* scratch: nodal force of the current phase */
 
   /* Cells. */
-  double *mass, *inv_cell_mass, *vol, *rho, *e, *p, *q, *c;
-  double *rho_half, *e_half, *p_half, *q_half; /* predictor state at t^{n+1/2} */
+  double *mass, *inv_cell_mass, *rho, *e, *p, *q, *c;
+  double *rho_half, *e_half, *p_half, *q_half; /* windows: predictor state at t^{n+1/2} */
+  size_t win_origin;                           /* global index at window entry CONT_HALO */
   int *material, *layer;
 
   size_t nregions;
@@ -59,10 +66,7 @@ struct cont_grid {
   char err[512];
 };
 
-/* Phase functions of one step (step.c); ranges are half-open [lo, hi). */
-void cont_calc_force_for_nodes(cont_grid *g, size_t lo, size_t hi, const double *xpos,
-                               const double *pq_cells, const double *area, double p_left,
-                               double p_right, double *force_out);
+/* Phase functions used outside the step too (step.c; grid set-up); ranges are half-open. */
 void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *rho,
                              const double *e, double *p, double *c, size_t *bad, ms_status *st);
 void cont_calc_q_for_cells(const cont_grid *g, size_t lo, size_t hi, const double *rho,

@@ -191,25 +191,24 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   g->x = alloc_doubles(Nn);
   g->u = alloc_doubles(Nn);
   g->inv_mass = alloc_doubles(Nn);
-  g->u_pred_mean = alloc_doubles(Nn);
-  g->area_mid = alloc_doubles(Nn);
-  g->u_mean = alloc_doubles(Nn);
+  g->u_pred_mean = alloc_doubles(CONT_WINDOW);
+  g->area_mid = alloc_doubles(CONT_WINDOW);
+  g->u_mean = alloc_doubles(CONT_WINDOW);
   g->ext_traction = alloc_doubles(Nn);
   g->ext_velocity = alloc_doubles(Nn);
   g->reaction = alloc_doubles(Nn);
   g->force = alloc_doubles(Nn);
   g->mass = alloc_doubles(N);
   g->inv_cell_mass = alloc_doubles(N);
-  g->vol = alloc_doubles(N);
   g->rho = alloc_doubles(N);
   g->e = alloc_doubles(N);
   g->p = alloc_doubles(N);
   g->q = alloc_doubles(N);
   g->c = alloc_doubles(N);
-  g->rho_half = alloc_doubles(N);
-  g->e_half = alloc_doubles(N);
-  g->p_half = alloc_doubles(N);
-  g->q_half = alloc_doubles(N);
+  g->rho_half = alloc_doubles(CONT_WINDOW);
+  g->e_half = alloc_doubles(CONT_WINDOW);
+  g->p_half = alloc_doubles(CONT_WINDOW);
+  g->q_half = alloc_doubles(CONT_WINDOW);
   g->material = ms_calloc(N, sizeof(int));
   g->layer = ms_calloc(N, sizeof(int));
   g->nregions = s->nlayers;
@@ -254,7 +253,6 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   double *node_mom = ms_calloc(Nn, sizeof(double));
   for (size_t i = 0; i < N; ++i) {
     double v = cont_cell_volume(g, g->x[i], g->x[i + 1]);
-    g->vol[i] = v;
     g->mass[i] = g->rho[i] * v;
     g->inv_cell_mass[i] = 1.0 / g->mass[i];
     double uc = s->layers[g->layer[i]].u;
@@ -270,9 +268,9 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   free(node_mass);
   free(node_mom);
   for (size_t i = 0; i < N; ++i) {
-    if (!(g->vol[i] > 0.0)) {
-      set_err(err, errlen, "cell %zu has volume %g (layers too thin for their cell count?)", i,
-              g->vol[i]);
+    if (!(g->mass[i] > 0.0)) {
+      set_err(err, errlen, "cell %zu has mass %g (layers too thin for their cell count?)", i,
+              g->mass[i]);
       cont_grid_destroy(g);
       return NULL;
     }
@@ -330,7 +328,7 @@ void cont_grid_destroy(cont_grid *g) {
   double **arrays[] = {&g->x, &g->u, &g->inv_mass, &g->u_pred_mean, &g->area_mid, &g->u_mean,
                        &g->ext_traction, &g->ext_velocity, &g->reaction, &g->force, &g->mass,
                        &g->inv_cell_mass,
-                       &g->vol, &g->rho, &g->e, &g->p, &g->q, &g->c, &g->rho_half, &g->e_half,
+                       &g->rho, &g->e, &g->p, &g->q, &g->c, &g->rho_half, &g->e_half,
                        &g->p_half, &g->q_half};
   for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k) free(*arrays[k]);
   free(g->material);

@@ -37,9 +37,10 @@ static void xt_add(xt_data *xt, const cont_grid *g) {
     size_t a = k * xt->stride, b = a + xt->stride < g->ncells ? a + xt->stride : g->ncells;
     double m = 0, v = 0, pv = 0;
     for (size_t i = a; i < b; ++i) {
+      double vi = cont_cell_volume(g, g->x[i], g->x[i + 1]);
       m += g->mass[i];
-      v += g->vol[i];
-      pv += g->p[i] * g->vol[i];
+      v += vi;
+      pv += g->p[i] * vi;
     }
     xt->x[f * (nc + 1) + k] = g->x[a];
     xt->rho[f * nc + k] = m / v;
