@@ -9,8 +9,11 @@
 #include <string.h>
 #include <yaml.h>
 
-/* Guards against alias bombs and runaway nesting in hostile decks. */
-enum { DK_MAX_DEPTH = 64, DK_MAX_NODES = 1000000 };
+/* Guards against alias bombs and runaway nesting in hostile decks. Nodes written out in the
+ * file are bounded by its size; nodes copied through aliases are not, and a "billion laughs"
+ * deck reaching DK_MAX_NODES took > 10 s and ~1 GB under ASan (fuzz_deck timeout), so copies
+ * through aliases have their own, much smaller budget (real decks reuse a block or two). */
+enum { DK_MAX_DEPTH = 64, DK_MAX_NODES = 1000000, DK_MAX_ALIAS_NODES = 10000 };
 
 /* ------------------------------------------------------------------------------------------ */
 /* Errors                                                                                      */
@@ -124,19 +127,27 @@ typedef struct build_state {
   yaml_document_t *ydoc;
   dk_doc *doc;
   dk_errors *e;
-  size_t nnodes;
+  size_t nnodes, alias_nodes;
+  unsigned char *seen; /* per libyaml node index: already copied once (a second use is an alias) */
+  size_t nseen;
   bool failed;
 } build_state;
 
-static dk_node *build(build_state *st, int index, const char *path, int depth) {
+static dk_node *build(build_state *st, int index, const char *path, int depth, bool in_alias) {
   yaml_node_t *y = yaml_document_get_node(st->ydoc, index);
   if (!y || st->failed) return NULL;
   int line = (int)y->start_mark.line + 1, col = (int)y->start_mark.column + 1;
-  if (depth > DK_MAX_DEPTH || ++st->nnodes > DK_MAX_NODES) {
+  if (index >= 1 && (size_t)index <= st->nseen) {
+    if (st->seen[index - 1]) in_alias = true;
+    st->seen[index - 1] = 1;
+  }
+  if (in_alias) st->alias_nodes++;
+  if (depth > DK_MAX_DEPTH || ++st->nnodes > DK_MAX_NODES ||
+      st->alias_nodes > DK_MAX_ALIAS_NODES) {
     dk_error_at(st->e, st->doc->file, line, col,
-                "the deck nests deeper than %d levels or expands to more than %d nodes "
-                "(recursive or exploding aliases?)",
-                DK_MAX_DEPTH, DK_MAX_NODES);
+                "the deck nests deeper than %d levels, expands to more than %d nodes, or "
+                "copies more than %d nodes through aliases (recursive or exploding aliases?)",
+                DK_MAX_DEPTH, DK_MAX_NODES, DK_MAX_ALIAS_NODES);
     st->failed = true;
     return NULL;
   }
@@ -159,7 +170,7 @@ static dk_node *build(build_state *st, int index, const char *path, int depth) {
     for (yaml_node_item_t *it = y->data.sequence.items.start; it < y->data.sequence.items.top;
          it++, i++) {
       char *cp = dk_child_path(path, NULL, i);
-      dk_node *c = build(st, *it, cp, depth + 1);
+      dk_node *c = build(st, *it, cp, depth + 1, in_alias);
       free(cp);
       if (!c) break;
       dk_node_append(n, NULL, c, false, false);
@@ -190,7 +201,7 @@ static dk_node *build(build_state *st, int index, const char *path, int depth) {
         continue;
       }
       char *cp = dk_child_path(path, key, 0);
-      dk_node *c = build(st, pr->value, cp, depth + 1);
+      dk_node *c = build(st, pr->value, cp, depth + 1, in_alias);
       free(cp);
       if (!c) break;
       c->key_line = kl;
@@ -229,12 +240,15 @@ static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const c
     return NULL;
   }
   build_state st = {.ydoc = &ydoc, .doc = doc, .e = e};
+  st.nseen = (size_t)(ydoc.nodes.top - ydoc.nodes.start);
+  st.seen = ms_calloc(st.nseen ? st.nseen : 1, 1);
   yaml_node_t *root = yaml_document_get_root_node(&ydoc);
   if (!root) {
     doc->root = dk_node_new(DK_MAP, 1, 1, "");
   } else {
-    doc->root = build(&st, 1, "", 0);
+    doc->root = build(&st, 1, "", 0, false);
     if (!doc->root || st.failed) {
+      free(st.seen);
       yaml_document_delete(&ydoc);
       dk_free(doc);
       return NULL;
@@ -243,11 +257,13 @@ static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const c
       dk_error(e, doc, doc->root, "a deck must be a mapping of keys (e.g. 'materials:'), "
                                   "found a %s",
                doc->root->kind == DK_SEQ ? "list" : "single value");
+      free(st.seen);
       yaml_document_delete(&ydoc);
       dk_free(doc);
       return NULL;
     }
   }
+  free(st.seen);
   yaml_document_delete(&ydoc);
   /* A second YAML document in the same file is almost certainly a mistake. */
   yaml_document_t extra;

@@ -229,6 +229,42 @@ static void test_deck_number_out_of_range(void **state) {
   dk_errors_free(&e);
 }
 
+/* fuzz_deck, crashes/fuzz_deck/alias-bomb-timeout.yaml: a "billion laughs" deck was expanded
+ * up to the 10^6-node limit before being refused (> 10 s and ~1 GB under ASan). Copies made
+ * through aliases now have a budget of their own (10^4 nodes); ordinary reuse still works. */
+static void test_alias_expansion_budget(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  /* 10 x 10 x 10 x 10 = 10^4 copies of the leaf, plus the lists holding them: over budget */
+  const char *bomb = "a: &a [x, x, x, x, x, x, x, x, x, x]\n"
+                     "b: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]\n"
+                     "c: &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b]\n"
+                     "d: [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c]\n";
+  assert_null(dk_load_string(bomb, "bomb.yaml", &e));
+  dk_errors_print(&e, stderr);
+  /* located at the copied node's anchor (libyaml does not keep where an alias was used) */
+  assert_true(has_error(&e, "bomb.yaml:1:11: the deck nests deeper than 64 levels, expands to more "
+                            "than 1000000 nodes, or copies more than 10000 nodes through aliases"));
+  dk_errors_free(&e);
+  /* one level less (about 10^3 copies) is a legitimate, if odd, deck */
+  const char *reuse = "eos: &al {type: mg_linear, rho0: 2.703}\n"
+                      "a: &a [x, x, x, x, x, x, x, x, x, x]\n"
+                      "b: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]\n"
+                      "c: [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b]\n"
+                      "materials: [{name: x, eos: *al}, {name: y, eos: *al}]\n";
+  dk_doc *doc = dk_load_string(reuse, "reuse.yaml", &e);
+  assert_non_null(doc);
+  assert_int_equal(e.n, 0);
+  const dk_node *c = dk_get(dk_root(doc), "c");
+  assert_int_equal(dk_seq_len(c), 10);
+  assert_int_equal(dk_seq_len(dk_seq_at(dk_seq_at(c, 9), 9)), 10);
+  const dk_node *y = dk_seq_at(dk_get(dk_root(doc), "materials"), 1);
+  assert_string_equal(dk_scalar(dk_get(dk_get(y, "eos"), "rho0")), "2.703");
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resolved_deck_round_trip),
@@ -237,6 +273,7 @@ int main(void) {
       cmocka_unit_test(test_table_line_too_long),
       cmocka_unit_test(test_h5_declared_size_not_stored),
       cmocka_unit_test(test_deck_number_out_of_range),
+      cmocka_unit_test(test_alias_expansion_budget),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
