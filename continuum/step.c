@@ -110,27 +110,20 @@ void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *r
 }
 
 /* Courant limit with the viscosity's signal speed: Δt_i = cfl Δx / (Q + sqrt(Q² + c²)),
- * Q = q_lin c + 2 q_quad |Δu| in compression (Benson 1991 form). */
-static inline double time_constraint(const cont_grid *g, size_t lo, size_t hi, int k) {
+ * Q = q_lin c + 2 q_quad |Δu| in compression (Benson 1991 form). Used at set-up; the step
+ * computes the same formula inside cont_calc_q_and_time_constraint_for_cells. */
+double cont_calc_time_constraint(const cont_grid *g, size_t lo, size_t hi) {
   const double *restrict x = g->x, *restrict u = g->u, *restrict c = g->c;
   const double cq2 = 2.0 * g->q_quad, cl = g->q_lin;
   double inv_dt_max = 0.0; /* max of 1/Δt avoids a division per cell */
-  (void)k;
-#pragma omp simd reduction(max : inv_dt_max)
   for (size_t i = lo; i < hi; ++i) {
-    double dx = x[i + 1] - x[i];
     double du = u[i + 1] - u[i];
     double adu = du < 0.0 ? -du : 0.0;
     double qs = adu > 0.0 ? cl * c[i] + cq2 * adu : 0.0;
-    double speed = qs + sqrt(qs * qs + c[i] * c[i]);
-    double inv = speed / dx;
+    double inv = (qs + sqrt(qs * qs + c[i] * c[i])) / (x[i + 1] - x[i]);
     inv_dt_max = inv > inv_dt_max ? inv : inv_dt_max;
   }
   return inv_dt_max > 0.0 ? g->cfl / inv_dt_max : INFINITY;
-}
-
-double cont_calc_time_constraint(const cont_grid *g, size_t lo, size_t hi) {
-  return time_constraint(g, lo, hi, g->area_power);
 }
 
 static ms_status fail(cont_grid *g, size_t cell, const char *what, double value) {
