@@ -17,6 +17,7 @@
 #define MSCALE_CPL_H
 
 #include "core.h"
+#include "eos.h"
 
 /* ========================================================================================== */
 /* Union–find (disjoint sets) with path compression and union by size.                        */
@@ -268,6 +269,18 @@ double cpl_piston_velocity(const cpl_piston *p, double t);
 /* Displacement x(t) − x(t_0) (exact integral of cpl_piston_velocity). */
 double cpl_piston_displacement(const cpl_piston *p, double t);
 
+/* Drive check: free-surface velocity of the particles against the grid's free-surface tag,
+ * sampled at the same times. Breakout t_break: the grid's velocity first exceeds 5 % of its
+ * maximum; plateaus: means over [t_break + window/2, t_break + window]; t_half_*: first time
+ * each reaches half its plateau (so a timing offset shows separately from a level error).
+ * False if there is no breakout or no sample in the plateau interval. */
+typedef struct cpl_fs_check {
+  double t_break, plateau_grid, plateau_particles, rel_diff, t_half_grid, t_half_particles;
+  size_t samples;
+} cpl_fs_check;
+bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,
+                            const double *u_particles, double window, cpl_fs_check *out);
+
 /* ========================================================================================== */
 /* Interfaces expected from the grid and the particles (docs/coupling.md §Interfaces)           *
  *
@@ -312,5 +325,26 @@ typedef struct cpl_particle_ops {
   /* Mean free-surface velocity along the drive axis (for the drive check). */
   double (*free_surface_velocity)(void *sim);
 } cpl_particle_ops;
+
+/* ========================================================================================== */
+/* The deck problem `coupled` (docs/input-coupled.md): grid → tagged node U(t) → cluster-dynamics
+ * piston → fragments, drag, transport to a detector (one-way drive).                          */
+typedef struct cpl_problem cpl_problem;
+cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                              dk_errors *e);
+ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p);
+void cpl_problem_free(cpl_problem *p);
+/* What the last cpl_problem_run measured (for tests and summaries). */
+typedef struct cpl_run_summary {
+  size_t particles;
+  long steps;
+  cpl_fs_check check;    /* free-surface drive check */
+  double energy_balance; /* (E(t_end) − E(0))/piston work of the particle phase */
+  double piston_work;    /* kJ */
+  size_t fragments;      /* at the end of the particle phase */
+  double ejected_mass;   /* g (every fragment but the largest) */
+  size_t transported, arrived;
+} cpl_run_summary;
+const cpl_run_summary *cpl_problem_summary(const cpl_problem *p);
 
 #endif /* MSCALE_CPL_H */

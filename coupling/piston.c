@@ -84,3 +84,55 @@ double cpl_piston_displacement(const cpl_piston *p, double t) {
   double part = h * (p->u[k] + p->c[k]) + 0.5 * (p->u[k + 1] - p->u[k]) * h * h / dt;
   return p->x[k] - p->x[0] + part;
 }
+
+/* Free-surface comparison (docs/coupling.md §5): breakout where the grid's velocity first
+ * exceeds 5 % of its maximum; plateaus = means over the second half of the window; arrival =
+ * first crossing of half the plateau (linear interpolation between samples). */
+static double half_crossing(size_t n, const double *t, const double *u, double level, double t0) {
+  for (size_t k = 1; k < n; k++) {
+    if (t[k] < t0 || !isfinite(u[k]) || !isfinite(u[k - 1]))
+      continue;
+    if (u[k - 1] < level && u[k] >= level)
+      return t[k - 1] + (level - u[k - 1]) * (t[k] - t[k - 1]) / (u[k] - u[k - 1]);
+    if (k == 1 && u[0] >= level)
+      return t[0];
+  }
+  return NAN;
+}
+
+bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,
+                            const double *u_particles, double window, cpl_fs_check *out) {
+  memset(out, 0, sizeof *out);
+  out->t_break = out->plateau_grid = out->plateau_particles = out->rel_diff = NAN;
+  out->t_half_grid = out->t_half_particles = NAN;
+  double umax = 0;
+  for (size_t k = 0; k < n; k++)
+    if (isfinite(u_grid[k]))
+      umax = fmax(umax, fabs(u_grid[k]));
+  if (!(umax > 0) || !(window > 0))
+    return false;
+  size_t kb = 0;
+  while (kb < n && !(fabs(u_grid[kb]) > 0.05 * umax))
+    kb++;
+  if (kb == n)
+    return false;
+  out->t_break = t[kb];
+  double sg = 0, sp = 0;
+  size_t m = 0;
+  for (size_t k = kb; k < n && t[k] <= out->t_break + window; k++)
+    if (t[k] >= out->t_break + 0.5 * window && isfinite(u_particles[k])) {
+      sg += u_grid[k];
+      sp += u_particles[k];
+      m++;
+    }
+  out->samples = m;
+  if (!m)
+    return false;
+  out->plateau_grid = sg / (double)m;
+  out->plateau_particles = sp / (double)m;
+  out->rel_diff = fabs(out->plateau_particles - out->plateau_grid) / fabs(out->plateau_grid);
+  double t0 = out->t_break - window;
+  out->t_half_grid = half_crossing(n, t, u_grid, 0.5 * out->plateau_grid, t0);
+  out->t_half_particles = half_crossing(n, t, u_particles, 0.5 * out->plateau_particles, t0);
+  return true;
+}

@@ -1,0 +1,813 @@
+/* The `coupled` problem (docs/input-coupled.md, docs/coupling.md §6): the one-way drive of
+ * DESIGN.md §6. The Lagrangian grid computes the loading; the velocity history U(t) of a tagged
+ * node inside the sample drives the piston of a cluster-dynamics region that represents the
+ * sample between that node and its (flat, grooved or rough) free surface; fragments are found
+ * during and after the particle phase, feel Schiller–Naumann drag from the grid's gas layer, and
+ * the detached ones are transported to a detector plane with CVODE.
+ *
+ * Two grids are read from the same `grid:` section: one runs first through the continuum
+ * problem's own loop (its outputs — profiles, histories, x–t diagram — land in the run
+ * directory and its tag histories drive the particles); the other is advanced in lock-step with
+ * the particles and the transport to supply the gas state at the current time. */
+#include "cpl_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cont.h"
+#include "ptl.h"
+
+enum { SURF_FLAT = 0, SURF_GROOVES, SURF_RANDOM };
+static const char *const surface_names[] = {"flat", "grooves", "random", NULL};
+static const char *const lattice_names[] = {"tri2d", "fcc", NULL};
+static const char *const cutoff_names[] = {"plain", "bonded", NULL};
+
+struct cpl_problem {
+  const eos_materials *mats;
+  cont_problem *grid_out, *grid_live;
+  size_t tag_drive, tag_fs; /* tag indices in both grids */
+  bool have_fs;
+  int sample_mat, gas_mat, gas_layer;
+  /* particles */
+  int lattice; /* 0 tri2d, 1 fcc */
+  double spacing, thickness, width, width_z, cutoff, damping_j, dt_factor, dt;
+  int cutoff_mode;
+  long piston_rows;
+  int surface;
+  double surf_depth, surf_wavelength;
+  long seed;
+  /* time and outputs */
+  double t_end;
+  long n_out;
+  double check_window;
+  /* fragments, drag, transport */
+  double bond;
+  long frag_every;
+  int drag_law;
+  double det_distance, transport_end;
+  long transport_windows;
+  cpl_run_summary sum; /* what the last run measured */
+};
+
+const cpl_run_summary *cpl_problem_summary(const cpl_problem *p) { return &p->sum; }
+
+/* ---------------------------------------------------------------------------------------- */
+/* Reading                                                                                   */
+
+static size_t find_tag(const cont_grid *g, const char *name) {
+  for (size_t i = 0; i < cont_grid_ntags(g); i++)
+    if (!strcmp(cont_grid_history(g, i).name, name))
+      return i;
+  return (size_t)-1;
+}
+
+static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
+  const dk_node *P = dk_get(sec, "particles");
+  if (!P) {
+    dk_error(e, doc, sec, "coupled: a 'particles:' section is required");
+    return;
+  }
+  if (!dk_expect_map(e, doc, P, "particles"))
+    return;
+  dk_read_enum(e, doc, P, "lattice", false, 0, lattice_names, &p->lattice);
+  dk_read_positive(e, doc, P, "spacing", MS_DIM_LENGTH, true, 0, &p->spacing);
+  dk_read_double(e, doc, P, "thickness", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->thickness);
+  dk_read_positive(e, doc, P, "width", MS_DIM_LENGTH, true, 0, &p->width);
+  dk_read_double(e, doc, P, "width_z", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->width_z);
+  dk_read_double(e, doc, P, "cutoff", MS_DIM_NONE, false, 1.2, 1.0, 1.5, &p->cutoff);
+  int mode = 1;
+  dk_read_enum(e, doc, P, "cutoff_mode", false, 1, cutoff_names, &mode);
+  p->cutoff_mode = mode;
+  dk_read_double(e, doc, P, "damping_j", MS_DIM_NONE, false, 50.0, 0.0, 1e6, &p->damping_j);
+  dk_read_int(e, doc, P, "piston_rows", false, 2, 1, 100, &p->piston_rows);
+  dk_read_double(e, doc, P, "dt_factor", MS_DIM_NONE, false, 0.05, 1e-4, 0.5, &p->dt_factor);
+  dk_read_double(e, doc, P, "dt", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &p->dt);
+  const dk_node *S = dk_get(P, "surface");
+  p->surface = SURF_FLAT;
+  if (S && dk_expect_map(e, doc, S, "particles.surface")) {
+    dk_read_enum(e, doc, S, "type", false, 0, surface_names, &p->surface);
+    bool need = p->surface != SURF_FLAT;
+    dk_read_double(e, doc, S, "depth", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY, &p->surf_depth);
+    dk_read_double(e, doc, S, "wavelength", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY,
+                   &p->surf_wavelength);
+    dk_read_int(e, doc, S, "seed", false, 1, 0, 1L << 40, &p->seed);
+    if (need && !(p->surf_wavelength > 0))
+      dk_error(e, doc, S, "particles.surface: wavelength must be > 0 for %s surfaces",
+               surface_names[p->surface]);
+  }
+}
+
+cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
+                              dk_errors *e) {
+  size_t nerr0 = e->n;
+  cpl_problem *p = ms_calloc(1, sizeof *p);
+  p->sum.check.rel_diff = NAN;
+  p->mats = mats;
+  /* the grid first: the continuum reader checks the error count it started with */
+  const dk_node *G = dk_get(sec, "grid");
+  if (!G) {
+    dk_error(e, doc, sec,
+             "coupled: a 'grid:' section (the keys of a continuum section) is "
+             "required");
+  } else {
+    p->grid_out = cont_problem_read(doc, G, mats, e);
+    if (p->grid_out) {
+      dk_errors scratch; /* the second read repeats the first one's (already empty) findings */
+      dk_errors_init(&scratch);
+      p->grid_live = cont_problem_read(doc, G, mats, &scratch);
+      dk_errors_free(&scratch);
+    }
+  }
+  const dk_node *D = dk_get(sec, "drive");
+  const char *drive_tag = NULL, *fs_tag = NULL;
+  if (!D)
+    dk_error(e, doc, sec,
+             "coupled: a 'drive:' section is required (the tag whose U(t) drives "
+             "the particles)");
+  else if (dk_expect_map(e, doc, D, "drive")) {
+    dk_read_string(e, doc, D, "tag", true, NULL, &drive_tag);
+    dk_read_string(e, doc, D, "free_surface_tag", false, "", &fs_tag);
+    /* 0: depth/c0, shorter than the round trip of the release to the piston and back */
+    dk_read_double(e, doc, D, "check_window", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
+                   &p->check_window);
+  }
+  read_particles(p, doc, sec, e);
+
+  const dk_node *T = dk_get(sec, "time");
+  if (!T)
+    dk_error(e, doc, sec,
+             "coupled: a 'time:' section with 'end' (end of the particle phase) is "
+             "required");
+  else if (dk_expect_map(e, doc, T, "time")) {
+    dk_read_positive(e, doc, T, "end", MS_DIM_TIME, true, 0, &p->t_end);
+    dk_read_int(e, doc, T, "outputs", false, 4, 1, 1000, &p->n_out);
+  }
+  const dk_node *F = dk_get(sec, "fragments");
+  p->bond = 1.2;
+  p->frag_every = 100;
+  if (F && dk_expect_map(e, doc, F, "fragments")) {
+    dk_read_double(e, doc, F, "bond", MS_DIM_NONE, false, 1.2, 0.5, 3.0, &p->bond);
+    dk_read_int(e, doc, F, "every", false, 100, 1, 1000000, &p->frag_every);
+  }
+  const dk_node *R = dk_get(sec, "drag");
+  p->drag_law = CPL_DRAG_SCHILLER_NAUMANN;
+  if (R && dk_expect_map(e, doc, R, "drag"))
+    dk_read_enum(e, doc, R, "law", false, 0, cpl_drag_law_names, &p->drag_law);
+  const dk_node *X = dk_get(sec, "transport");
+  if (X && dk_expect_map(e, doc, X, "transport")) {
+    dk_read_positive(e, doc, X, "detector", MS_DIM_LENGTH, true, 0, &p->det_distance);
+    dk_read_positive(e, doc, X, "end", MS_DIM_TIME, true, 0, &p->transport_end);
+    dk_read_int(e, doc, X, "windows", false, 200, 1, 100000, &p->transport_windows);
+  }
+
+  /* consistency with the grid: tags, the sample between them, the gas beyond */
+  if (p->grid_out && drive_tag) {
+    const cont_grid *g = cont_problem_grid(p->grid_out);
+    cont_view v = cont_grid_view(g);
+    p->tag_drive = find_tag(g, drive_tag);
+    const dk_node *at = dk_get(D, "tag");
+    if (p->tag_drive == (size_t)-1) {
+      dk_error(e, doc, at, "drive.tag: no tag named '%s' in grid.tags", drive_tag);
+    } else {
+      p->have_fs = fs_tag && fs_tag[0];
+      size_t nd = cont_grid_history(g, p->tag_drive).node, nf = v.ncells;
+      if (p->have_fs) {
+        p->tag_fs = find_tag(g, fs_tag);
+        if (p->tag_fs == (size_t)-1) {
+          dk_error(e, doc, dk_get(D, "free_surface_tag"),
+                   "drive.free_surface_tag: no tag named '%s' in grid.tags", fs_tag);
+          p->have_fs = false;
+        } else {
+          nf = cont_grid_history(g, p->tag_fs).node;
+        }
+      }
+      if (!p->have_fs) {
+        dk_error(e, doc, D,
+                 "drive.free_surface_tag is required: it marks the sample's free "
+                 "surface, where the particle region ends");
+      } else if (nd >= nf) {
+        dk_error(e, doc, at,
+                 "drive.tag '%s' (node %zu) must lie left of the free surface '%s' "
+                 "(node %zu)",
+                 drive_tag, nd, fs_tag, nf);
+      } else {
+        p->sample_mat = v.material[nd];
+        for (size_t c = nd; c < nf; c++)
+          if (v.material[c] != p->sample_mat) {
+            dk_error(e, doc, at,
+                     "the cells between drive.tag '%s' and the free surface '%s' "
+                     "must be one material (the particle region's)",
+                     drive_tag, fs_tag);
+            break;
+          }
+        if (nf >= v.ncells) {
+          dk_error(e, doc, dk_get(D, "free_surface_tag"),
+                   "the free surface '%s' is the grid's last node: the gas layer beyond it is "
+                   "missing",
+                   fs_tag);
+        } else {
+          p->gas_mat = v.material[nf];
+          p->gas_layer = v.layer[nf];
+          const eos_material *gm = &mats->m[p->gas_mat];
+          if (p->drag_law != CPL_DRAG_NONE && !(gm->viscosity > 0))
+            dk_error(e, doc, R ? R : sec,
+                     "drag needs the gas viscosity: give material '%s' a 'viscosity' "
+                     "(air: 1.8e-9 g/(cm*10us) = 1.8e-5 Pa*s), or set drag.law: none",
+                     gm->name);
+        }
+        if (!mats->m[p->sample_mat].eos)
+          dk_error(e, doc, at, "the sample material has no equation of state");
+      }
+    }
+  }
+  if (p->lattice == 0 && p->thickness == 0)
+    p->thickness = p->spacing;
+  if (p->lattice == 1 && !(p->width_z > 0))
+    p->width_z = 4 * sqrt(2.0) * p->spacing;
+  if (p->surface != SURF_FLAT && p->surf_wavelength > 0 && p->width > 0 &&
+      p->surf_wavelength > p->width * (1 + 1e-9))
+    dk_error(e, doc, dk_get(dk_get(sec, "particles"), "width"),
+             "particles.width (%g cm) must hold at least one surface wavelength (%g cm)", p->width,
+             p->surf_wavelength);
+  if (e->n != nerr0) {
+    cpl_problem_free(p);
+    return NULL;
+  }
+  return p;
+}
+
+void cpl_problem_free(cpl_problem *p) {
+  if (!p)
+    return;
+  cont_problem_free(p->grid_out);
+  cont_problem_free(p->grid_live);
+  free(p);
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Free-surface profile                                                                      */
+
+typedef struct surface_modes {
+  int n;
+  double ky[64], kz[64], amp[64], phase[64];
+  double lo, hi; /* range of the raw sum, for scaling to the peak-to-valley depth */
+} surface_modes;
+
+/* Height below the nominal surface (0 at the peaks, depth at the valleys). */
+static double surface_drop(const cpl_problem *p, const surface_modes *m, double y, double z) {
+  if (p->surface == SURF_FLAT || !(p->surf_depth > 0))
+    return 0.0;
+  if (p->surface == SURF_GROOVES) {
+    double lam = p->width / fmax(1.0, nearbyint(p->width / p->surf_wavelength));
+    return 0.5 * p->surf_depth * (1 - cos(2 * CPL_PI * y / lam));
+  }
+  double s = 0;
+  for (int k = 0; k < m->n; k++)
+    s += m->amp[k] * cos(m->ky[k] * y + m->kz[k] * z + m->phase[k]);
+  return p->surf_depth * (m->hi - s) / (m->hi - m->lo);
+}
+
+/* Random roughness: periodic modes with wavelengths from the box size down to the deck's
+ * wavelength (the correlation length), random phases, amplitudes ∝ wavelength (a rough,
+ * self-affine-like profile), scaled to the peak-to-valley depth Rz. */
+static void surface_setup(const cpl_problem *p, surface_modes *m, bool three_d) {
+  memset(m, 0, sizeof *m);
+  if (p->surface != SURF_RANDOM)
+    return;
+  int my = (int)fmax(1.0, floor(p->width / p->surf_wavelength));
+  int mz = three_d ? (int)fmax(1.0, floor(p->width_z / p->surf_wavelength)) : 0;
+  uint64_t k = 0;
+  for (int iy = 0; iy <= my && m->n < 64; iy++)
+    for (int iz = 0; iz <= mz && m->n < 64; iz++) {
+      if (!iy && !iz)
+        continue;
+      double ky = 2 * CPL_PI * iy / p->width, kz = three_d ? 2 * CPL_PI * iz / p->width_z : 0;
+      double kk = sqrt(ky * ky + kz * kz);
+      m->ky[m->n] = ky;
+      m->kz[m->n] = kz;
+      m->amp[m->n] = (0.5 + ptl_splitmix64_uniform((uint64_t)p->seed, k++)) / kk;
+      m->phase[m->n] = 2 * CPL_PI * ptl_splitmix64_uniform((uint64_t)p->seed, k++);
+      m->n++;
+    }
+  /* range of the sum over a fine sample of the period */
+  m->lo = INFINITY;
+  m->hi = -INFINITY;
+  int ny = 512, nz = three_d ? 128 : 1;
+  for (int a = 0; a < ny; a++)
+    for (int b = 0; b < nz; b++) {
+      double y = p->width * a / ny, z = three_d ? p->width_z * b / nz : 0, s = 0;
+      for (int j = 0; j < m->n; j++)
+        s += m->amp[j] * cos(m->ky[j] * y + m->kz[j] * z + m->phase[j]);
+      if (s < m->lo)
+        m->lo = s;
+      if (s > m->hi)
+        m->hi = s;
+    }
+  if (!(m->hi > m->lo))
+    m->hi = m->lo + 1;
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Running                                                                                   */
+
+/* Gas state from the live grid: only the gas layer beyond the sample counts. */
+typedef struct gas_ctx {
+  const cont_grid *g;
+  int gas_layer;
+  double mu;
+} gas_ctx;
+
+static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
+  (void)t;
+  const gas_ctx *c = user;
+  cont_sample s;
+  if (!cont_grid_sample(c->g, x[0], &s) || s.layer != c->gas_layer)
+    return false;
+  out->rho = s.rho;
+  out->u[0] = s.u;
+  out->u[1] = out->u[2] = 0;
+  out->p = s.p;
+  out->mu = c->mu;
+  return true;
+}
+
+static FILE *open_csv(const ms_ctx *ctx, ms_afile *af, const char *name) {
+  char *path = ms_out_path(ctx, name);
+  ms_status s = ms_afile_open(af, path);
+  free(path);
+  return s == MS_OK ? af->f : NULL;
+}
+
+static ms_status commit_csv(ms_afile *af) { return ms_afile_commit(af); }
+
+static ms_status write_table(const ms_ctx *ctx, const char *name, const cpl_fragments *fr, int kind,
+                             const cpl_ejecta_sel *sel, const char *title) {
+  ms_afile af;
+  FILE *f = open_csv(ctx, &af, name);
+  if (!f)
+    return MS_ERR_IO;
+  switch (kind) {
+  case 0:
+    cpl_write_spectrum(f, fr, title);
+    break;
+  case 1:
+    cpl_write_fragment_table(f, fr, title);
+    break;
+  case 2:
+    cpl_write_cumulative(f, fr, title);
+    break;
+  case 3:
+    cpl_write_histogram(f, fr, CPL_HIST_MASS, 30, title);
+    break;
+  case 4:
+    cpl_write_histogram(f, fr, CPL_HIST_DIAMETER, 30, title);
+    break;
+  default:
+    cpl_write_ejecta_velocity(f, fr, sel, title);
+    break;
+  }
+  return commit_csv(&af);
+}
+
+/* View of the CD particles for the fragment search: piston and removed particles excluded. */
+static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
+  for (size_t i = 0; i < ps->n; i++)
+    skip[i] = (ps->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) != 0;
+  cpl_particles v = {ps->n,
+                     ps->x,
+                     ps->y,
+                     ps->dim == 3 ? ps->z : NULL,
+                     ps->vx,
+                     ps->vy,
+                     ps->dim == 3 ? ps->vz : NULL,
+                     ps->mass,
+                     skip};
+  return v;
+}
+
+ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
+  ms_status st;
+  /* 1. the grid alone, with its own outputs */
+  ms_log(ctx, MS_LOG_INFO, "coupled: 1/3 grid run (U(t) of the drive node)");
+  st = cont_problem_run(ctx, p->grid_out);
+  if (st != MS_OK)
+    return st;
+  const cont_grid *gout = cont_problem_grid(p->grid_out);
+  cont_history hd = cont_grid_history(gout, p->tag_drive);
+  cont_history hf = cont_grid_history(gout, p->tag_fs);
+  cpl_piston drive, fsurf;
+  if (cpl_piston_build(&drive, hd.n, hd.t, hd.x, hd.u) != MS_OK ||
+      cpl_piston_build(&fsurf, hf.n, hf.t, hf.x, hf.u) != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR,
+           "coupled: the grid's tag histories are unusable (non-finite or "
+           "not increasing in time)");
+    return MS_ERR_INTERNAL;
+  }
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: drive history '%s': %zu samples, max displacement correction %.3g km/s "
+         "(0 for the conservative cross scheme)",
+         hd.name, hd.n, drive.max_correction);
+
+  /* particle phase starts a little before the drive node moves (saves steps) */
+  double umax = 0;
+  for (size_t k = 0; k < hd.n; k++)
+    umax = fmax(umax, fabs(hd.u[k]));
+  size_t k0 = 0;
+  while (k0 + 1 < hd.n && fabs(hd.u[k0 + 1]) <= 1e-3 * umax)
+    k0++;
+  double t_start = hd.t[k0];
+  if (!(p->t_end > t_start)) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: time.end = %g is before the drive node moves (t = %g)",
+           p->t_end, t_start);
+    cpl_piston_free(&drive);
+    cpl_piston_free(&fsurf);
+    return MS_ERR_INPUT;
+  }
+  if (p->t_end > hd.t[hd.n - 1])
+    ms_log(ctx, MS_LOG_WARN,
+           "coupled: the particle phase (to %g) outlasts the grid run (%g): "
+           "the piston keeps the last velocity",
+           p->t_end, hd.t[hd.n - 1]);
+
+  /* 2. the particle region */
+  const eos_t *eos = p->mats->m[p->sample_mat].eos;
+  const double rho0 = eos_rho0(eos), c0 = eos_c0(eos), a = p->spacing;
+  const bool fcc = p->lattice == 1;
+  const cd_lattice lat = fcc ? CD_LATTICE_FCC : CD_LATTICE_TRI2D;
+  const double x_drive = hd.x[0], x_fs = hf.x[0], depth = x_fs - x_drive;
+  const double mass = rho0 * cd_cluster_volume(lat, a, p->thickness);
+  /* lattice counts: tri2d with close-packed rows along y (row spacing √3/2 a in x);
+   * fcc cubic cells √2 a */
+  const double cell_x = fcc ? sqrt(2.0) * a : sqrt(3.0) * a, cell_y = fcc ? sqrt(2.0) * a : a;
+  int nx = (int)fmax(2.0, nearbyint(depth / cell_x));
+  int ny = (int)fmax(2.0, nearbyint(p->width / cell_y));
+  int nz = fcc ? (int)fmax(2.0, nearbyint(p->width_z / cell_y)) : 1;
+  const double width = ny * cell_y, width_z = fcc ? nz * cell_y : 0.0;
+  const double x_top = x_drive + nx * cell_x; /* nominal free surface of the lattice */
+  size_t ncap = (size_t)(fcc ? 4 : 2) * (size_t)nx * (size_t)ny * (size_t)nz;
+  ptl_state *tmp = ptl_state_create(ncap, fcc ? 3 : 2);
+  if (fcc) {
+    double sh[3] = {0.25, 0.25, 0.25}, o[3] = {x_drive, 0, 0};
+    cd_lattice_fcc(tmp, nx, ny, nz, sh, o, a, mass, 0);
+  } else {
+    /* generated as cd_lattice_tri's (x', y') = (y, x): rows of constant x hold neighbours */
+    double sh[2] = {0.25, 0.25}, o[2] = {0, x_drive};
+    cd_lattice_tri(tmp, ny, nx, sh, o, a, mass, 0);
+    for (size_t i = 0; i < tmp->n; i++) {
+      double t = tmp->x[i];
+      tmp->x[i] = tmp->y[i];
+      tmp->y[i] = t;
+    }
+  }
+  surface_modes modes;
+  surface_setup(p, &modes, fcc);
+  ptl_state *ps = ptl_state_create(tmp->n, fcc ? 3 : 2);
+  const double row = fcc ? 0.5 * sqrt(2.0) * a : 0.5 * sqrt(3.0) * a; /* layer spacing in x */
+  for (size_t i = 0; i < tmp->n; i++) {
+    double drop = surface_drop(p, &modes, tmp->y[i], tmp->z[i]);
+    double top = x_top - drop;
+    if (tmp->x[i] > top)
+      continue;
+    size_t j = ptl_state_add(ps, tmp->x[i], tmp->y[i], tmp->z[i], mass, 0);
+    if (tmp->x[i] < x_drive + p->piston_rows * row)
+      ps->flags[j] |= PTL_DRIVEN;
+    else if (tmp->x[i] > top - row)
+      ps->flags[j] |= PTL_SURFACE;
+  }
+  ptl_state_free(tmp);
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: 2/3 particles: %s lattice, a = %g cm, %zu particles (%d x %d%s%s cells), "
+         "region %g..%g cm (grid: %g..%g), width %g cm, surface %s (depth %g cm)",
+         lattice_names[p->lattice], a, ps->n, nx, ny, fcc ? " x " : "", fcc ? "" : "", x_drive,
+         x_top, x_drive, x_fs, width, surface_names[p->surface], p->surf_depth);
+  (void)nz;
+
+  cd_box box;
+  memset(&box, 0, sizeof box);
+  box.lo[0] = x_drive - 10 * a;
+  box.hi[0] = x_top + 10 * a;
+  box.bc[0] = CD_BC_FREE;
+  box.hi[1] = width;
+  box.bc[1] = CD_BC_PERIODIC;
+  box.hi[2] = fcc ? width_z : 1.0;
+  box.bc[2] = fcc ? CD_BC_PERIODIC : CD_BC_FREE;
+  cd_config cfg;
+  memset(&cfg, 0, sizeof cfg);
+  cfg.r0 = a;
+  cfg.skin = 0.1 * a;
+  cfg.dt = p->dt > 0 ? p->dt : p->dt_factor * a / c0;
+  cfg.cutoff = p->cutoff_mode == 1 ? CD_CUTOFF_BONDED : CD_CUTOFF_PLAIN;
+  cfg.damping_gamma = p->damping_j > 0 ? c0 / (p->damping_j * a) : 0.0;
+  cfg.lattice = lat;
+  cfg.thickness = p->thickness;
+  cd_sim *sim = cd_sim_create(ps, &box, &cfg, 1);
+  cd_pair_table *tab = ms_calloc(1, sizeof *tab);
+  st = cd_pair_table_build(tab, eos, eos, lat, a, p->thickness, p->cutoff * a, 0.5 * a, 1.0, 0);
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR,
+           "coupled: cannot build the pair potential of the sample material "
+           "(cold curve missing or not finite on [0.5a, R_c])");
+    free(tab);
+    cd_sim_free(sim);
+    cpl_piston_free(&drive);
+    cpl_piston_free(&fsurf);
+    return st;
+  }
+  cd_sim_set_pair(sim, 0, 0, tab);
+  /* piston: the drive history from the particle phase's start (relative time) */
+  cd_history ph;
+  ph.n = hd.n - k0;
+  ph.t = ms_calloc(ph.n, sizeof(double));
+  ph.u = ms_calloc(ph.n, sizeof(double));
+  for (size_t k = 0; k < ph.n; k++) {
+    ph.t[k] = hd.t[k0 + k] - t_start;
+    ph.u[k] = hd.u[k0 + k];
+  }
+  double dir[3] = {1, 0, 0};
+  cd_sim_set_piston(sim, &ph, dir);
+  free(ph.t);
+  free(ph.u);
+  st = cd_sim_init(sim);
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: particle set-up failed (%s)", ms_status_str(st));
+    cd_sim_free(sim);
+    cpl_piston_free(&drive);
+    cpl_piston_free(&fsurf);
+    return st;
+  }
+
+  /* 3. the particle phase, with the live grid supplying the gas */
+  cont_grid *glive = cont_problem_grid(p->grid_live);
+  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity};
+  cpl_fragments fr;
+  cpl_fragments_init(&fr);
+  cpl_fragment_opts fo;
+  memset(&fo, 0, sizeof fo);
+  fo.bond = p->bond;
+  fo.spacing = a;
+  fo.rho0 = rho0;
+  fo.box.period[1] = width;
+  if (fcc)
+    fo.box.period[2] = width_z;
+  cpl_ejecta_sel sel;
+  cpl_ejecta_sel_default(&sel);
+  size_t n = ps->n;
+  uint8_t *skip = ms_calloc(n + 1, 1);
+  double *fx = ms_calloc(n + 1, sizeof(double)), *fy = ms_calloc(n + 1, sizeof(double)),
+         *fz = ms_calloc(n + 1, sizeof(double));
+  ms_afile af_ej, af_fs;
+  FILE *f_ej = open_csv(ctx, &af_ej, "ejecta_mass.csv");
+  FILE *f_fs = open_csv(ctx, &af_fs, "free_surface.csv");
+  if (!f_ej || !f_fs) {
+    st = MS_ERR_IO;
+    goto particle_done;
+  }
+  {
+    static const char *const ejn[] = {"t", "M_ej", "fragments"};
+    static const char *const eju[] = {"10us", "g", "1"};
+    ms_csv_header(f_ej, "ejected mass (every fragment but the largest) vs time", 3, ejn, eju);
+    static const char *const fsn[] = {"t", "u_grid", "u_particles"};
+    static const char *const fsu[] = {"10us", "km/s", "km/s"};
+    ms_csv_header(f_fs, "free-surface velocity: grid tag vs particle surface layer", 3, fsn, fsu);
+  }
+  const double t_rel_end = p->t_end - t_start;
+  const long nsteps = (long)ceil(t_rel_end / cfg.dt);
+  long next_out = 1, last_search = 0;
+  /* free-surface samples for the drive check */
+  size_t fs_cap = (size_t)(nsteps / p->frag_every) + (size_t)p->n_out + 4, fs_n = 0;
+  double *fs_t = ms_calloc(fs_cap, sizeof(double)), *fs_ug = ms_calloc(fs_cap, sizeof(double)),
+         *fs_up = ms_calloc(fs_cap, sizeof(double));
+  cd_energy e0;
+  cd_sim_energy(sim, &e0);
+  ms_log(ctx, MS_LOG_DEBUG, "coupled: initial energy: kinetic %g potential %g total %g", e0.kinetic,
+         e0.potential, e0.total);
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "particles", t_start, p->t_end);
+  for (long step = 1; step <= nsteps && st == MS_OK; step++) {
+    st = cd_sim_step(sim);
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: particle step %ld failed (%s) at t = %g", step,
+             ms_status_str(st), t_start + sim->t);
+      break;
+    }
+    bool out_now = step * p->n_out >= next_out * nsteps;
+    if (step % p->frag_every && !out_now && step != nsteps)
+      continue;
+    double t_abs = t_start + sim->t;
+    /* fragments, ejected mass, drag kick over the interval since the last search */
+    cpl_particles view = particle_view(ps, skip);
+    st = cpl_fragments_find(&fr, &view, &fo);
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR,
+             "coupled: fragment search failed at t = %g (non-finite "
+             "particle positions?)",
+             t_abs);
+      break;
+    }
+    double row_ej[3] = {t_abs, cpl_ejected_mass(&fr, &sel), (double)fr.n};
+    last_search = step;
+    ms_csv_row(f_ej, 3, row_ej);
+    if (p->drag_law != CPL_DRAG_NONE) {
+      st = cont_grid_run_to(glive, t_abs);
+      if (st != MS_OK) {
+        ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(glive));
+        break;
+      }
+      memset(fx, 0, n * sizeof *fx);
+      memset(fy, 0, n * sizeof *fy);
+      memset(fz, 0, n * sizeof *fz);
+      cpl_drag_fragments(p->drag_law, &fr, &view, &sel, grid_gas, &gas, t_abs, fx, fy, fz);
+      /* a velocity kick over the search interval (operator splitting; drag is slow on the
+       * particle time step) */
+      double span = (double)(step - last_search) * cfg.dt;
+      for (size_t i = 0; i < n; i++)
+        if (!skip[i]) {
+          ps->vx[i] += fx[i] / ps->mass[i] * span;
+          ps->vy[i] += fy[i] / ps->mass[i] * span;
+          if (fcc)
+            ps->vz[i] += fz[i] / ps->mass[i] * span;
+        }
+    }
+    /* free-surface check */
+    double ug = cpl_piston_velocity(&fsurf, t_abs), up = cd_free_surface_velocity(sim, 0);
+    double row_fs[3] = {t_abs, ug, up};
+    ms_csv_row(f_fs, 3, row_fs);
+    if (fs_n < fs_cap) {
+      fs_t[fs_n] = t_abs;
+      fs_ug[fs_n] = ug;
+      fs_up[fs_n] = up;
+      fs_n++;
+    }
+    if (out_now) {
+      char name[64];
+      snprintf(name, sizeof name, "particles_%04ld.h5", next_out);
+      char *path = ms_out_path(ctx, name);
+      cpl_snapshot_info info = {t_abs, a, rho0, fo.box};
+      st = cpl_write_snapshot(path, &view, &fr, &info);
+      free(path);
+      if (st != MS_OK)
+        break;
+      snprintf(name, sizeof name, "spectrum_%04ld.csv", next_out);
+      char title[160];
+      snprintf(title, sizeof title, "fragment spectrum N(g) at t = %g (10us), b = %g", t_abs,
+               p->bond);
+      st = write_table(ctx, name, &fr, 0, &sel, title);
+      if (st != MS_OK)
+        break;
+      cd_energy en;
+      cd_sim_energy(sim, &en);
+      ms_log(ctx, MS_LOG_INFO,
+             "coupled: t = %.5g: %zu fragments, ejected mass %.4g g, free surface %.4g km/s "
+             "(grid %.4g); energy [kJ]: kinetic %.4g potential %.4g damped %.4g broken %.4g "
+             "piston work %.4g, balance %.3g of the work",
+             t_abs, fr.n, row_ej[1], up, ug, en.kinetic, en.potential - e0.potential, en.dissipated,
+             en.broken, en.piston_work,
+             en.piston_work != 0 ? (en.total - e0.total) / en.piston_work : 0.0);
+      next_out++;
+    }
+    ms_progress_update(&prog, t_abs, step);
+  }
+  ms_progress_finish(&prog, t_start + sim->t, (long)(sim->t / cfg.dt));
+  cpl_fs_check chk;
+  const double window = p->check_window > 0 ? p->check_window : depth / c0;
+  if (st == MS_OK && cpl_free_surface_check(fs_n, fs_t, fs_ug, fs_up, window, &chk))
+    ms_log(ctx, MS_LOG_INFO,
+           "coupled: drive check (free surface, %zu samples over [%g, %g]): plateau particles "
+           "%.5g km/s vs grid %.5g km/s: %.2f %%; half-rise at t = %.5g (particles) vs %.5g "
+           "(grid)",
+           chk.samples, chk.t_break + 0.5 * window, chk.t_break + window, chk.plateau_particles,
+           chk.plateau_grid, 100 * chk.rel_diff, chk.t_half_particles, chk.t_half_grid);
+  else if (st == MS_OK)
+    ms_log(ctx, MS_LOG_WARN,
+           "coupled: drive check: no free-surface breakout within the "
+           "particle phase (or no samples in the check window)");
+  p->sum.check = chk;
+  free(fs_t);
+  free(fs_ug);
+  free(fs_up);
+
+  if (st == MS_OK) {
+    cd_energy en;
+    cd_sim_energy(sim, &en);
+    p->sum.particles = n;
+    p->sum.steps = (long)nsteps;
+    p->sum.energy_balance = en.piston_work != 0 ? (en.total - e0.total) / en.piston_work : 0.0;
+    p->sum.piston_work = en.piston_work;
+    p->sum.fragments = fr.n;
+    p->sum.ejected_mass = cpl_ejected_mass(&fr, &sel);
+  }
+  /* final fragment tables */
+  if (st == MS_OK) {
+    char title[160];
+    snprintf(title, sizeof title, "fragments at the end of the particle phase, t = %g (10us)",
+             t_start + sim->t);
+    const char *names[] = {"spectrum.csv",  "fragments.csv",     "cumulative.csv",
+                           "mass_hist.csv", "diameter_hist.csv", "ejecta_velocity.csv"};
+    for (int k = 0; k < 6 && st == MS_OK; k++)
+      st = write_table(ctx, names[k], &fr, k, &sel, k == 0 ? title : NULL);
+  }
+particle_done:
+  if (f_ej) {
+    ms_status s2 = commit_csv(&af_ej);
+    if (st == MS_OK)
+      st = s2;
+  }
+  if (f_fs) {
+    ms_status s2 = commit_csv(&af_fs);
+    if (st == MS_OK)
+      st = s2;
+  }
+
+  /* 4. transport of the ejecta to the detector */
+  if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t) {
+    double t0 = t_start + sim->t;
+    cpl_transport_opts to;
+    cpl_transport_opts_default(&to);
+    to.law = (cpl_drag_law)p->drag_law;
+    to.rho_p = rho0;
+    to.det_x = x_fs + p->det_distance;
+    cpl_transport *tr = cpl_transport_create(&to, grid_gas, &gas);
+    /* keep each flight's fragment size g for the detector spectrum */
+    int64_t *gcount = ms_calloc(fr.n + 1, sizeof *gcount);
+    size_t nfl = 0, big = cpl_largest_fragment(&fr);
+    for (size_t k = 0; k < fr.n; k++) {
+      if (!cpl_is_ejecta_with(&fr, k, &sel, big))
+        continue;
+      double x[3] = {fr.cx[k], fr.cy[k], fr.cz[k]}, v[3] = {fr.vx[k], fr.vy[k], fr.vz[k]};
+      cpl_transport_add(tr, fr.mass[k], x, v, t0);
+      gcount[nfl++] = fr.count[k];
+    }
+    ms_log(ctx, MS_LOG_INFO,
+           "coupled: 3/3 transport of %zu ejecta fragments to the detector at "
+           "x = %g cm (%g cm beyond the free surface), until t = %g",
+           nfl, to.det_x, p->det_distance, p->transport_end);
+    ms_progress_start(&prog, ctx, "transport", t0, p->transport_end);
+    for (long w = 1; w <= p->transport_windows && st == MS_OK; w++) {
+      double tw = t0 + (p->transport_end - t0) * (double)w / (double)p->transport_windows;
+      st = cont_grid_run_to(glive, tw);
+      if (st != MS_OK) {
+        ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(glive));
+        break;
+      }
+      ms_status s2 = cpl_transport_advance(tr, tw);
+      if (s2 != MS_OK) /* a failed fragment is reported, the others fly on */
+        ms_log(ctx, MS_LOG_WARN, "coupled: transport: %s", cpl_transport_error(tr));
+      ms_progress_update(&prog, tw, w);
+    }
+    ms_progress_finish(&prog, p->transport_end, p->transport_windows);
+    if (st == MS_OK) {
+      ms_afile af;
+      FILE *f = open_csv(ctx, &af, "arrivals.csv");
+      if (!f) {
+        st = MS_ERR_IO;
+      } else {
+        cpl_write_arrivals(f, tr, NULL);
+        st = commit_csv(&af);
+      }
+      /* the spectrum at the detector: arrived fragments only */
+      cpl_fragments det;
+      memset(&det, 0, sizeof det);
+      det.count = ms_calloc(nfl + 1, sizeof *det.count);
+      det.mass = ms_calloc(nfl + 1, sizeof *det.mass);
+      size_t narr = 0;
+      double marr = 0;
+      for (size_t i = 0; i < nfl; i++) {
+        cpl_flight fl = cpl_transport_get(tr, i);
+        if (fl.state != CPL_ARRIVED)
+          continue;
+        det.count[det.n] = gcount[i];
+        det.mass[det.n] = fl.mass;
+        det.n++;
+        narr++;
+        marr += fl.mass;
+      }
+      if (st == MS_OK) {
+        f = open_csv(ctx, &af, "spectrum_detector.csv");
+        if (!f) {
+          st = MS_ERR_IO;
+        } else {
+          cpl_write_spectrum(f, &det, "fragment spectrum N(g) of the arrivals at the detector");
+          st = commit_csv(&af);
+        }
+      }
+      ms_log(ctx, MS_LOG_INFO, "coupled: %zu of %zu fragments (%.4g g) reached the detector", narr,
+             nfl, marr);
+      p->sum.transported = nfl;
+      p->sum.arrived = narr;
+      free(det.count);
+      free(det.mass);
+    }
+    free(gcount);
+    cpl_transport_free(tr);
+  }
+  cpl_fragments_free(&fr);
+  free(skip);
+  free(fx);
+  free(fy);
+  free(fz);
+  cd_sim_free(sim);
+  cpl_piston_free(&drive);
+  cpl_piston_free(&fsurf);
+  return st;
+}

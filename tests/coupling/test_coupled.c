@@ -1,0 +1,232 @@
+/* The `coupled` problem end to end (one-way drive, docs/coupling.md §6):
+ *  1. symmetric plate impact (Pb on Pb, 0.5 km/s): the grid's U(t) at a node 0.02 cm below the
+ *     free surface drives a flat 2D cluster-dynamics slab; the particle free-surface velocity
+ *     plateau must match the grid's (exactly 2 up = 0.5 km/s in both) within 2 % (the issue's
+ *     evidence), the particle energy balance must close, and a flat surface ejects nothing;
+ *  2. the same with a grooved surface: jets form, fragments are found, and ejecta reach a
+ *     detector through the air (drag from the grid's gas layer);
+ *  3. deck errors: a missing tag, a drive node beyond the free surface, a gas without
+ *     viscosity are reported with their deck location. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+/* cmocka needs the headers above */
+#include <cmocka.h>
+
+#include "cpl.h"
+
+static const char *const MATERIALS =
+    "units: internal\n"
+    "problem: coupled\n"
+    "materials:\n"
+    "  - name: pb\n"
+    "    eos: {type: mg_cold, rho0: 11.34, c0: 1.972, n: 3.0, gamma0: 2.0}\n"
+    "  - name: air\n"
+    "    eos: {type: ideal_gas, gamma: 1.4, rho0: 1.225e-3, p0: 1.01325e-4}\n"
+    "    viscosity: %s\n";
+
+static const char *const GRID =
+    "coupled:\n"
+    "  grid:\n"
+    "    layers:\n"
+    "      - {name: flyer, material: pb, thickness: 0.1, cells: 200, velocity: %s}\n"
+    "      - {name: sample, material: pb, thickness: 0.1, cells: 200, pressure: 1.01325e-4}\n"
+    "      - {name: air, material: air, thickness: 0.5, cells: 100, density: 1.225e-3,"
+    " pressure: 1.01325e-4}\n"
+    "    left: {type: free}\n"
+    "    right: {type: pressure, value: 1.01325e-4}\n"
+    "    time: {end: 0.12}\n"
+    "    tags:\n"
+    "      - {name: drive, x: %s}\n"
+    "      - {name: free_surface, layer: sample, side: right}\n"
+    "  drive: {tag: %s, free_surface_tag: free_surface}\n";
+
+/* Read and run a deck; returns the problem (caller frees) or NULL with errors in *e. */
+static cpl_problem *run_deck(const char *text, dk_errors *e, dk_doc **doc_out,
+                             eos_materials **mats_out, bool run, ms_status *status) {
+  dk_doc *doc = dk_load_string(text, "test.yaml", e);
+  assert_non_null(doc);
+  dk_read_units(doc, e);
+  eos_materials *mats = eos_materials_read(doc, e);
+  assert_non_null(mats);
+  const dk_node *root = dk_root(doc);
+  dk_get(root, "problem");
+  cpl_problem *p = cpl_problem_read(doc, dk_get(root, "coupled"), mats, e);
+  dk_report_unused(e, doc);
+  *doc_out = doc;
+  *mats_out = mats;
+  if (!p || e->n || !run)
+    return p;
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.quiet = true;
+  ctx.verbosity = MS_LOG_WARN;
+  char dir[] = "/tmp/mscale_test_coupled_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
+  *status = cpl_problem_run(&ctx, p);
+  /* a few outputs must exist */
+  const char *files[] = {"spectrum.csv",     "fragments.csv",     "ejecta_mass.csv",
+                         "free_surface.csv", "particles_0001.h5", "particles_0001.xmf",
+                         "history_drive.csv"};
+  for (size_t k = 0; k < sizeof files / sizeof *files && *status == MS_OK; k++) {
+    char *path = ms_out_path(&ctx, files[k]);
+    if (access(path, R_OK))
+      fail_msg("missing output %s", path);
+    free(path);
+  }
+  ms_ctx_close(&ctx);
+  char cmd[128];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  assert_int_equal(system(cmd), 0);
+  return p;
+}
+
+static char *deck(const char *viscosity, const char *drive_x, const char *drive_tag,
+                  const char *rest) {
+  static char buf[8192];
+  /* 0.5 km/s (≈ 6 GPa) for the flat drive check; 1.5 km/s (≈ 20 GPa) where jets must form */
+  const char *flyer = strstr(rest, "grooves") ? "1.5" : "0.5";
+  int n = snprintf(buf, sizeof buf, MATERIALS, viscosity);
+  n += snprintf(buf + n, sizeof buf - (size_t)n, GRID, flyer, drive_x, drive_tag);
+  snprintf(buf + n, sizeof buf - (size_t)n, "%s", rest);
+  return buf;
+}
+
+static void test_symmetric_flat(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  eos_materials *mats;
+  ms_status st = MS_ERR_INTERNAL;
+  const char *rest = "  particles: {lattice: tri2d, spacing: 2.0e-4, width: 0.004, cutoff: 1.2,"
+                     " cutoff_mode: bonded, damping_j: 50}\n"
+                     "  time: {end: 0.065, outputs: 1}\n"
+                     "  fragments: {every: 50}\n";
+  cpl_problem *p = run_deck(deck("1.8e-9", "0.18", "drive", rest), &e, &doc, &mats, true, &st);
+  dk_errors_print(&e, stderr);
+  assert_int_equal(e.n, 0);
+  assert_int_equal(st, MS_OK);
+  const cpl_run_summary *s = cpl_problem_summary(p);
+  printf("symmetric impact: %zu particles, %ld steps; free surface plateau %.5f (particles) vs "
+         "%.5f (grid) km/s: %.3f %%; half-rise %.5g vs %.5g; energy balance %.3g of the piston "
+         "work; %zu fragments\n",
+         s->particles, s->steps, s->check.plateau_particles, s->check.plateau_grid,
+         100 * s->check.rel_diff, s->check.t_half_particles, s->check.t_half_grid,
+         s->energy_balance, s->fragments);
+  /* the issue's evidence: the same free-surface velocity as the grid alone within 2 %
+   * (measured 0.14 %: the lattice's Hugoniot differs slightly from the grid's EOS) */
+  assert_true(s->check.samples >= 5);
+  assert_true(s->check.rel_diff < 0.02);
+  /* symmetric impact: the free surface flies at the flyer's speed, 0.5 km/s, in both; the
+   * grid's artificial viscosity and the lattice's rounding of the wave cost < 1 % */
+  assert_true(fabs(s->check.plateau_grid - 0.5) < 0.005);
+  /* the lattice carries the wave faster than the grid (shear stiffness of a pair-potential
+   * lattice): the particle surface breaks out earlier, by less than 20 % of the transit time
+   * over the 0.02 cm region (≈ 0.009) — measured 0.0013 */
+  assert_true(s->check.t_half_particles <= s->check.t_half_grid);
+  assert_true(s->check.t_half_grid - s->check.t_half_particles < 0.2 * 0.009);
+  /* bonded velocity Verlet with damping: the balance (kinetic + potential + damped − piston
+   * work) closes to 1e-4 of the work (measured 1.2e-6) */
+  assert_true(fabs(s->energy_balance) < 1e-4);
+  assert_true(s->piston_work > 0);
+  /* a flat surface before the release returns: one piece, nothing ejected */
+  assert_int_equal(s->fragments, 1);
+  assert_true(s->ejected_mass == 0);
+  cpl_problem_free(p);
+  eos_materials_free(mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+static void test_grooved_ejecta(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  eos_materials *mats;
+  ms_status st = MS_ERR_INTERNAL;
+  /* Pb on Pb at 1.5 km/s; one groove 40 µm deep, 40 µm period; a = 2 µm; 0.5 µs after
+   * breakout; detector 0.2 cm beyond the free surface */
+  const char *rest =
+      "  particles:\n"
+      "    {lattice: tri2d, spacing: 2.0e-4, width: 0.004, cutoff: 1.2, cutoff_mode: bonded,"
+      " damping_j: 50, surface: {type: grooves, depth: 40.0e-4, wavelength: 40.0e-4}}\n"
+      "  time: {end: 0.085, outputs: 2}\n"
+      "  fragments: {every: 100}\n"
+      "  transport: {detector: 0.2, end: 1.0, windows: 20}\n";
+  cpl_problem *p = run_deck(deck("1.8e-9", "0.18", "drive", rest), &e, &doc, &mats, true, &st);
+  dk_errors_print(&e, stderr);
+  assert_int_equal(e.n, 0);
+  assert_int_equal(st, MS_OK);
+  const cpl_run_summary *s = cpl_problem_summary(p);
+  printf("grooved surface: %zu particles, %zu fragments, ejected %.4g g, %zu of %zu transported "
+         "fragments at the detector\n",
+         s->particles, s->fragments, s->ejected_mass, s->arrived, s->transported);
+  /* a groove as deep as its period jets faster than the free surface: material leaves the
+   * bulk — fragments besides the bulk, with positive mass (measured: 32 fragments) — and the
+   * ejecta reach a detector 2 mm away within 9 µs (they fly at ≳ 1.5 km/s: ≈ 1.3 µs). The
+   * energy balance is not asserted here: bond breaking is booked by the particle code
+   * (cd_energy.broken), which the flat case above checks without broken bonds. */
+  assert_true(s->fragments >= 2);
+  assert_true(s->ejected_mass > 0);
+  assert_true(s->transported >= 1);
+  assert_int_equal(s->arrived, s->transported);
+  cpl_problem_free(p);
+  eos_materials_free(mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+static bool has_error(const dk_errors *e, const char *needle) {
+  for (size_t i = 0; i < e->n; i++)
+    if (strstr(e->msg[i], needle))
+      return true;
+  return false;
+}
+
+static void test_deck_errors(void **state) {
+  (void)state;
+  const char *rest = "  particles: {spacing: 2.0e-4, width: 0.004}\n"
+                     "  time: {end: 0.065}\n";
+  struct {
+    const char *visc, *x, *tag, *needle;
+  } cases[] = {
+      {"1.8e-9", "0.18", "nodrive", "test.yaml:21:16: drive.tag: no tag named 'nodrive'"},
+      {"1.8e-9", "0.25", "drive", "must lie left of the free surface"},
+      {"0", "0.18", "drive", "drag needs the gas viscosity: give material 'air'"},
+  };
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+    dk_errors e;
+    dk_errors_init(&e);
+    dk_doc *doc;
+    eos_materials *mats;
+    ms_status st;
+    cpl_problem *p =
+        run_deck(deck(cases[c].visc, cases[c].x, cases[c].tag, rest), &e, &doc, &mats, false, &st);
+    assert_null(p);
+    if (!has_error(&e, cases[c].needle)) {
+      dk_errors_print(&e, stderr);
+      fail_msg("case %zu: expected an error containing '%s'", c, cases[c].needle);
+    }
+    eos_materials_free(mats);
+    dk_free(doc);
+    dk_errors_free(&e);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_deck_errors),
+      cmocka_unit_test(test_symmetric_flat),
+      cmocka_unit_test(test_grooved_ejecta),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
