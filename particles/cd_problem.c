@@ -31,6 +31,13 @@ typedef struct cd_region {
   double velocity[3];
   bool piston;
   bool matrix;                /* fills only the sites no other region takes (no overlap check) */
+  int ngrains;                /* polycrystal / grain structure (box regions; 0 = single crystal) */
+  uint64_t grain_seed;
+  bool rotate;                /* random lattice orientation per grain */
+  double dmin;                /* overlap removal distance / r0 */
+  int ngmat;                  /* grain materials (0: the region's material) */
+  int gmat[CD_MAX_MATERIALS];
+  double gfrac[CD_MAX_MATERIALS];
   surface_kind surface;       /* box: profile of the hi face along `surface_axis` */
   int surface_axis, surface_along;
   double amplitude, wavelength;
@@ -167,7 +174,63 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     r->surface_along = (int)along;
     r->seed = (uint64_t)seed;
   }
+  const dk_node *gn = dk_get(rn, "polycrystal");
+  if (gn && dk_expect_map(e, doc, gn, "polycrystal")) {
+    long ng = 10, seed = 1;
+    dk_read_int(e, doc, gn, "grains", true, 10, 1, 100000, &ng);
+    dk_read_int(e, doc, gn, "seed", false, 1, 0, 1L << 40, &seed);
+    dk_read_bool(e, doc, gn, "rotate", false, true, &r->rotate);
+    dk_read_double(e, doc, gn, "min_distance", MS_DIM_NONE, false, 0.8, 0.1, 1.0, &r->dmin);
+    r->ngrains = (int)ng;
+    r->grain_seed = (uint64_t)seed;
+    if (r->shape != SHAPE_BOX || r->surface != SURF_FLAT)
+      dk_error(e, doc, gn, "a polycrystal fills a box region with a flat surface");
+    const dk_node *ml = dk_get(gn, "materials");
+    if (ml && dk_expect_seq(e, doc, ml, "polycrystal materials")) {
+      double *fr = NULL;
+      size_t nf = 0;
+      dk_read_double_list(e, doc, gn, "fractions", MS_DIM_NONE, true, &fr, &nf);
+      if (nf != dk_seq_len(ml) || nf > CD_MAX_MATERIALS)
+        dk_error(e, doc, gn, "polycrystal: 'fractions' needs one number per material");
+      double sum = 0;
+      for (size_t k = 0; k < nf && k < dk_seq_len(ml) && k < CD_MAX_MATERIALS; k++) {
+        const char *nm = dk_scalar(dk_seq_at(ml, k));
+        r->gmat[k] = nm ? material_index(p, mats, doc, dk_seq_at(ml, k), nm, e) : -1;
+        r->gfrac[k] = fr[k];
+        sum += fr[k];
+        r->ngmat = (int)k + 1;
+      }
+      if (nf && fabs(sum - 1.0) > 1e-6) dk_error(e, doc, gn, "polycrystal: fractions must sum to 1 (%g)", sum);
+      free(fr);
+    }
+  }
   p->nreg++;
+}
+
+/* seeds and materials of a region's grains (the seeds are those of cd_polycrystal) */
+static void grain_seed(const cd_region *r, int dim, int g, double x[3]) {
+  for (int a = 0; a < 3; a++)
+    x[a] = a < dim ? r->lo[a] + (r->hi[a] - r->lo[a]) * ptl_splitmix64_uniform(r->grain_seed, 3 * (uint64_t)g + a) : 0.0;
+}
+static int grain_material(const cd_region *r, int g) {
+  if (r->ngmat == 0) return r->mat;
+  double u = ptl_splitmix64_uniform(r->grain_seed ^ 0x5bd1e995u, (uint64_t)g), acc = 0;
+  for (int k = 0; k < r->ngmat; k++) {
+    acc += r->gfrac[k];
+    if (u < acc) return r->gmat[k];
+  }
+  return r->gmat[r->ngmat - 1];
+}
+static int nearest_grain(const cd_region *r, int dim, const double x[3]) {
+  int best = 0;
+  double bd = INFINITY;
+  for (int g = 0; g < r->ngrains; g++) {
+    double s[3], d2 = 0;
+    grain_seed(r, dim, g, s);
+    for (int a = 0; a < dim; a++) d2 += (x[a] - s[a]) * (x[a] - s[a]);
+    if (d2 < bd) { bd = d2; best = g; }
+  }
+  return best;
 }
 
 /* Height of a box region's profiled hi face at coordinate s along the surface. Random: a sum of
@@ -438,8 +501,43 @@ void cd_problem_free(cd_problem *p) {
 }
 
 /* Fill the regions: a site belongs to the first ordinary region containing it (overlaps of the
- * same material are fine), else to the first `matrix` region containing it. */
-static ptl_state *build_particles(const cd_problem *p) {
+ * same material are fine), else to the first `matrix` region containing it. Polycrystal regions
+ * with rotated grains claim their sites in the global lattice and are then filled by
+ * cd_polycrystal (their residual porosity goes to the log). */
+typedef struct site_list {
+  size_t n, cap;
+  double *x;
+  int *reg, *mat;
+} site_list;
+
+static void site_add(site_list *l, const double x[3], int reg, int mat) {
+  if (l->n == l->cap) {
+    l->cap = l->cap ? 2 * l->cap : 4096;
+    l->x = ms_realloc(l->x, 3 * l->cap, sizeof *l->x);
+    l->reg = ms_realloc(l->reg, l->cap, sizeof *l->reg);
+    l->mat = ms_realloc(l->mat, l->cap, sizeof *l->mat);
+  }
+  memcpy(l->x + 3 * l->n, x, 3 * sizeof *x);
+  l->reg[l->n] = reg;
+  l->mat[l->n++] = mat;
+}
+
+static int owner_region(const cd_problem *p, const double x[3]) {
+  for (int kk = 0; kk < 2 * p->nreg; kk++) { /* ordinary regions, then matrices */
+    const int k = kk % p->nreg;
+    const cd_region *r = &p->reg[k];
+    if (r->matrix == (kk >= p->nreg) && region_contains(r, x, p->dim)) return k;
+  }
+  return -1;
+}
+
+typedef struct owner_filter { const cd_problem *p; int reg; } owner_filter;
+static bool owned_by(void *user, const double x[3]) {
+  const owner_filter *f = user;
+  return owner_region(f->p, x) == f->reg;
+}
+
+static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
   double per[3];
   lattice_period(p, per);
   long ncell[3] = {1, 1, 1};
@@ -448,39 +546,57 @@ static ptl_state *build_particles(const cd_problem *p) {
   const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
   const double vol = cd_cluster_volume(p->lattice, p->r0, p->thickness);
-  size_t count = 0;
-  for (int pass = 0; pass < 2; pass++) { /* count, then fill */
-    ptl_state *s = pass ? ptl_state_create(count, p->dim) : NULL;
-    count = 0;
-    for (long iz = 0; iz < ncell[2]; iz++)
-      for (long iy = 0; iy < ncell[1]; iy++)
-        for (long ix = 0; ix < ncell[0]; ix++)
-          for (int b = 0; b < nb; b++) {
-            const double *bs = p->dim == 3 ? fcc[b] : tri[b];
-            double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
-                           p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
-            bool inside = true;
-            for (int a = 0; a < p->dim; a++)
-              if (x[a] < p->box.lo[a] || x[a] >= p->box.hi[a]) inside = false;
-            if (!inside) continue;
-            for (int kk = 0; kk < 2 * p->nreg; kk++) { /* ordinary regions, then matrices */
-              const int k = kk % p->nreg;
-              const cd_region *r = &p->reg[k];
-              if (r->matrix != (kk >= p->nreg) || !region_contains(r, x, p->dim)) continue;
-              if (pass) {
-                size_t i = ptl_state_add(s, x[0], x[1], x[2], eos_rho0(p->mat[r->mat]->eos) * vol, r->mat);
-                s->vx[i] = r->velocity[0];
-                s->vy[i] = r->velocity[1];
-                s->vz[i] = r->velocity[2];
-                if (r->piston) s->flags[i] |= PTL_DRIVEN;
-              }
-              count++;
-              break;
-            }
-          }
-    if (pass) return s;
+  site_list l = {0};
+  for (long iz = 0; iz < ncell[2]; iz++)
+    for (long iy = 0; iy < ncell[1]; iy++)
+      for (long ix = 0; ix < ncell[0]; ix++)
+        for (int b = 0; b < nb; b++) {
+          const double *bs = p->dim == 3 ? fcc[b] : tri[b];
+          double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
+                         p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
+          bool inside = true;
+          for (int a = 0; a < p->dim; a++)
+            if (x[a] < p->box.lo[a] || x[a] >= p->box.hi[a]) inside = false;
+          if (!inside) continue;
+          int k = owner_region(p, x);
+          if (k < 0) continue;
+          const cd_region *r = &p->reg[k];
+          if (r->ngrains > 0 && r->rotate) continue; /* filled below */
+          int mat = r->ngrains > 0 ? grain_material(r, nearest_grain(r, p->dim, x)) : r->mat;
+          site_add(&l, x, k, mat);
+        }
+  for (int k = 0; k < p->nreg; k++) {
+    const cd_region *r = &p->reg[k];
+    if (r->ngrains == 0 || !r->rotate) continue;
+    double lo[3], hi[3], *xyz = NULL, por = 0;
+    int32_t *grain = NULL;
+    for (int a = 0; a < 3; a++) {
+      lo[a] = a < p->dim ? fmax(r->lo[a], p->box.lo[a]) : 0.0;
+      hi[a] = a < p->dim ? fmin(r->hi[a], p->box.hi[a]) : 0.0;
+    }
+    owner_filter f = {p, k};
+    size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, r->ngrains, r->grain_seed, r->dmin,
+                              owned_by, &f, &xyz, &grain, &por);
+    for (size_t i = 0; i < n; i++) site_add(&l, xyz + 3 * i, k, grain_material(r, grain[i]));
+    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
+           "residual porosity %.2f %%", k + 1, r->ngrains, n, 100.0 * por);
+    free(xyz);
+    free(grain);
   }
-  return NULL;
+  ptl_state *s = ptl_state_create(l.n, p->dim);
+  for (size_t q = 0; q < l.n; q++) {
+    const cd_region *r = &p->reg[l.reg[q]];
+    const double *x = l.x + 3 * q;
+    size_t i = ptl_state_add(s, x[0], x[1], x[2], eos_rho0(p->mat[l.mat[q]]->eos) * vol, l.mat[q]);
+    s->vx[i] = r->velocity[0];
+    s->vy[i] = r->velocity[1];
+    s->vz[i] = r->velocity[2];
+    if (r->piston) s->flags[i] |= PTL_DRIVEN;
+  }
+  free(l.x);
+  free(l.reg);
+  free(l.mat);
+  return s;
 }
 
 static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, double vfs) {
@@ -490,7 +606,7 @@ static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, doubl
 }
 
 ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
-  ptl_state *ps = build_particles(p);
+  ptl_state *ps = build_particles(p, ctx);
   if (!ps || ps->n == 0) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: the regions contain no lattice site");
     ptl_state_free(ps);

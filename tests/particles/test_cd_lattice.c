@@ -137,8 +137,45 @@ static void test_von_mises(void **state) {
   assert_true(cd_von_mises(hyd) == 0.0);
 }
 
+/* Voronoi polycrystal: every grain present, no two sites of different grains closer than
+ * dmin·r0 (brute force), inside the box, a residual porosity that is small but not zero
+ * (grain-boundary overlap removal), deterministic for a seed. */
+static void check_poly(int dim) {
+  const double L = 16 * sqrt(2.0) * R0, lo[3] = {0, 0, 0}, hi[3] = {L, L, dim == 2 ? 0 : L};
+  double *x = NULL, *x2 = NULL, por = 0, por2 = 0;
+  int32_t *g = NULL, *g2 = NULL;
+  size_t n = cd_polycrystal(dim, R0, R0, lo, hi, 6, 42, 0.8, NULL, NULL, &x, &g, &por);
+  size_t n2 = cd_polycrystal(dim, R0, R0, lo, hi, 6, 42, 0.8, NULL, NULL, &x2, &g2, &por2);
+  printf("polycrystal %dD: %zu sites, porosity %.2f %%\n", dim, n, 100 * por);
+  assert_int_equal(n, n2);
+  assert_memory_equal(x, x2, 3 * n * sizeof *x);
+  assert_true(por > 0.0 && por < 0.15);
+  int seen[6] = {0};
+  double worst = INFINITY;
+  for (size_t i = 0; i < n; i++) {
+    seen[g[i]] = 1;
+    for (int a = 0; a < dim; a++) assert_true(x[3 * i + a] >= lo[a] && x[3 * i + a] < hi[a]);
+    for (size_t j = i + 1; j < n; j++) {
+      double d2 = 0;
+      for (int a = 0; a < 3; a++) d2 += (x[3 * i + a] - x[3 * j + a]) * (x[3 * i + a] - x[3 * j + a]);
+      if (g[i] != g[j]) worst = fmin(worst, sqrt(d2));
+      else assert_true(d2 > 0.99 * R0 * R0); /* inside a grain: the perfect lattice */
+    }
+  }
+  for (int k = 0; k < 6; k++) assert_true(seen[k]);
+  assert_true(worst >= 0.8 * R0 * (1 - 1e-12));
+  free(x); free(x2); free(g); free(g2);
+}
+
+static void test_polycrystal(void **state) {
+  (void)state;
+  check_poly(3);
+  check_poly(2);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fcc_mg), cmocka_unit_test(test_fcc_table1),
-                                     cmocka_unit_test(test_tri2d_mg), cmocka_unit_test(test_von_mises)};
+                                     cmocka_unit_test(test_tri2d_mg), cmocka_unit_test(test_von_mises),
+                                     cmocka_unit_test(test_polycrystal)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
