@@ -375,6 +375,12 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
   if (out && dk_expect_map(e, doc, out, "output")) {
     dk_read_double_list(e, doc, out, "times", MS_DIM_TIME, false, &p->out_times, &p->n_out);
     for (size_t k = 0; k < p->n_out; ++k) {
+      if (p->t_end > 0.0 && p->out_times[k] > p->t_end) {
+        dk_error(e, doc, dk_get(out, "times"),
+                 "output.times entry %zu = %g is after time.end = %g", k, p->out_times[k],
+                 p->t_end);
+        break;
+      }
       if (p->out_times[k] < 0.0 || (k > 0 && !(p->out_times[k] > p->out_times[k - 1]))) {
         dk_error(e, doc, dk_get(out, "times"),
                  "output.times must be >= 0 and increasing (entry %zu = %g)", k, p->out_times[k]);
