@@ -243,11 +243,54 @@ static void test_unstable_run_stops(void **state) {
   release(&r);
 }
 
+/* A deck in SI units (`units: si`) gives the same grid as its internal-unit twin: lengths m →
+ * cm, velocities m/s → km/s, times s → 10 µs, pressures Pa → GPa, history tables converted
+ * column by column. */
+static void test_si_units(void **state) {
+  const char *text =
+      "units: si\n"
+      "problem: continuum\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2703, c0: 5350, s: 1.34, gamma0: 2.0}\n"
+      "continuum:\n"
+      "  layers:\n"
+      "    - {material: al, thickness: 0.002, cells: 20, velocity: 500, pressure: 1.0e9}\n"
+      "  left: {type: piston, table: [[0, 0], [1.0e-6, 1000]]}\n"
+      "  right: {type: pressure, value: 1.0e9}\n"
+      "  time: {end: 2.0e-6, dt_max: 1.0e-8}\n"
+      "  output: {times: [1.0e-6]}\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(text, "si.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  eos_materials *mats = eos_materials_read(doc, &e);
+  cont_problem *p = cont_problem_read(doc, dk_get(dk_root(doc), "continuum"), mats, &e);
+  if (!p) dk_errors_print(&e, stdout);
+  assert_non_null(p);
+  cont_grid *g = cont_problem_grid(p);
+  cont_view v = cont_grid_view(g);
+  /* exact decimal conversions up to one rounding each */
+  assert_true(fabs(v.x[v.ncells] - 0.2) < 1e-15);
+  assert_true(fabs(v.u[10] - 0.5) < 1e-15);
+  assert_true(fabs(v.rho[0] - 2.703) < 1e-12);
+  assert_true(fabs(v.p[5] - 1.0) < 1e-9); /* 1 GPa from the pressure → energy solve */
+  /* the piston table: 1000 m/s at 1 µs = 1 km/s at t = 0.1 (internal); half-way 0.5 */
+  assert_int_equal(cont_grid_run_to(g, 0.05), MS_OK);
+  assert_true(fabs(v.u[0] - 0.5) < 1e-12);
+  cont_problem_free(p);
+  eos_materials_free(mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_zero_cells),          cmocka_unit_test(test_overlapping_layers),
       cmocka_unit_test(test_cfl_not_below_one),   cmocka_unit_test(test_unknown_material),
       cmocka_unit_test(test_history_not_monotone), cmocka_unit_test(test_errors_collected),
-      cmocka_unit_test(test_good_deck_runs),      cmocka_unit_test(test_unstable_run_stops)};
+      cmocka_unit_test(test_good_deck_runs),      cmocka_unit_test(test_unstable_run_stops),
+      cmocka_unit_test(test_si_units)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
