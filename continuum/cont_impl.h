@@ -15,7 +15,7 @@ typedef struct cont_region {
  * chunk-local windows of CONT_WINDOW entries: global index j lives at [j + CONT_HALO − origin],
  * and the last CONT_HALO entries are carried into the next window, so scratch data never
  * travels to main memory. */
-enum { CONT_CHUNK = 512, CONT_HALO = 4, CONT_WINDOW = CONT_CHUNK + 2 * CONT_HALO };
+enum { CONT_CHUNK = 1024, CONT_HALO = 4, CONT_WINDOW = CONT_CHUNK + 2 * CONT_HALO };
 
 typedef struct cont_tag {
   char *name;
