@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Plots for the Hamiltonian discrete model's paper-000 tests (docs/validation.md).
 
-  plot_rod.py rod OUTDIR [OUTDIR2 ...] -o rod.png [--cross HISTORY.csv] [--L 1 --c 5.0475]
+  plot_rod.py rod OUTDIR [OUTDIR2 ...] -o rod.png [--cross HISTORY.csv[:LABEL] ...]
       w(L/2, t) over the last 10 L/c: DM runs (dm_probes.csv of each OUTDIR, labelled by their
       particle count), the exact solution and optionally a cross-scheme history
       (continuum `history_quarter.csv`: columns t and x or w of the tagged node).
@@ -47,7 +47,7 @@ def triangle_exact(x, t, L, eps, c):
 
 
 def rod(args):
-    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig, ax = plt.subplots(figsize=(9, 5.2))
     L, c, eps = args.L, args.c, args.eps
     tmax = None
     for d in args.dirs:
@@ -66,17 +66,19 @@ def rod(args):
     tt = np.linspace(tmax - 10 * L / c, tmax, 4000)
     ax.plot(tt * c / L, triangle_exact(0.5 * L, tt, L, eps, c) * 1e4, "k--", lw=1.2,
             label="exact (x = L/2)")
-    if args.cross:
-        names, data = read_csv(args.cross)
+    for spec in args.cross or []:
+        path, _, label = spec.partition(":")
+        names, data = read_csv(path)
         t = data[:, 0]
         col = names.index("w") if "w" in names else names.index("x")
         w = data[:, col] - (0.5 * L if names[col] == "x" else 0.0)
         sel = t >= tmax - 10 * L / c
-        ax.plot(t[sel] * c / L, w[sel] * 1e4, lw=1.0, label="cross scheme (continuum)")
+        ax.plot(t[sel] * c / L, w[sel] * 1e4, lw=1.0, ls=":",
+                label="cross scheme " + (label or path))
     ax.set_xlabel("t c / L")
     ax.set_ylabel("w(L/2, t)  [1e-4 cm]")
     ax.set_title("Paper 000 §6.1: rod, triangle initial data, last 10 L/c before 250 L/c")
-    ax.legend(loc="upper right", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(args.o, dpi=110)
@@ -123,7 +125,7 @@ def sphere(args):
 
 def slice_(args):
     files = sorted(glob.glob(os.path.join(args.dirs[0], "dm_profile_*.csv")))
-    fig, axs = plt.subplots(1, len(files), figsize=(3.6 * len(files), 3.8), squeeze=False)
+    fig, axs = plt.subplots(1, len(files), figsize=(3.6 * len(files), 4.3), squeeze=False)
     for ax, fn in zip(axs[0], files):
         names, data = read_csv(fn)
         x, y = data[:, 0], data[:, 1]
@@ -140,7 +142,7 @@ def slice_(args):
         with open(fn) as f:
             title = f.readline()
         t = title.split("t = ")[1].split(" ")[0] if "t = " in title else ""
-        ax.set_title(f"t = {t}")
+        ax.set_title(f"t = {float(t):.3g}" if t else "")
         ax.set_xlabel("x [cm]")
     axs[0][0].set_ylabel("y [cm]")
     fig.suptitle("§6.3: |u| at z = h/2, S = 0.8 exp(-5|u|/|u|max) " + args.title, fontsize=9)
@@ -153,7 +155,8 @@ def main():
     ap.add_argument("what", choices=["rod", "contact", "sphere", "slice"])
     ap.add_argument("dirs", nargs="+")
     ap.add_argument("-o", required=True, help="output PNG")
-    ap.add_argument("--cross", help="cross-scheme history CSV (rod)")
+    ap.add_argument("--cross", action="append",
+                    help="cross-scheme history CSV[:LABEL] (rod; repeatable)")
     ap.add_argument("--L", type=float, default=1.0)
     ap.add_argument("--c", type=float, default=math.sqrt(200 / 7.85))
     ap.add_argument("--eps", type=float, default=1e-3)
