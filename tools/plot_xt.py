@@ -23,16 +23,9 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("outdir")
-    ap.add_argument("--quantity", choices=["density", "pressure"], default=None,
-                    help="default: the deck's output.xt_quantity")
-    ap.add_argument("--log", action="store_true", help="logarithmic colour scale")
-    ap.add_argument("--tags", action="store_true", help="overlay tagged-node trajectories")
-    ap.add_argument("-o", "--output", default=None)
-    a = ap.parse_args()
-
+def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
+    """Draw the x–t diagram of OUTDIR/xt.h5; returns the PNG path."""
+    a = argparse.Namespace(outdir=outdir, quantity=quantity, log=log, tags=tags, output=output)
     path = os.path.join(a.outdir, "xt.h5")
     if not os.path.exists(path):
         sys.exit(f"plot_xt: {path} not found (set output.xt_frames > 0 in the deck)")
@@ -78,7 +71,54 @@ def main():
     out = a.output or os.path.join(a.outdir, f"xt_{quantity}.png")
     fig.tight_layout()
     fig.savefig(out, dpi=120)
-    print(out)
+    plt.close(fig)
+    return out
+
+
+def plot_histories(outdir, output):
+    """Velocity and position histories of the tagged nodes (the U(t) that drives particles)."""
+    with h5py.File(os.path.join(outdir, "history.h5"), "r") as h:
+        names = [n for n in h if "t" in h[n] and "u" in h[n]]
+        if not names:
+            return None
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+        for name in names:
+            t = h[name]["t"][()].ravel()
+            ax1.plot(t, h[name]["u"][()].ravel(), label=name)
+            ax2.plot(t, h[name]["x"][()].ravel(), label=name)
+    ax1.set_xlabel("t [10us]"); ax1.set_ylabel("u [km/s]"); ax1.set_title("Tagged nodes: U(t)")
+    ax2.set_xlabel("t [10us]"); ax2.set_ylabel("x [cm]"); ax2.set_title("Tagged nodes: x(t)")
+    ax1.legend(fontsize=8); ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(output, dpi=120)
+    plt.close(fig)
+    return output
+
+
+def plot_run(outdir, plotdir):
+    """Hook for tools/plot_run.py: every continuum picture of a run directory."""
+    made = []
+    if os.path.exists(os.path.join(outdir, "xt.h5")):
+        for q in ("density", "pressure"):
+            made.append(plot_xt(outdir, q, log=False, tags=True,
+                                output=os.path.join(plotdir, f"xt_{q}.png")))
+    if os.path.exists(os.path.join(outdir, "history.h5")):
+        out = plot_histories(outdir, os.path.join(plotdir, "histories.png"))
+        if out:
+            made.append(out)
+    return made
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("outdir")
+    ap.add_argument("--quantity", choices=["density", "pressure"], default=None,
+                    help="default: the deck's output.xt_quantity")
+    ap.add_argument("--log", action="store_true", help="logarithmic colour scale")
+    ap.add_argument("--tags", action="store_true", help="overlay tagged-node trajectories")
+    ap.add_argument("-o", "--output", default=None)
+    a = ap.parse_args()
+    print(plot_xt(a.outdir, a.quantity, a.log, a.tags, a.output))
 
 
 if __name__ == "__main__":
