@@ -85,8 +85,10 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
     const dk_node *it = dk_seq_at(L, i);
     dm_layer *ly = &p->layers[i];
     if (!dk_expect_map(e, doc, it, "discrete_model.layers[]")) continue;
-    dk_read_double(e, doc, it, "x_max", MS_DIM_LENGTH, false, INFINITY, -INFINITY, INFINITY,
-                   &ly->x_max);
+    ly->x_max = INFINITY; /* absent: the rest of the domain (no default written back) */
+    if (dk_get(it, "x_max"))
+      dk_read_double(e, doc, it, "x_max", MS_DIM_LENGTH, true, 0, -INFINITY, INFINITY,
+                     &ly->x_max);
     const char *mname = NULL;
     if (dk_get(it, "material")) {
       dk_read_string(e, doc, it, "material", true, NULL, &mname);
