@@ -54,6 +54,8 @@ struct dm_problem {
   long probe_every, energy_every;
   double *profile_times;
   size_t nprofile_times;
+  double *snapshot_times;
+  size_t nsnapshot_times;
   dm_run_summary sum;
 };
 
@@ -64,6 +66,7 @@ void dm_problem_free(dm_problem *p) {
   free(p->layers);
   free(p->probes);
   free(p->profile_times);
+  free(p->snapshot_times);
   free(p);
 }
 
@@ -225,6 +228,9 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     if (dk_get(out, "profile_times"))
       dk_read_double_list(e, doc, out, "profile_times", MS_DIM_TIME, true, &p->profile_times,
                           &p->nprofile_times);
+    if (dk_get(out, "snapshot_times"))
+      dk_read_double_list(e, doc, out, "snapshot_times", MS_DIM_TIME, true, &p->snapshot_times,
+                          &p->nsnapshot_times);
   }
   if (e->n > nerr0) {
     dm_problem_free(p);
@@ -517,6 +523,67 @@ static void write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, s
   free(path);
 }
 
+/* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView): current positions
+ * X + w, reference positions, w, u, |u|, Cauchy stress (9 components) and its pressure
+ * −tr Σ/3, von Mises intensity and Σ_xx. */
+static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, int index) {
+  if (!ctx->outdir || !ctx->outdir[0]) return;
+  const dm_state *s = m->s;
+  char name[64];
+  snprintf(name, sizeof name, "dm_snapshot_%03d.h5", index);
+  char *path = ms_out_path(ctx, name);
+  double *S = malloc(9 * s->n * sizeof(double));
+  double *x = malloc(3 * nreal * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
+  dm_cauchy_stress(m, S);
+  double *speed = sc, *pres = sc + nreal, *vm = sc + 2 * nreal, *sxx = sc + 3 * nreal;
+  for (size_t i = 0; i < nreal; ++i) {
+    const double *u = &s->u[3 * i], *T = &S[9 * i];
+    for (int a = 0; a < 3; ++a) x[3 * i + a] = s->X[3 * i + a] + s->w[3 * i + a];
+    speed[i] = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    pres[i] = -(T[0] + T[4] + T[8]) / 3.0;
+    double s12 = 0.5 * (T[1] + T[3]), s23 = 0.5 * (T[5] + T[7]), s31 = 0.5 * (T[2] + T[6]);
+    vm[i] = sqrt(0.5 * ((T[0] - T[4]) * (T[0] - T[4]) + (T[4] - T[8]) * (T[4] - T[8]) +
+                        (T[8] - T[0]) * (T[8] - T[0]) + 6.0 * (s12 * s12 + s23 * s23 + s31 * s31)));
+    sxx[i] = T[0];
+  }
+  ms_status st = MS_ERR_IO;
+  ms_h5 *h = ms_h5_create(path);
+  if (h) {
+    st = ms_h5_write_doubles(h, "particles/x", nreal, 3, x, "cm");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/X", nreal, 3, s->X, "cm");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/w", nreal, 3, s->w, "cm");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/u", nreal, 3, s->u, "km/s");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/speed", nreal, 1, speed, "km/s");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/cauchy", nreal, 9, S, "GPa");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/pressure", nreal, 1, pres, "GPa");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/von_mises", nreal, 1, vm, "GPa");
+    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_xx", nreal, 1, sxx, "GPa");
+    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", t);
+    if (st == MS_OK)
+      st = ms_h5_close(h);
+    else
+      ms_h5_abort(h);
+  }
+  if (st == MS_OK) {
+    ms_xdmf_attr attr[] = {{"displacement", "particles/w", 3, false},
+                           {"velocity", "particles/u", 3, false},
+                           {"speed", "particles/speed", 1, false},
+                           {"pressure", "particles/pressure", 1, false},
+                           {"von_mises", "particles/von_mises", 1, false},
+                           {"sigma_xx", "particles/sigma_xx", 1, false}};
+    char xname[64];
+    snprintf(xname, sizeof xname, "dm_snapshot_%03d.xmf", index);
+    char *xmf = ms_out_path(ctx, xname);
+    st = ms_xdmf_write_points(xmf, name, "particles/x", nreal, 3, t, 6, attr);
+    free(xmf);
+  }
+  if (st != MS_OK) ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
+  free(path);
+  free(S);
+  free(x);
+  free(sc);
+}
+
 static void write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_state *s,
                                 size_t nreal, double t) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
@@ -769,6 +836,8 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   double *ehist = ms_calloc(nerec_max * 5, sizeof(double));
   long *prof_step = ms_calloc(p->nprofile_times ? p->nprofile_times : 1, sizeof(long));
   for (size_t q = 0; q < p->nprofile_times; ++q) prof_step[q] = lround(p->profile_times[q] / dt);
+  long *snap_step = ms_calloc(p->nsnapshot_times ? p->nsnapshot_times : 1, sizeof(long));
+  for (size_t q = 0; q < p->nsnapshot_times; ++q) snap_step[q] = lround(p->snapshot_times[q] / dt);
 
   rkn_integrator *ig = rkn_create(p->integrator, 3 * s.n);
   double E0 = dm_kinetic_energy(&s) + dm_potential_energy(m, s.w);
@@ -798,6 +867,11 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
       if (prof_step[q] == step) {
         dm_potential_energy(m, s.w); /* stresses of the current state */
         write_profile(ctx, p, m, nreal, t, (int)q);
+      }
+    for (size_t q = 0; q < p->nsnapshot_times; ++q)
+      if (snap_step[q] == step) {
+        dm_potential_energy(m, s.w);
+        write_snapshot(ctx, m, nreal, t, (int)q);
       }
     if (step == nsteps) break;
     double w0 = ms_wall_time(), c0 = cpu_time();
@@ -891,6 +965,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   free(hist);
   free(ehist);
   free(prof_step);
+  free(snap_step);
   free(pr);
   rkn_destroy(ig);
   dm_destroy(m);
