@@ -22,11 +22,14 @@ enum { SURF_FLAT = 0, SURF_GROOVES, SURF_RANDOM };
 static const char *const surface_names[] = {"flat", "grooves", "random", NULL};
 static const char *const lattice_names[] = {"tri2d", "fcc", NULL};
 static const char *const cutoff_names[] = {"plain", "bonded", NULL};
+static const char *const drive_mode_names[] = {"velocity", "transmitting", NULL};
 
 struct cpl_problem {
   const eos_materials *mats;
   cont_problem *grid_out, *grid_live;
   size_t tag_drive, tag_fs; /* tag indices in both grids */
+  int drive_mode;           /* 0 velocity history, 1 transmitting (characteristic) piston */
+  double impedance;         /* Z for the transmitting piston (0: √1.5 ρ0 c0) */
   bool have_fs;
   int sample_mat, gas_mat, gas_layer;
   /* particles */
@@ -128,6 +131,9 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   else if (dk_expect_map(e, doc, D, "drive")) {
     dk_read_string(e, doc, D, "tag", true, NULL, &drive_tag);
     dk_read_string(e, doc, D, "free_surface_tag", false, "", &fs_tag);
+    p->drive_mode = 1;
+    dk_read_enum(e, doc, D, "mode", false, 1, drive_mode_names, &p->drive_mode);
+    dk_read_double(e, doc, D, "impedance", MS_DIM_NONE, false, 0.0, 0.0, INFINITY, &p->impedance);
     /* 0: depth/c0, shorter than the round trip of the release to the piston and back */
     dk_read_double(e, doc, D, "check_window", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
                    &p->check_window);
@@ -310,6 +316,25 @@ static void surface_setup(const cpl_problem *p, surface_modes *m, bool three_d) 
 
 /* ---------------------------------------------------------------------------------------- */
 /* Running                                                                                   */
+
+/* Linear interpolation in a sampled history (constant beyond the ends). */
+static double interp(size_t n, const double *t, const double *v, double x) {
+  if (!n)
+    return 0.0;
+  if (x <= t[0])
+    return v[0];
+  if (x >= t[n - 1])
+    return v[n - 1];
+  size_t lo = 0, hi = n - 1;
+  while (hi - lo > 1) {
+    size_t mid = (lo + hi) / 2;
+    if (t[mid] <= x)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return v[lo] + (v[hi] - v[lo]) * (x - t[lo]) / (t[hi] - t[lo]);
+}
 
 /* Gas state from the live grid: only the gas layer beyond the sample counts. */
 typedef struct gas_ctx {
@@ -518,16 +543,25 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   /* piston: the drive history from the particle phase's start (relative time) */
   cd_history ph;
   ph.n = hd.n - k0;
-  ph.t = ms_calloc(ph.n, sizeof(double));
-  ph.u = ms_calloc(ph.n, sizeof(double));
+  ph.t = ms_calloc(ph.n < 2 ? 2 : ph.n, sizeof(double));
+  ph.u = ms_calloc(ph.n < 2 ? 2 : ph.n, sizeof(double));
   for (size_t k = 0; k < ph.n; k++) {
     ph.t[k] = hd.t[k0 + k] - t_start;
     ph.u[k] = hd.u[k0 + k];
   }
   double dir[3] = {1, 0, 0};
+  if (p->drive_mode == 1)
+    ph.n = 2; /* rewritten in place every step (transmitting piston) */
   cd_sim_set_piston(sim, &ph, dir);
   free(ph.t);
   free(ph.u);
+  /* transmitting piston (docs/coupling.md §5): u = U_g + (p_g − p_particles)/Z passes waves
+   * coming from the particle side out of the region instead of reflecting them; Z defaults to
+   * ρ0 c_L with c_L = √1.5 c0, the longitudinal speed of a nearest-neighbour central-force
+   * lattice (2D triangular and fcc [100] alike) */
+  const double Z = p->impedance > 0 ? p->impedance : sqrt(1.5) * rho0 * c0;
+  const double area = fcc ? width * width_z : width * p->thickness;
+  double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
   st = cd_sim_init(sim);
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: particle set-up failed (%s)", ms_status_str(st));
@@ -566,7 +600,10 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   {
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
-    ms_csv_header(f_ej, "ejected mass (every fragment but the largest) vs time", 3, ejn, eju);
+    ms_csv_header(f_ej,
+                  "ejected mass (fragments but the largest, ahead of the grid's free surface) "
+                  "vs time",
+                  3, ejn, eju);
     static const char *const fsn[] = {"t", "u_grid", "u_particles"};
     static const char *const fsu[] = {"10us", "km/s", "km/s"};
     ms_csv_header(f_fs, "free-surface velocity: grid tag vs particle surface layer", 3, fsn, fsu);
@@ -585,7 +622,26 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   ms_progress prog;
   ms_progress_start(&prog, ctx, "particles", t_start, p->t_end);
   for (long step = 1; step <= nsteps && st == MS_OK; step++) {
+    if (p->drive_mode == 1) {
+      /* grid state over the step: mean velocity (exact displacement) and sample-side
+       * pressure at the mid-step */
+      double ta = t_start + sim->t, tb = ta + cfg.dt;
+      double ug =
+          (cpl_piston_displacement(&drive, tb) - cpl_piston_displacement(&drive, ta)) / cfg.dt;
+      double pg = interp(hd.n, hd.t, hd.p_right, 0.5 * (ta + tb));
+      double u_cmd = ug + (pg - p_particles) / Z;
+      sim->piston.t[0] = sim->t;
+      sim->piston.t[1] = sim->t + cfg.dt;
+      sim->piston.u[0] = sim->piston.u[1] = u_cmd;
+    }
     st = cd_sim_step(sim);
+    if (p->drive_mode == 1) {
+      double fsum = 0;
+      for (size_t i = 0; i < ps->n; i++)
+        if (ps->flags[i] & PTL_DRIVEN)
+          fsum += ps->fx[i];
+      p_particles = -fsum / area; /* compression pushes the piston towards −x */
+    }
     if (st != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR, "coupled: particle step %ld failed (%s) at t = %g", step,
              ms_status_str(st), t_start + sim->t);
@@ -605,6 +661,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
              t_abs);
       break;
     }
+    /* ejecta: detached fragments ahead of the grid's free surface at this time */
+    sel.plane = hf.x[0] + cpl_piston_displacement(&fsurf, t_abs);
     double row_ej[3] = {t_abs, cpl_ejected_mass(&fr, &sel), (double)fr.n};
     last_search = step;
     ms_csv_row(f_ej, 3, row_ej);
@@ -675,9 +733,10 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     ms_log(ctx, MS_LOG_INFO,
            "coupled: drive check (free surface, %zu samples over [%g, %g]): plateau particles "
            "%.5g km/s vs grid %.5g km/s: %.2f %%; half-rise at t = %.5g (particles) vs %.5g "
-           "(grid)",
+           "(grid); smallest particle velocity in the next two windows %.4g km/s (%s piston)",
            chk.samples, chk.t_break + 0.5 * window, chk.t_break + window, chk.plateau_particles,
-           chk.plateau_grid, 100 * chk.rel_diff, chk.t_half_particles, chk.t_half_grid);
+           chk.plateau_grid, 100 * chk.rel_diff, chk.t_half_particles, chk.t_half_grid,
+           chk.min_after, drive_mode_names[p->drive_mode]);
   else if (st == MS_OK)
     ms_log(ctx, MS_LOG_WARN,
            "coupled: drive check: no free-surface breakout within the "

@@ -272,10 +272,13 @@ double cpl_piston_displacement(const cpl_piston *p, double t);
 /* Drive check: free-surface velocity of the particles against the grid's free-surface tag,
  * sampled at the same times. Breakout t_break: the grid's velocity first exceeds 5 % of its
  * maximum; plateaus: means over [t_break + window/2, t_break + window]; t_half_*: first time
- * each reaches half its plateau (so a timing offset shows separately from a level error).
+ * each reaches half its plateau (so a timing offset shows separately from a level error);
+ * min_after: the particles' smallest velocity in the next two windows (a release reflected at
+ * the piston comes back as a dip).
  * False if there is no breakout or no sample in the plateau interval. */
 typedef struct cpl_fs_check {
   double t_break, plateau_grid, plateau_particles, rel_diff, t_half_grid, t_half_particles;
+  double min_after; /* smallest particle velocity over (t_break + window, t_break + 3 window] */
   size_t samples;
 } cpl_fs_check;
 bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,

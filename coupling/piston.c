@@ -104,7 +104,7 @@ bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,
                             const double *u_particles, double window, cpl_fs_check *out) {
   memset(out, 0, sizeof *out);
   out->t_break = out->plateau_grid = out->plateau_particles = out->rel_diff = NAN;
-  out->t_half_grid = out->t_half_particles = NAN;
+  out->t_half_grid = out->t_half_particles = out->min_after = NAN;
   double umax = 0;
   for (size_t k = 0; k < n; k++)
     if (isfinite(u_grid[k]))
@@ -128,6 +128,11 @@ bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,
   out->samples = m;
   if (!m)
     return false;
+  /* after the window: the reflection of the release at the piston shows up here */
+  for (size_t k = kb; k < n && t[k] <= out->t_break + 3 * window; k++)
+    if (t[k] > out->t_break + window && isfinite(u_particles[k]))
+      out->min_after =
+          isnan(out->min_after) ? u_particles[k] : fmin(out->min_after, u_particles[k]);
   out->plateau_grid = sg / (double)m;
   out->plateau_particles = sp / (double)m;
   out->rel_diff = fabs(out->plateau_particles - out->plateau_grid) / fabs(out->plateau_grid);
