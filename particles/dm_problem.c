@@ -280,9 +280,10 @@ static void build_particles(dm_problem *p, dm_state *s) {
     nreal *= (size_t)p->ncell[a];
     ntot *= (size_t)(p->ncell[a] + ext_lo[a] + ext_hi[a]);
   }
-  /* Count the outside particles that are kept (no crossed face is free). */
+  /* Arrays sized for the whole extended lattice; outside particles are kept only when no
+   * face they lie beyond is free. */
   dm_state_alloc(s, ntot, p->dim);
-  size_t nreal_check = 0, next = nreal;
+  size_t next = nreal;
   for (long k = -ext_lo[2]; k < p->ncell[2] + ext_hi[2]; ++k)
     for (long j = -ext_lo[1]; j < p->ncell[1] + ext_hi[1]; ++j)
       for (long i = -ext_lo[0]; i < p->ncell[0] + ext_hi[0]; ++i) {
@@ -308,7 +309,6 @@ static void build_particles(dm_problem *p, dm_state *s) {
         size_t id;
         if (!outside) {
           id = (size_t)i + (size_t)p->ncell[0] * ((size_t)j + (size_t)p->ncell[1] * (size_t)k);
-          ++nreal_check;
         } else {
           id = next++;
           if (fixed) {
@@ -330,7 +330,6 @@ static void build_particles(dm_problem *p, dm_state *s) {
         s->K[id] = ly->K;
         s->G[id] = ly->G;
       }
-  (void)nreal_check;
   s->n = next; /* arrays are longer than needed when faces are free: harmless */
 }
 
