@@ -411,6 +411,115 @@ static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
   return v;
 }
 
+/* The particle region between x_drive and x_drive + depth (lattice, surface profile, piston and
+ * surface layers, pair table); the piston history is set by the caller. */
+typedef struct region {
+  cd_sim *sim;
+  ptl_state *ps;
+  cd_config cfg;
+  const eos_t *eos;
+  double rho0, c0, a, width, width_z, x_top, area;
+  bool fcc;
+} region;
+
+static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_drive,
+                              double depth, region *r) {
+  ms_status st;
+  const eos_t *eos = p->mats->m[p->sample_mat].eos;
+  const double rho0 = eos_rho0(eos), c0 = eos_c0(eos), a = p->spacing;
+  const bool fcc = p->lattice == 1;
+  const cd_lattice lat = fcc ? CD_LATTICE_FCC : CD_LATTICE_TRI2D;
+  const double mass = rho0 * cd_cluster_volume(lat, a, p->thickness);
+  /* lattice counts: tri2d with close-packed rows along y (row spacing √3/2 a in x);
+   * fcc cubic cells √2 a */
+  const double cell_x = fcc ? sqrt(2.0) * a : sqrt(3.0) * a, cell_y = fcc ? sqrt(2.0) * a : a;
+  int nx = (int)fmax(2.0, nearbyint(depth / cell_x));
+  int ny = (int)fmax(2.0, nearbyint(p->width / cell_y));
+  int nz = fcc ? (int)fmax(2.0, nearbyint(p->width_z / cell_y)) : 1;
+  const double width = ny * cell_y, width_z = fcc ? nz * cell_y : 0.0;
+  const double x_top = x_drive + nx * cell_x; /* nominal free surface of the lattice */
+  size_t ncap = (size_t)(fcc ? 4 : 2) * (size_t)nx * (size_t)ny * (size_t)nz;
+  ptl_state *tmp = ptl_state_create(ncap, fcc ? 3 : 2);
+  if (fcc) {
+    double sh[3] = {0.25, 0.25, 0.25}, o[3] = {x_drive, 0, 0};
+    cd_lattice_fcc(tmp, nx, ny, nz, sh, o, a, mass, 0);
+  } else {
+    /* generated as cd_lattice_tri's (x', y') = (y, x): rows of constant x hold neighbours */
+    double sh[2] = {0.25, 0.25}, o[2] = {0, x_drive};
+    cd_lattice_tri(tmp, ny, nx, sh, o, a, mass, 0);
+    for (size_t i = 0; i < tmp->n; i++) {
+      double t = tmp->x[i];
+      tmp->x[i] = tmp->y[i];
+      tmp->y[i] = t;
+    }
+  }
+  surface_modes modes;
+  surface_setup(p, &modes, fcc);
+  ptl_state *ps = ptl_state_create(tmp->n, fcc ? 3 : 2);
+  const double row = fcc ? 0.5 * sqrt(2.0) * a : 0.5 * sqrt(3.0) * a; /* layer spacing in x */
+  for (size_t i = 0; i < tmp->n; i++) {
+    double drop = surface_drop(p, &modes, tmp->y[i], tmp->z[i]);
+    double top = x_top - drop;
+    if (tmp->x[i] > top)
+      continue;
+    size_t j = ptl_state_add(ps, tmp->x[i], tmp->y[i], tmp->z[i], mass, 0);
+    if (tmp->x[i] < x_drive + p->piston_rows * row)
+      ps->flags[j] |= PTL_DRIVEN;
+    else if (tmp->x[i] > top - row)
+      ps->flags[j] |= PTL_SURFACE;
+  }
+  ptl_state_free(tmp);
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: particles: %s lattice, a = %g cm, %zu particles (%d x %d x %d cells), "
+         "region %g..%g cm (grid: %g..%g), width %g cm, surface %s (depth %g cm)",
+         lattice_names[p->lattice], a, ps->n, nx, ny, nz, x_drive, x_top, x_drive,
+         x_drive + depth, width, surface_names[p->surface], p->surf_depth);
+
+  cd_box box;
+  memset(&box, 0, sizeof box);
+  box.lo[0] = x_drive - 10 * a;
+  box.hi[0] = x_top + 10 * a;
+  box.bc[0] = CD_BC_FREE;
+  box.hi[1] = width;
+  box.bc[1] = CD_BC_PERIODIC;
+  box.hi[2] = fcc ? width_z : 1.0;
+  box.bc[2] = fcc ? CD_BC_PERIODIC : CD_BC_FREE;
+  cd_config cfg;
+  memset(&cfg, 0, sizeof cfg);
+  cfg.r0 = a;
+  cfg.skin = 0.1 * a;
+  cfg.dt = p->dt > 0 ? p->dt : p->dt_factor * a / c0;
+  cfg.cutoff = p->cutoff_mode == 1 ? CD_CUTOFF_BONDED : CD_CUTOFF_PLAIN;
+  cfg.damping_gamma = p->damping_j > 0 ? c0 / (p->damping_j * a) : 0.0;
+  cfg.lattice = lat;
+  cfg.thickness = p->thickness;
+  cd_sim *sim = cd_sim_create(ps, &box, &cfg, 1);
+  cd_pair_table *tab = ms_calloc(1, sizeof *tab);
+  st = cd_pair_table_build(tab, eos, eos, lat, a, p->thickness, p->cutoff * a, 0.5 * a, 1.0, 0);
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR,
+           "coupled: cannot build the pair potential of the sample material "
+           "(cold curve missing or not finite on [0.5a, R_c])");
+    free(tab);
+    cd_sim_free(sim);
+    return st;
+  }
+  cd_sim_set_pair(sim, 0, 0, tab);
+  r->sim = sim;
+  r->ps = ps;
+  r->cfg = cfg;
+  r->eos = eos;
+  r->rho0 = rho0;
+  r->c0 = c0;
+  r->a = a;
+  r->fcc = fcc;
+  r->width = width;
+  r->width_z = width_z;
+  r->x_top = x_top;
+  r->area = fcc ? width * width_z : width * p->thickness;
+  return MS_OK;
+}
+
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   ms_status st;
   /* 1. the grid alone, with its own outputs */
@@ -456,90 +565,20 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
            p->t_end, hd.t[hd.n - 1]);
 
   /* 2. the particle region */
-  const eos_t *eos = p->mats->m[p->sample_mat].eos;
-  const double rho0 = eos_rho0(eos), c0 = eos_c0(eos), a = p->spacing;
-  const bool fcc = p->lattice == 1;
-  const cd_lattice lat = fcc ? CD_LATTICE_FCC : CD_LATTICE_TRI2D;
   const double x_drive = hd.x[0], x_fs = hf.x[0], depth = x_fs - x_drive;
-  const double mass = rho0 * cd_cluster_volume(lat, a, p->thickness);
-  /* lattice counts: tri2d with close-packed rows along y (row spacing √3/2 a in x);
-   * fcc cubic cells √2 a */
-  const double cell_x = fcc ? sqrt(2.0) * a : sqrt(3.0) * a, cell_y = fcc ? sqrt(2.0) * a : a;
-  int nx = (int)fmax(2.0, nearbyint(depth / cell_x));
-  int ny = (int)fmax(2.0, nearbyint(p->width / cell_y));
-  int nz = fcc ? (int)fmax(2.0, nearbyint(p->width_z / cell_y)) : 1;
-  const double width = ny * cell_y, width_z = fcc ? nz * cell_y : 0.0;
-  const double x_top = x_drive + nx * cell_x; /* nominal free surface of the lattice */
-  size_t ncap = (size_t)(fcc ? 4 : 2) * (size_t)nx * (size_t)ny * (size_t)nz;
-  ptl_state *tmp = ptl_state_create(ncap, fcc ? 3 : 2);
-  if (fcc) {
-    double sh[3] = {0.25, 0.25, 0.25}, o[3] = {x_drive, 0, 0};
-    cd_lattice_fcc(tmp, nx, ny, nz, sh, o, a, mass, 0);
-  } else {
-    /* generated as cd_lattice_tri's (x', y') = (y, x): rows of constant x hold neighbours */
-    double sh[2] = {0.25, 0.25}, o[2] = {0, x_drive};
-    cd_lattice_tri(tmp, ny, nx, sh, o, a, mass, 0);
-    for (size_t i = 0; i < tmp->n; i++) {
-      double t = tmp->x[i];
-      tmp->x[i] = tmp->y[i];
-      tmp->y[i] = t;
-    }
-  }
-  surface_modes modes;
-  surface_setup(p, &modes, fcc);
-  ptl_state *ps = ptl_state_create(tmp->n, fcc ? 3 : 2);
-  const double row = fcc ? 0.5 * sqrt(2.0) * a : 0.5 * sqrt(3.0) * a; /* layer spacing in x */
-  for (size_t i = 0; i < tmp->n; i++) {
-    double drop = surface_drop(p, &modes, tmp->y[i], tmp->z[i]);
-    double top = x_top - drop;
-    if (tmp->x[i] > top)
-      continue;
-    size_t j = ptl_state_add(ps, tmp->x[i], tmp->y[i], tmp->z[i], mass, 0);
-    if (tmp->x[i] < x_drive + p->piston_rows * row)
-      ps->flags[j] |= PTL_DRIVEN;
-    else if (tmp->x[i] > top - row)
-      ps->flags[j] |= PTL_SURFACE;
-  }
-  ptl_state_free(tmp);
-  ms_log(ctx, MS_LOG_INFO,
-         "coupled: 2/3 particles: %s lattice, a = %g cm, %zu particles (%d x %d%s%s cells), "
-         "region %g..%g cm (grid: %g..%g), width %g cm, surface %s (depth %g cm)",
-         lattice_names[p->lattice], a, ps->n, nx, ny, fcc ? " x " : "", fcc ? "" : "", x_drive,
-         x_top, x_drive, x_fs, width, surface_names[p->surface], p->surf_depth);
-  (void)nz;
-
-  cd_box box;
-  memset(&box, 0, sizeof box);
-  box.lo[0] = x_drive - 10 * a;
-  box.hi[0] = x_top + 10 * a;
-  box.bc[0] = CD_BC_FREE;
-  box.hi[1] = width;
-  box.bc[1] = CD_BC_PERIODIC;
-  box.hi[2] = fcc ? width_z : 1.0;
-  box.bc[2] = fcc ? CD_BC_PERIODIC : CD_BC_FREE;
-  cd_config cfg;
-  memset(&cfg, 0, sizeof cfg);
-  cfg.r0 = a;
-  cfg.skin = 0.1 * a;
-  cfg.dt = p->dt > 0 ? p->dt : p->dt_factor * a / c0;
-  cfg.cutoff = p->cutoff_mode == 1 ? CD_CUTOFF_BONDED : CD_CUTOFF_PLAIN;
-  cfg.damping_gamma = p->damping_j > 0 ? c0 / (p->damping_j * a) : 0.0;
-  cfg.lattice = lat;
-  cfg.thickness = p->thickness;
-  cd_sim *sim = cd_sim_create(ps, &box, &cfg, 1);
-  cd_pair_table *tab = ms_calloc(1, sizeof *tab);
-  st = cd_pair_table_build(tab, eos, eos, lat, a, p->thickness, p->cutoff * a, 0.5 * a, 1.0, 0);
+  region reg;
+  st = build_region(ctx, p, x_drive, depth, &reg);
   if (st != MS_OK) {
-    ms_log(ctx, MS_LOG_ERROR,
-           "coupled: cannot build the pair potential of the sample material "
-           "(cold curve missing or not finite on [0.5a, R_c])");
-    free(tab);
-    cd_sim_free(sim);
     cpl_piston_free(&drive);
     cpl_piston_free(&fsurf);
     return st;
   }
-  cd_sim_set_pair(sim, 0, 0, tab);
+  cd_sim *sim = reg.sim;
+  ptl_state *ps = reg.ps;
+  const cd_config cfg = reg.cfg;
+  const double rho0 = reg.rho0, c0 = reg.c0, a = reg.a, width = reg.width,
+               width_z = reg.width_z;
+  const bool fcc = reg.fcc;
   /* piston: the drive history from the particle phase's start (relative time) */
   cd_history ph;
   ph.n = hd.n - k0;
@@ -560,7 +599,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
    * ρ0 c_L with c_L = √1.5 c0, the longitudinal speed of a nearest-neighbour central-force
    * lattice (2D triangular and fcc [100] alike) */
   const double Z = p->impedance > 0 ? p->impedance : sqrt(1.5) * rho0 * c0;
-  const double area = fcc ? width * width_z : width * p->thickness;
+  const double area = reg.area;
   double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
   st = cd_sim_init(sim);
   if (st != MS_OK) {
