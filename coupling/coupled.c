@@ -22,7 +22,8 @@ enum { SURF_FLAT = 0, SURF_GROOVES, SURF_RANDOM };
 static const char *const surface_names[] = {"flat", "grooves", "random", NULL};
 static const char *const lattice_names[] = {"tri2d", "fcc", NULL};
 static const char *const cutoff_names[] = {"plain", "bonded", NULL};
-static const char *const drive_mode_names[] = {"velocity", "transmitting", NULL};
+static const char *const drive_mode_names[] = {"velocity", "transmitting", "two_way", NULL};
+enum { DRIVE_VELOCITY = 0, DRIVE_TRANSMITTING, DRIVE_TWO_WAY };
 
 struct cpl_problem {
   const eos_materials *mats;
@@ -33,7 +34,8 @@ struct cpl_problem {
   bool have_fs;
   int sample_mat, gas_mat, gas_layer;
   /* particles */
-  int lattice; /* 0 tri2d, 1 fcc */
+  int lattice;  /* 0 tri2d, 1 fcc */
+  double depth; /* two-way: particle region length beyond the interface node */
   double spacing, thickness, width, width_z, cutoff, damping_j, dt_factor, dt;
   int cutoff_mode;
   long piston_rows;
@@ -78,6 +80,8 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
   dk_read_double(e, doc, P, "thickness", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->thickness);
   dk_read_positive(e, doc, P, "width", MS_DIM_LENGTH, true, 0, &p->width);
   dk_read_double(e, doc, P, "width_z", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->width_z);
+  /* two-way coupling: the particle region's extent beyond the grid's last node */
+  dk_read_double(e, doc, P, "depth", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->depth);
   dk_read_double(e, doc, P, "cutoff", MS_DIM_NONE, false, 1.2, 1.0, 1.5, &p->cutoff);
   int mode = 1;
   dk_read_enum(e, doc, P, "cutoff_mode", false, 1, cutoff_names, &mode);
@@ -178,6 +182,23 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     } else {
       p->have_fs = fs_tag && fs_tag[0];
       size_t nd = cont_grid_history(g, p->tag_drive).node, nf = v.ncells;
+      if (p->drive_mode == DRIVE_TWO_WAY) {
+        /* the grid ends at the interface; the particles continue it */
+        if (nd != v.ncells)
+          dk_error(e, doc, at,
+                   "drive.mode two_way: drive.tag '%s' must be the grid's last node (%zu), "
+                   "with `right: {type: free}`: the particles replace what lies beyond it",
+                   drive_tag, v.ncells);
+        if (!(p->depth > 0))
+          dk_error(e, doc, dk_get(sec, "particles") ? dk_get(sec, "particles") : sec,
+                   "drive.mode two_way needs particles.depth (the particle region's length "
+                   "beyond the interface, cm)");
+        if (X)
+          dk_error(e, doc, X, "drive.mode two_way has no gas layer: remove 'transport'");
+        p->sample_mat = v.material[nd ? nd - 1 : 0];
+        p->drag_law = CPL_DRAG_NONE;
+        goto consistency_done;
+      }
       if (p->have_fs) {
         p->tag_fs = find_tag(g, fs_tag);
         if (p->tag_fs == (size_t)-1) {
@@ -227,6 +248,7 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
       }
     }
   }
+consistency_done:
   if (p->lattice == 0 && p->thickness == 0)
     p->thickness = p->spacing;
   if (p->lattice == 1 && !(p->width_z > 0))
@@ -422,8 +444,8 @@ typedef struct region {
   bool fcc;
 } region;
 
-static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_drive,
-                              double depth, region *r) {
+static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_drive, double depth,
+                              region *r) {
   ms_status st;
   const eos_t *eos = p->mats->m[p->sample_mat].eos;
   const double rho0 = eos_rho0(eos), c0 = eos_c0(eos), a = p->spacing;
@@ -472,8 +494,8 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   ms_log(ctx, MS_LOG_INFO,
          "coupled: particles: %s lattice, a = %g cm, %zu particles (%d x %d x %d cells), "
          "region %g..%g cm (grid: %g..%g), width %g cm, surface %s (depth %g cm)",
-         lattice_names[p->lattice], a, ps->n, nx, ny, nz, x_drive, x_top, x_drive,
-         x_drive + depth, width, surface_names[p->surface], p->surf_depth);
+         lattice_names[p->lattice], a, ps->n, nx, ny, nz, x_drive, x_top, x_drive, x_drive + depth,
+         width, surface_names[p->surface], p->surf_depth);
 
   cd_box box;
   memset(&box, 0, sizeof box);
@@ -520,7 +542,172 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   return MS_OK;
 }
 
+/* Two-way coupling (docs/coupling.md §6): the grid ends at the interface node; per grid step
+ * the node gets the impulse the particles received in the previous step as a traction, the
+ * grid steps, and the particles sub-cycle with the piston moving at the node's mean velocity
+ * over the step (so the piston follows the node's displacement exactly). */
+static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
+  cont_grid *g = cont_problem_grid(p->grid_live);
+  const size_t node = cont_grid_history(g, p->tag_drive).node;
+  cont_view v = cont_grid_view(g);
+  const double x_if0 = v.x[node];
+  region reg;
+  ms_status st = build_region(ctx, p, x_if0, p->depth, &reg);
+  if (st != MS_OK)
+    return st;
+  cd_sim *sim = reg.sim;
+  ptl_state *ps = reg.ps;
+  double th[2] = {0, 1}, uh[2] = {0, 0}, dir[3] = {1, 0, 0};
+  cd_history ph = {2, th, uh};
+  cd_sim_set_piston(sim, &ph, dir);
+  st = cd_sim_init(sim);
+  if (st != MS_OK) {
+    cd_sim_free(sim);
+    return st;
+  }
+  const double dt_p = reg.cfg.dt, area = reg.area;
+  ms_afile af_if;
+  FILE *f_if = open_csv(ctx, &af_if, "interface.csv");
+  if (!f_if) {
+    cd_sim_free(sim);
+    return MS_ERR_IO;
+  }
+  static const char *const names[] = {"t",      "u_interface", "p_particles", "u_free_surface",
+                                      "J_grid", "J_particles", "W_grid",      "W_particles"};
+  static const char *const units[] = {"10us",     "km/s",     "GPa",     "km/s",
+                                      "GPa*10us", "GPa*10us", "kJ/cm^2", "kJ/cm^2"};
+  ms_csv_header(f_if,
+                "two-way interface: node velocity, particle pressure, impulse and work "
+                "per unit area as the grid and the particles received them",
+                8, names, units);
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g", node,
+         x_if0, p->depth, dt_p);
+  cpl_fragments fr;
+  cpl_fragments_init(&fr);
+  cpl_fragment_opts fo;
+  memset(&fo, 0, sizeof fo);
+  fo.bond = p->bond;
+  fo.spacing = reg.a;
+  fo.rho0 = reg.rho0;
+  fo.box.period[1] = reg.width;
+  if (reg.fcc)
+    fo.box.period[2] = reg.width_z;
+  uint8_t *skip = ms_calloc(ps->n + 1, 1);
+  double p_avg = 0.0, Jg = 0, Jp = 0, Wg = 0, f_prev = 0, w_before = 0, dtg_last = 0, owed = 0;
+  for (size_t i = 0; i < ps->n; i++)
+    if (ps->flags[i] & PTL_DRIVEN)
+      f_prev += ps->fx[i];
+  long gsteps = 0, psteps = 0, next_out = 1;
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "two-way", 0.0, p->t_end);
+  while (cont_grid_time(g) < p->t_end * (1 - 1e-12) && st == MS_OK) {
+    /* the particles push the node towards −x: the traction hands the grid the impulse the
+     * particles received and the grid has not yet (`owed`, normally the last step's), spread
+     * over the expected step; what a different step size leaves over is carried on, so the
+     * exchange conserves momentum exactly up to the impulse in flight */
+    const double traction = dtg_last > 0 ? -owed / dtg_last : 0.0;
+    cont_grid_set_node_force(g, node, traction);
+    double ta = cont_grid_time(g), xa = cont_grid_view(g).x[node];
+    st = cont_grid_step(g, p->t_end - ta);
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: grid: %s", cont_grid_error(g));
+      break;
+    }
+    gsteps++;
+    double tb = cont_grid_time(g), xb = cont_grid_view(g).x[node], dtg = tb - ta;
+    double ubar = (xb - xa) / dtg;
+    Jg += traction * dtg;
+    Wg += traction * (xb - xa);
+    owed += traction * dtg;
+    /* sub-cycle: whole number of particle steps over the grid step */
+    long nsub = (long)ceil(dtg / dt_p * (1 - 1e-12));
+    if (nsub < 1)
+      nsub = 1;
+    sim->cfg.dt = dtg / (double)nsub;
+    sim->piston.t[0] = sim->t;
+    sim->piston.t[1] = sim->t + dtg;
+    sim->piston.u[0] = sim->piston.u[1] = ubar;
+    double imp = 0;
+    w_before = sim->piston_work;
+    for (long k = 0; k < nsub && st == MS_OK; k++) {
+      st = cd_sim_step(sim);
+      psteps++;
+      double f = 0;
+      for (size_t i = 0; i < ps->n; i++)
+        if (ps->flags[i] & PTL_DRIVEN)
+          f += ps->fx[i];
+      /* impulse on the particles from the piston: velocity Verlet's ½(F_old + F_new) Δt */
+      imp += -0.5 * (f_prev + f) * sim->cfg.dt;
+      f_prev = f;
+    }
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: particle step failed (%s) at t = %g", ms_status_str(st),
+             sim->t);
+      break;
+    }
+    p_avg = imp / (dtg * area);
+    Jp += p_avg * dtg;
+    owed += p_avg * dtg;
+    dtg_last = dtg;
+    double ufs = cd_free_surface_velocity(sim, 0);
+    double row[8] = {tb, ubar, p_avg, ufs, Jg, Jp, Wg, sim->piston_work / area};
+    ms_csv_row(f_if, 8, row);
+    if (tb >= p->t_end * (double)next_out / (double)p->n_out * (1 - 1e-12)) {
+      cpl_particles view = particle_view(ps, skip);
+      st = cpl_fragments_find(&fr, &view, &fo);
+      if (st != MS_OK)
+        break;
+      char name[64];
+      snprintf(name, sizeof name, "particles_%04ld.h5", next_out);
+      char *path = ms_out_path(ctx, name);
+      cpl_snapshot_info info = {tb, reg.a, reg.rho0, fo.box};
+      st = cpl_write_snapshot(path, &view, &fr, &info);
+      free(path);
+      ms_log(ctx, MS_LOG_INFO,
+             "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
+             "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
+             "particles %.6g (per cm^2); %zu fragments",
+             tb, gsteps, psteps, ubar, p_avg, Jg, Jp, Wg, sim->piston_work / area, fr.n);
+      next_out++;
+    }
+    p->sum.u_interface = ubar;
+    p->sum.u_free_surface = ufs;
+    ms_progress_update(&prog, tb, gsteps);
+  }
+  ms_progress_finish(&prog, cont_grid_time(g), gsteps);
+  ms_status s2 = ms_afile_commit(&af_if);
+  if (st == MS_OK)
+    st = s2;
+  if (st == MS_OK)
+    st = write_table(ctx, "spectrum.csv", &fr, 0, NULL, NULL);
+  p->sum.particles = ps->n;
+  p->sum.steps = psteps;
+  p->sum.fragments = fr.n;
+  /* the particles' last grid step is in flight: the grid receives its counterpart in its next
+   * step; compare what both sides have exchanged so far */
+  p->sum.impulse_grid = Jg;
+  p->sum.impulse_particles = Jp - owed;
+  p->sum.work_grid = Wg;
+  p->sum.work_particles = w_before / area;
+  p->sum.piston_work = sim->piston_work;
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
+         "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
+         "%.6g + particles %.6g = %.3g (%.2g of it)",
+         Jg, p->sum.impulse_particles, Jg + p->sum.impulse_particles,
+         (Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), Wg,
+         p->sum.work_particles, Wg + p->sum.work_particles,
+         (Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
+  cpl_fragments_free(&fr);
+  free(skip);
+  cd_sim_free(sim);
+  return st;
+}
+
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
+  if (p->drive_mode == DRIVE_TWO_WAY)
+    return run_two_way(ctx, p);
   ms_status st;
   /* 1. the grid alone, with its own outputs */
   ms_log(ctx, MS_LOG_INFO, "coupled: 1/3 grid run (U(t) of the drive node)");
@@ -576,8 +763,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   cd_sim *sim = reg.sim;
   ptl_state *ps = reg.ps;
   const cd_config cfg = reg.cfg;
-  const double rho0 = reg.rho0, c0 = reg.c0, a = reg.a, width = reg.width,
-               width_z = reg.width_z;
+  const double rho0 = reg.rho0, c0 = reg.c0, a = reg.a, width = reg.width, width_z = reg.width_z;
   const bool fcc = reg.fcc;
   /* piston: the drive history from the particle phase's start (relative time) */
   cd_history ph;

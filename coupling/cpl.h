@@ -347,6 +347,10 @@ typedef struct cpl_run_summary {
   size_t fragments;      /* at the end of the particle phase */
   double ejected_mass;   /* g (every fragment but the largest) */
   size_t transported, arrived;
+  /* two-way coupling: interface impulse and work as the grid received them vs as the particles
+   * did (per unit area), their relative mismatch, and the end state */
+  double impulse_grid, impulse_particles, work_grid, work_particles;
+  double u_interface, u_free_surface; /* at the end of the run, km/s */
 } cpl_run_summary;
 const cpl_run_summary *cpl_problem_summary(const cpl_problem *p);
 
