@@ -11,6 +11,9 @@
 #if defined(MSCALE_HAVE_PARTICLES_CD) || defined(MSCALE_HAVE_PARTICLES_DM)
 #include "ptl.h"
 #endif
+#ifdef MSCALE_HAVE_COUPLING
+#include "cpl.h"
+#endif
 
 typedef void *(*problem_read_fn)(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
 typedef ms_status (*problem_run_fn)(ms_ctx *, void *);
@@ -44,6 +47,11 @@ static const problem_type problem_types[] = {
     {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes",
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
      (problem_free_fn)dm_problem_free},
+#endif
+#ifdef MSCALE_HAVE_COUPLING
+    {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport",
+     (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
+     (problem_free_fn)cpl_problem_free},
 #endif
 };
 enum { N_PROBLEM_TYPES = sizeof problem_types / sizeof problem_types[0] };
