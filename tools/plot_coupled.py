@@ -5,6 +5,8 @@ Usage: /usr/bin/python3 tools/plot_coupled.py RUNDIR        # PNGs into RUNDIR/p
 
   drive.png              U(t) of the drive node (history_<tag>.csv of the grid) and the
                          free-surface velocity of the grid vs the particles (free_surface.csv)
+  interface.png          two-way runs: interface and free-surface velocities, interface
+                         impulse and work as the grid gave and the particles received them
   particles_NNNN.png     particle snapshots (particles_NNNN.h5) coloured by fragment, with the
                          velocity along the drive axis in a second panel
 Also offers plot_run(outdir, plotdir) for tools/plot_run.py. Debian's numpy/h5py/matplotlib.
@@ -50,6 +52,36 @@ def plot_drive(outdir, plotdir):
     return [out]
 
 
+def plot_interface(outdir, plotdir):
+    """Two-way runs: interface velocity, particle free surface, the interface balance."""
+    path = os.path.join(outdir, "interface.csv")
+    if not os.path.exists(path):
+        return []
+    c, u, _ = read_csv(path)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5))
+    a1.plot(c["t"], c["u_interface"], label="interface node (grid)")
+    a1.plot(c["t"], c["u_free_surface"], label="free surface (particles)")
+    a1.set_xlabel(lab("t", u))
+    a1.set_ylabel("velocity [km/s]")
+    a1.set_title("two-way coupling: velocities")
+    a1.grid(True, alpha=0.3)
+    a1.legend(fontsize=8)
+    a2.plot(c["t"], -c["J_grid"], label="impulse given by the grid (-J_grid)")
+    a2.plot(c["t"], c["J_particles"], "--", label="impulse received by the particles")
+    a2.plot(c["t"], -c["W_grid"], label="work given by the grid (-W_grid)")
+    a2.plot(c["t"], c["W_particles"], "--", label="work received by the particles")
+    a2.set_xlabel(lab("t", u))
+    a2.set_ylabel("per cm^2 (GPa*10us, kJ/cm^2)")
+    a2.set_title("interface balance")
+    a2.grid(True, alpha=0.3)
+    a2.legend(fontsize=8)
+    fig.tight_layout()
+    out = os.path.join(plotdir, "interface.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
+
+
 def plot_snapshot(path, out):
     import h5py
 
@@ -85,7 +117,7 @@ def plot_snapshot(path, out):
 
 
 def plot_run(outdir, plotdir):
-    made = plot_drive(outdir, plotdir)
+    made = plot_drive(outdir, plotdir) + plot_interface(outdir, plotdir)
     for snap in sorted(glob.glob(os.path.join(outdir, "particles_*.h5"))):
         name = os.path.splitext(os.path.basename(snap))[0]
         try:
