@@ -8,11 +8,13 @@
 
 static void run_usage(FILE *f) {
   fprintf(f,
-          "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose]\n\n"
+          "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose] [--restart FILE]\n\n"
           "  -o OUTDIR   output directory (default: out/<deck name>)\n"
           "  --force     allow writing into an OUTDIR that already holds results\n"
           "  --quiet     no progress line\n"
-          "  --verbose   debug messages in the log\n\n"
+          "  --verbose   debug messages in the log\n"
+          "  --restart FILE  continue from a checkpoint the same deck wrote (discrete_model;\n"
+          "              any rank count, docs/mpi.md)\n\n"
           "The deck is validated completely before anything runs (see `mscale check`).\n"
           "OUTDIR receives deck.resolved.yaml (defaults filled in), run.log, run_info.yaml and\n"
           "the problem's data (CSV with units headers, HDF5 + XDMF for ParaView).\n"
@@ -52,11 +54,13 @@ int cmd_run(int argc, char **argv) {
     run_usage(stdout);
     return 0;
   }
-  const char *deck = NULL, *outdir_arg = NULL;
+  const char *deck = NULL, *outdir_arg = NULL, *restart = NULL;
   bool force = false, quiet = false, verbose = false;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "-o") && i + 1 < argc)
       outdir_arg = argv[++i];
+    else if (!strcmp(argv[i], "--restart") && i + 1 < argc)
+      restart = argv[++i];
     else if (!strcmp(argv[i], "--force"))
       force = true;
     else if (!strcmp(argv[i], "--quiet"))
@@ -78,6 +82,7 @@ int cmd_run(int argc, char **argv) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ctx.quiet = quiet;
+  ctx.restart = restart;
   if (verbose) ctx.verbosity = MS_LOG_DEBUG;
   if (par_init(&argc, &argv, &ctx)) {
     fprintf(stderr, "mscale: cannot start MPI\n");

@@ -58,6 +58,7 @@ typedef struct ms_ctx {
   char *outdir;           /* output directory ("" = none: tests, tools) */
   bool quiet;             /* no progress lines on stderr */
   double wall_start;      /* ms_wall_time() when the context was made */
+  const char *restart;    /* `mscale run --restart FILE`: checkpoint to continue from, or NULL */
 } ms_ctx;
 
 /* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
@@ -297,5 +298,13 @@ int par_max_int(int v);
 /* All ranks agree on a status: the worst (non-zero) one wins. */
 ms_status par_agree_status(ms_status s);
 void par_bcast_doubles(double *v, size_t n, int root);
+/* Typed wrappers for distributed particle models (docs/mpi.md). */
+void par_bcast_ints(int32_t *v, size_t n, int root);
+/* In-place element-wise sum over ranks of v[0..n). */
+void par_sum_doubles(double *v, size_t n);
+/* All-to-all personalised exchange of doubles: counts and displacements (in doubles) per rank,
+ * arrays of ctx->size entries. Serial: copies send[sdispl[0]..] to recv[rdispl[0]..]. */
+void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,
+                           const int *rcount, const int *rdispl);
 
 #endif /* MSCALE_CORE_H */

@@ -3,6 +3,7 @@
 #include "core.h"
 
 #include <mpi.h>
+#include <string.h>
 
 static bool mpi_started_here = false;
 
@@ -61,4 +62,22 @@ ms_status par_agree_status(ms_status s) { return (ms_status)par_max_int((int)s);
 
 void par_bcast_doubles(double *v, size_t n, int root) {
   if (active()) MPI_Bcast(v, (int)n, MPI_DOUBLE, root, MPI_COMM_WORLD);
+}
+
+void par_bcast_ints(int32_t *v, size_t n, int root) {
+  if (active()) MPI_Bcast(v, (int)n, MPI_INT32_T, root, MPI_COMM_WORLD);
+}
+
+void par_sum_doubles(double *v, size_t n) {
+  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+}
+
+void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,
+                           const int *rcount, const int *rdispl) {
+  if (active()) {
+    MPI_Alltoallv(send, scount, sdispl, MPI_DOUBLE, recv, rcount, rdispl, MPI_DOUBLE,
+                  MPI_COMM_WORLD);
+  } else if (scount[0] > 0) {
+    memcpy(recv + rdispl[0], send + sdispl[0], (size_t)scount[0] * sizeof(double));
+  }
 }

@@ -239,6 +239,19 @@ void dm_forces(dm_model *m, const double *w, double *F) {
   }
 }
 
+/* The two passes of dm_forces over particles [0, n) only (the distributed model: owned
+ * particles first, ghosts after them; dm_par.c exchanges Q between the passes). */
+void dm_stress_pass(dm_model *m, const double *w, size_t n) {
+#pragma omp parallel for schedule(static) if (n > 16384)
+  for (long i = 0; i < (long)n; ++i) strain_stress(m, w, (size_t)i);
+}
+
+void dm_gather_pass(dm_model *m, const double *w, double *F, size_t n) {
+  const int stab = m->opt.hourglass > 0;
+#pragma omp parallel for schedule(static) if (n > 16384)
+  for (long i = 0; i < (long)n; ++i) gather_force(m, w, (size_t)i, F, stab);
+}
+
 double dm_potential_energy(dm_model *m, const double *w) {
   const long n = (long)m->s->n;
 #pragma omp parallel for schedule(static) if (n > 16384)

@@ -56,10 +56,19 @@ struct dm_problem {
   size_t nprofile_times;
   double *snapshot_times;
   size_t nsnapshot_times;
+  long checkpoint_every; /* steps between checkpoints (0: none) */
   dm_run_summary sum;
+  double *final_w, *final_u; /* global state at the end of the last run ([n][3]) */
+  size_t final_n;
 };
 
 const dm_run_summary *dm_problem_summary(const dm_problem *p) { return &p->sum; }
+
+size_t dm_problem_final_state(const dm_problem *p, const double **w, const double **u) {
+  if (w) *w = p->final_w;
+  if (u) *u = p->final_u;
+  return p->final_n;
+}
 
 void dm_problem_free(dm_problem *p) {
   if (!p) return;
@@ -67,6 +76,8 @@ void dm_problem_free(dm_problem *p) {
   free(p->probes);
   free(p->profile_times);
   free(p->snapshot_times);
+  free(p->final_w);
+  free(p->final_u);
   free(p);
 }
 
@@ -225,6 +236,7 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
       dk_read_double_list(e, doc, out, "probes", MS_DIM_LENGTH, true, &p->probes, &p->nprobes);
     dk_read_int(e, doc, out, "probe_every", false, 1, 1, LONG_MAX, &p->probe_every);
     dk_read_int(e, doc, out, "energy_every", false, 100, 1, LONG_MAX, &p->energy_every);
+    dk_read_int(e, doc, out, "checkpoint_every", false, 0, 0, LONG_MAX, &p->checkpoint_every);
     if (dk_get(out, "profile_times"))
       dk_read_double_list(e, doc, out, "profile_times", MS_DIM_TIME, true, &p->profile_times,
                           &p->nprofile_times);
@@ -743,6 +755,118 @@ static void sphere_analysis(dm_problem *p, const dm_state *s, size_t nreal, doub
   p->sum.err_u_l2 = sqrt(su / cnt) / u0;
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* Checkpoint / restart (docs/mpi.md)                                                          */
+
+/* What a run needs to continue bit for bit: the global state in particle order (the same file
+ * for every rank count) and the diagnostics recorded so far. */
+typedef struct dm_checkpoint_data {
+  long step;
+  double E0, dw_scale, energy_err_max;
+  double *hist, *ehist; /* the run's arrays (not owned) */
+  size_t pcols, nrec, nerec, nrec_max, nerec_max;
+} dm_checkpoint_data;
+
+/* OUTDIR/dm_checkpoint.h5, written as dm_checkpoint.h5.part and renamed when complete
+ * (ms_h5_close): a crash while writing leaves the previous checkpoint intact. Rank 0 only. */
+static ms_status write_checkpoint(const ms_ctx *ctx, const dm_state *s, double dt, int ranks,
+                                  const dm_checkpoint_data *ck) {
+  if (!ctx->outdir || !ctx->outdir[0]) return MS_OK;
+  char *path = ms_out_path(ctx, "dm_checkpoint.h5");
+  ms_h5 *h = ms_h5_create(path);
+  ms_status st = h ? MS_OK : MS_ERR_IO;
+  if (st == MS_OK) st = ms_h5_write_doubles(h, "/state/w", s->n, 3, s->w, "cm");
+  if (st == MS_OK) st = ms_h5_write_doubles(h, "/state/u", s->n, 3, s->u, "km/s");
+  if (st == MS_OK && ck->nrec > 0)
+    st = ms_h5_write_doubles(h, "/history/probes", ck->nrec, ck->pcols, ck->hist, "10 us, cm");
+  if (st == MS_OK && ck->nerec > 0)
+    st = ms_h5_write_doubles(h, "/history/energy", ck->nerec, 5, ck->ehist, "10 us, kJ");
+  const char *names[] = {"step", "dt", "particles", "E0", "dw_scale", "energy_err_max", "ranks"};
+  double vals[] = {(double)ck->step, dt, (double)s->n, ck->E0, ck->dw_scale, ck->energy_err_max,
+                   (double)ranks};
+  for (int k = 0; k < 7 && st == MS_OK; ++k) st = ms_h5_attr_double(h, "/", names[k], vals[k]);
+  if (st == MS_OK) st = ms_h5_attr_string(h, "/", "format", "mscale discrete_model checkpoint 1");
+  if (h) {
+    if (st == MS_OK)
+      st = ms_h5_close(h);
+    else
+      ms_h5_abort(h);
+  }
+  if (st == MS_OK)
+    ms_log(ctx, MS_LOG_INFO, "discrete model: checkpoint at step %ld written to %s", ck->step,
+           path);
+  else
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: cannot write the checkpoint %s", path);
+  free(path);
+  return st;
+}
+
+static ms_status read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, double *dst,
+                           size_t *nrow, dk_errors *e) {
+  *nrow = 0;
+  if (!ms_h5_exists(h, name)) return MS_OK;
+  double *v = NULL;
+  size_t n0 = 0, n1 = 0;
+  ms_status st = ms_h5_read_doubles(h, name, &v, &n0, &n1, e);
+  if (st == MS_OK && (n1 != ncol || n0 > nmax)) {
+    dk_error_at(e, "checkpoint", 0, 0, "'%s' has %zu x %zu values, expected at most %zu x %zu",
+                name, n0, n1, nmax, ncol);
+    st = MS_ERR_INPUT;
+  }
+  if (st == MS_OK) memcpy(dst, v, n0 * ncol * sizeof(double)), *nrow = n0;
+  free(v);
+  return st;
+}
+
+/* Every rank reads the checkpoint into the global state s; the deck must describe the same
+ * particles and time step (the restart continues the same run). */
+static ms_status read_checkpoint(const ms_ctx *ctx, const char *path, dm_state *s, long nsteps,
+                                 double dt, dm_checkpoint_data *ck) {
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_status st = MS_ERR_INPUT;
+  ms_h5r *h = ms_h5_open_read(path, &e);
+  double step = 0, ck_dt = 0, np = 0, E0 = 0, dws = 0, emax = NAN;
+  if (h) {
+    st = MS_OK;
+    if (ms_h5_read_attr_double(h, "/", "step", &step, &e) ||
+        ms_h5_read_attr_double(h, "/", "dt", &ck_dt, &e) ||
+        ms_h5_read_attr_double(h, "/", "particles", &np, &e) ||
+        ms_h5_read_attr_double(h, "/", "E0", &E0, &e) ||
+        ms_h5_read_attr_double(h, "/", "dw_scale", &dws, &e) ||
+        ms_h5_read_attr_double(h, "/", "energy_err_max", &emax, &e))
+      st = MS_ERR_INPUT;
+    if (st == MS_OK && ((size_t)np != s->n || ck_dt != dt || step < 0 || step > nsteps)) {
+      dk_error_at(&e, path, 0, 0,
+                  "checkpoint of %zu particles, dt = %.17g at step %ld does not continue this "
+                  "deck (%zu particles, dt = %.17g, %ld steps)",
+                  (size_t)np, ck_dt, (long)step, s->n, dt, nsteps);
+      st = MS_ERR_INPUT;
+    }
+    double *v = NULL;
+    size_t n0 = 0, n1 = 0;
+    for (int k = 0; k < 2 && st == MS_OK; ++k) {
+      st = ms_h5_read_doubles(h, k ? "/state/u" : "/state/w", &v, &n0, &n1, &e);
+      if (st == MS_OK && (n0 != s->n || n1 != 3)) st = MS_ERR_INPUT;
+      if (st == MS_OK) memcpy(k ? s->u : s->w, v, 3 * s->n * sizeof(double));
+      free(v);
+      v = NULL;
+    }
+    if (st == MS_OK && ck->hist)
+      st = read_rows(h, "/history/probes", ck->pcols, ck->nrec_max, ck->hist, &ck->nrec, &e);
+    if (st == MS_OK)
+      st = read_rows(h, "/history/energy", 5, ck->nerec_max, ck->ehist, &ck->nerec, &e);
+    ms_h5_close_read(h);
+  }
+  if (st != MS_OK) {
+    if (ctx->rank == 0) dk_errors_print(&e, stderr);
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: cannot restart from %s", path);
+  }
+  dk_errors_free(&e);
+  ck->step = (long)step, ck->E0 = E0, ck->dw_scale = dws, ck->energy_err_max = emax;
+  return st;
+}
+
 static double cpu_time(void) {
   struct timespec ts;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -818,16 +942,45 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     return MS_ERR_INPUT;
   }
 
+  /* MPI: partition the bond graph and build this rank's local model (docs/mpi.md). */
+  dm_dist *d = dm_dist_create(m, ctx, &st);
+  if (!d) {
+    dm_destroy(m);
+    dm_state_free(&s);
+    return st;
+  }
+  const int par = ctx->size > 1;
+  {
+    const dm_dist_stats *ds = dm_dist_get_stats(d);
+    sum->ranks = ctx->size;
+    sum->edge_cut = ds->edge_cut, sum->edge_cut_slab = ds->edge_cut_slab;
+    sum->imbalance = ds->imbalance, sum->imbalance_slab = ds->imbalance_slab;
+    if (par)
+      ms_log(ctx, MS_LOG_INFO,
+             "discrete model on %d ranks: METIS edge cut %ld of %zu bonds (%.2f %%), imbalance "
+             "%.4f; plain x slabs: edge cut %ld, imbalance %.4f; owned max %zu, ghosts max %zu "
+             "(total %zu); partitioning %.3f s",
+             ctx->size, ds->edge_cut, ds->bonds, 100.0 * ds->edge_cut / fmax(1.0, ds->bonds),
+             ds->imbalance, ds->edge_cut_slab, ds->imbalance_slab, ds->max_owned, ds->max_ghosts,
+             ds->total_ghosts, ds->partition_s);
+  }
+  dm_state *ls = dm_dist_state(d);
+  /* files: rank 0 writes them (every rank holds the gathered global state when it matters) */
+  static char no_outdir[1] = "";
+  ms_ctx octx = *ctx;
+  if (ctx->rank != 0) octx.outdir = no_outdir;
+
   /* probes: nearest real particle to each x */
   probe_rec *pr = ms_calloc(p->nprobes ? p->nprobes : 1, sizeof *pr);
   for (size_t q = 0; q < p->nprobes; ++q) {
     double best = INFINITY;
     for (size_t i = 0; i < nreal; ++i) {
-      double d = fabs(s.X[3 * i] - p->probes[q]);
-      for (int a = 1; a < p->dim; ++a) d += fabs(s.X[3 * i + a] - (p->lo[a] + 0.5 * p->h));
-      if (d < best) best = d, pr[q].particle = i, pr[q].x = s.X[3 * i];
+      double dd = fabs(s.X[3 * i] - p->probes[q]);
+      for (int a = 1; a < p->dim; ++a) dd += fabs(s.X[3 * i + a] - (p->lo[a] + 0.5 * p->h));
+      if (dd < best) best = dd, pr[q].particle = i, pr[q].x = s.X[3 * i];
     }
   }
+  double *probe_val = ms_calloc(p->nprobes ? p->nprobes : 1, sizeof(double));
   size_t nrec_max = (size_t)(nsteps / p->probe_every) + 2, nrec = 0;
   size_t pcols = 1 + p->nprobes;
   double *hist = p->nprobes ? ms_calloc(nrec_max * pcols, sizeof(double)) : NULL;
@@ -838,48 +991,106 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   long *snap_step = ms_calloc(p->nsnapshot_times ? p->nsnapshot_times : 1, sizeof(long));
   for (size_t q = 0; q < p->nsnapshot_times; ++q) snap_step[q] = lround(p->snapshot_times[q] / dt);
 
-  rkn_integrator *ig = rkn_create(p->integrator, 3 * s.n);
-  double E0 = dm_kinetic_energy(&s) + dm_potential_energy(m, s.w);
-  ms_progress prog;
-  ms_progress_start(&prog, ctx, "discrete model", 0.0, sum->t_end);
+  rkn_integrator *ig = rkn_create(p->integrator, 3 * (ls->n ? ls->n : 1));
+  dm_dist_diag dg;
+  dm_dist_diagnostics(d, &dg);
+  double E0 = dg.kinetic + dg.potential;
   double wall = 0.0, cpu = 0.0, dw_scale = 0.0;
-  st = MS_OK;
-  for (long step = 0; step <= nsteps && st == MS_OK; ++step) {
+  long step0 = 0;
+  dm_checkpoint_data ck = {.hist = hist, .ehist = ehist, .pcols = pcols};
+  if (ctx->restart) {
+    ck.nrec_max = nrec_max, ck.nerec_max = nerec_max;
+    st = read_checkpoint(ctx, ctx->restart, &s, nsteps, dt, &ck);
+    if (par) st = par_agree_status(st);
+    if (st == MS_OK) {
+      dm_dist_scatter(d, s.w, 3, ls->w);
+      dm_dist_scatter(d, s.u, 3, ls->u);
+      step0 = ck.step, E0 = ck.E0, dw_scale = ck.dw_scale, nrec = ck.nrec, nerec = ck.nerec;
+      sum->energy_err_max = ck.energy_err_max;
+      sum->restart_step = step0;
+      ms_log(ctx, MS_LOG_INFO, "discrete model: restarted from %s at step %ld (t = %.9g)",
+             ctx->restart, step0, step0 * dt);
+    }
+  }
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "discrete model", step0 * dt, sum->t_end);
+  for (long step = step0; step <= nsteps && st == MS_OK; ++step) {
     double t = step * dt;
+    if (p->checkpoint_every > 0 && step > step0 && step % p->checkpoint_every == 0 &&
+        step < nsteps) {
+      /* the state at the top of this step, before anything of step `step` is recorded */
+      dm_dist_gather(d, ls->w, 3, s.w);
+      dm_dist_gather(d, ls->u, 3, s.u);
+      ck.step = step, ck.E0 = E0, ck.dw_scale = dw_scale, ck.nrec = nrec, ck.nerec = nerec;
+      ck.energy_err_max = sum->energy_err_max;
+      ms_status cs = ctx->rank == 0 ? write_checkpoint(&octx, &s, dt, ctx->size, &ck) : MS_OK;
+      if (par) cs = par_agree_status(cs);
+      if (cs != MS_OK) {
+        st = cs;
+        break;
+      }
+    }
     if (hist && step % p->probe_every == 0 && nrec < nrec_max) {
+      for (size_t q = 0; q < p->nprobes; ++q) {
+        long l = dm_dist_local_index(d, pr[q].particle);
+        probe_val[q] = l >= 0 ? ls->w[3 * l] : 0.0;
+      }
+      if (par) par_sum_doubles(probe_val, p->nprobes); /* one owner per probe: exact */
       hist[nrec * pcols] = t;
-      for (size_t q = 0; q < p->nprobes; ++q) hist[nrec * pcols + 1 + q] = s.w[3 * pr[q].particle];
+      for (size_t q = 0; q < p->nprobes; ++q) hist[nrec * pcols + 1 + q] = probe_val[q];
       ++nrec;
     }
     if ((step % p->energy_every == 0 || step == nsteps) && nerec < nerec_max) {
-      double K = dm_kinetic_energy(&s), U = dm_potential_energy(m, s.w);
-      double dwn, hgn = dm_hourglass_norm(m, s.w, &dwn);
-      dw_scale = fmax(dw_scale, dwn);
+      dm_dist_diagnostics(d, &dg);
+      double K = dg.kinetic, U = dg.potential;
+      dw_scale = fmax(dw_scale, dg.dw_norm);
       double *row = &ehist[5 * nerec++];
-      row[0] = t, row[1] = K, row[2] = U, row[3] = K + U, row[4] = hgn;
+      row[0] = t, row[1] = K, row[2] = U, row[3] = K + U, row[4] = dg.hourglass;
       if (E0 > 0 && !p->has_source) { /* a source does work: no conservation to check */
         double err = fabs(K + U - E0) / E0;
         sum->energy_err_max = isnan(sum->energy_err_max) ? err : fmax(sum->energy_err_max, err);
       }
+      if (step == nsteps) sum->kinetic_end = K, sum->potential_end = U;
     }
+    int gathered = 0;
     for (size_t q = 0; q < p->nprofile_times; ++q)
       if (prof_step[q] == step) {
-        dm_potential_energy(m, s.w); /* stresses of the current state */
-        write_profile(ctx, p, m, nreal, t, (int)q);
+        if (!gathered) {
+          dm_dist_gather(d, ls->w, 3, s.w);
+          dm_dist_gather(d, ls->u, 3, s.u);
+          dm_potential_energy(m, s.w); /* stresses of the current state */
+          gathered = 1;
+        }
+        write_profile(&octx, p, m, nreal, t, (int)q);
       }
     for (size_t q = 0; q < p->nsnapshot_times; ++q)
       if (snap_step[q] == step) {
-        dm_potential_energy(m, s.w);
-        write_snapshot(ctx, m, nreal, t, (int)q);
+        if (!gathered) {
+          dm_dist_gather(d, ls->w, 3, s.w);
+          dm_dist_gather(d, ls->u, 3, s.u);
+          dm_potential_energy(m, s.w);
+          gathered = 1;
+        }
+        write_snapshot(&octx, m, nreal, t, (int)q);
       }
     if (step == nsteps) break;
     double w0 = ms_wall_time(), c0 = cpu_time();
-    st = rkn_step(ig, t, dt, s.w, s.u, dm_accel, dm_constrain, m);
+    st = rkn_step(ig, t, dt, ls->w, ls->u, dm_dist_accel, dm_dist_constrain, d);
     wall += ms_wall_time() - w0;
     cpu += cpu_time() - c0;
     ms_progress_update(&prog, t + dt, step + 1);
   }
   ms_progress_finish(&prog, sum->t_end, nsteps);
+  /* the final state, on every rank, for the analyses */
+  dm_dist_gather(d, ls->w, 3, s.w);
+  dm_dist_gather(d, ls->u, 3, s.u);
+  free(p->final_w);
+  free(p->final_u);
+  p->final_n = s.n;
+  p->final_w = ms_calloc(3 * s.n, sizeof(double));
+  p->final_u = ms_calloc(3 * s.n, sizeof(double));
+  memcpy(p->final_w, s.w, 3 * s.n * sizeof(double));
+  memcpy(p->final_u, s.u, 3 * s.n * sizeof(double));
   /* zero-energy-mode indicator: |z|(t) relative to the largest |Δw| of the run */
   for (size_t r = 0; r < nerec; ++r) {
     double hg = dw_scale > 0 ? ehist[5 * r + 4] / dw_scale : 0.0;
@@ -888,10 +1099,16 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     sum->hourglass_max = fmax(sum->hourglass_max, hg);
     sum->hourglass_last = hg;
   }
+  if (par) { /* the slowest rank sets the pace; CPU time of all ranks */
+    wall = par_max_double(wall);
+    cpu = par_sum_double(cpu);
+  }
   sum->wall_s = wall;
   sum->cpu_s = cpu;
-  sum->particle_steps_per_s = wall > 0 ? (double)nreal * nsteps / wall : 0;
-  if (st != MS_OK) ms_log(ctx, MS_LOG_ERROR, "discrete model: non-finite acceleration (unstable)");
+  long nrun = nsteps - step0;
+  sum->particle_steps_per_s = wall > 0 ? (double)nreal * nrun / wall : 0;
+  if (st == MS_ERR_UNSTABLE)
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: non-finite acceleration (unstable)");
 
   /* analyses against the exact solutions */
   dm_potential_energy(m, s.w);
@@ -915,7 +1132,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     }
     if (p->has_source) {
       sphere_analysis(p, &s, nreal, sum->t_end);
-      write_sphere_radial(ctx, p, &s, nreal, sum->t_end);
+      write_sphere_radial(&octx, p, &s, nreal, sum->t_end);
       ms_log(ctx, MS_LOG_INFO,
              "sphere: radial w at t = %.6g vs exact: L1 %.4f, L2 %.4f, max %.4f (of max|w|); "
              "u: L2 %.4f of w0*omega",
@@ -926,7 +1143,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
          "discrete model: %ld steps in %.3f s (CPU %.3f s): %.4g particle-steps/s; "
          "max |dH|/H0 = %.3g; "
          "hourglass indicator first %.3g max %.3g last %.3g",
-         nsteps, wall, cpu, sum->particle_steps_per_s, sum->energy_err_max, sum->hourglass_first,
+         nrun, wall, cpu, sum->particle_steps_per_s, sum->energy_err_max, sum->hourglass_first,
          sum->hourglass_max, sum->hourglass_last);
 
   if (hist) {
@@ -937,7 +1154,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
       snprintf(lab[q + 1], 32, "w_x(%.6g)", pr[q].x);
       nm[q + 1] = lab[q + 1], un[q + 1] = "cm";
     }
-    write_series(ctx, "dm_probes.csv", "displacement history at probe particles", pcols, nm, un,
+    write_series(&octx, "dm_probes.csv", "displacement history at probe particles", pcols, nm, un,
                  hist, nrec);
     free(nm);
     free(un);
@@ -946,27 +1163,35 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   {
     const char *nm[] = {"t", "kinetic", "potential", "total", "hourglass"};
     const char *un[] = {"10 us", "kJ", "kJ", "kJ", "1"};
-    write_series(ctx, "dm_energy.csv", "energy (real particles) and zero-energy-mode indicator",
+    write_series(&octx, "dm_energy.csv", "energy (real particles) and zero-energy-mode indicator",
                  5, nm, un, ehist, nerec);
     const char *snm[] = {"particles", "real_particles", "bonds", "steps", "dt", "t_end", "omega_dt", "wall_s", "cpu_s",
                          "particle_steps_per_s", "energy_err_max", "hourglass_first",
                          "hourglass_max", "hourglass_last", "amp_err", "phase_err_L_over_c",
-                         "peak_err", "rms_err", "err_l1", "err_l2", "err_max", "err_u_l2"};
+                         "peak_err", "rms_err", "err_l1", "err_l2", "err_max", "err_u_l2",
+                         "kinetic_end", "potential_end", "ranks", "edge_cut", "edge_cut_slab",
+                         "imbalance", "imbalance_slab", "restart_step"};
     const char *sun[] = {"1", "1", "1", "1", "10 us", "10 us", "1", "s", "s", "1/s", "1", "1", "1", "1",
-                         "1", "L/c", "1", "1", "1", "1", "1", "1"};
-    double row[22] = {(double)sum->particles, (double)sum->real_particles, (double)sum->bonds, (double)sum->steps, sum->dt,
+                         "1", "L/c", "1", "1", "1", "1", "1", "1", "kJ", "kJ", "1", "1", "1", "1",
+                         "1", "1"};
+    double row[30] = {(double)sum->particles, (double)sum->real_particles, (double)sum->bonds, (double)sum->steps, sum->dt,
                       sum->t_end, sum->omega_dt, sum->wall_s, sum->cpu_s, sum->particle_steps_per_s,
                       sum->energy_err_max, sum->hourglass_first, sum->hourglass_max,
                       sum->hourglass_last, sum->amp_err, sum->phase_err, sum->peak_err, sum->rms_err,
-                      sum->err_l1, sum->err_l2, sum->err_max, sum->err_u_l2};
-    write_series(ctx, "dm_summary.csv", "discrete model run summary", 22, snm, sun, row, 1);
+                      sum->err_l1, sum->err_l2, sum->err_max, sum->err_u_l2, sum->kinetic_end,
+                      sum->potential_end, (double)sum->ranks, (double)sum->edge_cut,
+                      (double)sum->edge_cut_slab, sum->imbalance, sum->imbalance_slab,
+                      (double)sum->restart_step};
+    write_series(&octx, "dm_summary.csv", "discrete model run summary", 30, snm, sun, row, 1);
   }
   free(hist);
   free(ehist);
   free(prof_step);
   free(snap_step);
   free(pr);
+  free(probe_val);
   rkn_destroy(ig);
+  dm_dist_free(d);
   dm_destroy(m);
   dm_state_free(&s);
   return st;

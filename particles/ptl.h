@@ -401,6 +401,43 @@ ms_status dm_accel(void *user, double t, const double *q, double *acc);
  * must be two horizons thick so that the ghosts next to the wall have complete families. */
 void dm_constrain(void *user, double t, double *q, double *u);
 
+/* ---- the discrete model on MPI ranks (particles/dm_par.c, docs/mpi.md) ----
+ * Set-up is replicated (every rank builds the global model); the bond graph is partitioned with
+ * METIS (mirror ghosts stay with their partners), each rank integrates its owned particles plus
+ * ghost copies of the off-rank family members, whose w and Q arrive before every force pass.
+ * Owned values are bitwise independent of the rank count. */
+typedef struct dm_dist dm_dist;
+typedef struct dm_dist_stats {
+  long edge_cut, edge_cut_slab;         /* cut bonds: METIS, plain x slabs (comparison) */
+  double imbalance, imbalance_slab;     /* max rank weight / mean (weight = bonds + 1) */
+  size_t owned, ghosts;                 /* this rank */
+  size_t max_owned, max_ghosts, total_ghosts, bonds;
+  double partition_s;
+} dm_dist_stats;
+typedef struct dm_dist_diag {
+  double kinetic, potential; /* kJ, non-mirror particles */
+  double hourglass, dw_norm; /* as dm_hourglass_norm (sums per particle, then in global order) */
+} dm_dist_diag;
+/* The global model's prescribe callback must be set before this (it is copied). Collective. */
+dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status);
+void dm_dist_free(dm_dist *d);
+dm_state *dm_dist_state(dm_dist *d); /* local particles: owned [0, owned), then ghosts */
+dm_model *dm_dist_model(dm_dist *d);
+size_t dm_dist_owned(const dm_dist *d);
+const dm_dist_stats *dm_dist_get_stats(const dm_dist *d);
+long dm_dist_local_index(const dm_dist *d, size_t global); /* owned here: local index, else -1 */
+/* RKN callbacks over the local arrays (user = dm_dist *); the constraint hook also brings the
+ * ghosts' w up to date, which the acceleration relies on (rkn_step calls it first). */
+ms_status dm_dist_accel(void *user, double t, const double *q, double *acc);
+void dm_dist_constrain(void *user, double t, double *q, double *u);
+/* Energies and the hourglass indicator of the local state, summed in global particle order
+ * (the same bits on every rank and for every rank count). Collective. */
+void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out);
+/* Owned rows of a local [n_local][width] array into the global [n][width] array, on every
+ * rank (collective); and global → local (owned and ghosts). */
+void dm_dist_gather(dm_dist *d, const double *local, int width, double *global);
+void dm_dist_scatter(dm_dist *d, const double *global, int width, double *local);
+
 /* Exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
 /* §5.1 rod 0<x<2L, fixed ends, triangle initial displacement (series, nterms terms). */
 double dm_exact_rod_triangle(double x, double t, double L, double eps, double c, int nterms);
@@ -444,7 +481,15 @@ typedef struct dm_run_summary {
   double err_l1, err_l2, err_max; /* contact: σ_xx at t_end; sphere: radial w at t_end; all
                                    * relative to the exact solution's maximum */
   double err_u_l2;            /* sphere: radial velocity, L2, relative to u0 = w0 ω */
+  double kinetic_end, potential_end; /* energies at t_end (kJ) */
+  int ranks;                  /* MPI ranks of the run; partition quality (dm_dist_stats): */
+  long edge_cut, edge_cut_slab;
+  double imbalance, imbalance_slab;
+  long restart_step;          /* step the run continued from (0: a fresh start) */
 } dm_run_summary;
 const dm_run_summary *dm_problem_summary(const dm_problem *p);
+/* Global displacements and velocities ([n][3], particle order) at the end of the last run
+ * (the same on every rank); returns n (0 before a run). */
+size_t dm_problem_final_state(const dm_problem *p, const double **w, const double **u);
 
 #endif /* MSCALE_PTL_H */
