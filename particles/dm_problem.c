@@ -1099,6 +1099,16 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     sum->hourglass_max = fmax(sum->hourglass_max, hg);
     sum->hourglass_last = hg;
   }
+  if (par) {
+    const dm_dist_stats *ds = dm_dist_get_stats(d);
+    double ex_max = par_max_double(ds->exchange_s), ex_min = par_min_double(ds->exchange_s);
+    double vol = par_sum_double(ds->exchanged_doubles);
+    ms_log(ctx, MS_LOG_INFO,
+           "discrete model: ghost exchanges took %.3f-%.3f s per rank (of the step loop's %.3f s "
+           "on the slowest rank); %.4g doubles received in all (%.3g per particle-step)",
+           ex_min, ex_max, par_max_double(wall), vol,
+           vol / fmax(1.0, (double)nreal * (double)(nsteps - step0)));
+  }
   if (par) { /* the slowest rank sets the pace; CPU time of all ranks */
     wall = par_max_double(wall);
     cpu = par_sum_double(cpu);

@@ -413,6 +413,7 @@ typedef struct dm_dist_stats {
   size_t owned, ghosts;                 /* this rank */
   size_t max_owned, max_ghosts, total_ghosts, bonds;
   double partition_s;
+  double exchange_s, exchanged_doubles; /* this rank: wall time in ghost exchanges, doubles received */
 } dm_dist_stats;
 typedef struct dm_dist_diag {
   double kinetic, potential; /* kJ, non-mirror particles */

@@ -180,8 +180,9 @@ int main(int argc, char **argv) {
              s->particles, s->bonds / 2, np, s->edge_cut, s->imbalance, s->edge_cut_slab,
              s->imbalance_slab);
     if (np > 1) {
-      /* METIS k-way default tolerance is 3 % on the vertex weights */
-      CHECK(s->imbalance <= 1.031, "METIS imbalance %g", s->imbalance);
+      /* METIS is asked for at most 1 % above the mean weight (ufactor 10; docs/mpi.md); a
+       * little slack for the graph's granularity */
+      CHECK(s->imbalance <= 1.02, "METIS imbalance %g", s->imbalance);
       CHECK(s->edge_cut > 0 && s->edge_cut_slab > 0, "edge cuts %ld, %ld", s->edge_cut,
             s->edge_cut_slab);
     } else {
