@@ -149,7 +149,7 @@ static void ensure_sums(cd_sim *s) {
 
 static ms_status rebuild(cd_sim *s) {
   double t0 = ms_wall_time();
-  int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 1;
+  int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 8; /* default: every 8th build */
   bool reorder = s->nl->nbuild % every == 0;
   ms_status st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
   s->wall_time_neigh += ms_wall_time() - t0;

@@ -129,7 +129,7 @@ typedef struct cd_config {
   double dt;               /* time step */
   cd_cutoff_mode cutoff;
   double damping_gamma;    /* Γ of eq. 6 (paper 002), 1/time; 0 = off */
-  int sort_every;          /* renumber particles into cell order every k-th list build (0: 1) */
+  int sort_every;          /* renumber particles into cell order every k-th list build (0: 8) */
   cd_lattice lattice;      /* for the reference volume per particle (per-particle stress) */
   double thickness;        /* 2D plane-strain thickness h (unused in 3D) */
 } cd_config;
