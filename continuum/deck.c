@@ -225,9 +225,11 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
 }
 
 /* A tag: {name, node} | {name, x} | {name, layer, side}. */
-static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, const cont_setup *s,
-                     cont_tag_spec *tag) {
-  if (!dk_expect_map(e, doc, T, "tag")) return;
+static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, size_t index,
+                     const cont_setup *s, cont_tag_spec *tag) {
+  char what[48];
+  snprintf(what, sizeof what, "tags[%zu]", index);
+  if (!dk_expect_map(e, doc, T, what)) return;
   const char *name = NULL;
   dk_read_string(e, doc, T, "name", true, NULL, &name);
   tag->name = name ? name : "tag";
@@ -401,10 +403,10 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
   if (tags && dk_expect_seq(e, doc, tags, "tags") && e->n == nerr0) {
     size_t n = dk_seq_len(tags);
     p->tags = ms_calloc(n ? n : 1, sizeof(cont_tag_spec));
-    for (size_t k = 0; k < n; ++k) read_tag(e, doc, dk_seq_at(tags, k), s, &p->tags[k]);
+    for (size_t k = 0; k < n; ++k) read_tag(e, doc, dk_seq_at(tags, k), k, s, &p->tags[k]);
     for (size_t k = 0; k < n; ++k)
       for (size_t j = 0; j < k; ++j)
-        if (!strcmp(p->tags[j].name, p->tags[k].name))
+        if (p->tags[j].name && p->tags[k].name && !strcmp(p->tags[j].name, p->tags[k].name))
           dk_error(e, doc, dk_seq_at(tags, k), "tag name '%s' used twice", p->tags[k].name);
     s->tags = p->tags;
     s->ntags = n;

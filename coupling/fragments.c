@@ -264,18 +264,20 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
     }
     size_t c[3];
     for (int k = 0; k < 3; k++) {
+      /* Reduce in floating point before converting: a far-away particle (x = 1e300 in a
+       * damaged snapshot) must not overflow the integer conversion. */
+      const double nk = (double)g->nc[k];
       double s = (coord(pos[k], i) - g->lo[k]) * g->inv_w[k];
-      long ck = (long)floor(s);
       if (g->periodic[k]) {
-        ck %= (long)g->nc[k];
-        if (ck < 0)
-          ck += (long)g->nc[k];
-      } else if (ck >= (long)g->nc[k]) {
-        ck = (long)g->nc[k] - 1; /* the last cell takes the upper edge (and the remainder) */
-      } else if (ck < 0) {
-        ck = 0;
+        s = fmod(s, nk);
+        if (s < 0)
+          s += nk;
       }
-      c[k] = (size_t)ck;
+      if (!(s >= 0))
+        s = 0;
+      if (s >= nk)
+        s = nk - 1; /* the last cell takes the upper edge (and the remainder) */
+      c[k] = (size_t)s;
     }
     size_t cell = (c[2] * g->nc[1] + c[1]) * g->nc[0] + c[0];
     f->cell_of[i] = cell;

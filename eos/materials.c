@@ -251,6 +251,7 @@ static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_ma
     size_t *idx = ms_calloc(nc, sizeof *idx);
     double *frac = ms_calloc(nc, sizeof *frac);
     int by_mass = -1; /* unknown yet; all components must use the same kind of fraction */
+    bool all_found = true;
     for (size_t k = 0; k < nc; ++k) {
       const dk_node *c = dk_seq_at(comps, k);
       char cw[128];
@@ -261,6 +262,7 @@ static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_ma
       if (dk_read_string(e, doc, c, "material", true, NULL, &mname)) {
         const eos_material *m = eos_materials_find(mats, mname, e, doc, dk_get(c, "material"));
         if (m) idx[k] = (size_t)(m - mats->m);
+        else all_found = false; /* a material with errors of its own (already reported) */
       }
       bool has_vol = dk_get(c, "volume_fraction") != NULL, has_mass = dk_get(c, "mass_fraction") != NULL;
       if (has_vol == has_mass) {
@@ -280,7 +282,7 @@ static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_ma
     for (size_t k = 0; k < nc; ++k) sum += frac[k];
     if (e->n == nerr0 && fabs(sum - 1.0) > 1e-6)
       dk_error(e, doc, comps, "%s.components: fractions must add up to 1, found %.9g", what, sum);
-    if (e->n != nerr0) {
+    if (e->n != nerr0 || !all_found) {
       free(idx), free(frac);
       continue;
     }
