@@ -47,6 +47,7 @@ struct dm_dist {
   size_t nsend;
   double *sbuf, *rbuf; /* 9 doubles per sent / received particle */
   double *gbuf;        /* [4][n_global] ordered-reduction scratch */
+  double *tbuf;        /* [4][n_owned] per-particle terms of those reductions */
   dm_dist_stats stats;
 };
 
@@ -322,6 +323,7 @@ static void build_local(dm_dist *d) {
   d->sbuf = ms_calloc(9 * (d->nsend ? d->nsend : 1), sizeof(double));
   d->rbuf = ms_calloc(9 * (ng ? ng : 1), sizeof(double));
   d->gbuf = ms_calloc(4 * (n ? n : 1), sizeof(double));
+  d->tbuf = ms_calloc(4 * (nown ? nown : 1), sizeof(double));
 }
 
 /* Ghost values of a [n_local][width] array from their owners. */
@@ -405,6 +407,7 @@ void dm_dist_free(dm_dist *d) {
   free(d->sbuf);
   free(d->rbuf);
   free(d->gbuf);
+  free(d->tbuf);
   free(d);
 }
 
@@ -476,9 +479,8 @@ void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out) {
   const size_t no = d->n_owned;
   exchange(d, s->w, 3);
   dm_stress_pass(lm, s->w, no);
-  /* per-particle terms, stored in the local C-independent scratch (Q is free here) */
-  double *kin = ms_calloc(4 * (no ? no : 1), sizeof(double));
-  double *pot = kin + no, *hgz = kin + 2 * no, *hgw = kin + 3 * no;
+  double *kin = d->tbuf, *pot = kin + no, *hgz = kin + 2 * no, *hgw = kin + 3 * no;
+  memset(kin, 0, 4 * no * sizeof(double));
   for (size_t i = 0; i < no; ++i) {
     if (s->bc[i] == DM_MIRROR) continue;
     const double *u = &s->u[3 * i];
@@ -502,7 +504,6 @@ void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out) {
   }
   double *terms[4] = {kin, pot, hgz, hgw}, sums[4];
   ordered_sums(d, 4, terms, sums);
-  free(kin);
   out->kinetic = sums[0];
   out->potential = sums[1];
   out->hourglass = sqrt(sums[2]);
@@ -523,4 +524,15 @@ void dm_dist_scatter(dm_dist *d, const double *global, int width, double *local)
   for (size_t l = 0; l < nl; ++l)
     memcpy(&local[(size_t)width * l], &global[(size_t)width * d->gid[l]],
            (size_t)width * sizeof(double));
+}
+
+double dm_dist_mass_dot(dm_dist *d, const double *x, const double *y) {
+  const dm_state *s = &d->ls;
+  double *t = d->tbuf, sum;
+  for (size_t i = 0; i < d->n_owned; ++i)
+    t[i] = s->bc[i] == DM_FREE ? s->mass[i] * (x[3 * i] * y[3 * i] + x[3 * i + 1] * y[3 * i + 1] +
+                                               x[3 * i + 2] * y[3 * i + 2])
+                               : 0.0;
+  ordered_sums(d, 1, &t, &sum);
+  return sum;
 }

@@ -418,46 +418,42 @@ static double tridiag_max_eig(const double *al, const double *be, int k) {
 /* ω_max of the free particles: Lanczos on M⁻¹K (self-adjoint in the mass inner product) with
  * ghosts following their partners and fixed/prescribed particles held at 0. 40 iterations give
  * the top of the spectrum to well under 1 % on the lattices used here (it converges from
- * below; the run refuses ω_max Δt > 0.99 × the scheme's stability limit). */
-static double omega_max(dm_model *m, size_t n) {
+ * below; the run refuses ω_max Δt > 0.99 × the scheme's stability limit).
+ * Runs on the distributed model (dot products in global particle order: the same bits on any
+ * rank count). */
+static double omega_max(dm_dist *d, const dm_state *gs) {
   const int kmax = 40;
-  const dm_state *s = m->s;
+  dm_state *s = dm_dist_state(d);
+  dm_model *lm = dm_dist_model(d);
+  const size_t n = s->n ? s->n : 1; /* local particles (owned + ghosts) */
   double *q = calloc(3 * n, sizeof(double)), *qp = calloc(3 * n, sizeof(double));
   double *z = calloc(3 * n, sizeof(double)), *work = calloc(3 * n, sizeof(double));
   double al[64], be[64];
-  uint64_t rng = 7;
-  for (size_t i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c)
-      q[3 * i + c] = (s->bc[i] == DM_FREE && c < s->dim) ? 2.0 * splitmix_uniform(&rng) - 1.0 : 0.0;
-#define MDOT(x, y, out)                                                                        \
-  do {                                                                                         \
-    double acc_ = 0;                                                                           \
-    for (size_t i_ = 0; i_ < n; ++i_)                                                          \
-      if (s->bc[i_] == DM_FREE)                                                                \
-        acc_ += s->mass[i_] * ((x)[3 * i_] * (y)[3 * i_] + (x)[3 * i_ + 1] * (y)[3 * i_ + 1] +  \
-                               (x)[3 * i_ + 2] * (y)[3 * i_ + 2]);                             \
-    (out) = acc_;                                                                              \
-  } while (0)
-  double nrm;
-  MDOT(q, q, nrm);
-  nrm = sqrt(nrm);
+  { /* the start vector in global particle order, the same for every rank count */
+    double *g = calloc(3 * gs->n, sizeof(double));
+    uint64_t rng = 7;
+    for (size_t i = 0; i < gs->n; ++i)
+      for (int c = 0; c < 3; ++c)
+        g[3 * i + c] =
+            (gs->bc[i] == DM_FREE && c < gs->dim) ? 2.0 * splitmix_uniform(&rng) - 1.0 : 0.0;
+    dm_dist_scatter(d, g, 3, q);
+    free(g);
+  }
+  double nrm = sqrt(dm_dist_mass_dot(d, q, q));
   for (size_t i = 0; i < 3 * n; ++i) q[i] /= nrm;
-  dm_prescribe_fn saved = m->prescribe;
-  m->prescribe = NULL;
+  dm_prescribe_fn saved = lm->prescribe;
+  lm->prescribe = NULL;
   int k = 0;
   double beta_prev = 0.0;
   for (; k < kmax && nrm > 0; ++k) {
     memcpy(work, q, 3 * n * sizeof(double));
-    dm_constrain(m, 0.0, work, NULL); /* ghosts mirror their partners */
-    dm_accel(m, 0.0, work, z);        /* z = −M⁻¹K q on free particles, 0 elsewhere */
+    dm_dist_constrain(d, 0.0, work, NULL); /* ghosts mirror their partners; ghost values */
+    dm_dist_accel(d, 0.0, work, z);        /* z = −M⁻¹K q on free particles, 0 elsewhere */
     for (size_t i = 0; i < 3 * n; ++i) z[i] = -z[i];
-    double a;
-    MDOT(q, z, a);
+    double a = dm_dist_mass_dot(d, q, z);
     al[k] = a;
     for (size_t i = 0; i < 3 * n; ++i) z[i] -= a * q[i] + beta_prev * qp[i];
-    double b;
-    MDOT(z, z, b);
-    b = sqrt(b);
+    double b = sqrt(dm_dist_mass_dot(d, z, z));
     be[k] = b;
     if (!(b > 1e-12 * fabs(a))) {
       ++k;
@@ -466,8 +462,7 @@ static double omega_max(dm_model *m, size_t n) {
     for (size_t i = 0; i < 3 * n; ++i) qp[i] = q[i], q[i] = z[i] / b;
     beta_prev = b;
   }
-#undef MDOT
-  m->prescribe = saved;
+  lm->prescribe = saved;
   double lam = k > 0 ? tridiag_max_eig(al, be, k) : 0.0;
   free(q);
   free(qp);
@@ -922,26 +917,6 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     nsteps = (long)ceil(p->t_end / dt - 1e-9);
     dt = p->t_end / nsteps;
   }
-  double wmax = omega_max(m, s.n), limit = rkn_stability_limit(p->integrator);
-  sum->dt = dt;
-  sum->steps = nsteps;
-  sum->t_end = nsteps * dt;
-  sum->omega_dt = wmax * dt;
-  ms_log(ctx, MS_LOG_INFO,
-         "discrete model: %zu particles (%zu real), %zu bonds (%.1f per particle), dim %d, "
-         "horizon %.3g h; %s, dt = %.6g (omega_max dt = %.4g, stability limit %.4g), %ld steps",
-         s.n, nreal, m->nbonds, (double)m->nbonds / s.n, p->dim, p->horizon,
-         rkn_scheme_names[p->integrator], dt, wmax * dt, limit, nsteps);
-  if (wmax * dt > 0.99 * limit) {
-    ms_log(ctx, MS_LOG_ERROR,
-           "discrete model: time step %.6g too large: omega_max dt = %.4g exceeds 0.99 x the "
-           "stability limit %.4g of %s (lower dt or courant)",
-           dt, wmax * dt, limit, rkn_scheme_names[p->integrator]);
-    dm_destroy(m);
-    dm_state_free(&s);
-    return MS_ERR_INPUT;
-  }
-
   /* MPI: partition the bond graph and build this rank's local model (docs/mpi.md). */
   dm_dist *d = dm_dist_create(m, ctx, &st);
   if (!d) {
@@ -964,6 +939,27 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
              ds->imbalance, ds->edge_cut_slab, ds->imbalance_slab, ds->max_owned, ds->max_ghosts,
              ds->total_ghosts, ds->partition_s);
   }
+  double wmax = omega_max(d, &s), limit = rkn_stability_limit(p->integrator);
+  sum->dt = dt;
+  sum->steps = nsteps;
+  sum->t_end = nsteps * dt;
+  sum->omega_dt = wmax * dt;
+  ms_log(ctx, MS_LOG_INFO,
+         "discrete model: %zu particles (%zu real), %zu bonds (%.1f per particle), dim %d, "
+         "horizon %.3g h; %s, dt = %.6g (omega_max dt = %.4g, stability limit %.4g), %ld steps",
+         s.n, nreal, m->nbonds, (double)m->nbonds / s.n, p->dim, p->horizon,
+         rkn_scheme_names[p->integrator], dt, wmax * dt, limit, nsteps);
+  if (wmax * dt > 0.99 * limit) {
+    ms_log(ctx, MS_LOG_ERROR,
+           "discrete model: time step %.6g too large: omega_max dt = %.4g exceeds 0.99 x the "
+           "stability limit %.4g of %s (lower dt or courant)",
+           dt, wmax * dt, limit, rkn_scheme_names[p->integrator]);
+    dm_dist_free(d);
+    dm_destroy(m);
+    dm_state_free(&s);
+    return MS_ERR_INPUT;
+  }
+
   dm_state *ls = dm_dist_state(d);
   /* files: rank 0 writes them (every rank holds the gathered global state when it matters) */
   static char no_outdir[1] = "";

@@ -434,6 +434,9 @@ void dm_dist_constrain(void *user, double t, double *q, double *u);
 /* Energies and the hourglass indicator of the local state, summed in global particle order
  * (the same bits on every rank and for every rank count). Collective. */
 void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out);
+/* Σ m_i x_i·y_i over free particles of two local [n_local][3] arrays, in global particle order
+ * (as dm_dist_diagnostics). Collective. */
+double dm_dist_mass_dot(dm_dist *d, const double *x, const double *y);
 /* Owned rows of a local [n_local][width] array into the global [n][width] array, on every
  * rank (collective); and global → local (owned and ghosts). */
 void dm_dist_gather(dm_dist *d, const double *local, int width, double *global);

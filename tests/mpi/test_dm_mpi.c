@@ -139,6 +139,7 @@ static void same_run(const loaded *a, const loaded *b, const char *what) {
         "%s: particle, bond or step counts differ", what);
   SAME(kinetic_end);
   SAME(potential_end);
+  SAME(omega_dt);
   SAME(energy_err_max);
   SAME(hourglass_first);
   SAME(hourglass_max);
