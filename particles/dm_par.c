@@ -536,3 +536,23 @@ double dm_dist_mass_dot(dm_dist *d, const double *x, const double *y) {
   ordered_sums(d, 1, &t, &sum);
   return sum;
 }
+
+void dm_dist_global_stress(dm_dist *d) {
+  dm_model *lm = d->lm;
+  exchange(d, d->ls.w, 3);
+  dm_stress_pass(lm, d->ls.w, d->n_owned);
+  dm_dist_gather(d, lm->C, 9, d->gm->C);
+  dm_dist_gather(d, lm->sigma, 9, d->gm->sigma);
+}
+
+void dm_dist_release_global(dm_dist *d) {
+  dm_model *m = d->gm;
+  free(m->start), m->start = NULL;
+  free(m->nbr), m->nbr = NULL;
+  free(m->img), m->img = NULL;
+  free(m->Ainv), m->Ainv = NULL;
+  free(m->cond), m->cond = NULL;
+  free(m->kappa), m->kappa = NULL;
+  free(m->Q), m->Q = NULL;
+  free(m->energy), m->energy = NULL;
+}

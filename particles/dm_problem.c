@@ -940,6 +940,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
              ds->total_ghosts, ds->partition_s);
   }
   double wmax = omega_max(d, &s), limit = rkn_stability_limit(p->integrator);
+  dm_dist_release_global(d); /* the local model has all it needs: halve the memory */
   sum->dt = dt;
   sum->steps = nsteps;
   sum->t_end = nsteps * dt;
@@ -1054,7 +1055,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
         if (!gathered) {
           dm_dist_gather(d, ls->w, 3, s.w);
           dm_dist_gather(d, ls->u, 3, s.u);
-          dm_potential_energy(m, s.w); /* stresses of the current state */
+          dm_dist_global_stress(d); /* stresses of the current state */
           gathered = 1;
         }
         write_profile(&octx, p, m, nreal, t, (int)q);
@@ -1064,7 +1065,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
         if (!gathered) {
           dm_dist_gather(d, ls->w, 3, s.w);
           dm_dist_gather(d, ls->u, 3, s.u);
-          dm_potential_energy(m, s.w);
+          dm_dist_global_stress(d);
           gathered = 1;
         }
         write_snapshot(&octx, m, nreal, t, (int)q);
@@ -1117,7 +1118,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model: non-finite acceleration (unstable)");
 
   /* analyses against the exact solutions */
-  dm_potential_energy(m, s.w);
+  dm_dist_global_stress(d);
   if (st == MS_OK) {
     if ((p->profile == PROF_ROD_TRIANGLE || p->profile == PROF_ROD_SINE) && p->nprobes) {
       double *h1 = ms_calloc(2 * nrec, sizeof(double));

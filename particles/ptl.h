@@ -437,6 +437,12 @@ void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out);
 /* Σ m_i x_i·y_i over free particles of two local [n_local][3] arrays, in global particle order
  * (as dm_dist_diagnostics). Collective. */
 double dm_dist_mass_dot(dm_dist *d, const double *x, const double *y);
+/* C and σ of every particle into the global model's m->C, m->sigma (every rank), from the local
+ * state: what dm_potential_energy(global, w) would give, bit for bit. Collective. */
+void dm_dist_global_stress(dm_dist *d);
+/* Frees the global model's families and work arrays once the local model exists (the run
+ * then keeps only its state and C, σ for outputs): O(N/P) bonds per rank in the time loop. */
+void dm_dist_release_global(dm_dist *d);
 /* Owned rows of a local [n_local][width] array into the global [n][width] array, on every
  * rank (collective); and global → local (owned and ghosts). */
 void dm_dist_gather(dm_dist *d, const double *local, int width, double *global);
