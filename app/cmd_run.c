@@ -101,6 +101,11 @@ int cmd_run(int argc, char **argv) {
       dk_errors_print(&e, stderr);
       fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, e.n, e.n == 1 ? "" : "s");
     }
+  } else if (restart && !app_deck_restartable(&d)) {
+    if (ctx.rank == 0)
+      fprintf(stderr, "mscale run: --restart is not available for this deck's problem type "
+                      "(only discrete_model writes checkpoints)\n");
+    s = MS_ERR_INPUT;
   } else {
     char *outdir = outdir_arg ? ms_strdup(outdir_arg) : default_outdir(deck);
     s = par_agree_status(ms_outdir_create(&ctx, outdir, force));

@@ -22,6 +22,8 @@ typedef struct app_deck {
 /* Load, read and validate a deck; every error goes to *e. Returns MS_OK only if *e is empty. */
 ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e);
 ms_status app_deck_run(ms_ctx *ctx, app_deck *d);
+/* True if the deck's problem type can continue from a checkpoint (`run --restart`). */
+bool app_deck_restartable(const app_deck *d);
 void app_deck_free(app_deck *d);
 /* One line per problem type, for --help. */
 void app_print_problem_types(FILE *f);

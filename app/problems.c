@@ -21,6 +21,7 @@ typedef void (*problem_free_fn)(void *);
 
 typedef struct problem_type {
   const char *name, *summary;
+  bool restartable; /* reads ctx->restart (`mscale run --restart`) */
   problem_read_fn read;
   problem_run_fn run;
   problem_free_fn free;
@@ -32,24 +33,25 @@ ms_status hugoniot_problem_run(ms_ctx *, void *);
 void hugoniot_problem_free(void *);
 
 static const problem_type problem_types[] = {
-    {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", hugoniot_problem_read,
+    {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", false, hugoniot_problem_read,
      hugoniot_problem_run, hugoniot_problem_free},
 #ifdef MSCALE_HAVE_CONTINUUM
-    {"continuum", "1D Lagrangian gas dynamics (cross scheme)", (problem_read_fn)cont_problem_read,
+    {"continuum", "1D Lagrangian gas dynamics (cross scheme)", false,
+     (problem_read_fn)cont_problem_read,
      (problem_run_fn)cont_problem_run, (problem_free_fn)cont_problem_free},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_CD
-    {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)",
+    {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", false,
      (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
      (problem_free_fn)cd_problem_free},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_DM
-    {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes",
+    {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes", true,
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
      (problem_free_fn)dm_problem_free},
 #endif
 #ifdef MSCALE_HAVE_COUPLING
-    {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport",
+    {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", false,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
      (problem_free_fn)cpl_problem_free},
 #endif
@@ -90,6 +92,10 @@ ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e) {
   /* keys written for other problem types or misspelt: report them all */
   dk_report_unused(e, d->doc);
   return e->n ? MS_ERR_INPUT : MS_OK;
+}
+
+bool app_deck_restartable(const app_deck *d) {
+  return d->problem_kind >= 0 && problem_types[d->problem_kind].restartable;
 }
 
 ms_status app_deck_run(ms_ctx *ctx, app_deck *d) {
