@@ -106,6 +106,27 @@ ms_status eos_set_heat_capacity(eos_t *eos, double cv) {
 ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *e, double *p,
                    double *c, size_t *bad) {
   const eos_ops *ops = eos->ops;
+  if (ops->eval_array) {
+    /* one vectorized pass (c holds c² until the sound-speed policy is applied), then a scan
+     * for the first state outside the domain */
+    ops->eval_array(eos, n, rho, e, p, c);
+    double floor = EOS_C_FLOOR_FRACTION * eos->c0;
+    if (!(floor > 0.0)) floor = 1e-12;
+    const double floor2 = floor * floor;
+    if (c)
+      for (size_t i = 0; i < n; ++i) {
+        double c2 = c[i];
+        c[i] = isnan(c2) ? NAN : c2 > floor2 ? sqrt(c2) : floor;
+      }
+    for (size_t i = 0; i < n; ++i) {
+      if (!(rho[i] > 0.0) || !isfinite(e[i]) || isnan(p[i]) || (c && isnan(c[i]))) {
+        p[i] = NAN;
+        if (bad) *bad = i;
+        return MS_ERR_UNSTABLE;
+      }
+    }
+    return MS_OK;
+  }
   for (size_t i = 0; i < n; ++i) {
     double r = rho[i], ei = e[i], pi = NAN, c2 = NAN;
     if (r > 0.0 && isfinite(ei)) {

@@ -30,6 +30,11 @@ typedef struct eos_ops {
   /* Optional fused P and c² for eos_eval's loop (shares powers, table lookups); NULL: the two
    * calls above. Must give the same values as pressure() and sound_speed2(). */
   void (*eval)(const eos_t *eos, double rho, double e, double *p, double *c2);
+  /* Optional array form of eval for the grid's hot loop (vectorizable, no calls per cell):
+   * p[i] and, if c2 is not NULL, c2[i] for i < n, NaN outside the domain. Must give the same
+   * values, bit for bit, as eval(). NULL: eos_eval loops over eval(). */
+  void (*eval_array)(const eos_t *eos, size_t n, const double *rho, const double *e, double *p,
+                     double *c2);
 } eos_ops;
 
 /* A cubic-Hermite tabulated curve y(x) with slopes y'(x) at the nodes; x strictly increasing.

@@ -63,7 +63,7 @@ static void tc_free(eos_t *eos) {
 }
 
 static const eos_ops table_cold_ops = {tc_pressure, tc_c2, tc_cold_pressure, tc_cold_energy, NULL,
-                                       tc_free, tc_eval};
+                                       tc_free, tc_eval, NULL};
 
 /* Relative mismatch allowed between the delta column and rho/rho0: Table 1 prints δ with
  * three decimals (rounding error ≤ 5e-4 at δ ≥ 0.455, i.e. ≤ 1.1e-3 relative). */

@@ -70,7 +70,7 @@ static void tf_free(eos_t *eos) {
 }
 
 static const eos_ops table_full_ops = {tf_pressure, tf_c2, eos_isentrope_cold_pressure,
-                                       eos_isentrope_cold_energy, NULL, tf_free, tf_eval};
+                                       eos_isentrope_cold_energy, NULL, tf_free, tf_eval, NULL};
 
 /* Nodal c² from centred differences of P (one-sided, first order, on the edges). */
 static void nodal_c2_from_p(table_full *t) {
