@@ -10,6 +10,7 @@
  * Full table (docs/validation.md "Cluster dynamics"):
  *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain}) */
 #include <math.h>
+#include <omp.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -175,6 +176,9 @@ int main(int argc, char **argv) {
       opt_mode = !strcmp(argv[++k], "bonded") ? CD_CUTOFF_BONDED : CD_CUTOFF_PLAIN;
     }
   }
+  /* one thread: results do not depend on the thread count (test_cd_dynamics), and ctest -j
+   * runs several of these at once, where OpenMP barriers of oversubscribed threads stall */
+  omp_set_num_threads(1);
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_hugoniot)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,6 +10,7 @@
  * (an open finding, validation.md), so agreement is not asserted.
  *   build/tests/particles/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells) */
 #include <math.h>
+#include <omp.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -139,6 +140,9 @@ static void test_kuropatenko(void **state) {
 int main(int argc, char **argv) {
   for (int k = 1; k < argc; k++)
     if (!strcmp(argv[k], "--full")) full_run = true;
+  /* one thread: results do not depend on the thread count (test_cd_dynamics), and ctest -j
+   * runs several of these at once, where OpenMP barriers of oversubscribed threads stall */
+  omp_set_num_threads(1);
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_kuropatenko)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
