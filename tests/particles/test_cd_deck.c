@@ -86,6 +86,15 @@ static void test_good_deck_runs(void **state) {
   snprintf(path, sizeof path, "%s/cd_snap_000000.xmf", dir);
   assert_int_equal(access(path, R_OK), 0);
   ms_ctx_close(&ctx);
+  /* clean up the run directory (names as written by cd_problem_run and the core) */
+  static const char *const outs[] = {"cd_energy.csv", "cd_profiles.csv", "cd_front.csv", "run.log",
+                                     "cd_snap_000000.h5", "cd_snap_000000.xmf", "cd_snap_000011.h5",
+                                     "cd_snap_000011.xmf"};
+  for (size_t k = 0; k < sizeof outs / sizeof *outs; k++) {
+    snprintf(path, sizeof path, "%s/%s", dir, outs[k]);
+    unlink(path);
+  }
+  rmdir(dir);
   cd_problem_free(p);
   eos_materials_free(m);
   dk_free(doc);
