@@ -133,9 +133,11 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
       } else if (*entry & CD_NB_BONDED) {
         if (r2 >= t->rc2) {
           if (!wf) continue; /* diagnostics never change the state */
-          /* the bond breaks: its energy leaves the potential and is booked as broken */
+          /* the bond breaks: its energy leaves the potential and is booked as broken. With the
+           * hard truncation the force does work only up to R_c, so the energy lost is E(R_c):
+           * evaluate there (r2 itself may lie far beyond the end of the table). */
           double eb;
-          tab_force(t, r2, &eb);
+          tab_force(t, t->rc2, &eb);
           *entry &= ~CD_NB_BONDED;
           break_bond(s->partners, i, j);
           if (sum) {
