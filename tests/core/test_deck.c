@@ -10,12 +10,7 @@
 #include <cmocka.h>
 
 #include "core.h"
-
-static bool has_error(const dk_errors *e, const char *needle) {
-  for (size_t i = 0; i < e->n; i++)
-    if (strstr(e->msg[i], needle)) return true;
-  return false;
-}
+#include "test_util.h"
 
 static void dump(const dk_errors *e) { dk_errors_print(e, stderr); }
 

@@ -12,18 +12,13 @@
 #include <hdf5.h>
 
 #include "core.h"
+#include "test_util.h"
 
 static void write_file(const char *path, const char *text) {
   FILE *f = fopen(path, "w");
   assert_non_null(f);
   fputs(text, f);
   fclose(f);
-}
-
-static bool has_error(const dk_errors *e, const char *needle) {
-  for (size_t i = 0; i < e->n; i++)
-    if (strstr(e->msg[i], needle)) return true;
-  return false;
 }
 
 /* An aborted write leaves neither the final file nor the temporary; a committed one replaces

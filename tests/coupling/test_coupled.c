@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "cpl.h"
+#include "test_util.h"
 
 static const char *const MATERIALS =
     "units: internal\n"
@@ -211,13 +212,6 @@ static void test_grooved_ejecta(void **state) {
   eos_materials_free(mats);
   dk_free(doc);
   dk_errors_free(&e);
-}
-
-static bool has_error(const dk_errors *e, const char *needle) {
-  for (size_t i = 0; i < e->n; i++)
-    if (strstr(e->msg[i], needle))
-      return true;
-  return false;
 }
 
 static void test_deck_errors(void **state) {

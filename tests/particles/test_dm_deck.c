@@ -11,6 +11,7 @@
 #include <cmocka.h>
 
 #include "ptl.h"
+#include "test_util.h"
 
 static const char *materials =
     "problem: discrete_model\n"
@@ -44,12 +45,6 @@ static void unload(loaded *L) {
   eos_materials_free(L->mats);
   dk_free(L->doc);
   dk_errors_free(&L->e);
-}
-
-static bool has_error(const dk_errors *e, const char *needle) {
-  for (size_t i = 0; i < e->n; i++)
-    if (strstr(e->msg[i], needle)) return true;
-  return false;
 }
 
 /* Six independent mistakes: all reported in one pass, each with FILE:LINE:COL. */
