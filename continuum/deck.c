@@ -195,7 +195,11 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
     double h = 0;
     if (dk_read_positive(e, doc, L, "cell_size", MS_DIM_LENGTH, true, 0, &h) && th > 0.0) {
       double n = floor(th / h + 0.5);
-      spec->ncells = n < 1 ? 1 : (long)n;
+      if (!(n <= 1e8)) /* the same limit as `cells:` */
+        dk_error(e, doc, size_n, "layer %zu (%s): cell_size %g cm gives %.3g cells in %g cm; at "
+                 "most 1e8 cells per layer", k, name, h, n, th);
+      else
+        spec->ncells = n < 1 ? 1 : (long)n;
     }
   } else {
     dk_error(e, doc, L, "layer %zu (%s): missing 'cells' (count) or 'cell_size' (cm)", k, name);

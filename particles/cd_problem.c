@@ -16,6 +16,9 @@
 enum { CD_MAX_REGIONS = 32 };
 typedef enum { SHAPE_BOX = 0, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_HALFSPACE } region_shape;
 static const char *const shape_names[] = {"box", "sphere", "cylinder", "halfspace", NULL};
+
+/* Largest lattice a deck may ask for: particle indices are int32_t. */
+#define CD_MAX_LATTICE_SITES 2.0e9
 typedef enum { SURF_FLAT = 0, SURF_SINE, SURF_RANDOM } surface_kind;
 static const char *const surface_names[] = {"flat", "sine", "random", NULL};
 static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
@@ -366,6 +369,24 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     p->box.bc[2] = CD_BC_FREE;
     p->box.lo[2] = p->box.hi[2] = 0.0;
   }
+  /* The box bounds the lattice: particles are indexed with 32-bit integers (neighbour lists),
+   * and the checks below walk every lattice cell, so refuse a box that holds more sites
+   * before any count is converted to an integer. */
+  if (bn && e->n == nerr0 && p->r0 > 0) {
+    double per[3], sites = p->dim == 3 ? 4.0 : 2.0, widest = 0.0;
+    int axis = 0;
+    lattice_period(p, per);
+    for (int a = 0; a < p->dim; a++) {
+      double cells = ceil((p->box.hi[a] - p->box.lo[a]) / per[a]) + 1;
+      sites *= cells;
+      if (cells > widest) widest = cells, axis = a;
+    }
+    const dk_node *at = dk_seq_at(dk_get(bn, "hi"), (size_t)axis);
+    if (!(sites <= CD_MAX_LATTICE_SITES))
+      dk_error(e, doc, at ? at : bn, "box: holds about %.3g lattice sites at spacing %g cm (axis "
+               "%d is the longest); at most %.3g are possible (particle indices are 32-bit)",
+               sites, p->r0, axis, CD_MAX_LATTICE_SITES);
+  }
 
   /* regions */
   const dk_node *rl = dk_get(sec, "regions");
@@ -475,7 +496,9 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
                            p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
             int first = -1;
             for (int k = 0; k < p->nreg; k++) {
-              if (p->reg[k].matrix || !region_contains(&p->reg[k], x, p->dim)) continue;
+              /* a region whose material has errors of its own (mat < 0) is not compared */
+              if (p->reg[k].matrix || p->reg[k].mat < 0 || !region_contains(&p->reg[k], x, p->dim))
+                continue;
               if (first < 0) { first = k; continue; }
               if (p->reg[k].mat != p->reg[first].mat && !reported[first][k]) {
                 reported[first][k] = true;
