@@ -89,7 +89,10 @@ ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e) {
       d->problem_kind = kind;
     }
   }
-  /* keys written for other problem types or misspelt: report them all */
+  /* Keys written for other problem types or misspelt: report them all. If `problem:` or
+   * `materials:` had errors, the problem sections were not read: their keys are not unknown. */
+  if (d->problem_kind < 0)
+    for (int i = 0; i < N_PROBLEM_TYPES; i++) dk_mark_used(root, problem_types[i].name);
   dk_report_unused(e, d->doc);
   return e->n ? MS_ERR_INPUT : MS_OK;
 }

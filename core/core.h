@@ -201,6 +201,9 @@ bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const ch
 bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what,
                     ms_dim dim, double *out);
 
+/* Mark `key` of `map` and everything below it as read, without reading it (a section that
+ * could not be read because of earlier errors must not be reported as unknown keys). */
+void dk_mark_used(const dk_node *map, const char *key);
 /* Report every mapping key in the document that no reader asked for. */
 void dk_report_unused(dk_errors *e, const dk_doc *doc);
 /* Write the tree (with defaults filled in) as YAML, atomically (temporary name + rename). */

@@ -439,6 +439,22 @@ static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
   }
 }
 
+static void mark_used(dk_node *n) {
+  for (size_t i = 0; i < n->n; i++) {
+    if (n->kind == DK_MAP) n->used[i] = true;
+    mark_used(n->items[i]);
+  }
+}
+
+void dk_mark_used(const dk_node *map, const char *key) {
+  if (!map || map->kind != DK_MAP) return;
+  for (size_t i = 0; i < map->n; i++)
+    if (!strcmp(map->keys[i], key)) {
+      ((dk_node *)map)->used[i] = true; /* bookkeeping only; the content is unchanged */
+      mark_used(map->items[i]);
+    }
+}
+
 void dk_report_unused(dk_errors *e, const dk_doc *doc) {
   if (doc && doc->root) report_unused(e, doc, doc->root);
 }
