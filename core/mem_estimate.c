@@ -1,5 +1,5 @@
-/* Check-time memory estimate: see mem_estimate.h. */
-#include "mem_estimate.h"
+/* Check-time memory estimate (core.h, "Check-time memory estimate"). */
+#include "core.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-/* Check-time memory estimate (core/mem_estimate.h): a deck asking for more memory than the
+/* Check-time memory estimate (core/mem_estimate.c): a deck asking for more memory than the
  * machine has is rejected with an estimate that names the deck position and the largest items. */
 #include <math.h>
 #include <setjmp.h>
@@ -9,7 +9,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "mem_estimate.h"
+#include "core.h"
 
 static const double GiB = 1073741824.0;
 
