@@ -15,32 +15,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-def read_csv(path):
-    """Read an mscale CSV: '#' comment lines (title, units), a header line, numeric rows."""
-    units = {}
-    with open(path) as f:
-        lines = [ln for ln in f]
-    comments = [ln[1:].strip() for ln in lines if ln.startswith("#")]
-    for c in comments:
-        if c.startswith("units:"):
-            for item in c[len("units:"):].split(","):
-                item = item.strip()
-                if "[" in item:
-                    name, unit = item.split("[", 1)
-                    units[name.strip()] = unit.rstrip("]")
-    body = [ln for ln in lines if not ln.startswith("#")]
-    names = body[0].strip().split(",")
-    data = np.loadtxt(body[1:], delimiter=",", ndmin=2)
-    return names, data, units, (comments[0] if comments else "")
-
-
-def label(name, units):
-    return f"{name} [{units[name]}]" if name in units else name
+sys.path.insert(0, HERE)
+from plot_spectrum import lab, read_csv  # noqa: E402  (the one reader of mscale CSVs)
 
 
 def plot_hugoniots(outdir, plotdir):
@@ -49,13 +27,12 @@ def plot_hugoniots(outdir, plotdir):
         return []
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     for path in files:
-        names, d, units, _ = read_csv(path)
-        col = {n: i for i, n in enumerate(names)}
+        c, units, _ = read_csv(path)
         mat = os.path.basename(path)[len("hugoniot_"):-4]
-        ax1.plot(d[:, col["up"]], d[:, col["Us"]], "o-", label=mat)
-        ax2.plot(d[:, col["rho"]], d[:, col["P"]], "o-", label=mat)
-    ax1.set_xlabel(label("up", units)); ax1.set_ylabel(label("Us", units)); ax1.legend()
-    ax2.set_xlabel(label("rho", units)); ax2.set_ylabel(label("P", units)); ax2.legend()
+        ax1.plot(c["up"], c["Us"], "o-", label=mat)
+        ax2.plot(c["rho"], c["P"], "o-", label=mat)
+    ax1.set_xlabel(lab("up", units)); ax1.set_ylabel(lab("Us", units)); ax1.legend()
+    ax2.set_xlabel(lab("rho", units)); ax2.set_ylabel(lab("P", units)); ax2.legend()
     ax1.set_title("Shock velocity vs particle velocity"); ax2.set_title("Hugoniot P(rho)")
     fig.tight_layout()
     out = os.path.join(plotdir, "hugoniot.png")

@@ -13,13 +13,7 @@
 #include <cmocka.h>
 
 #include "eos.h"
-
-/* True if some message contains `needle`. */
-static inline bool eos_test_has_error(const dk_errors *e, const char *needle) {
-  for (size_t i = 0; i < e->n; ++i)
-    if (strstr(e->msg[i], needle)) return true;
-  return false;
-}
+#include "test_util.h" /* has_error */
 
 static inline void eos_test_dump(const dk_errors *e) {
   for (size_t i = 0; i < e->n; ++i) fprintf(stderr, "  | %s\n", e->msg[i]);

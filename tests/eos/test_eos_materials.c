@@ -99,7 +99,7 @@ static void test_good_deck(void **state) {
   assert_true(mx->comp[1] == 1);
   /* lookups of unknown names report the known ones */
   assert_null(eos_materials_find(m, "cu", &e, doc, dk_root(doc)));
-  assert_true(eos_test_has_error(&e, "unknown material 'cu' (known: al, pb, air, b4c_tab, tab, steel)"));
+  assert_true(has_error(&e, "unknown material 'cu' (known: al, pb, air, b4c_tab, tab, steel)"));
   eos_materials_free(m);
   dk_free(doc);
   dk_errors_free(&e);
@@ -232,7 +232,7 @@ static void test_bad_decks(void **state) {
     else
       snprintf(where, sizeof where, "%s:", path);
     if (getenv("EOS_TEST_VERBOSE")) eos_test_dump(&e);
-    if (e.n == 0 || !eos_test_has_error(&e, where) || !eos_test_has_error(&e, b->needle)) {
+    if (e.n == 0 || !has_error(&e, where) || !has_error(&e, b->needle)) {
       eos_test_dump(&e);
       fail_msg("bad deck '%s': expected an error at %s containing '%s'", b->what, where,
                b->needle);
@@ -256,7 +256,7 @@ static void test_error_details(void **state) {
                                     "      gamma0: 2\n",
                                &e, &doc, path, sizeof path);
   snprintf(where, sizeof where, "%s/cold_truncated.txt:4:", tmpdir);
-  assert_true(eos_test_has_error(&e, where) && eos_test_has_error(&e, "expected 4 columns"));
+  assert_true(has_error(&e, where) && has_error(&e, "expected 4 columns"));
   size_t n0 = e.n;
   assert_null(eos_materials_find(m, "al", &e, doc, dk_root(doc)));
   assert_int_equal(e.n, n0);

@@ -47,7 +47,7 @@ static void expect_cold_error(const char *name, const char *text, int line, cons
   char path[512], where[600];
   eos_t *eos = cold_from_text(name, text, &e, path, sizeof path);
   snprintf(where, sizeof where, "%s:%d:", path, line);
-  if (eos || !eos_test_has_error(&e, where) || !eos_test_has_error(&e, needle)) {
+  if (eos || !has_error(&e, where) || !has_error(&e, needle)) {
     eos_test_dump(&e);
     fail_msg("%s: expected an error at %s containing '%s'", name, where, needle);
   }
@@ -115,7 +115,7 @@ static void test_cold_table_good_and_broken(void **state) {
   dk_errors_init(&e);
   tmp_path(path, sizeof path, "does_not_exist.txt");
   assert_null(eos_create_table_cold(path, 2.0, false, &e));
-  assert_true(eos_test_has_error(&e, path) && eos_test_has_error(&e, "cannot open"));
+  assert_true(has_error(&e, path) && has_error(&e, "cannot open"));
   dk_errors_free(&e);
 }
 
@@ -202,7 +202,7 @@ static void expect_full_error(const char *name, const char *text, int line, cons
   dk_errors_init(&e);
   eos_t *eos = eos_create_table_full(path, &e);
   snprintf(where, sizeof where, "%s:%d:", path, line);
-  if (eos || !eos_test_has_error(&e, where) || !eos_test_has_error(&e, needle)) {
+  if (eos || !has_error(&e, where) || !has_error(&e, needle)) {
     eos_test_dump(&e);
     fail_msg("%s: expected an error at %s containing '%s'", name, where, needle);
   }
@@ -265,7 +265,7 @@ static void test_full_table_broken(void **state) {
       assert_int_equal(ms_h5_close(h), MS_OK);
       dk_errors_init(&e);
       assert_null(eos_create_table_full(path, &e));
-      if (!eos_test_has_error(&e, path) || !eos_test_has_error(&e, cases[k].needle)) {
+      if (!has_error(&e, path) || !has_error(&e, cases[k].needle)) {
         eos_test_dump(&e);
         fail_msg("%s: expected '%s'", cases[k].name, cases[k].needle);
       }
