@@ -241,6 +241,26 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
  * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
 ms_status cd_write_snapshot(cd_sim *s, const char *path);
 
+/* ---- CD domain partition (particles/cd_partition.c, docs/mpi.md) ---- */
+typedef enum cd_partition_method { CD_PART_SLAB = 0, CD_PART_METIS } cd_partition_method;
+typedef struct cd_partition_stats {
+  double imbalance; /* max part weight / mean part weight (weights as given) */
+  long edge_cut;    /* edges of the 26-neighbour coarse-cell graph joining different parts */
+  long halo_cells;  /* Σ over parts of the cells not in the part but adjacent to it */
+} cd_partition_stats;
+/* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
+ * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
+ * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
+ * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
+ * fixed seed, so every rank calling it with the same input gets the same owner map (no
+ * broadcast needed). nparts == 1 → all zero. stats may be NULL.
+ * METIS with nparts ≥ cells gives cell c to part c. Σ(weight+1) above 2^30 is scaled down
+ * for METIS's 32-bit weights. MS_ERR_INPUT: bad arguments, negative weights, more than
+ * 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
+ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                             int nparts, cd_partition_method method, int slab_axis,
+                             int32_t *owner, cd_partition_stats *stats);
+
 /* ---- deck problem `cluster_dynamics` (docs/input-cd.md) ---- */
 typedef struct cd_problem cd_problem;
 cd_problem *cd_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,

@@ -1,0 +1,192 @@
+/* cd_partition.c — partition of the cluster-dynamics coarse-cell grid over MPI ranks
+ * (docs/mpi.md "Partitioning the cluster-dynamics region").
+ *
+ * The particle region is covered by a grid of coarse cells, each weighted by its particle
+ * count. A part (rank) owns whole cells; its ghosts are the particles of the cells adjacent to
+ * it, so the communication of a step is proportional to the halo cells and the edges of the
+ * 26-neighbour cell graph cut by the partition. Two methods:
+ *   - slabs: contiguous ranges of cell planes along one axis, cut where the cumulative weight
+ *     crosses k·W/nparts (a plane goes to the part holding the midpoint of its weight);
+ *   - METIS k-way on the 26-neighbour graph, vertex weight = particles + 1 (an empty cell still
+ *     costs a little: cell-list bookkeeping), unit edge weights, fixed seed.
+ * Both are pure functions of their input, so every rank computes the same map without a
+ * broadcast (METIS is deterministic for a fixed seed and input on one build).
+ */
+#include "ptl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <metis.h>
+
+/* The distinct neighbours of cell (ix, iy, iz) in the 26-neighbour stencil, periodic axes
+ * wrapped, the cell itself excluded (a periodic axis of 1 or 2 cells maps several offsets onto
+ * the same cell). Returns the count (≤ 26), neighbours in stencil order. */
+static int cell_neighbours(const int ncell[3], const bool periodic[3], int ix, int iy, int iz,
+                           int64_t *out) {
+  const int64_t self = ix + (int64_t)ncell[0] * (iy + (int64_t)ncell[1] * iz);
+  int n = 0;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        int q[3] = {ix + dx, iy + dy, iz + dz};
+        bool ok = true;
+        for (int a = 0; a < 3 && ok; ++a) {
+          if (q[a] >= 0 && q[a] < ncell[a]) continue;
+          if (!periodic[a]) ok = false;
+          else q[a] = (q[a] + ncell[a]) % ncell[a];
+        }
+        if (!ok) continue;
+        int64_t c = q[0] + (int64_t)ncell[0] * (q[1] + (int64_t)ncell[1] * q[2]);
+        if (c == self) continue;
+        bool seen = false;
+        for (int m = 0; m < n && !seen; ++m) seen = out[m] == c;
+        if (!seen) out[n++] = c;
+      }
+  return n;
+}
+
+/* The 26-neighbour graph in CSR form (METIS's xadj/adjncy). */
+typedef struct cell_graph {
+  idx_t nv;
+  idx_t *xadj, *adj;
+} cell_graph;
+
+static void graph_build(const int ncell[3], const bool periodic[3], cell_graph *g) {
+  const int64_t nv = (int64_t)ncell[0] * ncell[1] * ncell[2];
+  g->nv = (idx_t)nv;
+  g->xadj = ms_calloc((size_t)nv + 1, sizeof(idx_t));
+  g->adj = ms_calloc((size_t)nv * 26 + 1, sizeof(idx_t));
+  int64_t nb[26];
+  size_t na = 0;
+  for (int iz = 0; iz < ncell[2]; ++iz)
+    for (int iy = 0; iy < ncell[1]; ++iy)
+      for (int ix = 0; ix < ncell[0]; ++ix) {
+        int64_t c = ix + (int64_t)ncell[0] * (iy + (int64_t)ncell[1] * iz);
+        int k = cell_neighbours(ncell, periodic, ix, iy, iz, nb);
+        for (int m = 0; m < k; ++m) g->adj[na++] = (idx_t)nb[m];
+        g->xadj[c + 1] = (idx_t)na;
+      }
+}
+
+static void graph_free(cell_graph *g) {
+  free(g->xadj);
+  free(g->adj);
+}
+
+/* Contiguous slabs of cell planes along `axis`, cut by cumulative weight. */
+static void slab_partition(const int ncell[3], const int64_t *weight, int nparts, int axis,
+                           int32_t *owner) {
+  const int np = ncell[axis];
+  double *pw = ms_calloc((size_t)np, sizeof(double));
+  const int64_t nv = (int64_t)ncell[0] * ncell[1] * ncell[2];
+  const int64_t stride[3] = {1, ncell[0], (int64_t)ncell[0] * ncell[1]};
+  double total = 0;
+  for (int64_t c = 0; c < nv; ++c) {
+    int plane = (int)(c / stride[axis] % ncell[axis]);
+    pw[plane] += (double)weight[c];
+    total += (double)weight[c];
+  }
+  int32_t *plane_part = ms_calloc((size_t)np, sizeof(int32_t));
+  double acc = 0;
+  for (int p = 0; p < np; ++p) {
+    /* the part holding the midpoint of the plane's weight; equal plane counts if all empty */
+    double at = total > 0 ? (acc + 0.5 * pw[p]) / total : (p + 0.5) / np;
+    int r = (int)(at * nparts);
+    plane_part[p] = r < nparts ? r : nparts - 1;
+    acc += pw[p];
+  }
+  for (int64_t c = 0; c < nv; ++c) owner[c] = plane_part[c / stride[axis] % ncell[axis]];
+  free(pw);
+  free(plane_part);
+}
+
+static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int nparts,
+                                 int32_t *owner) {
+  const idx_t nv = g->nv;
+  if (nparts >= nv) { /* no balancing possible: one cell per part, the rest empty */
+    for (idx_t c = 0; c < nv; ++c) owner[c] = (int32_t)c;
+    return MS_OK;
+  }
+  /* vertex weights w + 1 in idx_t; if their sum would overflow a 32-bit idx_t, particle
+   * counts are scaled down (rounded) so the total stays below 2^30 */
+  double total = 0;
+  for (idx_t c = 0; c < nv; ++c) total += (double)weight[c] + 1;
+  const double limit = 1073741824.0; /* 2^30 */
+  const double scale = total > limit ? (limit - (double)nv) / (total - (double)nv) : 1.0;
+  idx_t *vwgt = ms_calloc((size_t)nv, sizeof(idx_t));
+  for (idx_t c = 0; c < nv; ++c) vwgt[c] = (idx_t)llround((double)weight[c] * scale) + 1;
+  idx_t *part = ms_calloc((size_t)nv, sizeof(idx_t));
+  idx_t ncon = 1, np = nparts, objval = 0, nvtx = nv;
+  idx_t opts[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(opts);
+  opts[METIS_OPTION_SEED] = 12345; /* fixed: every rank computes the same map */
+  opts[METIS_OPTION_NUMBERING] = 0;
+  int rc = METIS_PartGraphKway(&nvtx, &ncon, g->xadj, g->adj, vwgt, NULL, NULL, &np, NULL, NULL,
+                               opts, &objval, part);
+  for (idx_t c = 0; c < nv; ++c) owner[c] = (int32_t)part[c];
+  free(vwgt);
+  free(part);
+  return rc == METIS_OK ? MS_OK : MS_ERR_INTERNAL;
+}
+
+/* Imbalance, edge cut and halo cells of a map (definitions in ptl.h). */
+static void partition_stats(const cell_graph *g, const int64_t *weight, int nparts,
+                            const int32_t *owner, cd_partition_stats *st) {
+  double *pw = ms_calloc((size_t)nparts, sizeof(double));
+  double total = 0, wmax = 0;
+  long cut = 0, halo = 0;
+  for (idx_t c = 0; c < g->nv; ++c) {
+    pw[owner[c]] += (double)weight[c];
+    total += (double)weight[c];
+    /* cell c is a halo cell of every other part owning one of its neighbours */
+    int32_t seen[26];
+    int ns = 0;
+    for (idx_t e = g->xadj[c]; e < g->xadj[c + 1]; ++e) {
+      int32_t q = owner[g->adj[e]];
+      if (q == owner[c]) continue;
+      ++cut;
+      bool dup = false;
+      for (int m = 0; m < ns && !dup; ++m) dup = seen[m] == q;
+      if (!dup) seen[ns++] = q;
+    }
+    halo += ns;
+  }
+  for (int r = 0; r < nparts; ++r) wmax = fmax(wmax, pw[r]);
+  st->imbalance = total > 0 ? wmax / (total / nparts) : 1.0;
+  st->edge_cut = cut / 2; /* every cut edge was seen from both ends */
+  st->halo_cells = halo;
+  free(pw);
+}
+
+ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                             int nparts, cd_partition_method method, int slab_axis,
+                             int32_t *owner, cd_partition_stats *stats) {
+  if (!ncell || !periodic || !weight || !owner || nparts < 1 || slab_axis < 0 || slab_axis > 2 ||
+      (method != CD_PART_SLAB && method != CD_PART_METIS))
+    return MS_ERR_INPUT;
+  double nv = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (ncell[a] < 1) return MS_ERR_INPUT;
+    nv *= ncell[a];
+  }
+  /* METIS indexes the 26 nv adjacency entries with a 32-bit idx_t */
+  if (nv * 26 > 2147483647.0) return MS_ERR_INPUT;
+  for (int64_t c = 0; c < (int64_t)nv; ++c)
+    if (weight[c] < 0) return MS_ERR_INPUT;
+
+  cell_graph g = {0};
+  const bool need_graph = stats || (method == CD_PART_METIS && nparts > 1);
+  if (need_graph) graph_build(ncell, periodic, &g);
+  ms_status s = MS_OK;
+  if (nparts == 1)
+    memset(owner, 0, (size_t)nv * sizeof *owner);
+  else if (method == CD_PART_SLAB)
+    slab_partition(ncell, weight, nparts, slab_axis, owner);
+  else
+    s = metis_partition(&g, weight, nparts, owner);
+  if (s == MS_OK && stats) partition_stats(&g, weight, nparts, owner, stats);
+  if (need_graph) graph_free(&g);
+  return s;
+}

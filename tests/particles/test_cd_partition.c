@@ -1,0 +1,234 @@
+/* cd_partition_cells (particles/cd_partition.c): slab balance on known weights, METIS against
+ * slabs, determinism, the periodic wrap of the 26-neighbour stencil, and the reported
+ * imbalance / edge cut / halo cells against a brute-force count over all cell pairs. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "ptl.h"
+
+static int64_t ncells(const int n[3]) { return (int64_t)n[0] * n[1] * n[2]; }
+
+/* Brute force over all cell pairs: adjacent when every axis index differs by at most 1
+ * (circularly on periodic axes) and the cells differ. */
+static bool adjacent(const int n[3], const bool per[3], int64_t a, int64_t b) {
+  if (a == b) return false;
+  int64_t ia[3] = {a % n[0], a / n[0] % n[1], a / n[0] / n[1]};
+  int64_t ib[3] = {b % n[0], b / n[0] % n[1], b / n[0] / n[1]};
+  for (int k = 0; k < 3; ++k) {
+    int64_t d = llabs(ia[k] - ib[k]);
+    if (per[k] && n[k] - d < d) d = n[k] - d;
+    if (d > 1) return false;
+  }
+  return true;
+}
+
+static void brute_stats(const int n[3], const bool per[3], const int64_t *w, int nparts,
+                        const int32_t *owner, cd_partition_stats *st) {
+  int64_t nv = ncells(n);
+  double *pw = calloc((size_t)nparts, sizeof(double)), tot = 0, mx = 0;
+  for (int64_t c = 0; c < nv; ++c) {
+    pw[owner[c]] += (double)w[c];
+    tot += (double)w[c];
+  }
+  for (int p = 0; p < nparts; ++p) mx = fmax(mx, pw[p]);
+  st->imbalance = mx / (tot / nparts);
+  st->edge_cut = 0;
+  for (int64_t a = 0; a < nv; ++a)
+    for (int64_t b = a + 1; b < nv; ++b)
+      if (owner[a] != owner[b] && adjacent(n, per, a, b)) st->edge_cut++;
+  st->halo_cells = 0;
+  for (int p = 0; p < nparts; ++p)
+    for (int64_t c = 0; c < nv; ++c) {
+      if (owner[c] == p) continue;
+      bool near = false;
+      for (int64_t b = 0; b < nv && !near; ++b) near = owner[b] == p && adjacent(n, per, c, b);
+      st->halo_cells += near;
+    }
+  free(pw);
+}
+
+/* Slabs on known plane weights: along x, planes weigh 6,1,1,1,1,1,1,4 (each plane 2×3 cells,
+ * the plane weight on its first cell): 2 parts split 8 | 8 after plane 2; 4 parts put each
+ * plane in the part holding the midpoint of its weight. */
+static void test_slab_known_weights(void **state) {
+  (void)state;
+  const int n[3] = {8, 2, 3};
+  const bool per[3] = {false, false, false};
+  const int64_t plane_w[8] = {6, 1, 1, 1, 1, 1, 1, 4};
+  int64_t w[48] = {0};
+  for (int x = 0; x < 8; ++x) w[x] = plane_w[x];
+  int32_t owner[48];
+  cd_partition_stats st;
+  assert_int_equal(cd_partition_cells(n, per, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
+  for (int64_t c = 0; c < 48; ++c) assert_int_equal(owner[c], c % 8 < 3 ? 0 : 1);
+  assert_true(st.imbalance == 1.0); /* 8 | 8 exactly */
+  /* 4 parts, quarter marks at 4, 8, 12: midpoints 3, 6.5, 7.5, 8.5, 9.5, 10.5, 11.5, 14 →
+   * parts 0,1,1,2,2,2,2,3 (weights 6, 2, 4, 4) */
+  const int32_t expect4[8] = {0, 1, 1, 2, 2, 2, 2, 3};
+  assert_int_equal(cd_partition_cells(n, per, w, 4, CD_PART_SLAB, 0, owner, &st), MS_OK);
+  for (int64_t c = 0; c < 48; ++c) assert_int_equal(owner[c], expect4[c % 8]);
+  assert_true(fabs(st.imbalance - 6.0 / 4.0) < 1e-15); /* part 0 = plane 0 (6) of mean 4 */
+  /* along z (3 planes of 16 cells), uniform weights: one plane per part */
+  int64_t u[48];
+  for (int c = 0; c < 48; ++c) u[c] = 5;
+  assert_int_equal(cd_partition_cells(n, per, u, 3, CD_PART_SLAB, 2, owner, &st), MS_OK);
+  for (int64_t c = 0; c < 48; ++c) assert_int_equal(owner[c], c / 16);
+  assert_true(st.imbalance == 1.0);
+  cd_partition_stats bf;
+  brute_stats(n, per, u, 3, owner, &bf);
+  assert_int_equal(st.edge_cut, bf.edge_cut);
+  assert_int_equal(st.halo_cells, bf.halo_cells);
+  assert_int_equal(st.halo_cells, 4 * 16); /* the middle part sees both neighbours' planes */
+}
+
+/* On a uniform 16³ block, METIS cuts no more edges than slabs for 4..16 parts (slabs cut
+ * (P−1) full planes, METIS near-cubic blocks) and stays balanced (METIS's default 3 %
+ * tolerance, plus one cell of granularity: a cell is 1/256 of a part at 16 parts). */
+static void test_metis_beats_slabs(void **state) {
+  (void)state;
+  const int n[3] = {16, 16, 16};
+  const bool per[3] = {false, false, false};
+  int64_t nv = ncells(n);
+  int64_t *w = malloc((size_t)nv * sizeof *w);
+  for (int64_t c = 0; c < nv; ++c) w[c] = 10;
+  int32_t *om = malloc((size_t)nv * sizeof *om), *os = malloc((size_t)nv * sizeof *os);
+  const int parts[] = {4, 8, 16};
+  for (size_t k = 0; k < 3; ++k) {
+    cd_partition_stats sm, ss;
+    assert_int_equal(cd_partition_cells(n, per, w, parts[k], CD_PART_METIS, 0, om, &sm), MS_OK);
+    assert_int_equal(cd_partition_cells(n, per, w, parts[k], CD_PART_SLAB, 0, os, &ss), MS_OK);
+    printf("16^3, %2d parts: METIS cut %ld halo %ld imbalance %.4f | slab cut %ld halo %ld "
+           "imbalance %.4f\n", parts[k], sm.edge_cut, sm.halo_cells, sm.imbalance, ss.edge_cut,
+           ss.halo_cells, ss.imbalance);
+    assert_true(sm.edge_cut <= ss.edge_cut);
+    assert_true(sm.imbalance < 1.04);
+    assert_true(ss.imbalance == 1.0); /* 16 planes split evenly */
+    for (int64_t c = 0; c < nv; ++c) assert_true(om[c] >= 0 && om[c] < parts[k]);
+  }
+  free(w);
+  free(om);
+  free(os);
+}
+
+/* Two calls with the same input give the same map (every rank computes it independently). */
+static void test_determinism(void **state) {
+  (void)state;
+  const int n[3] = {12, 9, 7};
+  const bool per[3] = {true, false, true};
+  int64_t nv = ncells(n);
+  int64_t *w = malloc((size_t)nv * sizeof *w);
+  for (int64_t c = 0; c < nv; ++c) w[c] = (int64_t)(100 * ptl_splitmix64_uniform(7, (uint64_t)c));
+  int32_t *a = malloc((size_t)nv * sizeof *a), *b = malloc((size_t)nv * sizeof *b);
+  for (int rep = 0; rep < 2; ++rep) {
+    cd_partition_method m = rep ? CD_PART_METIS : CD_PART_SLAB;
+    assert_int_equal(cd_partition_cells(n, per, w, 5, m, 1, a, NULL), MS_OK);
+    assert_int_equal(cd_partition_cells(n, per, w, 5, m, 1, b, NULL), MS_OK);
+    assert_memory_equal(a, b, (size_t)nv * sizeof *a);
+  }
+  free(w);
+  free(a);
+  free(b);
+}
+
+/* Periodic axes wrap: a ring of 4 cells in two slabs is cut twice (once open); a periodic axis
+ * of 2 cells joins them once, not twice; a fully periodic 3³ grid is the complete graph on 27
+ * cells (each cell's 26 offsets are 26 distinct cells). */
+static void test_periodic_wrap(void **state) {
+  (void)state;
+  int32_t owner[27];
+  int64_t w[27];
+  for (int c = 0; c < 27; ++c) w[c] = 1;
+  cd_partition_stats st;
+  const int ring[3] = {4, 1, 1};
+  const bool open[3] = {false, false, false}, px[3] = {true, false, false};
+  assert_int_equal(cd_partition_cells(ring, px, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
+  assert_int_equal(st.edge_cut, 2);
+  assert_int_equal(st.halo_cells, 4);
+  assert_int_equal(cd_partition_cells(ring, open, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
+  assert_int_equal(st.edge_cut, 1);
+  assert_int_equal(st.halo_cells, 2);
+  const int two[3] = {2, 1, 1};
+  assert_int_equal(cd_partition_cells(two, px, w, 2, CD_PART_METIS, 0, owner, &st), MS_OK);
+  assert_int_equal(st.edge_cut, 1);
+  assert_int_equal(st.halo_cells, 2);
+  const int cube[3] = {3, 3, 3};
+  const bool all[3] = {true, true, true};
+  assert_int_equal(cd_partition_cells(cube, all, w, 27, CD_PART_METIS, 0, owner, &st), MS_OK);
+  for (int c = 0; c < 27; ++c) assert_int_equal(owner[c], c); /* nparts ≥ cells: identity */
+  assert_int_equal(st.edge_cut, 27 * 26 / 2);
+  assert_int_equal(st.halo_cells, 27 * 26);
+  assert_int_equal(cd_partition_cells(cube, open, w, 27, CD_PART_METIS, 0, owner, &st), MS_OK);
+  /* open 3³: 8 corners × 7 + 12 edges × 11 + 6 faces × 17 + 1 centre × 26 neighbours, / 2 */
+  assert_int_equal(st.edge_cut, (8 * 7 + 12 * 11 + 6 * 17 + 26) / 2);
+}
+
+/* The reported figures equal a brute-force count over all cell pairs, for both methods, several
+ * part counts and mixed periodic/open axes (including a periodic axis of 2 cells). */
+static void test_stats_brute_force(void **state) {
+  (void)state;
+  const int grids[2][3] = {{6, 5, 4}, {7, 2, 3}};
+  const bool pers[2][3] = {{true, false, false}, {false, true, true}};
+  for (int g = 0; g < 2; ++g) {
+    const int *n = grids[g];
+    int64_t nv = ncells(n);
+    int64_t *w = malloc((size_t)nv * sizeof *w);
+    for (int64_t c = 0; c < nv; ++c)
+      w[c] = (int64_t)(50 * ptl_splitmix64_uniform(11 + (uint64_t)g, (uint64_t)c));
+    int32_t *owner = malloc((size_t)nv * sizeof *owner);
+    const int parts[] = {1, 2, 3, 5};
+    for (int m = 0; m < 2; ++m)
+      for (size_t k = 0; k < 4; ++k)
+        for (int axis = 0; axis < 3; ++axis) {
+          cd_partition_stats st, bf;
+          cd_partition_method meth = m ? CD_PART_METIS : CD_PART_SLAB;
+          assert_int_equal(cd_partition_cells(n, pers[g], w, parts[k], meth, axis, owner, &st),
+                           MS_OK);
+          brute_stats(n, pers[g], w, parts[k], owner, &bf);
+          assert_int_equal(st.edge_cut, bf.edge_cut);
+          assert_int_equal(st.halo_cells, bf.halo_cells);
+          /* the same sum of the same integers (exact in double) divided the same way */
+          assert_true(fabs(st.imbalance - bf.imbalance) <= 1e-14 * bf.imbalance);
+          if (parts[k] == 1) assert_int_equal(st.edge_cut, 0);
+          if (m == 0) { /* slabs: every plane along the axis belongs to one part, in order */
+            int64_t stride = axis == 0 ? 1 : axis == 1 ? n[0] : (int64_t)n[0] * n[1];
+            for (int64_t c = 0; c < nv; ++c) {
+              int64_t plane = c / stride % n[axis];
+              int64_t c0 = plane * stride; /* first cell of the plane */
+              assert_int_equal(owner[c], owner[c0]);
+              if (plane > 0) assert_true(owner[c0] >= owner[c0 - stride]);
+            }
+          }
+        }
+    free(w);
+    free(owner);
+  }
+}
+
+static void test_bad_arguments(void **state) {
+  (void)state;
+  const int n[3] = {2, 2, 2}, zero[3] = {2, 0, 2};
+  const bool per[3] = {false, false, false};
+  int64_t w[8] = {1, 1, 1, 1, 1, 1, 1, 1};
+  int32_t owner[8];
+  assert_int_equal(cd_partition_cells(n, per, w, 0, CD_PART_SLAB, 0, owner, NULL), MS_ERR_INPUT);
+  assert_int_equal(cd_partition_cells(n, per, w, 2, CD_PART_SLAB, 3, owner, NULL), MS_ERR_INPUT);
+  assert_int_equal(cd_partition_cells(zero, per, w, 2, CD_PART_SLAB, 0, owner, NULL), MS_ERR_INPUT);
+  w[3] = -1;
+  assert_int_equal(cd_partition_cells(n, per, w, 2, CD_PART_METIS, 0, owner, NULL), MS_ERR_INPUT);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_slab_known_weights), cmocka_unit_test(test_metis_beats_slabs),
+      cmocka_unit_test(test_determinism),        cmocka_unit_test(test_periodic_wrap),
+      cmocka_unit_test(test_stats_brute_force),  cmocka_unit_test(test_bad_arguments),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
