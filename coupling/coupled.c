@@ -105,6 +105,34 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
   }
 }
 
+/* Check-time memory estimate (docs/reliability.md §4), with build_region's lattice counts over
+ * the sample's initial depth (compression only shortens it): the cluster-dynamics bytes per
+ * particle, the lattice built a second time before the surface is cut (90 B), the fragment
+ * and transport buffers (skip flags, forces: 25 B); plus the grid's cells (both copies, which
+ * cont_problem_read has allocated already: counted so the total is right). */
+static void memory_check(const cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
+  const cont_grid *g = cont_problem_grid(p->grid_out);
+  cont_view v = cont_grid_view(g);
+  double depth = p->drive_mode == DRIVE_TWO_WAY
+                     ? p->depth
+                     : v.x[cont_grid_history(g, p->tag_fs).node] -
+                           v.x[cont_grid_history(g, p->tag_drive).node];
+  const bool fcc = p->lattice == 1;
+  const double a = p->spacing, cell_x = fcc ? sqrt(2.0) * a : sqrt(3.0) * a,
+               cell_y = fcc ? sqrt(2.0) * a : a;
+  double n = (fcc ? 4.0 : 2.0) * fmax(2.0, depth / cell_x) * fmax(2.0, p->width / cell_y) *
+             (fcc ? fmax(2.0, p->width_z / cell_y) : 1.0);
+  const dk_node *P = dk_get(sec, "particles");
+  ms_mem_estimate m;
+  ms_mem_init(&m);
+  ms_mem_add(&m, dk_get(P, "spacing"), "coupled particles", n,
+             cd_particle_bytes(fcc ? CD_LATTICE_FCC : CD_LATTICE_TRI2D, p->cutoff + 0.1) + 90 + 25);
+  ms_mem_add(&m, dk_get(sec, "grid"), "coupled grid cells (2 copies)", 2.0 * (double)v.ncells,
+             176.0 /* continuum/cont_impl.h: 10 node and 11 cell arrays of doubles, 2 of ints */);
+  ms_mem_check(&m, ms_mem_limit(), 1, 1, e, doc);
+  ms_mem_free(&m);
+}
+
 cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                               dk_errors *e) {
   size_t nerr0 = e->n;
@@ -258,6 +286,8 @@ consistency_done:
     dk_error(e, doc, dk_get(dk_get(sec, "particles"), "width"),
              "particles.width (%g cm) must hold at least one surface wavelength (%g cm)", p->width,
              p->surf_wavelength);
+  if (e->n == nerr0 && p->grid_out) /* before build_region allocates the lattice */
+    memory_check(p, doc, sec, e);
   if (e->n != nerr0) {
     cpl_problem_free(p);
     return NULL;

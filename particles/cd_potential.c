@@ -26,6 +26,14 @@ double cd_cluster_volume(cd_lattice lat, double r0, double thickness) {
   return r0 * r0 * r0 / sqrt(2.0);
 }
 
+double cd_particle_bytes(cd_lattice lat, double reach) {
+  /* lattice sites within `reach` r0 of a site: sphere or disc × sites per r0^dim
+   * (fcc √2, triangular 2/√3), 8 B per neighbour-list entry */
+  double entries = lat == CD_LATTICE_FCC ? 4.0 / 3.0 * M_PI * pow(reach, 3) * sqrt(2.0)
+                                         : M_PI * reach * reach * 2.0 / sqrt(3.0);
+  return 300.0 + 8.0 * entries;
+}
+
 static double lattice_delta(cd_lattice lat, double r0, double r) {
   double q = r0 / r;
   return lat == CD_LATTICE_TRI2D ? q * q : q * q * q;

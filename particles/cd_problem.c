@@ -296,6 +296,51 @@ static void lattice_period(const cd_problem *p, double per[3]) {
   }
 }
 
+/* Length, area or volume (dim 1..3 axes) of region r inside the box: an upper bound of the space
+ * its lattice sites fill (a surface profile counts at its peaks, overlaps count twice). */
+static double region_measure(const cd_problem *p, const cd_region *r) {
+  double box = 1.0, inside = 1.0;
+  for (int a = 0; a < p->dim; a++) box *= p->box.hi[a] - p->box.lo[a];
+  switch (r->shape) {
+  case SHAPE_BOX:
+  case SHAPE_CYLINDER: /* the cylinder's extent along its axis; its disc below */
+    for (int a = 0; a < p->dim; a++) {
+      if (r->shape == SHAPE_CYLINDER && a != r->axis) continue;
+      double hi = r->hi[a] + (r->surface != SURF_FLAT && a == r->surface_axis ? r->amplitude : 0);
+      inside *= fmax(0.0, fmin(hi, p->box.hi[a]) - fmax(r->lo[a], p->box.lo[a]));
+    }
+    if (r->shape == SHAPE_CYLINDER) /* 2D: a disc (axis 2) or a strip 2r wide */
+      inside = p->dim == 2 && r->axis == 2 ? M_PI * r->radius * r->radius
+               : inside * (p->dim == 3 ? M_PI * r->radius * r->radius : 2.0 * r->radius);
+    break;
+  case SHAPE_SPHERE:
+    inside = p->dim == 3 ? 4.0 / 3.0 * M_PI * pow(r->radius, 3) : M_PI * r->radius * r->radius;
+    break;
+  case SHAPE_HALFSPACE: {
+    int a = r->axis;
+    inside = box * fmin(1.0, fmax(0.0, (r->plane - p->box.lo[a]) / (p->box.hi[a] - p->box.lo[a])));
+    break;
+  }
+  }
+  return fmin(inside, box);
+}
+
+/* Check-time memory estimate (docs/reliability.md §4): particles = the regions' space over the
+ * space per lattice site, times cd_particle_bytes. */
+static void memory_check(const cd_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
+  double space = 0.0;
+  for (int k = 0; k < p->nreg; k++) space += region_measure(p, &p->reg[k]);
+  double box = 1.0;
+  for (int a = 0; a < p->dim; a++) box *= p->box.hi[a] - p->box.lo[a];
+  double site = cd_cluster_volume(p->lattice, p->r0, p->thickness) / (p->dim == 2 ? p->thickness : 1.0);
+  ms_mem_estimate m;
+  ms_mem_init(&m);
+  ms_mem_add(&m, dk_get(sec, "regions"), "cluster_dynamics particles", fmin(space, box) / site,
+             cd_particle_bytes(p->lattice, p->rc + p->skin));
+  ms_mem_check(&m, ms_mem_limit(), 1, 1, e, doc);
+  ms_mem_free(&m);
+}
+
 cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                             dk_errors *e) {
   size_t nerr0 = e->n;
@@ -372,6 +417,7 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   /* The box bounds the lattice: particles are indexed with 32-bit integers (neighbour lists),
    * and the checks below walk every lattice cell, so refuse a box that holds more sites
    * before any count is converted to an integer. */
+  bool box_too_big = false;
   if (bn && e->n == nerr0 && p->r0 > 0) {
     double per[3], sites = p->dim == 3 ? 4.0 : 2.0, widest = 0.0;
     int axis = 0;
@@ -382,7 +428,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
       if (cells > widest) widest = cells, axis = a;
     }
     const dk_node *at = dk_seq_at(dk_get(bn, "hi"), (size_t)axis);
-    if (!(sites <= CD_MAX_LATTICE_SITES))
+    box_too_big = !(sites <= CD_MAX_LATTICE_SITES);
+    if (box_too_big)
       dk_error(e, doc, at ? at : bn, "box: holds about %.3g lattice sites at spacing %g cm (axis "
                "%d is the longest); at most %.3g are possible (particle indices are 32-bit)",
                sites, p->r0, axis, CD_MAX_LATTICE_SITES);
@@ -477,6 +524,9 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   p->profile_bins = (int)bins;
   p->snapshots = (int)snaps;
 
+  /* refuse what cannot fit before anything is allocated (also said for a box of too many
+   * sites: the estimate tells how far off the deck is) */
+  if (e->n == nerr0 + box_too_big) memory_check(p, doc, sec, e);
   /* overlapping regions of different materials: some lattice site inside both */
   if (e->n == nerr0 && p->nreg > 1) {
     double per[3];

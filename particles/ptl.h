@@ -54,6 +54,12 @@ typedef enum cd_lattice { CD_LATTICE_FCC = 0, CD_LATTICE_TRI2D } cd_lattice;
 /* Cluster mass and reference volume per particle for nearest-neighbour distance r0:
  * fcc m = ρ0 r0³/√2; 2D triangular m = ρ0 (√3/2) r0² h, h = the plane-strain thickness. */
 double cd_cluster_volume(cd_lattice lat, double r0, double thickness);
+/* Memory per particle of a cluster-dynamics run, for the check-time estimate (core.h
+ * ms_mem_*): 300 B of state, pair-table share, outputs and set-up lists, plus 8 B per
+ * neighbour-list entry within `reach` r0 (R_c + skin). Calibrated on inputs/cd-piston-al.yaml
+ * (fcc, reach 1.3: 404 B): 20 376 -> 203 688 particles raised the peak RSS by 350 B per particle,
+ * of which cd_sim_bytes counts 225 B. */
+double cd_particle_bytes(cd_lattice lat, double reach);
 
 /* fcc lattice of nx×ny×nz cubic cells (cubic constant a = √2 r0) with the benchmark's order:
  * basis atom fastest, then cell x, y, z; basis (0,0,0), (½,½,0), (½,0,½), (0,½,½); positions

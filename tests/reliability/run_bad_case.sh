@@ -10,14 +10,19 @@
 #                                  (ARGS that name files are relative to CASE's folder)
 #   # needs: WORD                  skip (exit 77) unless `mscale --help` / `mscale check --help`
 #                                  mention WORD (a problem type or subcommand not built yet)
+#   # also-run: yes                a deck: `mscale run CASE -o TMP` must fail the same way and
+#                                  create no output directory (refused before anything runs)
 # Passes if mscale exits with exactly 2, every expectation is met, and stderr shows no
 # sanitizer report (a crash is a signal: exit code > 128, never 2).
+# The memory limit is capped (at 64 GiB unless MSCALE_MEMORY_LIMIT is set) so that cases refused
+# for their size do not depend on the machine.
 set -u
 mscale=$1 case=$2
 dir=$(cd "$(dirname "$case")" && pwd)
 case="$dir/$(basename "$case")"
-out=$(mktemp) err=$(mktemp)
-trap 'rm -f "$out" "$err"' EXIT
+out=$(mktemp) err=$(mktemp) rundir=$(mktemp -d)
+trap 'rm -rf "$out" "$err" "$rundir"' EXIT
+export MSCALE_MEMORY_LIMIT="${MSCALE_MEMORY_LIMIT:-64G}"
 
 directives=$(sed -n '/^#/!q; s/^# *//p' "$case")
 needs=$(printf '%s\n' "$directives" | sed -n 's/^needs: *//p')
@@ -45,38 +50,52 @@ else
 fi
 rc=$?
 fail=0
-echo "--- stderr of mscale (exit $rc):"
-cat "$err"
-if [ "$rc" -ne 2 ]; then
-  echo "FAIL: exit code $rc, expected 2"
-  fail=1
-fi
-if grep -qE 'Sanitizer|runtime error:|Segmentation fault|Aborted' "$err"; then
-  echo "FAIL: sanitizer report or crash"
-  fail=1
-fi
-nexpect=0
-printf '%s\n' "$directives" | sed -n 's/^expect: *//p' > "$out.expect"
-while IFS= read -r line; do
-  [ -n "$line" ] || continue
-  nexpect=$((nexpect + 1))
-  where=${line%% *}
-  text=${line#* }
-  case $where in
-    [0-9]*:[0-9]*) prefix="$case:$where:" ;;
-    *:) prefix="$dir/$where" ;;
-    *) prefix="$dir/$where:" ;;
-  esac
-  if ! awk -v p="$prefix" -v t="$text" 'index($0, p) == 1 && index($0, t) > 0 { f = 1 }
-                                        END { exit !f }' "$err"; then
-    echo "FAIL: no stderr line starts with '$prefix' and contains '$text'"
+
+# check_result LABEL: the exit code in $rc and stderr in $err against the expectations
+check_result() {
+  echo "--- stderr of $1:"
+  cat "$err"
+  if [ "$rc" -ne 2 ]; then
+    echo "FAIL: exit code $rc, expected 2"
     fail=1
   fi
-done < "$out.expect"
-rm -f "$out.expect"
-if [ "$nexpect" -eq 0 ]; then
-  echo "FAIL: the case states no '# expect:' line"
-  fail=1
+  if grep -qE 'Sanitizer|runtime error:|Segmentation fault|Aborted' "$err"; then
+    echo "FAIL: sanitizer report or crash"
+    fail=1
+  fi
+  nexpect=0
+  printf '%s\n' "$directives" | sed -n 's/^expect: *//p' > "$out.expect"
+  while IFS= read -r line; do
+    [ -n "$line" ] || continue
+    nexpect=$((nexpect + 1))
+    where=${line%% *}
+    text=${line#* }
+    case $where in
+      [0-9]*:[0-9]*) prefix="$case:$where:" ;;
+      *:) prefix="$dir/$where" ;;
+      *) prefix="$dir/$where:" ;;
+    esac
+    if ! awk -v p="$prefix" -v t="$text" 'index($0, p) == 1 && index($0, t) > 0 { f = 1 }
+                                          END { exit !f }' "$err"; then
+      echo "FAIL: no stderr line starts with '$prefix' and contains '$text'"
+      fail=1
+    fi
+  done < "$out.expect"
+  rm -f "$out.expect"
+  if [ "$nexpect" -eq 0 ]; then
+    echo "FAIL: the case states no '# expect:' line"
+    fail=1
+  fi
+}
+check_result "mscale (exit $rc)"
+if printf '%s\n' "$directives" | grep -q '^also-run: *yes'; then
+  "$mscale" run "$case" -o "$rundir/out" >"$out" 2>"$err"
+  rc=$?
+  check_result "mscale run (exit $rc)"
+  if [ -e "$rundir/out" ]; then
+    echo "FAIL: mscale run created its output directory"
+    fail=1
+  fi
 fi
 [ "$fail" -eq 0 ] && echo "PASS: exit 2 with the expected message(s)"
 exit $fail
