@@ -54,6 +54,7 @@ struct cd_problem {
   double r0, thickness, rc, skin, courant, dt, t_end, r_min, damping_j, attraction_default;
   int table_intervals;
   cd_cutoff_mode mode;
+  cd_integrator integrator;
   cd_box box;
   double origin[3];
   int nmat;
@@ -369,6 +370,9 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   dk_read_int(e, doc, sec, "table_intervals", false, 4096, 64, 1 << 22, &nint);
   p->table_intervals = (int)nint;
   dk_read_double(e, doc, sec, "damping", MS_DIM_NONE, false, 0.0, 0.0, 1e6, &p->damping_j);
+  int integ = CD_INT_VELOCITY_VERLET;
+  dk_read_enum(e, doc, sec, "integrator", false, CD_INT_VELOCITY_VERLET, cd_integrator_names, &integ);
+  p->integrator = (cd_integrator)integ;
 
   /* box */
   const dk_node *bn = dk_get(sec, "box");
@@ -721,7 +725,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   cd_config cfg = {.r0 = p->r0, .skin = p->skin * p->r0,
                    .dt = p->dt > 0 ? p->dt : p->courant * p->r0 / c0max, .cutoff = p->mode,
                    .damping_gamma = p->damping_j > 0 ? c0max / (p->damping_j * p->r0) : 0.0,
-                   .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness};
+                   .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness,
+                   .integrator = p->integrator};
   cd_sim *s = cd_sim_create(ps, &p->box, &cfg, p->nmat);
   for (int a = 0; a < p->nmat; a++)
     for (int b = a; b < p->nmat; b++) {
@@ -745,8 +750,9 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     return st;
   }
   ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
-         "%s cutoff, damping Gamma = %g, %zu bytes/particle", ps->n, p->nmat, cfg.dt, p->rc,
-         mode_names[p->mode], cfg.damping_gamma, cd_sim_bytes(s) / ps->n);
+         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle", ps->n, p->nmat, cfg.dt,
+         p->rc, mode_names[p->mode], cfg.damping_gamma, cd_integrator_names[p->integrator],
+         cd_sim_bytes(s) / ps->n);
 
   /* outputs */
   ms_afile fe = {0}, fp = {0}, ff = {0};

@@ -1,6 +1,7 @@
-/* cd_sim.c — the cluster-dynamics run: set-up, velocity-Verlet step, piston, walls, balance.
+/* cd_sim.c — the cluster-dynamics run: set-up, time step, piston, walls, balance.
  *
- * One step (velocity Verlet, then the damping sub-step; docs/particles-cd.md):
+ * Every force evaluation of a run goes through step_forces (the one place for per-evaluation
+ * hooks). One velocity-Verlet step (the default; then the damping sub-step; particles-cd.md):
  *   1. v ← v + (Δt/2) f/m, x ← x + Δt v for integrated particles (fused, with the largest
  *      displacement since the last list build); driven (piston) particles move by ∫u dt;
  *   2. walls reflect particles specularly;
@@ -11,12 +12,23 @@
  *      kinetic-energy change booked as dissipated energy.
  * Piston work: W += ½(F_old + F_new)·dir·Δs with F the force of the particles on the piston and
  * Δs the piston displacement in the step (trapezoid rule, consistent with Verlet).
+ *
+ * RKN steps (position Verlet, SIA4, RKN4, RKN4 conjugate; DESIGN.md §5.2) go through
+ * rkn_step_soa on x, y, z in place (rkn_step_cd): the lists are checked and rebuilt only at step
+ * boundaries, with the skin test widened by a bound on how far the stage positions reach from
+ * x^n; driven particles sit at x_p(t_l) = x_p(t_n) + ∫u dt at every stage; piston work is the
+ * scheme's own quadrature W += Δt Σ γ_l F_l·dir u(t_l); walls and damping act after the step.
  */
 #include "cd_impl.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+const char *const cd_integrator_names[] = {"velocity_verlet", "position_verlet", "sia4", "rkn4",
+                                           "rkn4_conjugate", NULL};
+static const rkn_kind rkn_of[CD_INT_COUNT] = {RKN_VERLET, RKN_VERLET, RKN_SIA4, RKN_RKN4,
+                                              RKN_RKN4_CONJ};
 
 /* ---- piston history ---- */
 double cd_history_eval(const cd_history *h, double t) {
@@ -70,14 +82,16 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
   h->n = nrow;
   h->t = ms_calloc(nrow, sizeof *h->t);
   h->u = ms_calloc(nrow, sizeof *h->u);
+  /* ms_read_table does not return the file line of a data row (comments and a header line may
+   * precede it), so row errors name the file and the data row. */
   for (size_t k = 0; k < nrow; k++) {
     h->t[k] = data[k * ncol] * ft;
     h->u[k] = data[k * ncol + 1] * fu;
     if (!isfinite(h->t[k]) || !isfinite(h->u[k])) {
-      dk_error_at(e, path, (int)k + 1, 1, "piston history: data row %zu is not finite", k + 1);
+      dk_error_at(e, path, 0, 0, "piston history: data row %zu is not finite", k + 1);
       st = MS_ERR_INPUT;
     } else if (k > 0 && !(h->t[k] > h->t[k - 1])) {
-      dk_error_at(e, path, (int)k + 1, 1,
+      dk_error_at(e, path, 0, 0,
                   "piston history: time does not increase at data row %zu (t = %g after %g): a "
                   "jump in time; give u(t) as a function with strictly increasing t",
                   k + 1, data[k * ncol], data[(k - 1) * ncol]);
@@ -135,6 +149,8 @@ void cd_sim_free(cd_sim *s) {
   free(s->partners);
   free(s->sums);
   free(s->pw);
+  rkn_destroy(s->rkn);
+  free(s->driven_x0);
   ptl_state_free(s->p);
   free(s);
 }
@@ -237,6 +253,20 @@ ms_status cd_sim_init(cd_sim *s) {
   s->driven = ms_calloc(s->n_driven + 1, sizeof *s->driven);
   for (size_t i = 0, k = 0; i < p->n; i++)
     if (p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
+  if (s->cfg.integrator != CD_INT_VELOCITY_VERLET) {
+    if ((int)s->cfg.integrator < 0 || s->cfg.integrator >= CD_INT_COUNT) return MS_ERR_INPUT;
+    s->rkn = rkn_create(rkn_of[s->cfg.integrator], 3 * p->n);
+    s->driven_x0 = ms_calloc(3 * s->n_driven + 1, sizeof *s->driven_x0);
+    /* q_l − x^n = Δt α_l u + Δt² Σ_{k<l} γ_k(α_l − α_k) a_k: reach coefficients */
+    const rkn_scheme *sc = rkn_integrator_scheme(s->rkn);
+    s->rkn_reach[0] = s->rkn_reach[1] = 0.0;
+    for (int l = 0; l < sc->stages; l++) {
+      double c1 = 0.0;
+      for (int k = 0; k < l; k++) c1 += fabs(sc->gamma[k] * (sc->alpha[l] - sc->alpha[k]));
+      s->rkn_reach[0] = fmax(s->rkn_reach[0], fabs(sc->alpha[l]));
+      s->rkn_reach[1] = fmax(s->rkn_reach[1], c1);
+    }
+  }
   /* pairs inside R_c at the start, for the broken-pair energy of the plain cutoff */
   cd_compute_forces(s, s->sums, NULL, false);
   memset(s->n_inside0, 0, sizeof s->n_inside0);
@@ -262,7 +292,144 @@ ms_status cd_sim_affine(cd_sim *s, const double lambda[3]) {
 }
 
 /* ---- time step ---- */
-ms_status cd_sim_step(cd_sim *s) {
+
+/* Specular walls: particles beyond a wall are mirrored back with the normal velocity reversed. */
+static void reflect_walls(cd_sim *s) {
+  ptl_state *p = s->p;
+  const long n = (long)p->n;
+  double *xs[3] = {p->x, p->y, p->z}, *vs[3] = {p->vx, p->vy, p->vz};
+  for (int a = 0; a < 3; a++) {
+    if (s->box.bc[a] != CD_BC_WALL) continue;
+    double *xa = xs[a], *va = vs[a];
+    const double lo = s->box.lo[a], hi = s->box.hi[a];
+    for (long i = 0; i < n; i++) {
+      if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
+      if (xa[i] < lo) { xa[i] = 2.0 * lo - xa[i]; va[i] = -va[i]; }
+      if (xa[i] > hi) { xa[i] = 2.0 * hi - xa[i]; va[i] = -va[i]; }
+    }
+  }
+}
+
+/* After the integrator: damping sub-step, clock, and the periodic NaN check. */
+static ms_status end_step(cd_sim *s) {
+  ptl_state *p = s->p;
+  const long n = (long)p->n;
+  const double *vx = p->vx, *vy = p->vy, *vz = p->vz;
+  if (s->cfg.damping_gamma > 0.0) s->dissipated += cd_damping_step(s);
+  s->t += s->cfg.dt;
+  s->step++;
+  if (s->step % 100 == 0) {
+    double sum = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : sum) if (CD_PAR(n))
+    for (long i = 0; i < n; i++) sum += vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+    if (!isfinite(sum)) return MS_ERR_UNSTABLE;
+  }
+  return MS_OK;
+}
+
+/* Signed piston displacement ∫_{t0}^{t1} u dt (t1 may precede t0: SIA4's last stage does). */
+static double piston_shift(const cd_sim *s, double t0, double t1) {
+  return t1 >= t0 ? cd_history_integral(&s->piston, t0, t1)
+                  : -cd_history_integral(&s->piston, t1, t0);
+}
+
+/* RKN constraint: driven particles at their prescribed place (and velocity at the end). */
+static void rkn_constrain_cd(void *user, double t, bool end) {
+  cd_sim *s = user;
+  ptl_state *p = s->p;
+  const double d = piston_shift(s, s->t, t), u = end ? cd_history_eval(&s->piston, t) : 0.0;
+  for (size_t k = 0; k < s->n_driven; k++) {
+    const int32_t i = s->driven[k];
+    const double *x0 = s->driven_x0 + 3 * k;
+    p->x[i] = x0[0] + d * s->piston_dir[0];
+    p->y[i] = x0[1] + d * s->piston_dir[1];
+    p->z[i] = x0[2] + d * s->piston_dir[2];
+    if (end) {
+      p->vx[i] = u * s->piston_dir[0];
+      p->vy[i] = u * s->piston_dir[1];
+      p->vz[i] = u * s->piston_dir[2];
+    }
+  }
+}
+
+/* RKN acceleration at the stage positions (x, y, z hold q_l): a = f/m of integrated
+ * particles, 0 for driven and removed ones; records the force on the piston. */
+static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
+  (void)t;
+  cd_sim *s = user;
+  ptl_state *p = s->p;
+  const long n = (long)p->n;
+  step_forces(s);
+  if (s->stage < 3) s->stage_force[s->stage++] = driven_force(s);
+  const double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
+  const double *restrict m = p->mass;
+  const uint8_t *restrict fl = p->flags;
+  double *restrict ax = acc[0], *restrict ay = acc[1], *restrict az = acc[2];
+#pragma omp parallel for simd schedule(static) if (CD_PAR(n))
+  for (long i = 0; i < n; i++) {
+    const double c = fl[i] & (PTL_DRIVEN | PTL_REMOVED) ? 0.0 : 1.0 / m[i];
+    ax[i] = c * fx[i];
+    ay[i] = c * fy[i];
+    az[i] = c * fz[i];
+  }
+  return MS_OK;
+}
+
+/* One RKN step. The lists are valid while every position stays within skin/2 of its build
+ * position; the stage positions reach at most Δt c0 max|v| + Δt² c1 max|a| from x^n (rkn_reach;
+ * max|a| from the last forces, doubled for its change within the step), so the lists are
+ * rebuilt before the step when that reach plus the displacement so far exceeds skin/2. */
+static ms_status rkn_step_cd(cd_sim *s) {
+  ptl_state *p = s->p;
+  const double dt = s->cfg.dt;
+  const long n = (long)p->n;
+  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  const double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
+  const double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
+  const double *restrict m = p->mass;
+  const uint8_t *restrict fl = p->flags;
+  const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
+  double dmax2 = 0.0, vmax2 = 0.0, amax2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : dmax2, vmax2, amax2) if (CD_PAR(n))
+  for (long i = 0; i < n; i++) {
+    const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+    const double a2 = fl[i] & (PTL_DRIVEN | PTL_REMOVED)
+                          ? 0.0
+                          : (fx[i] * fx[i] + fy[i] * fy[i] + fz[i] * fz[i]) / (m[i] * m[i]);
+    dmax2 = d2 > dmax2 ? d2 : dmax2;
+    vmax2 = v2 > vmax2 ? v2 : vmax2;
+    amax2 = a2 > amax2 ? a2 : amax2;
+  }
+  const double reach = dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
+  const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
+  if (!(sqrt(dmax2) + reach <= half)) { /* NaN also rebuilds */
+    ms_status st = rebuild(s);
+    if (st != MS_OK) return st;
+  }
+  for (size_t k = 0; k < s->n_driven; k++) {
+    const int32_t i = s->driven[k];
+    s->driven_x0[3 * k] = p->x[i];
+    s->driven_x0[3 * k + 1] = p->y[i];
+    s->driven_x0[3 * k + 2] = p->z[i];
+  }
+  s->stage = 0;
+  double *r[3] = {p->x, p->y, p->z}, *u[3] = {p->vx, p->vy, p->vz};
+  ms_status st = rkn_step_soa(s->rkn, s->t, dt, 3, r, u, rkn_accel_cd, rkn_constrain_cd, s);
+  if (st != MS_OK) return st;
+  if (s->n_driven) {
+    const rkn_scheme *sc = rkn_integrator_scheme(s->rkn);
+    for (int l = 0; l < sc->stages; l++)
+      s->piston_work -= dt * sc->gamma[l] * s->stage_force[l] *
+                        cd_history_eval(&s->piston, s->t + sc->alpha[l] * dt);
+  }
+  reflect_walls(s);
+  return end_step(s);
+}
+
+/* One velocity-Verlet step (the header comment). */
+static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt, hdt = 0.5 * dt;
   const long n = (long)p->n;
@@ -270,7 +437,6 @@ ms_status cd_sim_step(cd_sim *s) {
   double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
   const double *restrict m = p->mass;
-  const uint8_t *restrict fl = p->flags;
   const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
 
   /* Driven particles: prescribed velocity for this step, zero force so the uniform loop below
@@ -334,16 +500,7 @@ ms_status cd_sim_step(cd_sim *s) {
       }
     }
   }
-  for (int a = 0; a < 3; a++) {
-    if (s->box.bc[a] != CD_BC_WALL) continue;
-    double *xa = a == 0 ? x : (a == 1 ? y : z), *va = a == 0 ? vx : (a == 1 ? vy : vz);
-    const double lo = s->box.lo[a], hi = s->box.hi[a];
-    for (long i = 0; i < n; i++) {
-      if (fl[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
-      if (xa[i] < lo) { xa[i] = 2.0 * lo - xa[i]; va[i] = -va[i]; }
-      if (xa[i] > hi) { xa[i] = 2.0 * hi - xa[i]; va[i] = -va[i]; }
-    }
-  }
+  reflect_walls(s);
   if (exact && !(dmax2 <= half * half)) { /* NaN positions also trigger a rebuild */
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
@@ -366,17 +523,10 @@ ms_status cd_sim_step(cd_sim *s) {
       vz[i] = vp[2];
     }
   }
-  if (s->cfg.damping_gamma > 0.0) s->dissipated += cd_damping_step(s);
-  s->t += dt;
-  s->step++;
-  if (s->step % 100 == 0) {
-    double sum = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : sum) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) sum += vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-    if (!isfinite(sum)) return MS_ERR_UNSTABLE;
-  }
-  return MS_OK;
+  return end_step(s);
 }
+
+ms_status cd_sim_step(cd_sim *s) { return s->rkn ? rkn_step_cd(s) : vv_step(s); }
 
 /* ---- diagnostics ---- */
 void cd_sim_energy(cd_sim *s, cd_energy *out) {
@@ -457,5 +607,7 @@ size_t cd_sim_bytes(const cd_sim *s) {
   size_t b = ptl_state_bytes(s->p) + (s->nl ? cd_neigh_bytes(s->nl) : 0);
   if (s->scratch) b += 3 * s->p->cap * sizeof(double);
   if (s->partners) b += s->p->cap * CD_MAX_PARTNERS * sizeof(int32_t);
+  if (s->rkn) /* r^n and one acceleration per stage */
+    b += (size_t)(1 + rkn_integrator_scheme(s->rkn)->stages) * 3 * s->p->n * sizeof(double);
   return b;
 }

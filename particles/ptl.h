@@ -124,6 +124,20 @@ typedef enum cd_bc { CD_BC_FREE = 0, CD_BC_PERIODIC, CD_BC_WALL } cd_bc;
  *                     bonds) only repel, through the compressive branch r < r0. */
 typedef enum cd_cutoff_mode { CD_CUTOFF_PLAIN = 0, CD_CUTOFF_BONDED } cd_cutoff_mode;
 
+/* Time integrator (docs/particles-cd.md): velocity Verlet (fused kick–drift, the default and
+ * the benchmark's), or one of the symplectic RKN schemes of rkn_ (DESIGN.md §5.2) — position
+ * Verlet = RKN "verlet", SIA4, RKN4, RKN4 conjugate; damping is a separate step after any. */
+typedef enum cd_integrator {
+  CD_INT_VELOCITY_VERLET = 0,
+  CD_INT_POSITION_VERLET,
+  CD_INT_SIA4,
+  CD_INT_RKN4,
+  CD_INT_RKN4_CONJ,
+  CD_INT_COUNT
+} cd_integrator;
+/* NULL-terminated deck names indexed by cd_integrator (for dk_read_enum). */
+extern const char *const cd_integrator_names[];
+
 typedef struct cd_box {
   double lo[3], hi[3]; /* periodic period / wall positions (unused for free axes) */
   cd_bc bc[3];
@@ -138,6 +152,7 @@ typedef struct cd_config {
   int sort_every;          /* renumber particles into cell order every k-th list build (0: 8) */
   cd_lattice lattice;      /* for the reference volume per particle (per-particle stress) */
   double thickness;        /* 2D plane-strain thickness h (unused in 3D) */
+  cd_integrator integrator; /* default (0): velocity Verlet */
 } cd_config;
 
 /* Velocity history of the piston: piecewise linear u(t) through (t_k, u_k), constant beyond
@@ -194,6 +209,13 @@ typedef struct cd_sim {
   struct cd_layer_sums *sums;   /* per-layer accumulators of the kernels */
   int sums_cap;
   double *pw;                   /* [N][6] per-particle virials (allocated by diagnostics) */
+  /* RKN integrators (cfg.integrator != velocity Verlet): stage buffers, driven particles'
+   * positions at the start of the step, the piston force at each stage */
+  struct rkn_integrator *rkn;
+  double rkn_reach[2];          /* stage excursion bound: |q_l − r^n| ≤ Δt c0 max|v| + Δt² c1 max|a| */
+  double *driven_x0;            /* [n_driven][3] */
+  double stage_force[3];
+  int stage;
   double wall_time_force, wall_time_neigh;
 } cd_sim;
 
@@ -211,7 +233,8 @@ void cd_sim_free(cd_sim *s);
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
-/* One velocity-Verlet step (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN. */
+/* One step of cfg.integrator (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN.
+ * After an RKN step p->f holds the forces of the scheme's last stage, not of x^{n+1}. */
 ms_status cd_sim_step(cd_sim *s);
 /* Energies and momentum at the current state (one extra pass over the pairs). */
 void cd_sim_energy(cd_sim *s, cd_energy *out);
@@ -317,6 +340,18 @@ const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
  * with a static schedule (results do not depend on the thread count). */
 ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
                    rkn_accel_fn accel, rkn_constrain_fn constrain, void *user);
+/* Structure-of-arrays form, for models that keep one array per component (cluster dynamics:
+ * x, y, z). Create the integrator with ndof = ncomp·n; r[c], u[c] (c < ncomp) hold n entries.
+ * The stage positions q_l are formed IN PLACE in r (the integrator keeps r^n), so a force
+ * routine that reads the model's own position arrays sees q_l; `accel` fills acc[c][i] with
+ * a(q_l). `constrain` (optional) overwrites prescribed entries of r at stage time t (end ==
+ * false) and of r and u at the end of the step (end == true). No allocation. */
+enum { RKN_MAX_COMPONENTS = 3 };
+typedef ms_status (*rkn_accel_soa_fn)(void *user, double t, double *const acc[]);
+typedef void (*rkn_constrain_soa_fn)(void *user, double t, bool end);
+ms_status rkn_step_soa(rkn_integrator *ig, double t, double dt, int ncomp, double *const r[],
+                       double *const u[], rkn_accel_soa_fn accel, rkn_constrain_soa_fn constrain,
+                       void *user);
 /* Stability limit of a scheme: the largest ω·Δt for which r'' = −ω²r stays bounded (|tr M| < 2
  * for the step's 2×2 amplification matrix M), found numerically; Verlet: 2. */
 double rkn_stability_limit(rkn_kind kind);

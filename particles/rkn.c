@@ -9,6 +9,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 const char *const rkn_scheme_names[] = {"verlet", "sia4", "rkn4", "rkn4_conjugate", NULL};
 
@@ -76,38 +77,33 @@ void rkn_destroy(rkn_integrator *ig) {
 
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig) { return &ig->s; }
 
-ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
-                   rkn_accel_fn accel, rkn_constrain_fn constrain, void *user) {
-  const rkn_scheme *s = &ig->s;
-  const long n = (long)ig->ndof;
-  const double dt2 = dt * dt;
-  double *q = ig->q;
-  for (int l = 0; l < s->stages; ++l) {
-    /* q_l = r + Δt α_l u + Δt² Σ_{k<l} γ_k (α_l − α_k) a_k */
-    double alpha = s->alpha[l];
-    double c[3] = {0, 0, 0};
-    for (int k = 0; k < l; ++k) c[k] = dt2 * s->gamma[k] * (s->alpha[l] - s->alpha[k]);
-    const double *a0 = ig->acc[0], *a1 = ig->acc[1];
+/* q = r + Δt α_l u + Δt² Σ_{k<l} γ_k (α_l − α_k) a_k over n entries (a_k = acc[k] + off). */
+static void form_stage(const rkn_scheme *s, int l, double dt, long n, const double *r,
+                       const double *u, double *const acc[3], size_t off, double *q) {
+  const double alpha = s->alpha[l], dt2 = dt * dt;
+  double c[3] = {0, 0, 0};
+  for (int k = 0; k < l; ++k) c[k] = dt2 * s->gamma[k] * (s->alpha[l] - s->alpha[k]);
+  const double *a0 = acc[0] + off, *a1 = l > 1 ? acc[1] + off : NULL;
 #pragma omp parallel for schedule(static) if (n > 20000)
-    for (long i = 0; i < n; ++i) {
-      double v = r[i] + dt * alpha * u[i];
-      if (l > 0) v += c[0] * a0[i];
-      if (l > 1) v += c[1] * a1[i];
-      q[i] = v;
-    }
-    double tl = t + alpha * dt;
-    if (constrain) constrain(user, tl, q, NULL);
-    ms_status st = accel(user, tl, q, ig->acc[l]);
-    if (st != MS_OK) return st;
+  for (long i = 0; i < n; ++i) {
+    double v = r[i] + dt * alpha * u[i];
+    if (l > 0) v += c[0] * a0[i];
+    if (l > 1) v += c[1] * a1[i];
+    q[i] = v;
   }
-  /* r += Δt u + Δt² Σ β_l a_l;  u += Δt Σ γ_l a_l  (β_l = γ_l (1 − α_l)) */
+}
+
+/* r_out = r + Δt u + Δt² Σ β_l a_l;  u += Δt Σ γ_l a_l  (β_l = γ_l (1 − α_l)); r_out may be r. */
+static void finish_step(const rkn_scheme *s, double dt, long n, const double *r, double *u,
+                        double *const acc[3], size_t off, double *r_out) {
   double b[3] = {0, 0, 0}, g[3] = {0, 0, 0};
   for (int l = 0; l < s->stages; ++l) {
-    b[l] = dt2 * s->gamma[l] * (1.0 - s->alpha[l]);
+    b[l] = dt * dt * s->gamma[l] * (1.0 - s->alpha[l]);
     g[l] = dt * s->gamma[l];
   }
   const int m = s->stages;
-  const double *a0 = ig->acc[0], *a1 = ig->acc[1], *a2 = ig->acc[2];
+  const double *a0 = acc[0] + off, *a1 = m > 1 ? acc[1] + off : NULL,
+               *a2 = m > 1 ? acc[2] + off : NULL;
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (long i = 0; i < n; ++i) {
     double dr = b[0] * a0[i], du = g[0] * a0[i];
@@ -115,10 +111,49 @@ ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u
       dr += b[1] * a1[i] + b[2] * a2[i];
       du += g[1] * a1[i] + g[2] * a2[i];
     }
-    r[i] += dt * u[i] + dr;
+    r_out[i] = r[i] + dt * u[i] + dr;
     u[i] += du;
   }
+}
+
+ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,
+                   rkn_accel_fn accel, rkn_constrain_fn constrain, void *user) {
+  const rkn_scheme *s = &ig->s;
+  const long n = (long)ig->ndof;
+  for (int l = 0; l < s->stages; ++l) {
+    form_stage(s, l, dt, n, r, u, ig->acc, 0, ig->q);
+    double tl = t + s->alpha[l] * dt;
+    if (constrain) constrain(user, tl, ig->q, NULL);
+    ms_status st = accel(user, tl, ig->q, ig->acc[l]);
+    if (st != MS_OK) return st;
+  }
+  finish_step(s, dt, n, r, u, ig->acc, 0, r);
   if (constrain) constrain(user, t + dt, r, u);
+  return MS_OK;
+}
+
+/* Structure-of-arrays form: component c lives at offset c·n of the flat buffers; ig->q keeps
+ * r^n while the stage positions are formed in place in r. */
+ms_status rkn_step_soa(rkn_integrator *ig, double t, double dt, int ncomp, double *const r[],
+                       double *const u[], rkn_accel_soa_fn accel, rkn_constrain_soa_fn constrain,
+                       void *user) {
+  const rkn_scheme *s = &ig->s;
+  if (ncomp < 1 || ncomp > RKN_MAX_COMPONENTS || ig->ndof % (size_t)ncomp) return MS_ERR_INPUT;
+  const size_t n = ig->ndof / (size_t)ncomp;
+  for (int c = 0; c < ncomp; ++c) memcpy(ig->q + c * n, r[c], n * sizeof(double));
+  double *acc[RKN_MAX_COMPONENTS];
+  for (int l = 0; l < s->stages; ++l) {
+    for (int c = 0; c < ncomp; ++c) {
+      form_stage(s, l, dt, (long)n, ig->q + c * n, u[c], ig->acc, c * n, r[c]);
+      acc[c] = ig->acc[l] + c * n;
+    }
+    double tl = t + s->alpha[l] * dt;
+    if (constrain) constrain(user, tl, false);
+    ms_status st = accel(user, tl, acc);
+    if (st != MS_OK) return st;
+  }
+  for (int c = 0; c < ncomp; ++c) finish_step(s, dt, (long)n, ig->q + c * n, u[c], ig->acc, c * n, r[c]);
+  if (constrain) constrain(user, t + dt, true);
   return MS_OK;
 }
 

@@ -25,10 +25,27 @@
 #define R0 5.0e-4
 
 static bool full_run = false;
+static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
-  double D, rho_ratio, pzz, sigma_rh, up_behind;
+  double D, D_ahead, rho_ratio, pzz, pxx, sigma_u, sigma_rh, up_behind;
 } shock_result;
+
+/* Front seen from the undisturbed side: scanning down from the far end, the first place where
+ * the bin-mean velocity reaches frac·up (a dip behind a noisy front does not stop it). */
+static double front_from_ahead(const double *prof, int nbin, double up, double frac) {
+  const double thr = frac * up;
+  double zn = NAN, vn = NAN;
+  for (int k = nbin - 1; k >= 0; k--) {
+    const double *row = prof + (size_t)k * CD_PROFILE_NCOL;
+    if (row[1] <= 0) continue;
+    if (isfinite(vn) && row[5] >= thr && vn < thr)
+      return row[0] + (thr - row[5]) * (zn - row[0]) / (vn - row[5]);
+    zn = row[0];
+    vn = row[5];
+  }
+  return NAN;
+}
 
 static double fit_slope(const double *t, const double *z, int n, double tmin) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -40,26 +57,74 @@ static double fit_slope(const double *t, const double *z, int n, double tmin) {
   return m > 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : NAN;
 }
 
-static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double up, int nx, int nz) {
+/* Shock direction z along a lattice direction: orthorhombic cells (units of r0) and bases.
+ * [001]: cubic cell a = √2 r0, 4 sites; [110]: r0 × a × r0, 2 sites; [111]: close-packed
+ * planes (r0 × √3 r0 in plane, 2 sites) stacked ABC with spacing r0 √(2/3), 6 sites. */
+typedef enum { ORIENT_001 = 0, ORIENT_110, ORIENT_111 } orientation;
+static const char *const orient_name[] = {"[001]", "[110]", "[111]"};
+
+static void orient_cell(orientation o, double cell[3], int *nb, double basis[6][3]) {
+  const double s2 = sqrt(2.0), s3 = sqrt(3.0), s6 = sqrt(6.0);
+  if (o == ORIENT_001) {
+    static const double b[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+    cell[0] = cell[1] = cell[2] = s2;
+    *nb = 4;
+    memcpy(basis, b, sizeof b);
+  } else if (o == ORIENT_110) {
+    static const double b[2][3] = {{0, 0, 0}, {0.5, 0.5, 0.5}};
+    cell[0] = 1.0; cell[1] = s2; cell[2] = 1.0;
+    *nb = 2;
+    memcpy(basis, b, sizeof b);
+  } else {
+    cell[0] = 1.0; cell[1] = s3; cell[2] = s6;
+    *nb = 6;
+    for (int k = 0; k < 3; k++) /* plane k shifted by k·(½, 1/6) of the in-plane cell */
+      for (int q = 0; q < 2; q++) {
+        basis[2 * k + q][0] = fmod(0.5 * q + 0.5 * k, 1.0);
+        basis[2 * k + q][1] = fmod(0.5 * q + k / 6.0 + 1.0, 1.0);
+        basis[2 * k + q][2] = k / 3.0;
+      }
+  }
+}
+
+static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double up, int nx, int nz,
+                                 orientation orient, cd_integrator integ) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
-  double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
-  cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
-  const size_t npist = (size_t)4 * nx * nx * 2;
+  /* the cross-section and length of nx × nx × nz cubic cells, in whole cells of `orient` */
+  double cell[3], basis[6][3];
+  int nb, nc[3];
+  orient_cell(orient, cell, &nb, basis);
+  for (int c = 0; c < 3; c++) {
+    cell[c] *= R0;
+    nc[c] = (int)lround((c < 2 ? nx : nz) * a / cell[c]);
+  }
+  ptl_state *p = ptl_state_create((size_t)nb * nc[0] * nc[1] * nc[2], 3);
+  for (int iz = 0; iz < nc[2]; iz++)
+    for (int iy = 0; iy < nc[1]; iy++)
+      for (int ix = 0; ix < nc[0]; ix++)
+        for (int b = 0; b < nb; b++)
+          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0], (iy + basis[b][1] + 0.25) * cell[1],
+                        (iz + basis[b][2]) * cell[2], m, 0);
+  /* piston: the sites below 2a (two [001] cells, thicker than R_c + skin) */
+  const double zpist = 2.0 * a - 1e-3 * R0;
   double mean[3] = {0, 0, 0}, *v[3] = {p->vx, p->vy, p->vz};
+  size_t nfree = 0;
+  for (size_t i = 0; i < p->n; i++) nfree += p->z[i] >= zpist;
   for (size_t i = 0; i < p->n; i++) {
-    if (i < npist) { p->flags[i] = PTL_DRIVEN; continue; }
+    if (p->z[i] < zpist) { p->flags[i] = PTL_DRIVEN; continue; }
     for (int c = 0; c < 3; c++) {
       v[c][i] = 0.01 * (2.0 * ptl_splitmix64_uniform(12345, 3 * i + c) - 1.0);
-      mean[c] += v[c][i] / (double)(p->n - npist);
+      mean[c] += v[c][i] / (double)nfree;
     }
   }
-  for (size_t i = npist; i < p->n; i++)
-    for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
-  cd_box box = {.hi = {nx * a, nx * a, nz * a}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  for (size_t i = 0; i < p->n; i++)
+    if (p->z[i] >= zpist)
+      for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
+  cd_box box = {.hi = {nc[0] * cell[0], nc[1] * cell[1], nc[2] * cell[2]},
+                .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
   const double c0 = 5.35;
   cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / c0, .cutoff = mode,
-                   .sort_every = 8, .lattice = CD_LATTICE_FCC};
+                   .sort_every = 8, .lattice = CD_LATTICE_FCC, .integrator = integ};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
@@ -69,33 +134,48 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   cd_sim_set_piston(s, &h, dir);
   assert_int_equal(cd_sim_init(s), MS_OK);
   /* run until the front has crossed ~70 % of the slab, at a guessed D = Us(exp) (+20 %) */
-  const double L = nz * a, Dg = 5.35 + 1.34 * up;
+  const double L = box.hi[2], Dg = 5.35 + 1.34 * up;
   const long nsteps = (long)(0.7 * L / (1.2 * Dg) / cfg.dt), every = nsteps / 40 + 1;
-  const int nbin = nz + 20;
+  /* bins of whole lattice planes (2, 3, 2 planes of [001], [110], [111]: about a wide),
+   * centred between planes */
+  const double dz = cell[2] / (orient == ORIENT_111 ? 3 : 2), bw = lround(a / dz) * dz;
+  const double blo = -0.5 * dz;
+  const int nbin = (int)(L / bw) + 20;
   double *prof = calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof);
-  double tf[64], zf[64];
+  double tf[64], zf[64], zb[64];
   int nf = 0;
   for (long k = 1; k <= nsteps; k++) {
     assert_int_equal(cd_sim_step(s), MS_OK);
     if (k % every == 0 && nf < 64) {
-      cd_profile(s, 2, -0.25 * a, (nbin - 0.25) * a, nbin, nx * a * nx * a, prof);
+      cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
       tf[nf] = s->t;
-      zf[nf++] = cd_front_position(prof, nbin, 2, up, 0.5);
+      zf[nf] = cd_front_position(prof, nbin, 2, up, 0.5);
+      zb[nf++] = front_from_ahead(prof, nbin, up, 0.5);
+      if (dump)
+        for (int b = 0; b < nbin; b++) {
+          const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
+          if (row[1] > 0)
+            fprintf(dump, "%g,%g,%g,%g,%g,%g,%g,%g\n", up, s->t, row[0], row[2], row[5], row[6], row[8], row[12]);
+        }
     }
   }
   shock_result r = {0};
   r.D = fit_slope(tf, zf, nf, 0.25 * tf[nf - 1]);
+  r.D_ahead = fit_slope(tf, zb, nf, 0.25 * tf[nf - 1]);
   /* shocked state: bins between the piston + 5a and the front − 5a at the last frame */
-  cd_profile(s, 2, -0.25 * a, (nbin - 0.25) * a, nbin, nx * a * nx * a, prof);
+  cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
   double zp = 2 * a + up * s->t, zfront = cd_front_position(prof, nbin, 2, up, 0.5);
-  double rho = 0, pzz = 0, vz = 0;
+  double rho = 0, pzz = 0, vz = 0, pxx = 0, su = 0;
   int cnt = 0;
   for (int b = 0; b < nbin; b++) {
     const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
     if (row[0] > zp + 5 * a && row[0] < zfront - 5 * a && row[1] > 0) {
-      rho += row[2]; pzz += row[8]; vz += row[5]; cnt++;
+      rho += row[2]; pzz += row[8]; vz += row[5]; pxx += 0.5 * (row[6] + row[7]); su += row[12];
+      cnt++;
     }
   }
+  r.pxx = cnt ? pxx / cnt : NAN;
+  r.sigma_u = cnt ? su / cnt : NAN;
   r.rho_ratio = cnt ? rho / cnt / eos_rho0(eos) : NAN;
   r.pzz = cnt ? pzz / cnt : NAN;
   r.up_behind = cnt ? vz / cnt : NAN;
@@ -121,6 +201,8 @@ static eos_t *table1(void) {
 /* command-line selection (defaults: the CI set) */
 static double opt_ups[16];
 static int opt_nup = 0, opt_nx = 6, opt_nz = 180, opt_curve = -1, opt_mode = -1;
+static orientation opt_orient = ORIENT_001;
+static cd_integrator opt_integ = CD_INT_VELOCITY_VERLET;
 
 static void test_hugoniot(void **state) {
   (void)state;
@@ -129,8 +211,8 @@ static void test_hugoniot(void **state) {
   const double ups_full[] = {1.0, 1.5, 2.0, 3.0, 4.0, 5.0};
   const double ups_ci[2][2] = {{2.0, 3.0}, {2.0, 4.0}};
   const bool ci = !full_run && opt_nup == 0 && opt_mode < 0 && opt_curve < 0;
-  printf("| cold curve | cutoff | up km/s | D km/s | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (D/(D-u)) | rho/rho0 (bins) | P_zz bins GPa | rho0 D up GPa |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (D/(D-u)) | rho/rho0 (bins) | P_zz bins GPa | rho0 D up GPa | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int c = 0; c < 2; c++) {
     if (opt_curve >= 0 && c != opt_curve) continue;
     for (int mode = CD_CUTOFF_BONDED; mode >= CD_CUTOFF_PLAIN; mode--) {
@@ -138,14 +220,16 @@ static void test_hugoniot(void **state) {
       int nup = opt_nup ? opt_nup : (full_run ? 6 : 2);
       for (int k = 0; k < nup; k++) {
         double up = opt_nup ? opt_ups[k] : (full_run ? ups_full[k] : ups_ci[c][k]);
-        shock_result r = piston_shock(curves[c], (cd_cutoff_mode)mode, up, opt_nx, opt_nz);
+        shock_result r = piston_shock(curves[c], (cd_cutoff_mode)mode, up, opt_nx, opt_nz,
+                                      opt_orient, opt_integ);
         double us = 5.35 + 1.34 * up;
         eos_hugoniot_point hp;
         double upl[1] = {up};
         double eos_us = eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
-        printf("| %s | %s | %.1f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | %.3f | %.1f | %.1f |\n", cname[c],
-               mode == CD_CUTOFF_BONDED ? "bonded" : "plain", up, r.D, us, 100 * (r.D - us) / us, eos_us,
-               r.D / (r.D - up), r.rho_ratio, r.pzz, r.sigma_rh);
+        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | %.3f | %.1f | %.1f | %.1f | %.2f |\n",
+               cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
+               r.D, r.D_ahead, us, 100 * (r.D - us) / us, eos_us, r.D / (r.D - up), r.rho_ratio,
+               r.pzz, r.sigma_rh, r.pxx, r.sigma_u);
         fflush(stdout);
         /* paper 002 §2: the close-packed cluster medium needs no plasticity model for
          * up > 1.5–2 km/s; measured here: +7 % at 1.5 (too stiff), within 1 % from 2 to 4 km/s
@@ -170,6 +254,16 @@ int main(int argc, char **argv) {
         opt_ups[opt_nup++] = atof(tok);
     } else if (!strcmp(argv[k], "--size") && k + 1 < argc) {
       sscanf(argv[++k], "%d,%d", &opt_nx, &opt_nz);
+    } else if (!strcmp(argv[k], "--dump") && k + 1 < argc) {
+      dump = fopen(argv[++k], "w");
+      if (dump) fprintf(dump, "up,t,z,rho,vz,Pxx,Pzz,sigma_u\n");
+    } else if (!strcmp(argv[k], "--orient") && k + 1 < argc) {
+      k++;
+      opt_orient = !strcmp(argv[k], "110") ? ORIENT_110 : (!strcmp(argv[k], "111") ? ORIENT_111 : ORIENT_001);
+    } else if (!strcmp(argv[k], "--integrator") && k + 1 < argc) {
+      k++;
+      for (int q = 0; cd_integrator_names[q]; q++)
+        if (!strcmp(argv[k], cd_integrator_names[q])) opt_integ = (cd_integrator)q;
     } else if (!strcmp(argv[k], "--curve") && k + 1 < argc) {
       opt_curve = !strcmp(argv[++k], "mg");
     } else if (!strcmp(argv[k], "--cutoff") && k + 1 < argc) {
