@@ -288,7 +288,7 @@ int cmd_spectrum(int argc, char **argv) {
     dk_errors_print(&e, stderr);
     rc = 2;
   } else {
-    cpl_particles p = {s.n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.mass, NULL};
+    cpl_particles p = {s.n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.mass, NULL, NULL};
     cpl_fragments f;
     cpl_fragments_init(&f);
     st = cpl_fragments_find(&f, &p, &o);

@@ -309,6 +309,17 @@ void par_sum_doubles(double *v, size_t n);
  * arrays of ctx->size entries. Serial: copies send[sdispl[0]..] to recv[rdispl[0]..]. */
 void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,
                            const int *rcount, const int *rdispl);
+/* Distributed fragment analysis (coupling/fragments_dist.c): one int per rank to every rank
+ * (send and recv have size entries); alltoallv of int64 (counts in elements, as above); the
+ * largest int64 over ranks; each rank's v into all[rank] on every rank; concatenation of every
+ * rank's n doubles in rank order on every rank (counts/displs per rank, in doubles). */
+void par_alltoall_ints(const int *send, int *recv);
+void par_alltoallv_int64(const int64_t *send, const int *scount, const int *sdispl, int64_t *recv,
+                         const int *rcount, const int *rdispl);
+int64_t par_max_int64(int64_t v);
+void par_allgather_long(long v, long *all);
+void par_allgatherv_doubles(const double *send, int n, double *recv, const int *counts,
+                            const int *displs);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Check-time memory estimate (core/mem_estimate.c): problem readers add their large arrays   *

@@ -81,3 +81,40 @@ void par_alltoallv_doubles(const double *send, const int *scount, const int *sdi
     memcpy(recv + rdispl[0], send + sdispl[0], (size_t)scount[0] * sizeof(double));
   }
 }
+
+/* ---- distributed fragment analysis (coupling/fragments_dist.c) ---- */
+
+void par_alltoall_ints(const int *send, int *recv) {
+  if (active()) MPI_Alltoall(send, 1, MPI_INT, recv, 1, MPI_INT, MPI_COMM_WORLD);
+  else recv[0] = send[0];
+}
+
+void par_alltoallv_int64(const int64_t *send, const int *scount, const int *sdispl, int64_t *recv,
+                         const int *rcount, const int *rdispl) {
+  if (active()) {
+    MPI_Alltoallv(send, scount, sdispl, MPI_INT64_T, recv, rcount, rdispl, MPI_INT64_T,
+                  MPI_COMM_WORLD);
+  } else if (scount[0] > 0) {
+    memcpy(recv + rdispl[0], send + sdispl[0], (size_t)scount[0] * sizeof(int64_t));
+  }
+}
+
+int64_t par_max_int64(int64_t v) {
+  int64_t r = v;
+  if (active()) MPI_Allreduce(&v, &r, 1, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+  return r;
+}
+
+void par_allgather_long(long v, long *all) {
+  if (active()) MPI_Allgather(&v, 1, MPI_LONG, all, 1, MPI_LONG, MPI_COMM_WORLD);
+  else all[0] = v;
+}
+
+void par_allgatherv_doubles(const double *send, int n, double *recv, const int *counts,
+                            const int *displs) {
+  if (active()) {
+    MPI_Allgatherv(send, n, MPI_DOUBLE, recv, counts, displs, MPI_DOUBLE, MPI_COMM_WORLD);
+  } else if (n > 0) {
+    memcpy(recv + displs[0], send, (size_t)n * sizeof(double));
+  }
+}

@@ -459,7 +459,9 @@ static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
                      ps->vy,
                      ps->dim == 3 ? ps->vz : NULL,
                      ps->mass,
-                     skip};
+                     skip,
+                     ps->gid}; /* fragments numbered by smallest gid: independent of the
+                                * particle sorting and of the rank count */
   return v;
 }
 

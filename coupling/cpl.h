@@ -40,13 +40,17 @@ bool cpl_uf_union(cpl_uf *uf, size_t i, size_t k);
 
 /* A read-only view of particles in structure-of-arrays form (matches ptl_state). z, vx, vy,
  * vz may be NULL (taken as 0: 2D runs, or positions only). `skip` (optional) excludes
- * particles (e.g. removed or piston particles): they belong to no fragment (id −1). */
+ * particles (e.g. removed or piston particles): they belong to no fragment (id −1). `gid`
+ * (optional, distinct values ≥ 0) names particles independently of their storage order: with
+ * it, fragments are numbered by their smallest gid (what a distributed run reproduces); without
+ * it, by their smallest index. */
 typedef struct cpl_particles {
   size_t n;
   const double *x, *y, *z;    /* cm */
   const double *vx, *vy, *vz; /* km/s */
   const double *mass;         /* g */
   const uint8_t *skip;
+  const int64_t *gid;
 } cpl_particles;
 
 /* Periodic box: axis k is periodic with period period[k] > 0 starting at lo[k]; period 0 =
@@ -64,14 +68,15 @@ typedef struct cpl_fragment_opts {
 } cpl_fragment_opts;
 
 /* Fragments of one particle configuration. Fragment k is numbered in the order of its smallest
- * particle index (deterministic, independent of the search order and the thread count).
+ * particle index, or smallest gid if the view has gids (deterministic, independent of the
+ * search order and the thread count).
  * Per-fragment arrays are length n. Centres of mass on periodic axes are computed from
  * positions unwrapped around the fragment's circular mean and wrapped back into the box. */
 typedef struct cpl_fragments {
   size_t n_particles;   /* particles in the configuration (length of id) */
   size_t n;             /* fragments */
   int64_t *id;          /* [n_particles] fragment of each particle, −1 for skipped */
-  int64_t *first;       /* smallest particle index in the fragment */
+  int64_t *first;       /* smallest particle index (gid if the view has gids) in the fragment */
   int64_t *count;       /* particles in the fragment (g) */
   double *mass;         /* g */
   double *diameter;     /* equivalent diameter d = (6 m/(π ρ0))^{1/3}, cm */
@@ -84,6 +89,7 @@ typedef struct cpl_fragments {
   cpl_uf uf;
   size_t *cell_of, *cell_start, *cell_items;
   double *work;
+  int64_t *key; /* [n_particles] smallest gid per union–find root (numbering by gid) */
 } cpl_fragments;
 
 void cpl_fragments_init(cpl_fragments *f);

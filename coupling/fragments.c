@@ -1,5 +1,6 @@
 /* Fragments: bonds |r_i − r_k| ≤ b·a (paper 002 §4.2, DESIGN.md §6), connected components by
  * union–find, per-fragment statistics. docs/coupling.md describes the algorithm. */
+#define _GNU_SOURCE /* qsort_r */
 #include "cpl_impl.h"
 
 #include <math.h>
@@ -85,6 +86,7 @@ void cpl_fragments_free(cpl_fragments *f) {
   free(f->cell_of);
   free(f->cell_start);
   free(f->cell_items);
+  free(f->key);
   cpl_uf_free(&f->uf);
   memset(f, 0, sizeof *f);
 }
@@ -96,7 +98,9 @@ static void reserve_particles(cpl_fragments *f, size_t n) {
   free(f->id);
   free(f->cell_of);
   free(f->cell_items);
+  free(f->key);
   f->id = ms_calloc(cap, sizeof *f->id);
+  f->key = ms_calloc(cap, sizeof *f->key);
   f->cell_of = ms_calloc(cap, sizeof *f->cell_of);
   f->cell_items = ms_calloc(cap, sizeof *f->cell_items);
   f->cap_particles = cap;
@@ -127,7 +131,9 @@ static void reserve_fragments(cpl_fragments *f, size_t n) {
 
 static inline double coord(const double *a, size_t i) { return a ? a[i] : 0.0; }
 
-static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o) {
+/* Masses are checked for particles [0, n_mass) only (ghost copies of a distributed search
+ * carry positions only). */
+static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o, size_t n_mass) {
   if (!p || !o || (p->n && (!p->x || !p->y || !p->mass)))
     return MS_ERR_INPUT;
   if (!(o->bond > 0) || !(o->spacing > 0) || !isfinite(o->bond * o->spacing))
@@ -144,8 +150,11 @@ static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o)
   for (size_t i = 0; i < p->n; i++) {
     if (p->skip && p->skip[i])
       continue;
-    if (!isfinite(p->x[i]) || !isfinite(p->y[i]) || !isfinite(coord(p->z, i)) ||
-        !isfinite(p->mass[i]) || p->mass[i] < 0)
+    if (!isfinite(p->x[i]) || !isfinite(p->y[i]) || !isfinite(coord(p->z, i)))
+      return MS_ERR_INPUT;
+    if (i < n_mass && (!isfinite(p->mass[i]) || p->mass[i] < 0))
+      return MS_ERR_INPUT;
+    if (p->gid && p->gid[i] < 0)
       return MS_ERR_INPUT;
   }
   return MS_OK;
@@ -169,7 +178,14 @@ static inline bool bonded(const cpl_particles *p, const cpl_box *box, double L2,
 /* ---------------------------------------------------------------------------------------- */
 /* Labelling                                                                                  */
 
-/* Fragment ids from the union–find roots, numbered by smallest particle index. */
+static int cmp_root_key(const void *a, const void *b, void *keyv) {
+  const int64_t *key = keyv;
+  int64_t x = key[*(const size_t *)a], y = key[*(const size_t *)b];
+  return x < y ? -1 : x > y;
+}
+
+/* Fragment ids from the union–find roots, numbered by smallest particle index, or by smallest
+ * gid when the view has gids (then f->key[root] holds that gid). */
 static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
   size_t n = p->n;
   /* root -> id: reuse cell_of as the map (values (size_t)-1 = unassigned) */
@@ -177,6 +193,24 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
   for (size_t i = 0; i < n; i++)
     root_id[i] = (size_t)-1;
   size_t nfrag = 0;
+  if (p->gid) {
+    /* roots in order of their smallest gid: cell_items lists the roots, then is sorted */
+    for (size_t i = 0; i < n; i++) {
+      if (p->skip && p->skip[i])
+        continue;
+      size_t r = cpl_uf_find(&f->uf, i);
+      if (root_id[r] == (size_t)-1) {
+        root_id[r] = 0;
+        f->key[r] = p->gid[i];
+        f->cell_items[nfrag++] = r;
+      } else if (p->gid[i] < f->key[r]) {
+        f->key[r] = p->gid[i];
+      }
+    }
+    qsort_r(f->cell_items, nfrag, sizeof *f->cell_items, cmp_root_key, f->key);
+    for (size_t k = 0; k < nfrag; k++)
+      root_id[f->cell_items[k]] = k;
+  }
   for (size_t i = 0; i < n; i++) {
     if (p->skip && p->skip[i]) {
       f->id[i] = -1;
@@ -358,8 +392,9 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   f->n_bonds = nb;
 }
 
-ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
-  ms_status s = check_input(p, o);
+ms_status cpl_fragments_bond_search(cpl_fragments *f, const cpl_particles *p,
+                                   const cpl_fragment_opts *o, size_t n_mass) {
+  ms_status s = check_input(p, o, n_mass);
   if (s != MS_OK)
     return s;
   reserve_particles(f, p->n);
@@ -367,6 +402,13 @@ ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl
   size_t ncell = build_cells(f, p, o, &g);
   cpl_uf_init(&f->uf, p->n);
   search_cells(f, p, o, &g, ncell);
+  return MS_OK;
+}
+
+ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
+  ms_status s = cpl_fragments_bond_search(f, p, o, p ? p->n : 0);
+  if (s != MS_OK)
+    return s;
   label_from_roots(f, p);
   cpl_fragments_stats(f, p, o);
   return MS_OK;
@@ -375,7 +417,7 @@ ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl
 ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
                                  const cpl_fragment_opts *o, const size_t *start,
                                  const int32_t *nbr) {
-  ms_status s = check_input(p, o);
+  ms_status s = check_input(p, o, p ? p->n : 0);
   if (s != MS_OK)
     return s;
   if (p->n && (!start || !nbr))
@@ -405,117 +447,156 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
   return MS_OK;
 }
 
+
 /* ---------------------------------------------------------------------------------------- */
-/* Statistics                                                                                 */
+/* Statistics, in three passes over the particles with per-fragment accumulators, so that a
+ * distributed search can run each pass on its own particles and sum the accumulators across
+ * ranks between the passes (coupling/fragments_dist.c). The frame of a fragment: positions
+ * unwrapped (minimum image) around a reference point, the circular mean on periodic axes and
+ * the particle with the smallest key (gid, or index) on open axes. */
+
+void cpl_acc1_clear(double *acc, size_t nf) {
+  memset(acc, 0, nf * CPL_ACC1 * sizeof *acc);
+  for (size_t k = 0; k < nf; k++)
+    acc[k * CPL_ACC1 + CPL_ACC1_KEY] = INFINITY;
+}
+
+void cpl_acc1_add(double *acc, const int64_t *id, size_t n, const cpl_particles *p,
+                  const cpl_box *box) {
+  const double *pos[3] = {p->x, p->y, p->z};
+  const double *vel[3] = {p->vx, p->vy, p->vz};
+  const double two_pi = 2 * CPL_PI;
+  for (size_t i = 0; i < n; i++) {
+    if (id[i] < 0)
+      continue;
+    double *a = acc + (size_t)id[i] * CPL_ACC1;
+    double m = p->mass[i];
+    a[CPL_ACC1_COUNT] += 1;
+    a[CPL_ACC1_MASS] += m;
+    for (int d = 0; d < 3; d++) {
+      a[CPL_ACC1_MV + d] += m * coord(vel[d], i);
+      double P = box->period[d];
+      if (P > 0) {
+        double th = two_pi * (coord(pos[d], i) - box->lo[d]) / P;
+        /* unit weights: the reference point only needs to lie inside the fragment */
+        a[CPL_ACC1_COS + d] += cos(th);
+        a[CPL_ACC1_SIN + d] += sin(th);
+      }
+    }
+    double key = p->gid ? (double)p->gid[i] : (double)i;
+    if (key < a[CPL_ACC1_KEY]) {
+      a[CPL_ACC1_KEY] = key;
+      for (int d = 0; d < 3; d++)
+        a[CPL_ACC1_REF + d] = coord(pos[d], i);
+    }
+  }
+}
+
+void cpl_acc1_merge(double *dst, const double *src) {
+  for (int c = 0; c < CPL_ACC1_KEY; c++)
+    dst[c] += src[c];
+  if (src[CPL_ACC1_KEY] < dst[CPL_ACC1_KEY])
+    for (int c = CPL_ACC1_KEY; c < CPL_ACC1; c++)
+      dst[c] = src[c];
+}
+
+void cpl_ref_point(const double *acc1, const cpl_box *box, double ref[3]) {
+  for (int d = 0; d < 3; d++) {
+    double P = box->period[d];
+    if (P > 0)
+      ref[d] = box->lo[d] +
+               P * atan2(acc1[CPL_ACC1_SIN + d], acc1[CPL_ACC1_COS + d]) / (2 * CPL_PI);
+    else
+      ref[d] = acc1[CPL_ACC1_REF + d];
+  }
+}
+
+void cpl_acc2_add(double *acc2, const int64_t *id, size_t n, const cpl_particles *p,
+                  const cpl_box *box, const double *ref) {
+  const double *pos[3] = {p->x, p->y, p->z};
+  for (size_t i = 0; i < n; i++) {
+    if (id[i] < 0)
+      continue;
+    size_t k = (size_t)id[i];
+    for (int d = 0; d < 3; d++)
+      acc2[3 * k + d] += p->mass[i] * min_image(coord(pos[d], i) - ref[3 * k + d], box->period[d]);
+  }
+}
+
+void cpl_centre(double mass, const double ref[3], const double acc2[3], const cpl_box *box,
+                double off[3], double c[3]) {
+  for (int d = 0; d < 3; d++) {
+    /* offset of the centre from the reference (mean of unwrapped separations) */
+    off[d] = mass > 0 ? acc2[d] / mass : 0.0;
+    double x = ref[d] + off[d];
+    double P = box->period[d];
+    if (P > 0) {
+      x = box->lo[d] + fmod(x - box->lo[d], P);
+      if (x < box->lo[d])
+        x += P;
+    }
+    c[d] = x;
+  }
+}
+
+void cpl_acc3_add(double *acc3, const int64_t *id, size_t n, const cpl_particles *p,
+                  const cpl_box *box, const double *ref, const double *off) {
+  const double *pos[3] = {p->x, p->y, p->z};
+  for (size_t i = 0; i < n; i++) {
+    if (id[i] < 0)
+      continue;
+    size_t k = (size_t)id[i];
+    double r2 = 0;
+    for (int d = 0; d < 3; d++) {
+      double x = min_image(coord(pos[d], i) - ref[3 * k + d], box->period[d]) - off[3 * k + d];
+      r2 += x * x;
+    }
+    acc3[k] += p->mass[i] * r2;
+  }
+}
+
+void cpl_fragment_set(cpl_fragments *f, size_t k, const double *acc1, const double c[3],
+                      double acc3, double rho0) {
+  double M = acc1[CPL_ACC1_MASS], inv = M > 0 ? 1.0 / M : 0.0;
+  f->first[k] = (int64_t)acc1[CPL_ACC1_KEY];
+  f->count[k] = (int64_t)acc1[CPL_ACC1_COUNT];
+  f->mass[k] = M;
+  f->vx[k] = acc1[CPL_ACC1_MV] * inv;
+  f->vy[k] = acc1[CPL_ACC1_MV + 1] * inv;
+  f->vz[k] = acc1[CPL_ACC1_MV + 2] * inv;
+  f->cx[k] = c[0];
+  f->cy[k] = c[1];
+  f->cz[k] = c[2];
+  f->rg[k] = M > 0 ? sqrt(acc3 / M) : 0.0;
+  f->diameter[k] = rho0 > 0 ? cbrt(6 * M / (CPL_PI * rho0)) : NAN;
+}
+
+void cpl_fragments_reserve(cpl_fragments *f, size_t nf) { reserve_fragments(f, nf); }
 
 void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
   size_t nf = f->n;
   reserve_fragments(f, nf);
-  const double *pos[3] = {p->x, p->y, p->z};
-  const double two_pi = 2 * CPL_PI;
-  double *w = f->work; /* [nf][CPL_WORK_COLS]: cos/sin sums per periodic axis, reference, sums */
-  memset(w, 0, nf * CPL_WORK_COLS * sizeof *w);
-  for (size_t k = 0; k < nf; k++) {
-    f->count[k] = 0;
-    f->first[k] = -1;
-    f->mass[k] = 0;
-    f->vx[k] = f->vy[k] = f->vz[k] = 0;
-    f->cx[k] = f->cy[k] = f->cz[k] = 0;
-    f->rg[k] = 0;
-  }
-  /* pass 1: counts, masses, momentum, circular sums on periodic axes */
-  for (size_t i = 0; i < p->n; i++) {
-    int64_t id = f->id[i];
-    if (id < 0)
-      continue;
-    size_t k = (size_t)id;
-    double m = p->mass[i];
-    if (f->first[k] < 0)
-      f->first[k] = (int64_t)i;
-    f->count[k]++;
-    f->mass[k] += m;
-    f->vx[k] += m * coord(p->vx, i);
-    f->vy[k] += m * coord(p->vy, i);
-    f->vz[k] += m * coord(p->vz, i);
-    for (int a = 0; a < 3; a++) {
-      double P = o->box.period[a];
-      if (P > 0) {
-        double th = two_pi * (coord(pos[a], i) - o->box.lo[a]) / P;
-        /* unit weights: the reference point only needs to lie inside the fragment */
-        w[k * CPL_WORK_COLS + 2 * a] += cos(th);
-        w[k * CPL_WORK_COLS + 2 * a + 1] += sin(th);
-      }
-    }
-  }
-  /* reference point per periodic axis: circular mean (columns 0..2 reused) */
-  for (size_t k = 0; k < nf; k++) {
-    double M = f->mass[k];
-    double inv = M > 0 ? 1.0 / M : 0.0;
-    f->vx[k] *= inv;
-    f->vy[k] *= inv;
-    f->vz[k] *= inv;
-    double ref[3] = {0, 0, 0};
-    for (int a = 0; a < 3; a++) {
-      double P = o->box.period[a];
-      if (P > 0) {
-        double th = atan2(w[k * CPL_WORK_COLS + 2 * a + 1], w[k * CPL_WORK_COLS + 2 * a]);
-        ref[a] = o->box.lo[a] + P * th / two_pi;
-      }
-    }
-    for (int a = 0; a < 3; a++)
-      w[k * CPL_WORK_COLS + 6 + a] = ref[a];
-    /* position sums (unwrapped) go to columns 0..2 */
-    w[k * CPL_WORK_COLS + 0] = w[k * CPL_WORK_COLS + 1] = w[k * CPL_WORK_COLS + 2] = 0;
-    /* also fall back to the first particle as the reference on open axes (round-off) */
-    size_t i0 = (size_t)f->first[k];
-    for (int a = 0; a < 3; a++)
-      if (!(o->box.period[a] > 0))
-        w[k * CPL_WORK_COLS + 6 + a] = coord(pos[a], i0);
-  }
-  /* pass 2: mass-weighted unwrapped positions relative to the reference */
-  for (size_t i = 0; i < p->n; i++) {
-    int64_t id = f->id[i];
-    if (id < 0)
-      continue;
-    size_t k = (size_t)id;
-    double m = p->mass[i];
-    for (int a = 0; a < 3; a++) {
-      double d = min_image(coord(pos[a], i) - w[k * CPL_WORK_COLS + 6 + a], o->box.period[a]);
-      w[k * CPL_WORK_COLS + a] += m * d;
-    }
-  }
-  double *c[3] = {f->cx, f->cy, f->cz};
-  for (size_t k = 0; k < nf; k++) {
-    double M = f->mass[k];
-    for (int a = 0; a < 3; a++) {
-      /* offset of the centre from the reference (mean of unwrapped separations) */
-      double off = M > 0 ? w[k * CPL_WORK_COLS + a] / M : 0.0;
-      w[k * CPL_WORK_COLS + 3 + a] = off; /* kept for pass 3 */
-      double x = w[k * CPL_WORK_COLS + 6 + a] + off;
-      double P = o->box.period[a];
-      if (P > 0) {
-        x = o->box.lo[a] + fmod(x - o->box.lo[a], P);
-        if (x < o->box.lo[a])
-          x += P;
-      }
-      c[a][k] = x;
-    }
-    f->diameter[k] = o->rho0 > 0 ? cbrt(6 * M / (CPL_PI * o->rho0)) : NAN;
-  }
-  /* pass 3: radius of gyration about the centre (in the same unwrapped frame) */
-  for (size_t i = 0; i < p->n; i++) {
-    int64_t id = f->id[i];
-    if (id < 0)
-      continue;
-    size_t k = (size_t)id;
-    double r2 = 0;
-    for (int a = 0; a < 3; a++) {
-      double d = min_image(coord(pos[a], i) - w[k * CPL_WORK_COLS + 6 + a], o->box.period[a]) -
-                 w[k * CPL_WORK_COLS + 3 + a];
-      r2 += d * d;
-    }
-    f->rg[k] += p->mass[i] * r2;
-  }
+  /* f->work (CPL_WORK_COLS per fragment) as blocks: acc1 [nf][CPL_ACC1], ref, acc2, off [nf][3] */
+  double *acc1 = f->work, *ref = acc1 + nf * CPL_ACC1, *acc2 = ref + 3 * nf, *off = acc2 + 3 * nf;
+  double *acc3 = f->rg;
+  cpl_acc1_clear(acc1, nf);
+  memset(acc2, 0, 3 * nf * sizeof *acc2);
+  memset(acc3, 0, nf * sizeof *acc3);
+  cpl_acc1_add(acc1, f->id, p->n, p, &o->box);
   for (size_t k = 0; k < nf; k++)
-    f->rg[k] = f->mass[k] > 0 ? sqrt(f->rg[k] / f->mass[k]) : 0.0;
+    cpl_ref_point(acc1 + k * CPL_ACC1, &o->box, ref + 3 * k);
+  cpl_acc2_add(acc2, f->id, p->n, p, &o->box, ref);
+  for (size_t k = 0; k < nf; k++) {
+    double centre[3];
+    cpl_centre(acc1[k * CPL_ACC1 + CPL_ACC1_MASS], ref + 3 * k, acc2 + 3 * k, &o->box, off + 3 * k,
+               centre);
+    f->cx[k] = centre[0];
+    f->cy[k] = centre[1];
+    f->cz[k] = centre[2];
+  }
+  cpl_acc3_add(acc3, f->id, p->n, p, &o->box, ref, off);
+  for (size_t k = 0; k < nf; k++) {
+    const double centre[3] = {f->cx[k], f->cy[k], f->cz[k]};
+    cpl_fragment_set(f, k, acc1 + k * CPL_ACC1, centre, acc3[k], o->rho0);
+  }
 }

@@ -312,7 +312,7 @@ static void test_drag_sharing(void **state) {
   double x[5] = {0, 1e-4, 10e-4, 11e-4, 12e-4}, y[5] = {0}, z[5] = {0};
   double vx[5] = {1, 1.2, 2, 2, 2.3}, vy[5] = {0}, vz[5] = {0};
   double mass[5] = {1e-9, 2e-9, 1e-9, 1e-9, 3e-9};
-  cpl_particles p = {5, x, y, z, vx, vy, vz, mass, NULL};
+  cpl_particles p = {5, x, y, z, vx, vy, vz, mass, NULL, NULL};
   cpl_fragment_opts o = {.bond = 1.2, .spacing = 1e-4, .rho0 = RHO_PB};
   cpl_fragments f;
   cpl_fragments_init(&f);

@@ -9,6 +9,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 /* cmocka needs the headers above */
@@ -70,7 +71,7 @@ static void cloud_free(cloud *c) {
 
 static cpl_particles view(const cloud *c, bool use_skip, bool use_z) {
   cpl_particles p = {c->n,  c->x,  c->y, use_z ? c->z : NULL,      c->vx,
-                     c->vy, c->vz, c->m, use_skip ? c->skip : NULL};
+                     c->vy, c->vz, c->m, use_skip ? c->skip : NULL, NULL};
   return p;
 }
 
@@ -537,6 +538,81 @@ static void test_statistics(void **state) {
   cloud_free(&c);
 }
 
+/* Numbering by gid: the same cloud stored in a shuffled order with gid = original index gives
+ * the same fragment of every particle and the same table (rows in the same order, sums to
+ * round-off) as the unshuffled cloud numbered by index. Open and periodic axes. */
+static void test_gid_numbering(void **state) {
+  (void)state;
+  for (int per = 0; per < 2; per++) {
+    const size_t n = 600;
+    const double side = 9.0;
+    rng_state = 4242 + (uint64_t)per;
+    cloud c, s;
+    cloud_alloc(&c, n);
+    cloud_alloc(&s, n);
+    cpl_fragment_opts o = opts(0.8, 1.0); /* ~1.8 bonds per particle: below percolation */
+    o.rho0 = 2.0;
+    for (int a = 0; a < 3 && per; a++)
+      o.box.period[a] = a < 2 ? side : 0.0;
+    for (size_t i = 0; i < n; i++) {
+      c.x[i] = side * urand();
+      c.y[i] = side * urand();
+      c.z[i] = side * urand();
+      c.vx[i] = urand() - 0.5;
+      c.vy[i] = urand() - 0.5;
+      c.vz[i] = urand() - 0.5;
+      c.m[i] = 0.5 + urand();
+      c.skip[i] = urand() < 0.05;
+    }
+    size_t *perm = calloc(n, sizeof *perm); /* Fisher–Yates */
+    int64_t *gid = calloc(n, sizeof *gid);
+    for (size_t i = 0; i < n; i++)
+      perm[i] = i;
+    for (size_t i = n - 1; i > 0; i--) {
+      size_t j = (size_t)(urand() * (double)(i + 1)), t = perm[i];
+      perm[i] = perm[j];
+      perm[j] = t;
+    }
+    for (size_t j = 0; j < n; j++) {
+      size_t i = perm[j];
+      s.x[j] = c.x[i], s.y[j] = c.y[i], s.z[j] = c.z[i];
+      s.vx[j] = c.vx[i], s.vy[j] = c.vy[i], s.vz[j] = c.vz[i];
+      s.m[j] = c.m[i], s.skip[j] = c.skip[i];
+      gid[j] = (int64_t)i;
+    }
+    cpl_particles pc = view(&c, true, true), ps = view(&s, true, true);
+    ps.gid = gid;
+    cpl_fragments f, g;
+    cpl_fragments_init(&f);
+    cpl_fragments_init(&g);
+    assert_int_equal(cpl_fragments_find(&f, &pc, &o), MS_OK);
+    assert_int_equal(cpl_fragments_find(&g, &ps, &o), MS_OK);
+    printf("gid numbering (%s): %zu fragments of %zu particles\n", per ? "periodic" : "open", f.n, n);
+    assert_true(f.n > 20 && f.n < n / 2); /* a mix of clusters, not all singletons */
+    assert_int_equal(g.n, f.n);
+    for (size_t j = 0; j < n; j++)
+      assert_int_equal(g.id[j], f.id[perm[j]]);
+    /* sums in another order: round-off of a few ulps of the largest term */
+    for (size_t k = 0; k < f.n; k++) {
+      assert_int_equal(g.count[k], f.count[k]);
+      assert_int_equal(g.first[k], f.first[k]);
+      assert_double_equal(g.mass[k], f.mass[k], 1e-13 * f.mass[k]);
+      assert_double_equal(g.cx[k], f.cx[k], 1e-12 * side);
+      assert_double_equal(g.cy[k], f.cy[k], 1e-12 * side);
+      assert_double_equal(g.cz[k], f.cz[k], 1e-12 * side);
+      assert_double_equal(g.vx[k], f.vx[k], 1e-12);
+      assert_double_equal(g.rg[k], f.rg[k], 1e-12 * side);
+      assert_double_equal(g.diameter[k], f.diameter[k], 1e-13 * f.diameter[k]);
+    }
+    cpl_fragments_free(&f);
+    cpl_fragments_free(&g);
+    free(perm);
+    free(gid);
+    cloud_free(&c);
+    cloud_free(&s);
+  }
+}
+
 /* Bad input: non-finite positions, bad options. */
 static void test_bad_input(void **state) {
   (void)state;
@@ -660,6 +736,7 @@ int main(void) {
       cmocka_unit_test(test_chains),          cmocka_unit_test(test_rings_and_isolated),
       cmocka_unit_test(test_periodic_wrap),   cmocka_unit_test(test_statistics),
       cmocka_unit_test(test_bad_input),       cmocka_unit_test(test_csv_outputs),
+      cmocka_unit_test(test_gid_numbering),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

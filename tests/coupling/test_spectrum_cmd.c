@@ -150,7 +150,7 @@ static char *expected_rows(double bond) {
     y[i] = xyz[3 * i + 1];
     z[i] = xyz[3 * i + 2];
   }
-  cpl_particles p = {NPART, x, y, z, NULL, NULL, NULL, mass, NULL};
+  cpl_particles p = {NPART, x, y, z, NULL, NULL, NULL, mass, NULL, NULL};
   cpl_fragment_opts o = {.bond = bond, .spacing = A};
   cpl_fragments f;
   cpl_fragments_init(&f);
@@ -292,7 +292,7 @@ static void test_snapshot_writer(void **state) {
     y[i] = xyz[3 * i + 1];
     z[i] = xyz[3 * i + 2];
   }
-  cpl_particles p = {NPART, x, y, z, NULL, NULL, NULL, mass, NULL};
+  cpl_particles p = {NPART, x, y, z, NULL, NULL, NULL, mass, NULL, NULL};
   cpl_fragment_opts o = {.bond = 1.2, .spacing = A, .rho0 = 11.34};
   o.box.period[1] = 50 * A; /* y periodic, wide enough not to change anything */
   cpl_fragments f;
