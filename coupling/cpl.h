@@ -90,6 +90,7 @@ typedef struct cpl_fragments {
   size_t *cell_of, *cell_start, *cell_items;
   double *work;
   int64_t *key; /* [n_particles] smallest gid per union–find root (numbering by gid) */
+  int rounds;   /* cpl_fragments_find_dist: label-exchange rounds of the last search */
 } cpl_fragments;
 
 void cpl_fragments_init(cpl_fragments *f);
@@ -106,6 +107,24 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
 /* Per-fragment statistics from a labelling f->id already filled (used by the two finders;
  * public so that a distributed finder can reuse it). */
 void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o);
+
+/* Fragments of particles distributed over MPI ranks (coupling/fragments_dist.c, docs/mpi.md
+ * "Fragments on MPI ranks"). Collective. On each rank, p holds [0, n_owned) the owned particles
+ * (positions, velocities, masses) and then [n_owned, p->n) ghost copies of other ranks'
+ * particles (positions only: their masses and velocities are not read), ghost_owner[j] being
+ * the rank that owns particle n_owned + j. p->gid is required: distinct over the owned
+ * particles of all ranks, < 2^53; a ghost carries its original's gid and the same skip flag.
+ * Every bond between particles of different ranks must be seen by one of them: the ghosts of a
+ * rank include every particle within b·a of its owned ones (or the other rank's include its).
+ * Result on every rank: f->id[i] of the owned particles (f->n_particles = n_owned) and the
+ * whole table, fragments numbered by smallest gid: what cpl_fragments_find gives for the union
+ * of the owned particles with their gids (counts and ids exactly, sums to round-off, summed in
+ * another order). n_bonds: bonded pairs found on this rank (shared pairs counted twice).
+ * MS_ERR_INPUT on every rank if any rank's input is bad (also: a ghost whose original is
+ * unknown to or skipped by its owner, duplicate gids). */
+ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size_t n_owned,
+                                  const int32_t *ghost_owner, const cpl_fragment_opts *o,
+                                  const ms_ctx *ctx);
 
 /* Spectrum N(g): rows g ascending with count > 0; mass = total mass of those fragments. */
 typedef struct cpl_spectrum {
