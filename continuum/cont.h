@@ -147,6 +147,7 @@ cont_view cont_grid_view(const cont_grid *g);
  * impulse delivered (planar: momentum − impulse is constant). */
 typedef struct cont_balance {
   double internal, kinetic, work, momentum, impulse;
+  double source_energy, source_momentum; /* the part of work/impulse from cell sources */
 } cont_balance;
 cont_balance cont_grid_balance(const cont_grid *g);
 
@@ -158,6 +159,17 @@ void cont_grid_set_node_force(cont_grid *g, size_t node, double traction);
  * last step (same units as above) is cont_grid_node_reaction. */
 void cont_grid_set_node_velocity(cont_grid *g, size_t node, double u);
 double cont_grid_node_reaction(const cont_grid *g, size_t node);
+/* Cell source (two-way ejecta transport, docs/coupling.md §4): add momentum dp and total energy
+ * de to cell `cell` now, in the grid's mass units (planar: per cm² of face area, like the
+ * traction). Conservative by construction: both nodes of the cell get the same velocity change
+ * dp/(M_left + M_right) (nodal masses), which the momentum sum Σ M u receives exactly; what de
+ * leaves after the nodes' kinetic-energy change goes into the cell's internal energy (the
+ * dissipated part of the drag becomes heat); p and c are re-evaluated. Both are booked in
+ * cont_balance.work/impulse (and source_energy/source_momentum), so internal + kinetic − work
+ * stays constant. A prescribed (wall/piston/coupled) node keeps its velocity: its share goes to
+ * the boundary as a reaction in the next step. MS_ERR_UNSTABLE (cont_grid_error names it) if
+ * the cell's energy would turn negative or the EOS fails; the grid is then unchanged. */
+ms_status cont_grid_add_cell_source(cont_grid *g, size_t cell, double dp, double de);
 
 /* Tagged nodes: x, u of the node and p, ρ of the cells on its left/right (NAN where there is no
  * cell), recorded at t = 0 and after every step (same time level for all). */

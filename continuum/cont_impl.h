@@ -59,6 +59,7 @@ struct cont_grid {
 
   /* Energy and momentum budget. */
   double work, impulse;
+  double src_energy, src_momentum; /* the part of work/impulse from cont_grid_add_cell_source */
 
   size_t ntags, tag_cap;
   cont_tag *tags;

@@ -377,6 +377,8 @@ cont_balance cont_grid_balance(const cont_grid *g) {
   }
   b.work = g->work;
   b.impulse = g->impulse;
+  b.source_energy = g->src_energy;
+  b.source_momentum = g->src_momentum;
   return b;
 }
 
@@ -404,6 +406,45 @@ void cont_grid_set_node_velocity(cont_grid *g, size_t node, double u) {
 
 double cont_grid_node_reaction(const cont_grid *g, size_t node) {
   return node < g->nnodes ? g->reaction[node] : NAN;
+}
+
+ms_status cont_grid_add_cell_source(cont_grid *g, size_t cell, double dp, double de) {
+  if (cell >= g->ncells || !isfinite(dp) || !isfinite(de)) {
+    snprintf(g->err, sizeof g->err, "cell source: cell %zu of %zu, dp = %g, de = %g", cell,
+             g->ncells, dp, de);
+    return MS_ERR_UNSTABLE;
+  }
+  const size_t j = cell;
+  const double mL = 1.0 / g->inv_mass[j], mR = 1.0 / g->inv_mass[j + 1];
+  const double du = dp / (mL + mR);
+  /* kinetic energy the nodes gain: Σ M (u Δu + ½ Δu²) */
+  const double dke = mL * du * (g->u[j] + 0.5 * du) + mR * du * (g->u[j + 1] + 0.5 * du);
+  const double e_old = g->e[cell], p_old = g->p[cell], c_old = g->c[cell];
+  const double e_new = e_old + (de - dke) * g->inv_cell_mass[cell];
+  if (!(e_new >= 0.0)) {
+    snprintf(g->err, sizeof g->err,
+             "cell source: cell %zu would get e = %g (dp = %g, de = %g, kinetic %g)", cell, e_new,
+             dp, de, dke);
+    return MS_ERR_UNSTABLE;
+  }
+  g->e[cell] = e_new;
+  size_t bad = 0;
+  ms_status st = MS_OK;
+  cont_eval_eos_for_cells(g, cell, cell + 1, g->rho, g->e, g->p, g->c, &bad, &st);
+  if (st != MS_OK || !isfinite(g->p[cell])) {
+    g->e[cell] = e_old;
+    g->p[cell] = p_old;
+    g->c[cell] = c_old;
+    snprintf(g->err, sizeof g->err, "cell source: EOS failed in cell %zu at e = %g", cell, e_new);
+    return MS_ERR_UNSTABLE;
+  }
+  g->u[j] += du;
+  g->u[j + 1] += du;
+  g->work += de;
+  g->impulse += dp;
+  g->src_energy += de;
+  g->src_momentum += dp;
+  return MS_OK;
 }
 
 /* ------------------------------------------------------------------------------------------ */

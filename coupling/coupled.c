@@ -47,9 +47,10 @@ struct cpl_problem {
   long n_out;
   double check_window;
   /* fragments, drag, transport */
-  double bond;
+  double bond, jet_margin;
   long frag_every;
   int drag_law;
+  bool gas_return; /* drag.gas_return: the gas receives −(drag impulse) and the energy */
   double det_distance, transport_end;
   long transport_windows;
   cpl_run_summary sum; /* what the last run measured */
@@ -183,15 +184,19 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   }
   const dk_node *F = dk_get(sec, "fragments");
   p->bond = 1.2;
+  p->jet_margin = 0.1;
   p->frag_every = 100;
   if (F && dk_expect_map(e, doc, F, "fragments")) {
     dk_read_double(e, doc, F, "bond", MS_DIM_NONE, false, 1.2, 0.5, 3.0, &p->bond);
     dk_read_int(e, doc, F, "every", false, 100, 1, 1000000, &p->frag_every);
+    dk_read_double(e, doc, F, "jet_margin", MS_DIM_NONE, false, 0.1, 0.0, 10.0, &p->jet_margin);
   }
   const dk_node *R = dk_get(sec, "drag");
   p->drag_law = CPL_DRAG_SCHILLER_NAUMANN;
-  if (R && dk_expect_map(e, doc, R, "drag"))
+  if (R && dk_expect_map(e, doc, R, "drag")) {
     dk_read_enum(e, doc, R, "law", false, 0, cpl_drag_law_names, &p->drag_law);
+    dk_read_bool(e, doc, R, "gas_return", false, false, &p->gas_return);
+  }
   const dk_node *X = dk_get(sec, "transport");
   if (X && dk_expect_map(e, doc, X, "transport")) {
     dk_read_positive(e, doc, X, "detector", MS_DIM_LENGTH, true, 0, &p->det_distance);
@@ -390,10 +395,36 @@ static double interp(size_t n, const double *t, const double *v, double x) {
 
 /* Gas state from the live grid: only the gas layer beyond the sample counts. */
 typedef struct gas_ctx {
-  const cont_grid *g;
+  cont_grid *g;
   int gas_layer;
   double mu;
+  /* momentum/energy return (drag.gas_return): the particle region's cross-section, which the
+   * grid's per-cm² cells stand for, and the first failure */
+  double area;
+  ms_status st;
+  double returned_p, returned_e; /* what the gas received (absolute, g·km/s and kJ) */
 } gas_ctx;
+
+/* The gas at x receives momentum −dp (along the grid axis: the 1D gas has no transverse
+ * momentum, so dp[1], dp[2] are not represented) and energy −de (all of it, transverse motion
+ * included: energy is conserved exactly), per cm² of the particle region's cross-section.
+ * Outside the gas layer nothing is returned (nor was drag applied there). */
+static void gas_deposit(void *user, const double x[3], double t0, double t1, const double dp[3],
+                        double de) {
+  (void)t0;
+  (void)t1;
+  gas_ctx *c = user;
+  cont_sample s;
+  if (c->st != MS_OK || !cont_grid_sample(c->g, x[0], &s) || s.layer != c->gas_layer)
+    return;
+  ms_status st = cont_grid_add_cell_source(c->g, s.cell, -dp[0] / c->area, -de / c->area);
+  if (st != MS_OK) {
+    c->st = st;
+    return;
+  }
+  c->returned_p -= dp[0];
+  c->returned_e -= de;
+}
 
 static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
   (void)t;
@@ -830,7 +861,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
 
   /* 3. the particle phase, with the live grid supplying the gas */
   cont_grid *glive = cont_problem_grid(p->grid_live);
-  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity};
+  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, reg.area, MS_OK, 0, 0};
   cpl_fragments fr;
   cpl_fragments_init(&fr);
   cpl_fragment_opts fo;
@@ -937,12 +968,27 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
        * particle time step) */
       double span = (double)(step - last_search) * cfg.dt;
       for (size_t i = 0; i < n; i++)
-        if (!skip[i]) {
+        if (!skip[i] && (fx[i] != 0 || fy[i] != 0 || fz[i] != 0)) {
+          double v0[3] = {ps->vx[i], ps->vy[i], fcc ? ps->vz[i] : 0.0};
           ps->vx[i] += fx[i] / ps->mass[i] * span;
           ps->vy[i] += fy[i] / ps->mass[i] * span;
           if (fcc)
             ps->vz[i] += fz[i] / ps->mass[i] * span;
+          if (p->gas_return) {
+            double v1[3] = {ps->vx[i], ps->vy[i], fcc ? ps->vz[i] : 0.0};
+            double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], fcc ? ps->z[i] : 0.0};
+            for (int k = 0; k < 3; k++) {
+              dp[k] = ps->mass[i] * (v1[k] - v0[k]);
+              de += 0.5 * ps->mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]);
+            }
+            gas_deposit(&gas, xi, t_abs, t_abs, dp, de);
+          }
         }
+      if (gas.st != MS_OK) {
+        st = gas.st;
+        ms_log(ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(glive));
+        break;
+      }
     }
     /* free-surface check */
     double ug = cpl_piston_velocity(&fsurf, t_abs), up = cd_free_surface_velocity(sim, 0);
@@ -1012,6 +1058,22 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     p->sum.piston_work = en.piston_work;
     p->sum.fragments = fr.n;
     p->sum.ejected_mass = cpl_ejected_mass(&fr, &sel);
+    /* jets vs spall (docs/coupling.md §9): measured against the flat free surface's (the
+     * grid's) peak velocity up to the end of the particle phase */
+    double u_ref = 0;
+    for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++)
+      u_ref = fmax(u_ref, hf.u[k]);
+    cpl_particles view = particle_view(ps, skip);
+    const double normal[3] = {1, 0, 0};
+    cpl_ejecta_classify(&fr, &view, normal, u_ref, p->jet_margin, &p->sum.classes);
+    p->sum.u_ref = u_ref;
+    const cpl_ejecta_classes *ec = &p->sum.classes;
+    ms_log(ctx, MS_LOG_INFO,
+           "coupled: detached material at t = %.5g (bulk %.4g g): jets (faster than %.4g km/s = "
+           "(1 + %g) x the grid's peak free-surface velocity %.4g) %.4g g in %zu fragments, "
+           "slower (spall layers, debris) %.4g g in %zu fragments; fastest %.4g km/s",
+           t_start + sim->t, ec->m_bulk, (1 + p->jet_margin) * u_ref, p->jet_margin, u_ref,
+           ec->m_jet, ec->n_jet, ec->m_slow, ec->n_slow, ec->v_max);
   }
   /* final fragment tables */
   if (st == MS_OK) {
@@ -1044,6 +1106,8 @@ particle_done:
     to.rho_p = rho0;
     to.det_x = x_fs + p->det_distance;
     cpl_transport *tr = cpl_transport_create(&to, grid_gas, &gas);
+    if (p->gas_return)
+      cpl_transport_set_return(tr, gas_deposit, &gas);
     /* keep each flight's fragment size g for the detector spectrum */
     int64_t *gcount = ms_calloc(fr.n + 1, sizeof *gcount);
     size_t nfl = 0, big = cpl_largest_fragment(&fr);
@@ -1069,6 +1133,10 @@ particle_done:
       ms_status s2 = cpl_transport_advance(tr, tw);
       if (s2 != MS_OK) /* a failed fragment is reported, the others fly on */
         ms_log(ctx, MS_LOG_WARN, "coupled: transport: %s", cpl_transport_error(tr));
+      if (gas.st != MS_OK) {
+        st = gas.st;
+        ms_log(ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(glive));
+      }
       ms_progress_update(&prog, tw, w);
     }
     ms_progress_finish(&prog, p->transport_end, p->transport_windows);
@@ -1109,6 +1177,13 @@ particle_done:
       }
       ms_log(ctx, MS_LOG_INFO, "coupled: %zu of %zu fragments (%.4g g) reached the detector", narr,
              nfl, marr);
+      if (p->gas_return) {
+        cont_balance gb = cont_grid_balance(glive);
+        ms_log(ctx, MS_LOG_INFO,
+               "coupled: the gas received momentum %.6g g*km/s and energy %.6g kJ from the "
+               "fragments (grid sources per cm^2: %.6g, %.6g)",
+               gas.returned_p, gas.returned_e, gb.source_momentum, gb.source_energy);
+      }
       p->sum.transported = nfl;
       p->sum.arrived = narr;
       free(det.count);

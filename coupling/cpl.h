@@ -147,6 +147,21 @@ bool cpl_is_ejecta(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s);
 /* Total ejected mass (for the ejected-mass-vs-time history). */
 double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s);
 
+/* Jets vs spall (paper 002 §4.2; docs/coupling.md §9). Detached material = every fragment but
+ * the bulk, the fragment holding the deepest particle (smallest normal·r; the piston side, so a
+ * spalled slab larger than what stays behind is still detached). Each detached fragment is a
+ * jet if its centre-of-mass normal velocity exceeds (1 + margin)·u_ref (u_ref: the flat free
+ * surface's velocity, e.g. the grid's), otherwise slow (spalled layers and debris no faster
+ * than the free surface). */
+typedef struct cpl_ejecta_classes {
+  double m_jet, m_slow, m_bulk; /* g */
+  size_t n_jet, n_slow;         /* fragments */
+  double v_max;                 /* fastest detached fragment (normal velocity), km/s */
+  size_t bulk;                  /* fragment index of the bulk (SIZE_MAX if none) */
+} cpl_ejecta_classes;
+void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const double normal[3],
+                         double u_ref, double margin, cpl_ejecta_classes *out);
+
 /* CSV writers (core's units header; `f` may be stdout or an ms_afile's FILE).
  *   spectrum:    g,count,mass
  *   table:       id,count,mass,d,x,y,z,vx,vy,vz,rg        (one row per fragment)
@@ -371,6 +386,8 @@ typedef struct cpl_run_summary {
   double piston_work;    /* kJ */
   size_t fragments;      /* at the end of the particle phase */
   double ejected_mass;   /* g (every fragment but the largest) */
+  cpl_ejecta_classes classes; /* jets vs slow detached material at the end (one-way runs) */
+  double u_ref;               /* the grid's peak free-surface velocity they are measured by */
   size_t transported, arrived;
   /* two-way coupling: interface impulse and work as the grid received them vs as the particles
    * did (per unit area), their relative mismatch, and the end state */
