@@ -11,6 +11,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#endif
 
 cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   cd_neigh *nl = ms_calloc(1, sizeof *nl);
@@ -24,7 +27,9 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   nl->xb = ms_calloc(cap + 1, sizeof *nl->xb);
   nl->yb = ms_calloc(cap + 1, sizeof *nl->yb);
   nl->zb = ms_calloc(cap + 1, sizeof *nl->zb);
-  nl->scratch = ms_calloc(cap + 1, sizeof *nl->scratch);
+  nl->xs = ms_aligned_alloc(cap + 1, sizeof *nl->xs);
+  nl->ys = ms_aligned_alloc(cap + 1, sizeof *nl->ys);
+  nl->zs = ms_aligned_alloc(cap + 1, sizeof *nl->zs);
   return nl;
 }
 
@@ -45,14 +50,16 @@ void cd_neigh_free(cd_neigh *nl) {
   free(nl->xb);
   free(nl->yb);
   free(nl->zb);
-  free(nl->scratch);
+  free(nl->xs);
+  free(nl->ys);
+  free(nl->zs);
   free(nl);
 }
 
 size_t cd_neigh_bytes(const cd_neigh *nl) {
   size_t n = nl->n;
   size_t b = n * (2 * sizeof(int32_t) + sizeof(uint32_t) + 2 * sizeof(uint16_t) +
-                  3 * sizeof(float) + sizeof(double));
+                  3 * sizeof(float) + 3 * sizeof(double));
   b += (nl->ncells + 1) * sizeof(int32_t);
   for (int l = 0; l < nl->nlayer; l++) b += nl->buf_cap[l] * sizeof(int32_t);
   return b;
@@ -99,6 +106,52 @@ static bool is_partner(const int32_t *partners, int32_t i, int32_t j) {
  * at δ = 2 with the second shell; 50 would mean near-overlapping particles) */
 #define CD_MAX_CAND 510
 
+/* The candidates at sorted positions q0 .. q1 − 1 inside r_list of (xi, yi, zi), with the
+ * image shift sv (NULL: none) added to their positions: their indices sorted[q] are appended to
+ * out in order; returns how many. out needs 8 spare entries (whole vectors are stored).
+ * Positions come from the sorted-order copies xs/ys/zs, so the loads are contiguous; the
+ * arithmetic is the per-pair one, d = x_i − (x_j + shift), |d|² = (dx² + dy²) + dz². */
+static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const double *sv, double xi,
+                        double yi, double zi, double rl2, int32_t *restrict out) {
+  const double *restrict xs = nl->xs, *restrict ys = nl->ys, *restrict zs = nl->zs;
+  const int32_t *restrict sorted = nl->sorted;
+  int nc = 0;
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+  const __m512d vxi = _mm512_set1_pd(xi), vyi = _mm512_set1_pd(yi), vzi = _mm512_set1_pd(zi),
+                vrl2 = _mm512_set1_pd(rl2);
+  const __m512d sx = _mm512_set1_pd(sv ? sv[0] : 0.0), sy = _mm512_set1_pd(sv ? sv[1] : 0.0),
+                sz = _mm512_set1_pd(sv ? sv[2] : 0.0);
+  for (int32_t q = q0; q < q1; q += 8) {
+    const __mmask8 live = q1 - q >= 8 ? 0xff : (__mmask8)((1u << (q1 - q)) - 1u);
+    __m512d xj = _mm512_maskz_loadu_pd(live, xs + q), yj = _mm512_maskz_loadu_pd(live, ys + q),
+            zj = _mm512_maskz_loadu_pd(live, zs + q);
+    if (sv) {
+      xj = _mm512_add_pd(xj, sx);
+      yj = _mm512_add_pd(yj, sy);
+      zj = _mm512_add_pd(zj, sz);
+    }
+    const __m512d dx = _mm512_sub_pd(vxi, xj), dy = _mm512_sub_pd(vyi, yj),
+                  dz = _mm512_sub_pd(vzi, zj);
+    /* no fused multiply-add here: -std=c11 turns contraction off, as in the scalar loop */
+    const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
+                                     _mm512_mul_pd(dz, dz));
+    const __mmask8 take = _mm512_mask_cmp_pd_mask(live, d2, vrl2, _CMP_LT_OQ);
+    /* no branch on `take` (unpredictable); compress in a register and store the whole vector: compress-to-memory is slow on Zen 4 */
+    const __m256i j = _mm256_maskz_loadu_epi32(live, sorted + q);
+    _mm256_storeu_si256((__m256i *)(void *)(out + nc), _mm256_maskz_compress_epi32(take, j));
+    nc += __builtin_popcount(take);
+  }
+#else
+  for (int32_t q = q0; q < q1; q++) { /* branchless: store every candidate, advance on a take */
+    const double dx = xi - (sv ? xs[q] + sv[0] : xs[q]), dy = yi - (sv ? ys[q] + sv[1] : ys[q]),
+                 dz = zi - (sv ? zs[q] + sv[2] : zs[q]);
+    out[nc] = sorted[q];
+    nc += dx * dx + dy * dy + dz * dz < rl2;
+  }
+#endif
+  return nc;
+}
+
 static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
                           const int ax[3], const int32_t *partners) {
   const double rl2 = nl->rlist * nl->rlist;
@@ -108,7 +161,8 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   const double *x = p->x, *y = p->y, *z = p->z;
   int32_t *buf = nl->buf[layer];
   size_t cap = nl->buf_cap[layer], len = 0;
-  int32_t cand[CD_MAX_CAND + 1], img[CD_MAX_CAND + 2]; /* one particle's candidates */
+  int32_t cand[CD_MAX_CAND + 8], img[CD_MAX_CAND + 2]; /* one particle's candidates */
+  int32_t imgj[CD_MAX_CAND / 2 + 8];
   /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
    * (same layer, or no colouring) keep only q > p (cd_impl.h) */
   struct stencil_range { int32_t q0, q1; int code; bool same; } st[27];
@@ -164,21 +218,14 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         if (st[e].code == 13) {
           /* branchless: store every candidate, advance only for those inside r_list */
           if (q1 - q0 > CD_MAX_CAND - nc) { q1 = q0 + (CD_MAX_CAND - nc); nl->overfull = true; }
-          for (int32_t q = q0; q < q1; q++) {
-            const int32_t j = nl->sorted[q];
-            const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-            cand[nc] = j;
-            nc += dx * dx + dy * dy + dz * dz < rl2;
-          }
+          nc += select_range(nl, q0, q1, NULL, xi, yi, zi, rl2, cand + nc);
         } else {
           const double *sv = nl->shift[st[e].code];
           if (q1 - q0 > CD_MAX_CAND / 2 - nimg) { q1 = q0 + (CD_MAX_CAND / 2 - nimg); nl->overfull = true; }
-          for (int32_t q = q0; q < q1; q++) {
-            const int32_t j = nl->sorted[q];
-            const double dx = xi - (x[j] + sv[0]), dy = yi - (y[j] + sv[1]), dz = zi - (z[j] + sv[2]);
-            img[2 * nimg] = j;
+          const int m = select_range(nl, q0, q1, sv, xi, yi, zi, rl2, imgj);
+          for (int q = 0; q < m; q++, nimg++) {
+            img[2 * nimg] = imgj[q];
             img[2 * nimg + 1] = st[e].code;
-            nimg += dx * dx + dy * dy + dz * dz < rl2;
           }
         }
       }
@@ -211,7 +258,7 @@ static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int
   for (size_t i = 0; i < n; i++)
     if (nl->cell_of[i] < 0) nl->sorted[k++] = (int32_t)i;
   const int32_t *perm = nl->sorted;
-  double *tmp = nl->scratch;
+  double *tmp = nl->xs; /* xs/ys/zs are refilled after the renumbering */
   double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->fx, p->fy, p->fz, p->mass};
   for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) {
     double *v = arr[a];
@@ -219,15 +266,15 @@ static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int
     for (long q = 0; q < (long)n; q++) tmp[q] = v[perm[q]];
     memcpy(v, tmp, n * sizeof *v);
   }
-  int64_t *g = (int64_t *)(void *)nl->scratch;
+  int64_t *g = (int64_t *)(void *)nl->xs;
   for (size_t q = 0; q < n; q++) g[q] = p->gid[perm[q]];
   memcpy(p->gid, g, n * sizeof *g);
-  uint8_t *b = (uint8_t *)(void *)nl->scratch;
+  uint8_t *b = (uint8_t *)(void *)nl->xs;
   for (size_t q = 0; q < n; q++) b[q] = p->mat[perm[q]];
   memcpy(p->mat, b, n);
   for (size_t q = 0; q < n; q++) b[q] = p->flags[perm[q]];
   memcpy(p->flags, b, n);
-  int32_t *c = (int32_t *)(void *)nl->scratch;
+  int32_t *c = (int32_t *)(void *)nl->xs;
   for (size_t q = 0; q < n; q++) c[q] = nl->cell_of[perm[q]];
   memcpy(nl->cell_of, c, n * sizeof *c);
   if (partners) {
@@ -367,6 +414,15 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
   }
   for (int l = 0; l <= n0; l++) nl->layer_start[l] = cs[(size_t)l * n1 * n2];
   if (reorder) reorder_particles(nl, p, partners ? partners : NULL, cs[ncells]);
+  /* positions in cell order, so that the candidate tests read them contiguously */
+  const int32_t nsorted = cs[ncells];
+#pragma omp parallel for schedule(static) if (CD_PAR(n))
+  for (int32_t q = 0; q < nsorted; q++) {
+    const int32_t i = nl->sorted[q];
+    nl->xs[q] = p->x[i];
+    nl->ys[q] = p->y[i];
+    nl->zs[q] = p->z[i];
+  }
 
   /* Colouring (cd_impl.h). */
   const bool per0 = box->bc[ax[0]] == CD_BC_PERIODIC;
