@@ -13,8 +13,8 @@ static void run_usage(FILE *f) {
           "  --force     allow writing into an OUTDIR that already holds results\n"
           "  --quiet     no progress line\n"
           "  --verbose   debug messages in the log\n"
-          "  --restart FILE  continue from a checkpoint the same deck wrote (discrete_model;\n"
-          "              any rank count, docs/mpi.md)\n\n"
+          "  --restart FILE  continue from a checkpoint the same deck wrote (discrete_model,\n"
+          "              cluster_dynamics; docs/mpi.md)\n\n"
           "The deck is validated completely before anything runs (see `mscale check`).\n"
           "OUTDIR receives deck.resolved.yaml (defaults filled in), run.log, run_info.yaml and\n"
           "the problem's data (CSV with units headers, HDF5 + XDMF for ParaView).\n"
@@ -104,7 +104,7 @@ int cmd_run(int argc, char **argv) {
   } else if (restart && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)
       fprintf(stderr, "mscale run: --restart is not available for this deck's problem type "
-                      "(only discrete_model writes checkpoints)\n");
+                      "(only discrete_model and cluster_dynamics write checkpoints)\n");
     s = MS_ERR_INPUT;
   } else {
     char *outdir = outdir_arg ? ms_strdup(outdir_arg) : default_outdir(deck);

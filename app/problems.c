@@ -41,7 +41,7 @@ static const problem_type problem_types[] = {
      (problem_run_fn)cont_problem_run, (problem_free_fn)cont_problem_free},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_CD
-    {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", false,
+    {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", true,
      (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
      (problem_free_fn)cd_problem_free},
 #endif

@@ -208,6 +208,12 @@ void dk_mark_used(const dk_node *map, const char *key);
 void dk_report_unused(dk_errors *e, const dk_doc *doc);
 /* Write the tree (with defaults filled in) as YAML, atomically (temporary name + rename). */
 ms_status dk_write_resolved(const dk_doc *doc, const char *path);
+/* 64-bit FNV-1a hash of the resolved tree (keys, values, structure; defaults included once
+ * readers have filled them in), leaving out the nodes whose path (e.g. "cluster_dynamics.t_end")
+ * is listed in the NULL-terminated `skip` (may be NULL). Checkpoints store it so that a restart
+ * refuses a different deck. dk_hash_doubles mixes data read from files into such a hash. */
+uint64_t dk_hash(const dk_doc *doc, const char *const *skip);
+uint64_t dk_hash_doubles(uint64_t h, const double *v, size_t n);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Atomic files: write to "<path>.part", rename to <path> on commit; an interrupted run never  *
@@ -256,6 +262,9 @@ ms_h5 *ms_h5_create_collective(const char *path);
 ms_status ms_h5_write_doubles_dist(ms_h5 *h, const char *name, size_t n_local, size_t ncomp,
                                    const double *data, const char *units);
 ms_status ms_h5_write_ints_dist(ms_h5 *h, const char *name, size_t n_local, const int64_t *data);
+/* Bytes (e.g. the text of an output file so far) as a 1D uint8 dataset, distributed like the
+ * rows above (a rank with nothing to add passes 0). */
+ms_status ms_h5_write_bytes_dist(ms_h5 *h, const char *name, size_t n_local, const void *data);
 ms_status ms_h5_close(ms_h5 *h); /* commit: close + rename (collective files: every rank) */
 void ms_h5_abort(ms_h5 *h);      /* close + remove temporary */
 
@@ -266,6 +275,19 @@ ms_h5r *ms_h5_open_read(const char *path, dk_errors *e);
 ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
                              dk_errors *e);
 bool ms_h5_exists(ms_h5r *h, const char *name);
+/* Rows [row0, row0 + nrow) of a 1D/2D dataset (nrow = SIZE_MAX: to the end), as doubles or
+ * int64 (integer datasets only); *data malloc'd, *ncol its row width. MS_ERR_INPUT with a
+ * message naming the file when the dataset is missing, of the wrong class, shorter than asked
+ * or not fully stored (truncated file). */
+ms_status ms_h5_read_doubles_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
+                                  double **data, size_t *nread, size_t *ncol, dk_errors *e);
+ms_status ms_h5_read_ints_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
+                               int64_t **data, size_t *nread, size_t *ncol, dk_errors *e);
+/* A 1D uint8 dataset (ms_h5_write_bytes_dist); *data malloc'd (one extra 0 byte). */
+ms_status ms_h5_read_bytes(ms_h5r *h, const char *name, char **data, size_t *n, dk_errors *e);
+/* A string attribute; *v malloc'd. */
+ms_status ms_h5_read_attr_string(ms_h5r *h, const char *obj, const char *attr, char **v,
+                                 dk_errors *e);
 /* Reads a scalar numeric attribute `attr` of the object `obj` (group or dataset; "/" = root).
  * MS_ERR_INPUT with a message naming the file if it is absent or not a number; e may be NULL
  * to probe quietly. */
@@ -286,6 +308,24 @@ typedef struct ms_xdmf_attr {
 ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
                                size_t npoints, int dim, double time, size_t nattr,
                                const ms_xdmf_attr *attr);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Checkpoints (core/checkpoint.c, docs/mpi.md): collective HDF5 files under a temporary name,  *
+ * stamped with a format name, the resolved deck's hash (dk_hash) and the rank count.          */
+
+/* Every rank: create OUTDIR/name(.part) and write the stamp. NULL on failure. */
+ms_h5 *ms_ckpt_create(const ms_ctx *ctx, const char *name, const char *format, uint64_t deck_hash);
+/* Every rank: agree on st (the writes' status), then complete (rename) or abort the file and
+ * log it. The environment variable MSCALE_CHECKPOINT_DELAY (seconds) holds the complete
+ * temporary file before the rename (kill tests). */
+ms_status ms_ckpt_commit(const ms_ctx *ctx, ms_h5 *h, ms_status st, const char *name, long step);
+/* Open a checkpoint for reading; refuses (NULL, message in e) another format or deck hash. */
+ms_h5r *ms_ckpt_open(const char *path, const char *format, uint64_t deck_hash, dk_errors *e);
+/* An output file being written (rank 0's ms_afile): its text so far into dataset `name`; and
+ * back into a freshly opened ms_afile of the restarted run. Every rank calls both. */
+ms_status ms_ckpt_save_afile(const ms_ctx *ctx, ms_h5 *h, const char *name, ms_afile *af);
+ms_status ms_ckpt_restore_afile(const ms_ctx *ctx, ms_h5r *h, const char *name, ms_afile *af,
+                                dk_errors *e);
 
 /* ------------------------------------------------------------------------------------------ */
 /* MPI layer (core/par.c). Serial builds and tests use the same calls on one rank.            */

@@ -575,3 +575,35 @@ ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
   emit(af.f, doc->root, 0, 0);
   return ms_afile_commit(&af);
 }
+
+/* ------------------------------------------------------------------------------------------ */
+/* Deck hash (checkpoints refuse to continue a different deck)                                 */
+
+/* FNV-1a, 64 bit */
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
+  const unsigned char *c = data;
+  for (size_t i = 0; i < n; i++) h = (h ^ c[i]) * 0x100000001b3ull;
+  return h;
+}
+
+static uint64_t hash_node(uint64_t h, const dk_node *n, const char *const *skip) {
+  for (const char *const *s = skip; s && *s; s++)
+    if (n->path && !strcmp(n->path, *s)) return fnv1a(h, "~", 1);
+  char kind = n->kind == DK_SCALAR ? 's' : (n->kind == DK_MAP ? 'm' : 'q');
+  h = fnv1a(h, &kind, 1);
+  if (n->kind == DK_SCALAR) return fnv1a(h, n->value ? n->value : "", n->value ? strlen(n->value) + 1 : 1);
+  for (size_t i = 0; i < n->n; i++) {
+    if (n->kind == DK_MAP) h = fnv1a(h, n->keys[i], strlen(n->keys[i]) + 1);
+    h = hash_node(h, n->items[i], skip);
+  }
+  return fnv1a(h, "}", 1);
+}
+
+uint64_t dk_hash(const dk_doc *doc, const char *const *skip) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  return doc && doc->root ? hash_node(h, doc->root, skip) : h;
+}
+
+uint64_t dk_hash_doubles(uint64_t h, const double *v, size_t n) {
+  return fnv1a(h, v, n * sizeof *v);
+}

@@ -165,6 +165,10 @@ ms_status ms_h5_write_ints_dist(ms_h5 *h, const char *name, size_t n_local, cons
   return write_rows_dist(h, name, n_local, 1, H5T_NATIVE_INT64, H5T_STD_I64LE, data, NULL);
 }
 
+ms_status ms_h5_write_bytes_dist(ms_h5 *h, const char *name, size_t n_local, const void *data) {
+  return write_rows_dist(h, name, n_local, 1, H5T_NATIVE_UINT8, H5T_STD_U8LE, data, NULL);
+}
+
 static hid_t open_object(hid_t file, const char *obj) {
   if (!obj || !obj[0] || !strcmp(obj, "/")) return H5Oopen(file, "/", H5P_DEFAULT);
   if (H5Lexists(file, obj, H5P_DEFAULT) <= 0) {
@@ -342,6 +346,127 @@ ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t 
   H5Tclose(type);
   H5Sclose(space);
   H5Dclose(ds);
+  return s;
+}
+
+/* Rows [row0, row0 + nrow) of a 1D/2D dataset of class `cls` read as `memtype` (elem bytes). */
+static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow, H5T_class_t cls,
+                           hid_t memtype, size_t elem, void **data, size_t *nread, size_t *ncol,
+                           dk_errors *e) {
+  *data = NULL;
+  *nread = *ncol = 0;
+  if (!ms_h5_exists(h, name)) {
+    dk_error_at(e, h->path, 0, 0, "dataset '%s' is missing", name);
+    return MS_ERR_INPUT;
+  }
+  hid_t ds = H5Dopen2(h->file, name, H5P_DEFAULT);
+  if (ds < 0) {
+    dk_error_at(e, h->path, 0, 0, "'%s' is not a dataset", name);
+    return MS_ERR_INPUT;
+  }
+  hid_t space = H5Dget_space(ds), type = H5Dget_type(ds);
+  int rank = H5Sget_simple_extent_ndims(space);
+  hsize_t dims[2] = {0, 1};
+  ms_status s = MS_ERR_INPUT;
+  if (rank < 1 || rank > 2 || H5Tget_class(type) != cls) {
+    dk_error_at(e, h->path, 0, 0, "dataset '%s' must be a 1D or 2D %s array", name,
+                cls == H5T_FLOAT ? "floating-point" : "integer");
+  } else {
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    if (rank == 1) dims[1] = 1;
+    hsize_t count = dims[0] * dims[1], stored = H5Dget_storage_size(ds);
+    if (nrow == SIZE_MAX && row0 <= dims[0]) nrow = (size_t)(dims[0] - row0);
+    if (dims[1] && dims[0] > (hsize_t)SIZE_MAX / elem / dims[1]) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' declares an impossible size", name);
+    } else if ((double)stored < (double)count * (double)H5Tget_size(type)) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' stores only %llu of its %llu bytes (truncated "
+                  "or damaged file?)", name, (unsigned long long)stored,
+                  (unsigned long long)(count * H5Tget_size(type)));
+    } else if (row0 > dims[0] || nrow > dims[0] - row0) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' has %llu rows, rows %zu..%zu were asked for",
+                  name, (unsigned long long)dims[0], row0, row0 + nrow);
+    } else {
+      void *buf = calloc(nrow * dims[1] + 1, elem);
+      hsize_t start[2] = {row0, 0}, cnt[2] = {nrow, dims[1]};
+      hid_t mspace = H5Screate_simple(rank, cnt, NULL);
+      H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, cnt, NULL);
+      if (nrow == 0) {
+        H5Sselect_none(space);
+        H5Sselect_none(mspace);
+      }
+      if (!buf || H5Dread(ds, memtype, mspace, space, H5P_DEFAULT, buf) < 0) {
+        dk_error_at(e, h->path, 0, 0, "cannot read dataset '%s'", name);
+        free(buf);
+      } else {
+        *data = buf;
+        *nread = nrow;
+        *ncol = (size_t)dims[1];
+        s = MS_OK;
+      }
+      H5Sclose(mspace);
+    }
+  }
+  H5Tclose(type);
+  H5Sclose(space);
+  H5Dclose(ds);
+  return s;
+}
+
+ms_status ms_h5_read_doubles_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
+                                  double **data, size_t *nread, size_t *ncol, dk_errors *e) {
+  return read_rows(h, name, row0, nrow, H5T_FLOAT, H5T_NATIVE_DOUBLE, sizeof(double),
+                   (void **)data, nread, ncol, e);
+}
+
+ms_status ms_h5_read_ints_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
+                               int64_t **data, size_t *nread, size_t *ncol, dk_errors *e) {
+  return read_rows(h, name, row0, nrow, H5T_INTEGER, H5T_NATIVE_INT64, sizeof(int64_t),
+                   (void **)data, nread, ncol, e);
+}
+
+ms_status ms_h5_read_bytes(ms_h5r *h, const char *name, char **data, size_t *n, dk_errors *e) {
+  size_t ncol = 0;
+  ms_status s = read_rows(h, name, 0, SIZE_MAX, H5T_INTEGER, H5T_NATIVE_UINT8, 1,
+                          (void **)data, n, &ncol, e);
+  if (s == MS_OK && ncol != 1) {
+    dk_error_at(e, h->path, 0, 0, "dataset '%s' must be 1D bytes", name);
+    free(*data);
+    *data = NULL;
+    s = MS_ERR_INPUT;
+  }
+  return s;
+}
+
+ms_status ms_h5_read_attr_string(ms_h5r *h, const char *obj, const char *attr, char **v,
+                                 dk_errors *e) {
+  const char *o = obj && obj[0] ? obj : "/";
+  *v = NULL;
+  if ((strcmp(o, "/") && !ms_h5_exists(h, o)) ||
+      H5Aexists_by_name(h->file, o, attr, H5P_DEFAULT) <= 0) {
+    if (e) dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is missing", attr, o);
+    return MS_ERR_INPUT;
+  }
+  hid_t a = H5Aopen_by_name(h->file, o, attr, H5P_DEFAULT, H5P_DEFAULT);
+  ms_status s = MS_ERR_INPUT;
+  if (a >= 0) {
+    hid_t type = H5Aget_type(a);
+    size_t len = H5Tget_size(type);
+    if (H5Tget_class(type) == H5T_STRING && !H5Tis_variable_str(type) && len < (1u << 20)) {
+      hid_t mt = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mt, len + 1);
+      char *buf = ms_calloc(len + 2, 1);
+      if (H5Aread(a, mt, buf) >= 0) {
+        *v = buf;
+        s = MS_OK;
+      } else {
+        free(buf);
+      }
+      H5Tclose(mt);
+    }
+    H5Tclose(type);
+    H5Aclose(a);
+  }
+  if (s != MS_OK && e) dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is not a string", attr, o);
   return s;
 }
 

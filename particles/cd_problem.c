@@ -68,6 +68,9 @@ struct cd_problem {
   uint64_t thermal_seed;
   int out_every, profile_axis, profile_bins, snapshots;
   double front_u; /* reference velocity for front tracking (piston velocity by default) */
+  long checkpoint_every;  /* steps between checkpoints (0: none) */
+  double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
+  uint64_t deck_hash;     /* resolved deck (t_end left out) and piston history */
 };
 
 static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc,
@@ -523,6 +526,14 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_read_int(e, doc, on, "profile_bins", false, 100, 1, 1000000, &bins);
     dk_read_int(e, doc, on, "snapshots", false, 0, 0, 100000, &snaps);
   }
+  if (on && dk_node_kind(on) == DK_MAP) {
+    dk_read_int(e, doc, on, "checkpoint_every", false, 0, 0, 1L << 40, &p->checkpoint_every);
+    dk_read_double(e, doc, on, "checkpoint_time", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
+                   &p->checkpoint_time);
+    if (p->checkpoint_every > 0 && p->checkpoint_time > 0)
+      dk_error(e, doc, dk_get(on, "checkpoint_time"), "give checkpoint_every (steps) or "
+               "checkpoint_time (simulated time), not both");
+  }
   p->out_every = (int)every;
   p->profile_axis = (int)axis;
   p->profile_bins = (int)bins;
@@ -568,6 +579,11 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     cd_problem_free(p);
     return NULL;
   }
+  /* a restart may run to another t_end; anything else must be the deck that wrote it */
+  static const char *const hash_skip[] = {"cluster_dynamics.t_end", NULL};
+  p->deck_hash = dk_hash(doc, hash_skip);
+  p->deck_hash = dk_hash_doubles(p->deck_hash, p->piston.t, p->piston.n);
+  p->deck_hash = dk_hash_doubles(p->deck_hash, p->piston.u, p->piston.n);
   return p;
 }
 
@@ -682,15 +698,107 @@ static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, doubl
   ms_csv_row(f, 11, row);
 }
 
+static void write_headers(FILE *fe, FILE *fp, FILE *ff) {
+  static const char *const ecol[] = {"t", "kinetic", "potential", "dissipated", "broken",
+                                     "piston_work", "total", "px", "py", "pz", "v_free_surface"};
+  static const char *const eunit[] = {"10us", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2",
+                                      "g(km/s)^2", "g(km/s)^2", "g km/s", "g km/s", "g km/s", "km/s"};
+  ms_csv_header(fe, "cluster dynamics energy balance (total = kinetic + potential + dissipated "
+                "+ broken - piston_work)", 11, ecol, eunit);
+  const char *pcol[CD_PROFILE_NCOL + 1] = {"t"};
+  const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm", "-", "g/cm^3", "km/s", "km/s", "km/s",
+                                            "GPa", "GPa", "GPa", "GPa", "GPa", "GPa", "GPa"};
+  for (int c = 0; c < CD_PROFILE_NCOL; c++) pcol[c + 1] = cd_profile_columns[c];
+  ms_csv_header(fp, "cluster dynamics binned profiles (stress compression-positive)",
+                CD_PROFILE_NCOL + 1, pcol, punit);
+  static const char *const fcol[] = {"t", "front"}, *const funit[] = {"10us", "cm"};
+  ms_csv_header(ff, "shock front: where the bin-mean velocity along the profile axis falls "
+                "below half the front_velocity", 2, fcol, funit);
+}
+
+/* ---- checkpoints (docs/mpi.md): OUTDIR/cd_checkpoint.h5 ---- */
+#define CD_CHECKPOINT_FORMAT "mscale cluster_dynamics checkpoint 1"
+enum { CD_NSTREAMS = 3, CD_MAX_FRONT = 4096 };
+static const char *const stream_names[CD_NSTREAMS] = {"/outputs/cd_energy.csv",
+                                                      "/outputs/cd_profiles.csv",
+                                                      "/outputs/cd_front.csv"};
+
+/* The state at the end of a step, before that step's outputs: the particles (after
+ * cd_sim_refresh, which the restart repeats), the CSV text so far and the front samples. */
+static ms_status write_checkpoint(ms_ctx *ctx, const cd_problem *p, cd_sim *s,
+                                  ms_afile *const streams[CD_NSTREAMS], const double *front,
+                                  int nf) {
+  ms_status st = cd_sim_refresh(s);
+  if (st != MS_OK) return st;
+  ms_h5 *h = ms_ckpt_create(ctx, "cd_checkpoint.h5", CD_CHECKPOINT_FORMAT, p->deck_hash);
+  if (!h) return MS_ERR_IO;
+  st = cd_checkpoint_write(h, ctx, s);
+  for (int k = 0; k < CD_NSTREAMS && st == MS_OK; k++)
+    st = ms_ckpt_save_afile(ctx, h, stream_names[k], streams[k]);
+  if (st == MS_OK)
+    st = ms_h5_write_doubles_dist(h, "/outputs/front", ctx->rank == 0 ? (size_t)nf : 0, 2,
+                                  front, "10us, cm");
+  return ms_ckpt_commit(ctx, h, st, "cd_checkpoint.h5", s->step);
+}
+
+static ms_status restore_outputs(const ms_ctx *ctx, ms_h5r *h, ms_afile *const streams[CD_NSTREAMS],
+                                 double *front, int *nf) {
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_status st = MS_OK;
+  for (int k = 0; k < CD_NSTREAMS && st == MS_OK; k++)
+    st = ms_ckpt_restore_afile(ctx, h, stream_names[k], streams[k], &e);
+  double *v = NULL;
+  size_t n = 0, ncol = 0;
+  if (st == MS_OK) st = ms_h5_read_doubles_rows(h, "/outputs/front", 0, SIZE_MAX, &v, &n, &ncol, &e);
+  if (st == MS_OK && (ncol != 2 || n > CD_MAX_FRONT)) {
+    dk_error_at(&e, ctx->restart, 0, 0, "'/outputs/front' is not a table of at most %d (t, z) rows",
+                CD_MAX_FRONT);
+    st = MS_ERR_INPUT;
+  }
+  if (st == MS_OK) {
+    memcpy(front, v, 2 * n * sizeof *v);
+    *nf = (int)n;
+  }
+  free(v);
+  st = par_agree_status(st);
+  if (st != MS_OK && ctx->rank == 0) dk_errors_print(&e, stderr);
+  dk_errors_free(&e);
+  return st;
+}
+
 ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
-  ptl_state *ps = build_particles(p, ctx);
+  cd_restart *rs = NULL;
+  ms_h5r *rh = NULL;
+  ptl_state *ps = NULL;
+  if (ctx->restart) {
+    dk_errors e;
+    dk_errors_init(&e);
+    rh = ms_ckpt_open(ctx->restart, CD_CHECKPOINT_FORMAT, p->deck_hash, &e);
+    if (rh) rs = cd_restart_read(rh, ctx, p->dim, p->mode == CD_CUTOFF_BONDED, &e);
+    if (rs) ps = cd_restart_take_particles(rs);
+    ms_status st = par_agree_status(rs ? MS_OK : MS_ERR_INPUT);
+    if (st != MS_OK) {
+      if (ctx->rank == 0) dk_errors_print(&e, stderr);
+      ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot restart from %s", ctx->restart);
+    }
+    dk_errors_free(&e);
+    if (st != MS_OK) {
+      ptl_state_free(ps);
+      cd_restart_free(rs);
+      ms_h5_close_read(rh);
+      return st;
+    }
+  } else {
+    ps = build_particles(p, ctx);
+  }
   if (!ps || ps->n == 0) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: the regions contain no lattice site");
     ptl_state_free(ps);
     return MS_ERR_INPUT;
   }
   /* thermal velocities (splitmix64, mean removed over integrated particles) */
-  if (p->thermal_amp > 0) {
+  if (p->thermal_amp > 0 && !rs) {
     double mean[3] = {0, 0, 0}, *v[3] = {ps->vx, ps->vy, ps->vz};
     size_t nm = 0;
     for (size_t i = 0; i < ps->n; i++) {
@@ -709,7 +817,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   /* free-surface layer: particles within r0 of the farthest one along the piston direction */
   double dir[3] = {p->piston_dir[0], p->piston_dir[1], p->piston_dir[2]};
   int axis = p->profile_axis;
-  if (p->piston.n) {
+  if (p->piston.n && !rs) {
     double smax = -INFINITY;
     for (size_t i = 0; i < ps->n; i++) {
       double sx = ps->x[i] * dir[0] + ps->y[i] * dir[1] + ps->z[i] * dir[2];
@@ -738,15 +846,32 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
                "on [r_min, R_c] (cold curve undefined there?)", p->mat[a]->name, p->mat[b]->name);
         free(t);
         cd_sim_free(s);
+        cd_restart_free(rs);
+        ms_h5_close_read(rh);
         return MS_ERR_INPUT;
       }
       cd_sim_set_pair(s, a, b, t);
     }
   if (p->piston.n) cd_sim_set_piston(s, &p->piston, dir);
-  ms_status st = cd_sim_init(s);
+  const long nsteps = (long)ceil(p->t_end / cfg.dt - 1e-9);
+  ms_status st;
+  if (rs) {
+    dk_errors e;
+    dk_errors_init(&e);
+    st = cd_restart_step(rs) > nsteps ? MS_ERR_INPUT : cd_sim_init_restart(s, rs, &e);
+    if (cd_restart_step(rs) > nsteps)
+      dk_error_at(&e, ctx->restart, 0, 0, "the checkpoint is at step %ld, beyond this deck's "
+                  "end (step %ld)", cd_restart_step(rs), nsteps);
+    if (st != MS_OK && ctx->rank == 0) dk_errors_print(&e, stderr);
+    dk_errors_free(&e);
+  } else {
+    st = cd_sim_init(s);
+  }
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
     cd_sim_free(s);
+    cd_restart_free(rs);
+    ms_h5_close_read(rh);
     return st;
   }
   ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
@@ -774,23 +899,12 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     if (fe.f) ms_afile_abort(&fe);
     if (fp.f) ms_afile_abort(&fp);
     cd_sim_free(s);
+    cd_restart_free(rs);
+    ms_h5_close_read(rh);
     return st;
   }
-  static const char *const ecol[] = {"t", "kinetic", "potential", "dissipated", "broken",
-                                     "piston_work", "total", "px", "py", "pz", "v_free_surface"};
-  static const char *const eunit[] = {"10us", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2",
-                                      "g(km/s)^2", "g(km/s)^2", "g km/s", "g km/s", "g km/s", "km/s"};
-  ms_csv_header(fe.f, "cluster dynamics energy balance (total = kinetic + potential + dissipated "
-                "+ broken - piston_work)", 11, ecol, eunit);
-  const char *pcol[CD_PROFILE_NCOL + 1] = {"t"};
-  const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm", "-", "g/cm^3", "km/s", "km/s", "km/s",
-                                            "GPa", "GPa", "GPa", "GPa", "GPa", "GPa", "GPa"};
-  for (int c = 0; c < CD_PROFILE_NCOL; c++) pcol[c + 1] = cd_profile_columns[c];
-  ms_csv_header(fp.f, "cluster dynamics binned profiles (stress compression-positive)",
-                CD_PROFILE_NCOL + 1, pcol, punit);
-  static const char *const fcol[] = {"t", "front"}, *const funit[] = {"10us", "cm"};
-  ms_csv_header(ff.f, "shock front: where the bin-mean velocity along the profile axis falls "
-                "below half the front_velocity", 2, fcol, funit);
+  ms_afile *streams[CD_NSTREAMS] = {&fe, &fp, &ff};
+  if (!rs) write_headers(fe.f, fp.f, ff.f); /* a restart writes back the text so far */
 
   double lo = p->box.lo[axis], hi = p->box.hi[axis];
   if (p->box.bc[axis] != CD_BC_PERIODIC) { /* free axis: the extent may grow; pad by 50 % */
@@ -802,15 +916,31 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     if (a != axis) area *= p->box.hi[a] - p->box.lo[a];
   if (p->dim == 2) area *= p->thickness;
   double *prof = ms_calloc((size_t)p->profile_bins * CD_PROFILE_NCOL, sizeof *prof);
-  const long nsteps = (long)ceil(p->t_end / cfg.dt - 1e-9);
   const long snap_every = p->snapshots > 0 ? (nsteps + p->snapshots - 1) / p->snapshots : 0;
-  double tf[4096], zf[4096];
+  const long ckpt_every = p->checkpoint_every > 0
+                              ? p->checkpoint_every
+                              : (p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / cfg.dt)) : 0);
+  double front[2 * CD_MAX_FRONT]; /* (t, z) of the front fit */
   int nf = 0;
+  long step0 = 0;
+  if (rs) {
+    step0 = cd_restart_step(rs);
+    st = restore_outputs(ctx, rh, streams, front, &nf);
+    cd_restart_free(rs);
+    ms_h5_close_read(rh);
+    if (st == MS_OK)
+      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: restarted from %s at step %ld (t = %.9g)",
+             ctx->restart, step0, s->t);
+  }
   ms_progress prog;
-  ms_progress_start(&prog, ctx, "cluster_dynamics", 0.0, nsteps * cfg.dt);
-  for (long k = 0; k <= nsteps && st == MS_OK; k++) {
-    if (k > 0) st = cd_sim_step(s);
+  ms_progress_start(&prog, ctx, "cluster_dynamics", s->t, nsteps * cfg.dt);
+  for (long k = step0; k <= nsteps && st == MS_OK; k++) {
+    if (k > step0) st = cd_sim_step(s);
     if (st != MS_OK) break;
+    if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
+      st = write_checkpoint(ctx, p, s, streams, front, nf);
+      if (st != MS_OK) break;
+    }
     bool out = k % p->out_every == 0 || k == nsteps;
     if (out) {
       cd_energy en;
@@ -827,9 +957,9 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
         double z = cd_front_position(prof, p->profile_bins, axis, p->front_u, 0.5);
         double row[2] = {s->t, z};
         ms_csv_row(ff.f, 2, row);
-        if (isfinite(z) && nf < 4096) {
-          tf[nf] = s->t;
-          zf[nf++] = z;
+        if (isfinite(z) && nf < CD_MAX_FRONT) {
+          front[2 * nf] = s->t;
+          front[2 * nf++ + 1] = z;
         }
       }
       ms_progress_update(&prog, s->t, k);
@@ -846,10 +976,12 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   if (nf > 3) {
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     int m = 0;
-    for (int k = 0; k < nf; k++)
-      if (tf[k] >= 0.25 * tf[nf - 1]) {
-        sx += tf[k]; sy += zf[k]; sxx += tf[k] * tf[k]; sxy += tf[k] * zf[k]; m++;
+    for (int k = 0; k < nf; k++) {
+      const double tk = front[2 * k], zk = front[2 * k + 1];
+      if (tk >= 0.25 * front[2 * (nf - 1)]) {
+        sx += tk; sy += zk; sxx += tk * tk; sxy += tk * zk; m++;
       }
+    }
     if (m > 2)
       ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: shock speed D = %.4f km/s (front fit over t >= T/4)",
              (m * sxy - sx * sy) / (m * sxx - sx * sx));

@@ -163,10 +163,8 @@ static void ensure_sums(cd_sim *s) {
   }
 }
 
-static ms_status rebuild(cd_sim *s) {
+static ms_status rebuild_lists(cd_sim *s, bool reorder) {
   double t0 = ms_wall_time();
-  int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 8; /* default: every 8th build */
-  bool reorder = s->nl->nbuild % every == 0;
   ms_status st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
   s->wall_time_neigh += ms_wall_time() - t0;
   s->disp_bound = 0.0;
@@ -176,6 +174,11 @@ static ms_status rebuild(cd_sim *s) {
     for (size_t i = 0, k = 0; i < s->p->n; i++)
       if (s->p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
   return MS_OK;
+}
+
+static ms_status rebuild(cd_sim *s) {
+  int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 8; /* default: every 8th build */
+  return rebuild_lists(s, s->nl->nbuild % every == 0);
 }
 
 static double driven_force(const cd_sim *s) {
@@ -216,7 +219,7 @@ ms_status cd_sim_init(cd_sim *s) {
   s->nl = cd_neigh_create(p->cap, s->rc_max + s->cfg.skin, s->cfg.skin);
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;
-  if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
+  if (s->cfg.cutoff == CD_CUTOFF_BONDED && !s->partners) { /* a restart brings its own */
     /* partners: every pair closer than its R_c now */
     s->partners = ms_aligned_alloc(p->cap * CD_MAX_PARTNERS, sizeof(int32_t));
     for (size_t k = 0; k < p->cap * CD_MAX_PARTNERS; k++) s->partners[k] = -1;
@@ -268,13 +271,26 @@ ms_status cd_sim_init(cd_sim *s) {
     }
   }
   /* pairs inside R_c at the start, for the broken-pair energy of the plain cutoff */
-  cd_compute_forces(s, s->sums, NULL, false);
-  memset(s->n_inside0, 0, sizeof s->n_inside0);
-  for (int l = 0; l < s->nl->nlayer; l++)
-    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
-      s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
+  if (!s->have_inside0) {
+    cd_compute_forces(s, s->sums, NULL, false);
+    memset(s->n_inside0, 0, sizeof s->n_inside0);
+    for (int l = 0; l < s->nl->nlayer; l++)
+      for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
+        s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
+    s->have_inside0 = true;
+  }
   step_forces(s);
   return MS_OK;
+}
+
+/* What a restart does after reading a checkpoint (lists built with renumbering, then forces),
+ * done by the run at each checkpoint too: both continue from identical lists, particle order
+ * and force summation order (docs/mpi.md). The renumbering is a stable sort into cell order,
+ * so repeating it on the checkpoint's order leaves that order unchanged. */
+ms_status cd_sim_refresh(cd_sim *s) {
+  ms_status st = rebuild_lists(s, true);
+  if (st == MS_OK) step_forces(s);
+  return st;
 }
 
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]) {

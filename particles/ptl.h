@@ -290,6 +290,26 @@ ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const i
                              int nparts, cd_partition_method method, int slab_axis,
                              int32_t *owner, cd_partition_stats *stats);
 
+/* ---- checkpoint / restart (particles/cd_checkpoint.c, docs/mpi.md) ---- */
+/* Rebuild the lists with renumbering and recompute the forces: what a restart does, so the run
+ * calls it right before each checkpoint and both continue bit for bit. */
+ms_status cd_sim_refresh(cd_sim *s);
+/* Group /cd of a checkpoint file made by ms_ckpt_create: particles (each rank its own segment),
+ * bonded partners as gids, the balance accumulators, time, step, list-build count. Collective. */
+ms_status cd_checkpoint_write(ms_h5 *h, const ms_ctx *ctx, const cd_sim *s);
+typedef struct cd_restart cd_restart;
+/* Reads group /cd (bonded: with partners); NULL with messages in e if it is missing, damaged
+ * or truncated. */
+cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, dk_errors *e);
+/* The checkpoint's particles, for cd_sim_create (ownership passes to the caller). */
+ptl_state *cd_restart_take_particles(cd_restart *r);
+double cd_restart_time(const cd_restart *r);
+long cd_restart_step(const cd_restart *r);
+/* cd_sim_init for a sim made from cd_restart_take_particles (tables and piston set): restores
+ * partners, accumulators, time and step, then builds lists and forces as cd_sim_refresh. */
+ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e);
+void cd_restart_free(cd_restart *r);
+
 /* ---- deck problem `cluster_dynamics` (docs/input-cd.md) ---- */
 typedef struct cd_problem cd_problem;
 cd_problem *cd_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
