@@ -152,6 +152,32 @@ static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const double
   return nc;
 }
 
+/* One range of a cell's stencil: sorted positions q0 .. q1 − 1 with their image code; `same`
+ * ranges (same layer, or no colouring) keep only q > p (cd_impl.h). */
+typedef struct stencil_range { int32_t q0, q1; int code; bool same; } stencil_range;
+
+/* Image code of the shift (s0, s1, s2) along the axes ax[0..2]: 13 is no image. */
+static inline int stencil_code(const int ax[3], int s0, int s1, int s2) {
+  int sh[3];
+  sh[ax[0]] = s0;
+  sh[ax[1]] = s1;
+  sh[ax[2]] = s2;
+  return (sh[0] + 1) + 3 * (sh[1] + 1) + 9 * (sh[2] + 1);
+}
+
+/* Append a range to the stencil, merged with the previous one when contiguous with it. Empty
+ * ranges, and `same` ranges wholly before the cell's first position `cell_q0` (no particle of
+ * the cell takes them), are dropped: the candidates each particle sees are unchanged. */
+static inline void add_range(stencil_range *st, int *nst, int32_t q0, int32_t q1, int code,
+                             bool same, int32_t cell_q0) {
+  if (q0 == q1 || (same && q1 <= cell_q0)) return;
+  stencil_range *last = st + *nst - 1;
+  if (*nst > 0 && last->q1 == q0 && last->code == code && last->same == same)
+    last->q1 = q1;
+  else
+    st[(*nst)++] = (stencil_range){q0, q1, code, same};
+}
+
 static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
                           const int ax[3], const int32_t *partners) {
   const double rl2 = nl->rlist * nl->rlist;
@@ -165,7 +191,8 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   int32_t imgj[CD_MAX_CAND / 2 + 8];
   /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
    * (same layer, or no colouring) keep only q > p (cd_impl.h) */
-  struct stencil_range { int32_t q0, q1; int code; bool same; } st[27];
+  stencil_range st[27];
+  const int32_t *cs = nl->cell_start;
   const int32_t c_begin = (int32_t)layer * n1 * n2, c_end = c_begin + n1 * n2;
   for (int32_t c = c_begin; c < c_end; c++) {
     if (nl->cell_start[c] == nl->cell_start[c + 1]) continue;
@@ -187,23 +214,19 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         int m1 = k[1] + o1, s1 = 0;
         if (m1 < 0) { if (!per[1]) continue; m1 += n1; s1 = -1; }
         if (m1 >= n1) { if (!per[1]) continue; m1 -= n1; s1 = 1; }
+        const bool same = !next_layer;
+        const int32_t row = (m0 * n1 + m1) * n2;
+        if (k[2] >= 1 && k[2] + 1 < n2) { /* the row's three cells are contiguous: one range */
+          add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2],
+                    stencil_code(ax, s0, s1, 0), same, cs[c]);
+          continue;
+        }
         for (int o2 = -1; o2 <= 1; o2++) {
           int m2 = k[2] + o2, s2 = 0;
           if (m2 < 0) { if (!per[2]) continue; m2 += n2; s2 = -1; }
           if (m2 >= n2) { if (!per[2]) continue; m2 -= n2; s2 = 1; }
-          int sh[3] = {0, 0, 0};
-          sh[ax[0]] = s0;
-          sh[ax[1]] = s1;
-          sh[ax[2]] = s2;
-          int code = (sh[0] + 1) + 3 * (sh[1] + 1) + 9 * (sh[2] + 1);
-          int32_t cell = (m0 * n1 + m1) * n2 + m2;
-          int32_t q0 = nl->cell_start[cell], q1 = nl->cell_start[cell + 1];
-          if (q0 == q1) continue;
-          bool same = !next_layer;
-          if (nst > 0 && st[nst - 1].q1 == q0 && st[nst - 1].code == code && st[nst - 1].same == same)
-            st[nst - 1].q1 = q1; /* contiguous with the previous range: merge */
-          else
-            st[nst++] = (struct stencil_range){q0, q1, code, same};
+          add_range(st, &nst, cs[row + m2], cs[row + m2 + 1], stencil_code(ax, s0, s1, s2), same,
+                    cs[c]);
         }
       }
     }
