@@ -209,5 +209,17 @@ ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p);
 void cont_problem_free(cont_problem *p);
 /* The grid of a problem that has been read (built by cont_problem_read); for tests/coupling. */
 cont_grid *cont_problem_grid(cont_problem *p);
+/* Run with a caller stepping alongside (two-way coupling): the problem's own loop — output
+ * times, x–t frames, histories, balance log, instability guard — calls before(user, g) ahead of
+ * every grid step and after(user, g) once it succeeded; a status other than MS_OK from either
+ * ends the run with that status (outputs so far are kept, as on instability). Hooks may be
+ * NULL. end > 0 replaces the section's time.end. */
+typedef struct cont_step_hooks {
+  ms_status (*before)(void *user, cont_grid *g);
+  ms_status (*after)(void *user, cont_grid *g);
+  void *user;
+  double end;
+} cont_step_hooks;
+ms_status cont_problem_run_hooked(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *hooks);
 
 #endif /* MSCALE_CONT_H */

@@ -92,16 +92,22 @@ static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double
   }
 }
 
-static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p);
+static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *h);
 
 /* The 1D grid is cheap and serial: under MPI rank 0 runs it and writes every file (two ranks
  * writing the same outputs would race); the other ranks wait and share its status. */
 ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
-  ms_status s = ctx->rank == 0 ? run_on_this_rank(ctx, p) : MS_OK;
+  ms_status s = ctx->rank == 0 ? run_on_this_rank(ctx, p, NULL) : MS_OK;
   return par_agree_status(s);
 }
 
-static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p) {
+/* Hooked runs belong to the caller's (serial) coupling loop: every rank that calls runs. */
+ms_status cont_problem_run_hooked(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *hooks) {
+  if (hooks && hooks->end > 0) p->t_end = hooks->end;
+  return run_on_this_rank(ctx, p, hooks);
+}
+
+static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *h) {
   cont_grid *g = p->grid;
   ms_status s = MS_OK;
   cont_balance b0 = cont_grid_balance(g);
@@ -138,7 +144,9 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p) {
     double lim = left;
     if (g->dt_next < left && g->dt_next > 0.5 * left) lim = 0.5 * left; /* no sliver steps */
     if (lim == left) g->land_time = target;
+    if (h && h->before && (s = h->before(h->user, g)) != MS_OK) break;
     s = cont_grid_step(g, lim);
+    if (s == MS_OK && h && h->after && (s = h->after(h->user, g)) != MS_OK) break;
     if (s != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR, "continuum: %s", cont_grid_error(g));
       ms_status s2 = cont_write_profile(ctx, g, "profile_unstable");

@@ -28,6 +28,7 @@ enum { DRIVE_VELOCITY = 0, DRIVE_TRANSMITTING, DRIVE_TWO_WAY };
 struct cpl_problem {
   const eos_materials *mats;
   cont_problem *grid_out, *grid_live;
+  cont_problem *gas_grid; /* two-way: the gas beyond the particles' free surface (`gas:`) */
   size_t tag_drive, tag_fs; /* tag indices in both grids */
   int drive_mode;           /* 0 velocity history, 1 transmitting (characteristic) piston */
   double impedance;         /* Z for the transmitting piston (0: √1.5 ρ0 c0) */
@@ -155,6 +156,10 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
       dk_errors_free(&scratch);
     }
   }
+  /* two-way only: the gas beyond the particles' free surface, a grid of its own */
+  const dk_node *Gs = dk_get(sec, "gas");
+  if (Gs)
+    p->gas_grid = cont_problem_read(doc, Gs, mats, e);
   const dk_node *D = dk_get(sec, "drive");
   const char *drive_tag = NULL, *fs_tag = NULL;
   if (!D)
@@ -226,12 +231,30 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
           dk_error(e, doc, dk_get(sec, "particles") ? dk_get(sec, "particles") : sec,
                    "drive.mode two_way needs particles.depth (the particle region's length "
                    "beyond the interface, cm)");
-        if (X)
-          dk_error(e, doc, X, "drive.mode two_way has no gas layer: remove 'transport'");
         p->sample_mat = v.material[nd ? nd - 1 : 0];
-        p->drag_law = CPL_DRAG_NONE;
+        if (!p->gas_grid) {
+          if (X)
+            dk_error(e, doc, X,
+                     "drive.mode two_way without a 'gas:' section has no gas: remove "
+                     "'transport' (or add the gas beyond the particles as 'gas:')");
+          p->drag_law = CPL_DRAG_NONE;
+        } else {
+          cont_view gv = cont_grid_view(cont_problem_grid(p->gas_grid));
+          p->gas_mat = gv.material[0];
+          p->gas_layer = gv.layer[0];
+          const eos_material *gm = &mats->m[p->gas_mat];
+          if (p->drag_law != CPL_DRAG_NONE && !(gm->viscosity > 0))
+            dk_error(e, doc, R ? R : sec,
+                     "drag needs the gas viscosity: give material '%s' a 'viscosity' "
+                     "(air: 1.8e-9 g/(cm*10us) = 1.8e-5 Pa*s), or set drag.law: none",
+                     gm->name);
+        }
         goto consistency_done;
       }
+      if (Gs)
+        dk_error(e, doc, Gs,
+                 "'gas:' is for drive.mode two_way; the one-way grid carries its own gas layer "
+                 "beyond free_surface_tag");
       if (p->have_fs) {
         p->tag_fs = find_tag(g, fs_tag);
         if (p->tag_fs == (size_t)-1) {
@@ -305,6 +328,7 @@ void cpl_problem_free(cpl_problem *p) {
     return;
   cont_problem_free(p->grid_out);
   cont_problem_free(p->grid_live);
+  cont_problem_free(p->gas_grid);
   free(p);
 }
 
@@ -398,6 +422,7 @@ typedef struct gas_ctx {
   cont_grid *g;
   int gas_layer;
   double mu;
+  double offset; /* particle frame − grid frame (two-way gas grid; 0 for the one-way grid) */
   /* momentum/energy return (drag.gas_return): the particle region's cross-section, which the
    * grid's per-cm² cells stand for, and the first failure */
   double area;
@@ -415,7 +440,8 @@ static void gas_deposit(void *user, const double x[3], double t0, double t1, con
   (void)t1;
   gas_ctx *c = user;
   cont_sample s;
-  if (c->st != MS_OK || !cont_grid_sample(c->g, x[0], &s) || s.layer != c->gas_layer)
+  if (c->st != MS_OK || !cont_grid_sample(c->g, x[0] - c->offset, &s) ||
+      s.layer != c->gas_layer)
     return;
   ms_status st = cont_grid_add_cell_source(c->g, s.cell, -dp[0] / c->area, -de / c->area);
   if (st != MS_OK) {
@@ -430,7 +456,7 @@ static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
   (void)t;
   const gas_ctx *c = user;
   cont_sample s;
-  if (!cont_grid_sample(c->g, x[0], &s) || s.layer != c->gas_layer)
+  if (!cont_grid_sample(c->g, x[0] - c->offset, &s) || s.layer != c->gas_layer)
     return false;
   out->rho = s.rho;
   out->u[0] = s.u;
@@ -494,6 +520,143 @@ static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
                      ps->gid}; /* fragments numbered by smallest gid: independent of the
                                 * particle sorting and of the rank count */
   return v;
+}
+
+/* Drag on the detached fragments (their share of the fragment's force, cpl_drag_fragments) as a
+ * velocity kick over `span`, and with drag.gas_return the opposite momentum and the energy into
+ * the gas cell at each kicked particle. MS_ERR_UNSTABLE if the gas refused a return. */
+static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_particles *view,
+                           const cpl_ejecta_sel *sel, gas_ctx *gas, double t, double span,
+                           ptl_state *ps, const uint8_t *skip, double *fx, double *fy, double *fz) {
+  const size_t n = ps->n;
+  const bool three_d = ps->dim == 3;
+  memset(fx, 0, n * sizeof *fx);
+  memset(fy, 0, n * sizeof *fy);
+  memset(fz, 0, n * sizeof *fz);
+  cpl_drag_fragments(p->drag_law, fr, view, sel, grid_gas, gas, t, fx, fy, fz);
+  for (size_t i = 0; i < n; i++) {
+    if (skip[i] || (fx[i] == 0 && fy[i] == 0 && fz[i] == 0))
+      continue;
+    double v0[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
+    ps->vx[i] += fx[i] / ps->mass[i] * span;
+    ps->vy[i] += fy[i] / ps->mass[i] * span;
+    if (three_d)
+      ps->vz[i] += fz[i] / ps->mass[i] * span;
+    if (p->gas_return) {
+      double v1[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
+      double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], three_d ? ps->z[i] : 0.0};
+      for (int k = 0; k < 3; k++) {
+        dp[k] = ps->mass[i] * (v1[k] - v0[k]);
+        de += 0.5 * ps->mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]);
+      }
+      gas_deposit(gas, xi, t, t, dp, de);
+    }
+  }
+  return gas->st;
+}
+
+/* Transport of the detached fragments ahead of the free surface (sel) from t0 to the detector
+ * plane det_x, the gas grid advancing in lock-step (transport.windows); arrivals and the
+ * detector spectrum are written. */
+static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *fr,
+                                 const cpl_ejecta_sel *sel, gas_ctx *gas, double t0, double det_x,
+                                 double rho0) {
+  ms_status st = MS_OK;
+  cpl_transport_opts to;
+  cpl_transport_opts_default(&to);
+  to.law = (cpl_drag_law)p->drag_law;
+  to.rho_p = rho0;
+  to.det_x = det_x;
+  cpl_transport *tr = cpl_transport_create(&to, grid_gas, gas);
+  if (p->gas_return)
+    cpl_transport_set_return(tr, gas_deposit, gas);
+  /* keep each flight's fragment size g for the detector spectrum */
+  int64_t *gcount = ms_calloc(fr->n + 1, sizeof *gcount);
+  size_t nfl = 0, big = cpl_largest_fragment(fr);
+  for (size_t k = 0; k < fr->n; k++) {
+    if (!cpl_is_ejecta_with(fr, k, sel, big))
+      continue;
+    double x[3] = {fr->cx[k], fr->cy[k], fr->cz[k]}, v[3] = {fr->vx[k], fr->vy[k], fr->vz[k]};
+    cpl_transport_add(tr, fr->mass[k], x, v, t0);
+    gcount[nfl++] = fr->count[k];
+  }
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: 3/3 transport of %zu ejecta fragments to the detector at "
+         "x = %g cm (%g cm beyond the free surface), until t = %g",
+         nfl, to.det_x, p->det_distance, p->transport_end);
+  ms_progress prog;
+  ms_progress_start(&prog, ctx, "transport", t0, p->transport_end);
+  for (long w = 1; w <= p->transport_windows && st == MS_OK; w++) {
+    double tw = t0 + (p->transport_end - t0) * (double)w / (double)p->transport_windows;
+    st = cont_grid_run_to(gas->g, tw);
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(gas->g));
+      break;
+    }
+    ms_status s2 = cpl_transport_advance(tr, tw);
+    if (s2 != MS_OK) /* a failed fragment is reported, the others fly on */
+      ms_log(ctx, MS_LOG_WARN, "coupled: transport: %s", cpl_transport_error(tr));
+    if (gas->st != MS_OK) {
+      st = gas->st;
+      ms_log(ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(gas->g));
+    }
+    ms_progress_update(&prog, tw, w);
+  }
+  ms_progress_finish(&prog, p->transport_end, p->transport_windows);
+  if (st == MS_OK) {
+    ms_afile af;
+    FILE *f = open_csv(ctx, &af, "arrivals.csv");
+    if (!f) {
+      st = MS_ERR_IO;
+    } else {
+      cpl_write_arrivals(f, tr, NULL);
+      st = commit_csv(&af);
+    }
+    /* the spectrum at the detector: arrived fragments only */
+    cpl_fragments det;
+    memset(&det, 0, sizeof det);
+    det.count = ms_calloc(nfl + 1, sizeof *det.count);
+    det.mass = ms_calloc(nfl + 1, sizeof *det.mass);
+    size_t narr = 0;
+    double marr = 0;
+    for (size_t i = 0; i < nfl; i++) {
+      cpl_flight fl = cpl_transport_get(tr, i);
+      if (fl.state != CPL_ARRIVED)
+        continue;
+      det.count[det.n] = gcount[i];
+      det.mass[det.n] = fl.mass;
+      det.n++;
+      narr++;
+      marr += fl.mass;
+    }
+    if (st == MS_OK) {
+      f = open_csv(ctx, &af, "spectrum_detector.csv");
+      if (!f) {
+        st = MS_ERR_IO;
+      } else {
+        cpl_write_spectrum(f, &det, "fragment spectrum N(g) of the arrivals at the detector");
+        st = commit_csv(&af);
+      }
+    }
+    ms_log(ctx, MS_LOG_INFO, "coupled: %zu of %zu fragments (%.4g g) reached the detector", narr,
+           nfl, marr);
+    if (p->gas_return) {
+      cont_balance gb = cont_grid_balance(gas->g);
+      ms_log(ctx, MS_LOG_INFO,
+             "coupled: the gas received momentum %.6g g*km/s and energy %.6g kJ from the "
+             "fragments (grid sources per cm^2: %.6g, %.6g)",
+             gas->returned_p, gas->returned_e, gb.source_momentum, gb.source_energy);
+    }
+    p->sum.gas_momentum = gas->returned_p;
+    p->sum.gas_energy = gas->returned_e;
+    p->sum.transported = nfl;
+    p->sum.arrived = narr;
+    free(det.count);
+    free(det.mass);
+  }
+  free(gcount);
+  cpl_transport_free(tr);
+  return st;
 }
 
 /* The particle region between x_drive and x_drive + depth (lattice, surface profile, piston and
@@ -605,21 +768,163 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   return MS_OK;
 }
 
-/* Two-way coupling (docs/coupling.md §6): the grid ends at the interface node; per grid step
- * the node gets the impulse the particles received in the previous step as a traction, the
- * grid steps, and the particles sub-cycle with the piston moving at the node's mean velocity
- * over the step (so the piston follows the node's displacement exactly). */
-static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
-  cont_grid *g = cont_problem_grid(p->grid_live);
-  const size_t node = cont_grid_history(g, p->tag_drive).node;
-  cont_view v = cont_grid_view(g);
-  const double x_if0 = v.x[node];
+/* Two-way coupling (docs/coupling.md §6): the grid ends at the interface node and runs through
+ * the continuum problem's own loop (profiles, histories, x–t data as in a grid-only run); per
+ * grid step the node gets the impulse the particles received in the previous step as a
+ * traction (before the step), then the particles sub-cycle with the piston moving at the node's
+ * mean velocity over the step, so the piston follows the node's displacement exactly (after
+ * it). With a `gas:` section a second grid carries the gas beyond the particles' free surface:
+ * its first node moves with the particles' free-surface velocity, and detached fragments ahead
+ * of it feel its drag and are transported through it as in the one-way run. */
+typedef struct two_way {
+  ms_ctx *ctx;
+  cpl_problem *p;
+  size_t node;
   region reg;
-  ms_status st = build_region(ctx, p, x_if0, p->depth, &reg);
+  FILE *f_if, *f_ej;
+  cpl_fragments fr;
+  cpl_fragment_opts fo;
+  cpl_ejecta_sel sel;
+  uint8_t *skip;
+  double *fx, *fy, *fz;
+  double ta, xa, traction; /* interface node before the current grid step; its load */
+  double p_avg, Jg, Jp, Wg, f_prev, w_before, dtg_last, owed;
+  long gsteps, psteps, next_out, last_search;
+  gas_ctx gas; /* gas.g == NULL: no gas section */
+} two_way;
+
+static ms_status two_way_before(void *user, cont_grid *g) {
+  two_way *w = user;
+  /* the particles push the node towards −x: the traction hands the grid the impulse the
+   * particles received and the grid has not yet (`owed`, normally the last step's), spread
+   * over the expected step; what a different step size leaves over is carried on, so the
+   * exchange conserves momentum exactly up to the impulse in flight */
+  w->traction = w->dtg_last > 0 ? -w->owed / w->dtg_last : 0.0;
+  cont_grid_set_node_force(g, w->node, w->traction);
+  w->ta = cont_grid_time(g);
+  w->xa = cont_grid_view(g).x[w->node];
+  return MS_OK;
+}
+
+/* Fragments, ejected mass and the drag kick since the last search (gas section only). */
+static ms_status two_way_fragments(two_way *w, double t) {
+  cpl_problem *p = w->p;
+  ptl_state *ps = w->reg.ps;
+  cpl_particles view = particle_view(ps, w->skip);
+  ms_status st = cpl_fragments_find(&w->fr, &view, &w->fo);
+  if (st != MS_OK || !w->gas.g)
+    return st;
+  /* ejecta: detached fragments ahead of the gas grid's first node (the particles' free surface
+   * as the gas sees it) */
+  w->sel.plane = cont_grid_view(w->gas.g).x[0] + w->gas.offset;
+  double row[3] = {t, cpl_ejected_mass(&w->fr, &w->sel), (double)w->fr.n};
+  ms_csv_row(w->f_ej, 3, row);
+  if (p->drag_law != CPL_DRAG_NONE) {
+    double span = (double)(w->psteps - w->last_search) * w->reg.sim->cfg.dt;
+    st = drag_kick(p, &w->fr, &view, &w->sel, &w->gas, t, span, ps, w->skip, w->fx, w->fy, w->fz);
+    if (st != MS_OK)
+      ms_log(w->ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(w->gas.g));
+  }
+  w->last_search = w->psteps;
+  return st;
+}
+
+static ms_status two_way_after(void *user, cont_grid *g) {
+  two_way *w = user;
+  cpl_problem *p = w->p;
+  cd_sim *sim = w->reg.sim;
+  ptl_state *ps = w->reg.ps;
+  const double area = w->reg.area;
+  ms_status st = MS_OK;
+  w->gsteps++;
+  double tb = cont_grid_time(g), xb = cont_grid_view(g).x[w->node], dtg = tb - w->ta;
+  double ubar = (xb - w->xa) / dtg;
+  w->Jg += w->traction * dtg;
+  w->Wg += w->traction * (xb - w->xa);
+  w->owed += w->traction * dtg;
+  /* sub-cycle: whole number of particle steps over the grid step */
+  long nsub = (long)ceil(dtg / w->reg.cfg.dt * (1 - 1e-12));
+  if (nsub < 1)
+    nsub = 1;
+  sim->cfg.dt = dtg / (double)nsub;
+  sim->piston.t[0] = sim->t;
+  sim->piston.t[1] = sim->t + dtg;
+  sim->piston.u[0] = sim->piston.u[1] = ubar;
+  double imp = 0;
+  w->w_before = sim->piston_work;
+  for (long k = 0; k < nsub && st == MS_OK; k++) {
+    st = cd_sim_step(sim);
+    w->psteps++;
+    double f = 0;
+    for (size_t i = 0; i < ps->n; i++)
+      if (ps->flags[i] & PTL_DRIVEN)
+        f += ps->fx[i];
+    /* impulse on the particles from the piston: velocity Verlet's ½(F_old + F_new) Δt */
+    imp += -0.5 * (w->f_prev + f) * sim->cfg.dt;
+    w->f_prev = f;
+  }
+  if (st != MS_OK) {
+    ms_log(w->ctx, MS_LOG_ERROR, "coupled: particle step failed (%s) at t = %g",
+           ms_status_str(st), sim->t);
+    return st;
+  }
+  w->p_avg = imp / (dtg * area);
+  w->Jp += w->p_avg * dtg;
+  w->owed += w->p_avg * dtg;
+  w->dtg_last = dtg;
+  double ufs = cd_free_surface_velocity(sim, 0);
+  if (w->gas.g) {
+    /* the gas ahead is pushed by the particles' free surface */
+    cont_grid_set_node_velocity(w->gas.g, 0, ufs);
+    st = cont_grid_run_to(w->gas.g, tb);
+    if (st != MS_OK) {
+      ms_log(w->ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(w->gas.g));
+      return st;
+    }
+  }
+  double row[8] = {tb, ubar, w->p_avg, ufs, w->Jg, w->Jp, w->Wg, sim->piston_work / area};
+  ms_csv_row(w->f_if, 8, row);
+  bool out_now = tb >= p->t_end * (double)w->next_out / (double)p->n_out * (1 - 1e-12);
+  if (out_now || (w->gas.g && w->psteps - w->last_search >= p->frag_every)) {
+    st = two_way_fragments(w, tb);
+    if (st != MS_OK)
+      return st;
+  }
+  if (out_now) {
+    char name[64];
+    snprintf(name, sizeof name, "particles_%04ld.h5", w->next_out);
+    char *path = ms_out_path(w->ctx, name);
+    cpl_particles view = particle_view(ps, w->skip);
+    cpl_snapshot_info info = {tb, w->reg.a, w->reg.rho0, w->fo.box};
+    st = cpl_write_snapshot(path, &view, &w->fr, &info);
+    free(path);
+    ms_log(w->ctx, MS_LOG_INFO,
+           "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
+           "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
+           "particles %.6g (per cm^2); %zu fragments",
+           tb, w->gsteps, w->psteps, ubar, w->p_avg, w->Jg, w->Jp, w->Wg,
+           sim->piston_work / area, w->fr.n);
+    w->next_out++;
+  }
+  p->sum.u_interface = ubar;
+  p->sum.u_free_surface = ufs;
+  return st;
+}
+
+static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
+  two_way w;
+  memset(&w, 0, sizeof w);
+  w.ctx = ctx;
+  w.p = p;
+  w.next_out = 1;
+  cont_grid *g = cont_problem_grid(p->grid_live);
+  w.node = cont_grid_history(g, p->tag_drive).node;
+  const double x_if0 = cont_grid_view(g).x[w.node];
+  ms_status st = build_region(ctx, p, x_if0, p->depth, &w.reg);
   if (st != MS_OK)
     return st;
-  cd_sim *sim = reg.sim;
-  ptl_state *ps = reg.ps;
+  cd_sim *sim = w.reg.sim;
+  ptl_state *ps = w.reg.ps;
   double th[2] = {0, 1}, uh[2] = {0, 0}, dir[3] = {1, 0, 0};
   cd_history ph = {2, th, uh};
   cd_sim_set_piston(sim, &ph, dir);
@@ -628,10 +933,12 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     cd_sim_free(sim);
     return st;
   }
-  const double dt_p = reg.cfg.dt, area = reg.area;
-  ms_afile af_if;
-  FILE *f_if = open_csv(ctx, &af_if, "interface.csv");
-  if (!f_if) {
+  ms_afile af_if, af_ej;
+  w.f_if = open_csv(ctx, &af_if, "interface.csv");
+  w.f_ej = p->gas_grid ? open_csv(ctx, &af_ej, "ejecta_mass.csv") : NULL;
+  if (!w.f_if || (p->gas_grid && !w.f_ej)) {
+    if (w.f_if)
+      ms_afile_abort(&af_if);
     cd_sim_free(sim);
     return MS_ERR_IO;
   }
@@ -639,131 +946,87 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
                                       "J_grid", "J_particles", "W_grid",      "W_particles"};
   static const char *const units[] = {"10us",     "km/s",     "GPa",     "km/s",
                                       "GPa*10us", "GPa*10us", "kJ/cm^2", "kJ/cm^2"};
-  ms_csv_header(f_if,
+  ms_csv_header(w.f_if,
                 "two-way interface: node velocity, particle pressure, impulse and work "
                 "per unit area as the grid and the particles received them",
                 8, names, units);
-  ms_log(ctx, MS_LOG_INFO,
-         "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g", node,
-         x_if0, p->depth, dt_p);
-  cpl_fragments fr;
-  cpl_fragments_init(&fr);
-  cpl_fragment_opts fo;
-  memset(&fo, 0, sizeof fo);
-  fo.bond = p->bond;
-  fo.spacing = reg.a;
-  fo.rho0 = reg.rho0;
-  fo.box.period[1] = reg.width;
-  if (reg.fcc)
-    fo.box.period[2] = reg.width_z;
-  uint8_t *skip = ms_calloc(ps->n + 1, 1);
-  double p_avg = 0.0, Jg = 0, Jp = 0, Wg = 0, f_prev = 0, w_before = 0, dtg_last = 0, owed = 0;
+  if (w.f_ej) {
+    static const char *const ejn[] = {"t", "M_ej", "fragments"};
+    static const char *const eju[] = {"10us", "g", "1"};
+    ms_csv_header(w.f_ej, "ejected mass (fragments but the largest, ahead of the particles' "
+                          "free surface) vs time", 3, ejn, eju);
+  }
+  cpl_fragments_init(&w.fr);
+  w.fo.bond = p->bond;
+  w.fo.spacing = w.reg.a;
+  w.fo.rho0 = w.reg.rho0;
+  w.fo.box.period[1] = w.reg.width;
+  if (w.reg.fcc)
+    w.fo.box.period[2] = w.reg.width_z;
+  cpl_ejecta_sel_default(&w.sel);
+  w.skip = ms_calloc(ps->n + 1, 1);
+  w.fx = ms_calloc(ps->n + 1, sizeof(double));
+  w.fy = ms_calloc(ps->n + 1, sizeof(double));
+  w.fz = ms_calloc(ps->n + 1, sizeof(double));
   for (size_t i = 0; i < ps->n; i++)
     if (ps->flags[i] & PTL_DRIVEN)
-      f_prev += ps->fx[i];
-  long gsteps = 0, psteps = 0, next_out = 1;
-  ms_progress prog;
-  ms_progress_start(&prog, ctx, "two-way", 0.0, p->t_end);
-  while (cont_grid_time(g) < p->t_end * (1 - 1e-12) && st == MS_OK) {
-    /* the particles push the node towards −x: the traction hands the grid the impulse the
-     * particles received and the grid has not yet (`owed`, normally the last step's), spread
-     * over the expected step; what a different step size leaves over is carried on, so the
-     * exchange conserves momentum exactly up to the impulse in flight */
-    const double traction = dtg_last > 0 ? -owed / dtg_last : 0.0;
-    cont_grid_set_node_force(g, node, traction);
-    double ta = cont_grid_time(g), xa = cont_grid_view(g).x[node];
-    st = cont_grid_step(g, p->t_end - ta);
-    if (st != MS_OK) {
-      ms_log(ctx, MS_LOG_ERROR, "coupled: grid: %s", cont_grid_error(g));
-      break;
-    }
-    gsteps++;
-    double tb = cont_grid_time(g), xb = cont_grid_view(g).x[node], dtg = tb - ta;
-    double ubar = (xb - xa) / dtg;
-    Jg += traction * dtg;
-    Wg += traction * (xb - xa);
-    owed += traction * dtg;
-    /* sub-cycle: whole number of particle steps over the grid step */
-    long nsub = (long)ceil(dtg / dt_p * (1 - 1e-12));
-    if (nsub < 1)
-      nsub = 1;
-    sim->cfg.dt = dtg / (double)nsub;
-    sim->piston.t[0] = sim->t;
-    sim->piston.t[1] = sim->t + dtg;
-    sim->piston.u[0] = sim->piston.u[1] = ubar;
-    double imp = 0;
-    w_before = sim->piston_work;
-    for (long k = 0; k < nsub && st == MS_OK; k++) {
-      st = cd_sim_step(sim);
-      psteps++;
-      double f = 0;
-      for (size_t i = 0; i < ps->n; i++)
-        if (ps->flags[i] & PTL_DRIVEN)
-          f += ps->fx[i];
-      /* impulse on the particles from the piston: velocity Verlet's ½(F_old + F_new) Δt */
-      imp += -0.5 * (f_prev + f) * sim->cfg.dt;
-      f_prev = f;
-    }
-    if (st != MS_OK) {
-      ms_log(ctx, MS_LOG_ERROR, "coupled: particle step failed (%s) at t = %g", ms_status_str(st),
-             sim->t);
-      break;
-    }
-    p_avg = imp / (dtg * area);
-    Jp += p_avg * dtg;
-    owed += p_avg * dtg;
-    dtg_last = dtg;
-    double ufs = cd_free_surface_velocity(sim, 0);
-    double row[8] = {tb, ubar, p_avg, ufs, Jg, Jp, Wg, sim->piston_work / area};
-    ms_csv_row(f_if, 8, row);
-    if (tb >= p->t_end * (double)next_out / (double)p->n_out * (1 - 1e-12)) {
-      cpl_particles view = particle_view(ps, skip);
-      st = cpl_fragments_find(&fr, &view, &fo);
-      if (st != MS_OK)
-        break;
-      char name[64];
-      snprintf(name, sizeof name, "particles_%04ld.h5", next_out);
-      char *path = ms_out_path(ctx, name);
-      cpl_snapshot_info info = {tb, reg.a, reg.rho0, fo.box};
-      st = cpl_write_snapshot(path, &view, &fr, &info);
-      free(path);
-      ms_log(ctx, MS_LOG_INFO,
-             "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
-             "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
-             "particles %.6g (per cm^2); %zu fragments",
-             tb, gsteps, psteps, ubar, p_avg, Jg, Jp, Wg, sim->piston_work / area, fr.n);
-      next_out++;
-    }
-    p->sum.u_interface = ubar;
-    p->sum.u_free_surface = ufs;
-    ms_progress_update(&prog, tb, gsteps);
+      w.f_prev += ps->fx[i];
+  if (p->gas_grid) {
+    cont_grid *gg = cont_problem_grid(p->gas_grid);
+    /* the gas grid's first node sits on the particles' nominal free surface */
+    w.gas = (gas_ctx){gg, p->gas_layer, p->mats->m[p->gas_mat].viscosity,
+                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0};
   }
-  ms_progress_finish(&prog, cont_grid_time(g), gsteps);
+  ms_log(ctx, MS_LOG_INFO,
+         "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
+         x_if0, p->depth, w.reg.cfg.dt, p->gas_grid ? ", gas grid beyond the free surface" : "");
+  cont_step_hooks hooks = {two_way_before, two_way_after, &w, p->t_end};
+  st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
   ms_status s2 = ms_afile_commit(&af_if);
   if (st == MS_OK)
     st = s2;
+  if (w.f_ej) {
+    s2 = ms_afile_commit(&af_ej);
+    if (st == MS_OK)
+      st = s2;
+  }
   if (st == MS_OK)
-    st = write_table(ctx, "spectrum.csv", &fr, 0, NULL, NULL);
+    st = write_table(ctx, "spectrum.csv", &w.fr, 0, NULL, NULL);
+  if (p->gas_grid) /* at the end of the particle phase (the transport moves it on) */
+    p->sum.gas_shift = cont_grid_view(w.gas.g).x[0] + w.gas.offset - w.reg.x_top;
+  if (st == MS_OK && p->gas_grid) {
+    const char *tables[] = {"fragments.csv", "cumulative.csv", "mass_hist.csv",
+                            "diameter_hist.csv", "ejecta_velocity.csv"};
+    for (int k = 0; k < 5 && st == MS_OK; k++)
+      st = write_table(ctx, tables[k], &w.fr, k + 1, &w.sel, NULL);
+    if (st == MS_OK && p->det_distance > 0 && p->transport_end > cont_grid_time(g))
+      st = transport_phase(ctx, p, &w.fr, &w.sel, &w.gas, cont_grid_time(g),
+                           w.reg.x_top + p->det_distance, w.reg.rho0);
+  }
   p->sum.particles = ps->n;
-  p->sum.steps = psteps;
-  p->sum.fragments = fr.n;
+  p->sum.steps = w.psteps;
+  p->sum.fragments = w.fr.n;
+  p->sum.ejected_mass = p->gas_grid ? cpl_ejected_mass(&w.fr, &w.sel) : 0.0;
   /* the particles' last grid step is in flight: the grid receives its counterpart in its next
    * step; compare what both sides have exchanged so far */
-  p->sum.impulse_grid = Jg;
-  p->sum.impulse_particles = Jp - owed;
-  p->sum.work_grid = Wg;
-  p->sum.work_particles = w_before / area;
+  p->sum.impulse_grid = w.Jg;
+  p->sum.impulse_particles = w.Jp - w.owed;
+  p->sum.work_grid = w.Wg;
+  p->sum.work_particles = w.w_before / w.reg.area;
   p->sum.piston_work = sim->piston_work;
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
          "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
          "%.6g + particles %.6g = %.3g (%.2g of it)",
-         Jg, p->sum.impulse_particles, Jg + p->sum.impulse_particles,
-         (Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), Wg,
-         p->sum.work_particles, Wg + p->sum.work_particles,
-         (Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
-  cpl_fragments_free(&fr);
-  free(skip);
+         w.Jg, p->sum.impulse_particles, w.Jg + p->sum.impulse_particles,
+         (w.Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), w.Wg,
+         p->sum.work_particles, w.Wg + p->sum.work_particles,
+         (w.Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
+  cpl_fragments_free(&w.fr);
+  free(w.skip);
+  free(w.fx);
+  free(w.fy);
+  free(w.fz);
   cd_sim_free(sim);
   return st;
 }
@@ -861,7 +1124,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
 
   /* 3. the particle phase, with the live grid supplying the gas */
   cont_grid *glive = cont_problem_grid(p->grid_live);
-  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, reg.area, MS_OK, 0, 0};
+  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, 0.0, reg.area, MS_OK, 0, 0};
   cpl_fragments fr;
   cpl_fragments_init(&fr);
   cpl_fragment_opts fo;
@@ -960,32 +1223,11 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
         ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(glive));
         break;
       }
-      memset(fx, 0, n * sizeof *fx);
-      memset(fy, 0, n * sizeof *fy);
-      memset(fz, 0, n * sizeof *fz);
-      cpl_drag_fragments(p->drag_law, &fr, &view, &sel, grid_gas, &gas, t_abs, fx, fy, fz);
       /* a velocity kick over the search interval (operator splitting; drag is slow on the
        * particle time step) */
-      double span = (double)(step - last_search) * cfg.dt;
-      for (size_t i = 0; i < n; i++)
-        if (!skip[i] && (fx[i] != 0 || fy[i] != 0 || fz[i] != 0)) {
-          double v0[3] = {ps->vx[i], ps->vy[i], fcc ? ps->vz[i] : 0.0};
-          ps->vx[i] += fx[i] / ps->mass[i] * span;
-          ps->vy[i] += fy[i] / ps->mass[i] * span;
-          if (fcc)
-            ps->vz[i] += fz[i] / ps->mass[i] * span;
-          if (p->gas_return) {
-            double v1[3] = {ps->vx[i], ps->vy[i], fcc ? ps->vz[i] : 0.0};
-            double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], fcc ? ps->z[i] : 0.0};
-            for (int k = 0; k < 3; k++) {
-              dp[k] = ps->mass[i] * (v1[k] - v0[k]);
-              de += 0.5 * ps->mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]);
-            }
-            gas_deposit(&gas, xi, t_abs, t_abs, dp, de);
-          }
-        }
-      if (gas.st != MS_OK) {
-        st = gas.st;
+      st = drag_kick(p, &fr, &view, &sel, &gas, t_abs, (double)(step - last_search) * cfg.dt, ps,
+                     skip, fx, fy, fz);
+      if (st != MS_OK) {
         ms_log(ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(glive));
         break;
       }
@@ -1098,100 +1340,8 @@ particle_done:
   }
 
   /* 4. transport of the ejecta to the detector */
-  if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t) {
-    double t0 = t_start + sim->t;
-    cpl_transport_opts to;
-    cpl_transport_opts_default(&to);
-    to.law = (cpl_drag_law)p->drag_law;
-    to.rho_p = rho0;
-    to.det_x = x_fs + p->det_distance;
-    cpl_transport *tr = cpl_transport_create(&to, grid_gas, &gas);
-    if (p->gas_return)
-      cpl_transport_set_return(tr, gas_deposit, &gas);
-    /* keep each flight's fragment size g for the detector spectrum */
-    int64_t *gcount = ms_calloc(fr.n + 1, sizeof *gcount);
-    size_t nfl = 0, big = cpl_largest_fragment(&fr);
-    for (size_t k = 0; k < fr.n; k++) {
-      if (!cpl_is_ejecta_with(&fr, k, &sel, big))
-        continue;
-      double x[3] = {fr.cx[k], fr.cy[k], fr.cz[k]}, v[3] = {fr.vx[k], fr.vy[k], fr.vz[k]};
-      cpl_transport_add(tr, fr.mass[k], x, v, t0);
-      gcount[nfl++] = fr.count[k];
-    }
-    ms_log(ctx, MS_LOG_INFO,
-           "coupled: 3/3 transport of %zu ejecta fragments to the detector at "
-           "x = %g cm (%g cm beyond the free surface), until t = %g",
-           nfl, to.det_x, p->det_distance, p->transport_end);
-    ms_progress_start(&prog, ctx, "transport", t0, p->transport_end);
-    for (long w = 1; w <= p->transport_windows && st == MS_OK; w++) {
-      double tw = t0 + (p->transport_end - t0) * (double)w / (double)p->transport_windows;
-      st = cont_grid_run_to(glive, tw);
-      if (st != MS_OK) {
-        ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(glive));
-        break;
-      }
-      ms_status s2 = cpl_transport_advance(tr, tw);
-      if (s2 != MS_OK) /* a failed fragment is reported, the others fly on */
-        ms_log(ctx, MS_LOG_WARN, "coupled: transport: %s", cpl_transport_error(tr));
-      if (gas.st != MS_OK) {
-        st = gas.st;
-        ms_log(ctx, MS_LOG_ERROR, "coupled: gas return: %s", cont_grid_error(glive));
-      }
-      ms_progress_update(&prog, tw, w);
-    }
-    ms_progress_finish(&prog, p->transport_end, p->transport_windows);
-    if (st == MS_OK) {
-      ms_afile af;
-      FILE *f = open_csv(ctx, &af, "arrivals.csv");
-      if (!f) {
-        st = MS_ERR_IO;
-      } else {
-        cpl_write_arrivals(f, tr, NULL);
-        st = commit_csv(&af);
-      }
-      /* the spectrum at the detector: arrived fragments only */
-      cpl_fragments det;
-      memset(&det, 0, sizeof det);
-      det.count = ms_calloc(nfl + 1, sizeof *det.count);
-      det.mass = ms_calloc(nfl + 1, sizeof *det.mass);
-      size_t narr = 0;
-      double marr = 0;
-      for (size_t i = 0; i < nfl; i++) {
-        cpl_flight fl = cpl_transport_get(tr, i);
-        if (fl.state != CPL_ARRIVED)
-          continue;
-        det.count[det.n] = gcount[i];
-        det.mass[det.n] = fl.mass;
-        det.n++;
-        narr++;
-        marr += fl.mass;
-      }
-      if (st == MS_OK) {
-        f = open_csv(ctx, &af, "spectrum_detector.csv");
-        if (!f) {
-          st = MS_ERR_IO;
-        } else {
-          cpl_write_spectrum(f, &det, "fragment spectrum N(g) of the arrivals at the detector");
-          st = commit_csv(&af);
-        }
-      }
-      ms_log(ctx, MS_LOG_INFO, "coupled: %zu of %zu fragments (%.4g g) reached the detector", narr,
-             nfl, marr);
-      if (p->gas_return) {
-        cont_balance gb = cont_grid_balance(glive);
-        ms_log(ctx, MS_LOG_INFO,
-               "coupled: the gas received momentum %.6g g*km/s and energy %.6g kJ from the "
-               "fragments (grid sources per cm^2: %.6g, %.6g)",
-               gas.returned_p, gas.returned_e, gb.source_momentum, gb.source_energy);
-      }
-      p->sum.transported = nfl;
-      p->sum.arrived = narr;
-      free(det.count);
-      free(det.mass);
-    }
-    free(gcount);
-    cpl_transport_free(tr);
-  }
+  if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t)
+    st = transport_phase(ctx, p, &fr, &sel, &gas, t_start + sim->t, x_fs + p->det_distance, rho0);
   cpl_fragments_free(&fr);
   free(skip);
   free(fx);

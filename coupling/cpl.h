@@ -393,6 +393,9 @@ typedef struct cpl_run_summary {
    * did (per unit area), their relative mismatch, and the end state */
   double impulse_grid, impulse_particles, work_grid, work_particles;
   double u_interface, u_free_surface; /* at the end of the run, km/s */
+  /* drag.gas_return: momentum (along x) and energy the gas received from the fragments
+   * (g·km/s, kJ); two-way with `gas:`: how far the gas grid's first node moved (cm) */
+  double gas_momentum, gas_energy, gas_shift;
 } cpl_run_summary;
 const cpl_run_summary *cpl_problem_summary(const cpl_problem *p);
 
