@@ -360,6 +360,16 @@ int64_t par_max_int64(int64_t v);
 void par_allgather_long(long v, long *all);
 void par_allgatherv_doubles(const double *send, int n, double *recv, const int *counts,
                             const int *displs);
+/* Rank and size of MPI_COMM_WORLD (0 and 1 when MPI is not running). */
+int par_rank(void);
+int par_size(void);
+/* In-place element-wise sum over ranks of v[0..n) (exact: integers). */
+void par_sum_int64s(int64_t *v, size_t n);
+/* Point-to-point exchange with `nnbr` neighbour ranks (ranks[k]): send[sdispl[k]..+scount[k])
+ * goes to ranks[k], recv[rdispl[k]..+rcount[k]) comes from it (counts in doubles). Every rank
+ * must list each partner that lists it. Allocation-free after the first call. No-op serially. */
+void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const int *scount,
+                          const int *sdispl, double *recv, const int *rcount, const int *rdispl);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Check-time memory estimate (core/mem_estimate.c): problem readers add their large arrays   *

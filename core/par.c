@@ -3,6 +3,7 @@
 #include "core.h"
 
 #include <mpi.h>
+#include <stdlib.h>
 #include <string.h>
 
 static bool mpi_started_here = false;
@@ -82,6 +83,22 @@ void par_alltoallv_doubles(const double *send, const int *scount, const int *sdi
   }
 }
 
+int par_rank(void) {
+  int r = 0;
+  if (active()) MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+int par_size(void) {
+  int n = 1;
+  if (active()) MPI_Comm_size(MPI_COMM_WORLD, &n);
+  return n;
+}
+
+void par_sum_int64s(int64_t *v, size_t n) {
+  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+}
+
 /* ---- distributed fragment analysis (coupling/fragments_dist.c) ---- */
 
 void par_alltoall_ints(const int *send, int *recv) {
@@ -117,4 +134,29 @@ void par_allgatherv_doubles(const double *send, int n, double *recv, const int *
   } else if (n > 0) {
     memcpy(recv + displs[0], send, (size_t)n * sizeof(double));
   }
+}
+
+/* Requests of the neighbour exchange: grown on first use to 2 per neighbour, then reused (the
+ * exchange runs every force evaluation and must not allocate). */
+static MPI_Request *nbr_req;
+static int nbr_req_cap;
+
+void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const int *scount,
+                          const int *sdispl, double *recv, const int *rcount, const int *rdispl) {
+  if (!active() || nnbr == 0) return;
+  if (2 * nnbr > nbr_req_cap) {
+    free(nbr_req);
+    nbr_req_cap = 2 * nnbr;
+    nbr_req = ms_calloc((size_t)nbr_req_cap, sizeof *nbr_req);
+  }
+  int nreq = 0;
+  for (int k = 0; k < nnbr; k++)
+    if (rcount[k] > 0)
+      MPI_Irecv(recv + rdispl[k], rcount[k], MPI_DOUBLE, ranks[k], 77, MPI_COMM_WORLD,
+                &nbr_req[nreq++]);
+  for (int k = 0; k < nnbr; k++)
+    if (scount[k] > 0)
+      MPI_Isend(send + sdispl[k], scount[k], MPI_DOUBLE, ranks[k], 77, MPI_COMM_WORLD,
+                &nbr_req[nreq++]);
+  MPI_Waitall(nreq, nbr_req, MPI_STATUSES_IGNORE);
 }

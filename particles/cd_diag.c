@@ -29,7 +29,7 @@ void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area
   const double width = (hi - lo) / nbin, vol = width * area;
   memset(out, 0, (size_t)nbin * CD_PROFILE_NCOL * sizeof *out);
   double *mass = ms_calloc((size_t)nbin, sizeof *mass);
-  for (size_t i = 0; i < p->n; i++) {
+  for (size_t i = 0; i < p->nlocal; i++) {
     if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
     int k = (int)floor((xa[i] - lo) / width);
     if (k < 0 || k >= nbin) continue;
@@ -38,6 +38,10 @@ void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area
     mass[k] += p->mass[i];
     for (int c = 0; c < 3; c++) row[3 + c] += p->mass[i] * v[c][i];
   }
+  if (s->dd) { /* MPI: every rank's owned particles */
+    par_sum_doubles(out, (size_t)nbin * CD_PROFILE_NCOL);
+    par_sum_doubles(mass, (size_t)nbin);
+  }
   for (int k = 0; k < nbin; k++) {
     double *row = out + (size_t)k * CD_PROFILE_NCOL;
     row[0] = lo + (k + 0.5) * width;
@@ -45,21 +49,24 @@ void cd_profile(cd_sim *s, int axis, double lo, double hi, int nbin, double area
     for (int c = 0; c < 3; c++) row[3 + c] = mass[k] > 0 ? row[3 + c] / mass[k] : 0.0;
   }
   static const int ia[6] = {0, 1, 2, 0, 1, 2}, ib[6] = {0, 1, 2, 1, 2, 0};
-  for (size_t i = 0; i < p->n; i++) {
+  double *acc = ms_calloc(6 * (size_t)nbin, sizeof *acc); /* stress sums per bin */
+  for (size_t i = 0; i < p->nlocal; i++) {
     if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
     int k = (int)floor((xa[i] - lo) / width);
     if (k < 0 || k >= nbin) continue;
-    double *row = out + (size_t)k * CD_PROFILE_NCOL;
+    const double *row = out + (size_t)k * CD_PROFILE_NCOL;
     double dv[3];
     for (int c = 0; c < 3; c++) dv[c] = v[c][i] - row[3 + c];
-    for (int c = 0; c < 6; c++) row[6 + c] += p->mass[i] * dv[ia[c]] * dv[ib[c]] + w[6 * i + c];
+    for (int c = 0; c < 6; c++) acc[6 * k + c] += p->mass[i] * dv[ia[c]] * dv[ib[c]] + w[6 * i + c];
   }
+  if (s->dd) par_sum_doubles(acc, 6 * (size_t)nbin);
   for (int k = 0; k < nbin; k++) {
     double *row = out + (size_t)k * CD_PROFILE_NCOL;
-    for (int c = 0; c < 6; c++) row[6 + c] /= vol;
+    for (int c = 0; c < 6; c++) row[6 + c] = acc[6 * k + c] / vol;
     row[12] = cd_von_mises(row + 6);
   }
   free(mass);
+  free(acc);
 }
 
 double cd_front_position(const double *profile, int nbin, int axis, double u_ref, double frac) {
@@ -79,7 +86,7 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
 
 ms_status cd_write_snapshot(cd_sim *s, const char *path) {
   const ptl_state *p = s->p;
-  const size_t n = p->n;
+  const size_t n = p->nlocal; /* MPI: each rank writes its owned particles (collective file) */
   const double *w = particle_virials(s);
   const double v0 = cd_cluster_volume(s->cfg.lattice, s->cfg.r0, s->cfg.thickness);
   double *xyz = ms_calloc(3 * n + 1, sizeof *xyz), *vel = ms_calloc(3 * n + 1, sizeof *vel);
@@ -99,20 +106,21 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
     mat[i] = p->mat[i];
   }
   ms_status st = MS_ERR_IO;
-  ms_h5 *h = ms_h5_create(path);
+  ms_h5 *h = s->dd ? ms_h5_create_collective(path) : ms_h5_create(path);
   if (h) {
-    st = ms_h5_write_doubles(h, "particles/x", n, 3, xyz, "cm");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/v", n, 3, vel, "km/s");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/mass", n, 1, p->mass, "g");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_u", n, 1, su, "GPa");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/pressure", n, 1, pr, "GPa");
-    if (st == MS_OK) st = ms_h5_write_ints(h, "particles/material", n, mat);
-    if (st == MS_OK) st = ms_h5_write_ints(h, "particles/gid", n, p->gid);
+    st = ms_h5_write_doubles_dist(h, "particles/x", n, 3, xyz, "cm");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, p->mass, "g");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/sigma_u", n, 1, su, "GPa");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/pressure", n, 1, pr, "GPa");
+    if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/material", n, mat);
+    if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/gid", n, p->gid);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", s->t);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "r0", s->cfg.r0);
     if (st == MS_OK) st = ms_h5_close(h); else ms_h5_abort(h);
   }
-  if (st == MS_OK) {
+  const size_t nglobal = s->dd ? (size_t)par_sum_long((long)n) : n;
+  if (st == MS_OK && (!s->dd || par_rank() == 0)) {
     /* sidecar next to the .h5, referring to it by its base name */
     size_t len = strlen(path);
     char *xmf = ms_calloc(len + 8, 1);
@@ -125,7 +133,7 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
                            {"sigma_u", "particles/sigma_u", 1, false},
                            {"pressure", "particles/pressure", 1, false},
                            {"mass", "particles/mass", 1, false}};
-    st = ms_xdmf_write_points(xmf, base, "particles/x", n, 3, s->t, 4, attr);
+    st = ms_xdmf_write_points(xmf, base, "particles/x", nglobal, 3, s->t, 4, attr);
     free(xmf);
   }
   free(xyz);
@@ -133,5 +141,5 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
   free(su);
   free(pr);
   free(mat);
-  return st;
+  return s->dd ? par_agree_status(st) : st;
 }

@@ -101,6 +101,15 @@ static void break_bond(int32_t *partners, int32_t i, int32_t j) {
   }
 }
 
+/* Under MPI a pair of an owned particle and a ghost is computed on both ranks (each keeps the
+ * force on its own particle); its energy, virial and counts are booked by the rank owning the
+ * particle with the smaller gid, so global sums count every pair once (docs/mpi.md). */
+static inline bool books_pair(const ptl_state *p, int32_t i, int32_t j) {
+  const int32_t nloc = (int32_t)p->nlocal;
+  if (i < nloc && j < nloc) return true;
+  return (p->gid[i] < p->gid[j] ? i : j) < nloc;
+}
+
 /* General path: several materials, bonded mode, energies and virials. */
 static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *pw, bool wf) {
   const cd_neigh *nl = s->nl;
@@ -129,7 +138,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
       if (!bonded) {
         if (r2 >= t->rc2) continue;
         fr = tab_force(t, r2, sum ? &e : NULL);
-        if (sum) sum->inside[mi * CD_MAX_MATERIALS + mj]++;
+        if (sum && books_pair(p, i, j)) sum->inside[mi * CD_MAX_MATERIALS + mj]++;
       } else if (*entry & CD_NB_BONDED) {
         if (r2 >= t->rc2) {
           if (!wf) continue; /* diagnostics never change the state */
@@ -140,7 +149,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
           tab_force(t, t->rc2, &eb);
           *entry &= ~CD_NB_BONDED;
           break_bond(s->partners, i, j);
-          if (sum) {
+          if (sum && books_pair(p, i, j)) {
             sum->broken += eb;
             sum->nbroken++;
           }
@@ -160,10 +169,12 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
         fz[j] = fma(-fr, dz, fz[j]);
       }
       if (sum) {
-        sum->epot += e;
         double v[6] = {fr * dx * dx, fr * dy * dy, fr * dz * dz,
                        fr * dx * dy, fr * dy * dz, fr * dz * dx};
-        for (int c = 0; c < 6; c++) sum->vir[c] += v[c];
+        if (books_pair(p, i, j)) {
+          sum->epot += e;
+          for (int c = 0; c < 6; c++) sum->vir[c] += v[c];
+        }
         if (pw)
           for (int c = 0; c < 6; c++) {
             pw[6 * (size_t)i + c] += 0.5 * v[c];
@@ -256,9 +267,9 @@ static void layer_damping(cd_sim *s, int layer, double *dv) {
 double cd_damping_step(cd_sim *s) {
   ptl_state *p = s->p;
   const cd_neigh *nl = s->nl;
-  const long n = (long)p->n;
+  const long n = (long)p->nlocal; /* ghosts' increments are their owners' business */
   double *dv = s->scratch;
-  memset(dv, 0, 3 * (size_t)n * sizeof *dv);
+  memset(dv, 0, 3 * p->n * sizeof *dv);
   for (int ph = 0; ph < nl->nphase; ph++) {
     const int a = nl->phase_start[ph], b = nl->phase_start[ph + 1];
 #pragma omp parallel for schedule(dynamic, 1) if (nl->colour && CD_PAR(p->n))

@@ -91,4 +91,21 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool write_fo
  * inside R_c, with μ_ik = 2 m_i m_k/(m_i + m_k); returns the kinetic energy it removed. */
 double cd_damping_step(cd_sim *s);
 
+/* ---- MPI decomposition (cd_par.c, docs/mpi.md) ---- */
+typedef struct cd_dd cd_dd;
+/* In cd_sim_init (rc_max known, before the first list build): coarse grid and first partition;
+ * grows p to hold the global count. Collective. */
+ms_status cd_dd_create(cd_sim *s);
+void cd_dd_free(cd_dd *d);
+/* At every list build: repartition when due, migrate particles to their owners, sort the owned
+ * ones by coarse cell, send full ghost copies, and remap bonded partners. Collective. */
+ms_status cd_dd_redistribute(cd_sim *s);
+/* Ghost refresh before a force evaluation (positions + velocities, ghost forces zeroed) or
+ * before the damping sub-step (velocities only). Collective. */
+void cd_dd_refresh(cd_sim *s, bool positions);
+/* The box changed (affine deformation): new coarse grid and partition. Collective. */
+void cd_dd_regrid(cd_sim *s);
+bool cd_dd_owns(const cd_dd *d, const double x[3]);
+const cd_mpi_stats *cd_dd_stats(const cd_dd *d);
+
 #endif /* MSCALE_CD_IMPL_H */

@@ -143,6 +143,7 @@ void cd_sim_free(cd_sim *s) {
         free(s->pair[a][b]);
       }
   cd_neigh_free(s->nl);
+  cd_dd_free(s->dd);
   cd_history_free(&s->piston);
   free(s->driven);
   free(s->scratch);
@@ -163,16 +164,27 @@ static void ensure_sums(cd_sim *s) {
   }
 }
 
+/* Under MPI (s->dd) every build first moves particles to their owners and refreshes the
+ * ghosts (cd_par.c), which also sorts the owned particles into cell order (no renumbering). */
 static ms_status rebuild_lists(cd_sim *s, bool reorder) {
   double t0 = ms_wall_time();
-  ms_status st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
+  ms_status st = MS_OK;
+  if (s->dd) {
+    st = cd_dd_redistribute(s);
+    reorder = false;
+  }
+  if (st == MS_OK) st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
+  if (s->dd) st = par_agree_status(st);
   s->wall_time_neigh += ms_wall_time() - t0;
   s->disp_bound = 0.0;
   if (st != MS_OK) return st;
   ensure_sums(s);
-  if (reorder && s->driven) /* indices changed: refresh the driven list */
-    for (size_t i = 0, k = 0; i < s->p->n; i++)
+  if ((reorder || s->dd) && s->driven) { /* indices changed: refresh the driven list */
+    size_t k = 0;
+    for (size_t i = 0; i < s->p->nlocal; i++)
       if (s->p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
+    s->n_driven = k;
+  }
   return MS_OK;
 }
 
@@ -193,6 +205,7 @@ static double driven_force(const cd_sim *s) {
 
 /* Forces for the time step; in bonded mode also books broken bonds. */
 static void step_forces(cd_sim *s) {
+  if (s->dd) cd_dd_refresh(s, true);
   double t0 = ms_wall_time();
   if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
     cd_compute_forces(s, s->sums, NULL, true);
@@ -216,6 +229,10 @@ ms_status cd_sim_init(cd_sim *s) {
     }
   if (p->dim == 2)
     for (size_t i = 0; i < p->n; i++) p->z[i] = p->vz[i] = 0.0;
+  if (s->mpi_on && par_size() > 1) {
+    ms_status st = cd_dd_create(s); /* grows p to the global count */
+    if (st != MS_OK) return st;
+  }
   s->nl = cd_neigh_create(p->cap, s->rc_max + s->cfg.skin, s->cfg.skin);
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;
@@ -251,13 +268,15 @@ ms_status cd_sim_init(cd_sim *s) {
   }
   if (s->cfg.damping_gamma > 0.0) s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
   s->n_driven = 0;
-  for (size_t i = 0; i < p->n; i++)
+  for (size_t i = 0; i < p->nlocal; i++)
     if (p->flags[i] & PTL_DRIVEN) s->n_driven++;
-  s->driven = ms_calloc(s->n_driven + 1, sizeof *s->driven);
-  for (size_t i = 0, k = 0; i < p->n; i++)
+  /* under MPI the owned driven particles change with migration: room for all */
+  s->driven = ms_calloc((s->dd ? p->cap : s->n_driven) + 1, sizeof *s->driven);
+  for (size_t i = 0, k = 0; i < p->nlocal; i++)
     if (p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
   if (s->cfg.integrator != CD_INT_VELOCITY_VERLET) {
     if ((int)s->cfg.integrator < 0 || s->cfg.integrator >= CD_INT_COUNT) return MS_ERR_INPUT;
+    if (s->dd) return MS_ERR_INPUT; /* MPI runs use velocity Verlet (docs/mpi.md) */
     s->rkn = rkn_create(rkn_of[s->cfg.integrator], 3 * p->n);
     s->driven_x0 = ms_calloc(3 * s->n_driven + 1, sizeof *s->driven_x0);
     /* q_l − x^n = Δt α_l u + Δt² Σ_{k<l} γ_k(α_l − α_k) a_k: reach coefficients */
@@ -277,6 +296,7 @@ ms_status cd_sim_init(cd_sim *s) {
     for (int l = 0; l < s->nl->nlayer; l++)
       for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
         s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
+    if (s->dd) par_sum_int64s(&s->n_inside0[0][0], CD_MAX_MATERIALS * CD_MAX_MATERIALS);
     s->have_inside0 = true;
   }
   step_forces(s);
@@ -301,6 +321,7 @@ ms_status cd_sim_affine(cd_sim *s, const double lambda[3]) {
     for (size_t i = 0; i < p->n; i++) xa[a][i] = lo + lambda[a] * (xa[a][i] - lo);
     s->box.hi[a] = lo + lambda[a] * (s->box.hi[a] - lo);
   }
+  if (s->dd) cd_dd_regrid(s);
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;
   step_forces(s);
@@ -312,7 +333,7 @@ ms_status cd_sim_affine(cd_sim *s, const double lambda[3]) {
 /* Specular walls: particles beyond a wall are mirrored back with the normal velocity reversed. */
 static void reflect_walls(cd_sim *s) {
   ptl_state *p = s->p;
-  const long n = (long)p->n;
+  const long n = (long)p->nlocal;
   double *xs[3] = {p->x, p->y, p->z}, *vs[3] = {p->vx, p->vy, p->vz};
   for (int a = 0; a < 3; a++) {
     if (s->box.bc[a] != CD_BC_WALL) continue;
@@ -329,16 +350,21 @@ static void reflect_walls(cd_sim *s) {
 /* After the integrator: damping sub-step, clock, and the periodic NaN check. */
 static ms_status end_step(cd_sim *s) {
   ptl_state *p = s->p;
-  const long n = (long)p->n;
+  const long n = (long)p->nlocal;
   const double *vx = p->vx, *vy = p->vy, *vz = p->vz;
-  if (s->cfg.damping_gamma > 0.0) s->dissipated += cd_damping_step(s);
+  if (s->cfg.damping_gamma > 0.0) {
+    if (s->dd) cd_dd_refresh(s, false); /* the ghosts' velocities after the kick */
+    s->dissipated += cd_damping_step(s);
+  }
   s->t += s->cfg.dt;
   s->step++;
   if (s->step % 100 == 0) {
     double sum = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : sum) if (CD_PAR(n))
     for (long i = 0; i < n; i++) sum += vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-    if (!isfinite(sum)) return MS_ERR_UNSTABLE;
+    int bad = !isfinite(sum);
+    if (s->dd) bad = par_max_int(bad); /* every rank stops together */
+    if (bad) return MS_ERR_UNSTABLE;
   }
   return MS_OK;
 }
@@ -448,7 +474,7 @@ static ms_status rkn_step_cd(cd_sim *s) {
 static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt, hdt = 0.5 * dt;
-  const long n = (long)p->n;
+  long n = (long)p->nlocal; /* ghosts are refreshed from their owners; MPI: changes at a build */
   double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
@@ -458,7 +484,9 @@ static ms_status vv_step(cd_sim *s) {
   /* Driven particles: prescribed velocity for this step, zero force so the uniform loop below
    * moves them by Δt·(∫u dt/Δt). Removed particles have f = v = 0 and stay put. */
   double ds = 0.0, fold = 0.0, vp[3] = {0, 0, 0};
-  if (s->n_driven) {
+  /* MPI: a rank without driven particles at the start of the step may receive some at a build */
+  const bool piston = s->n_driven > 0 || (s->dd && s->piston.n > 0);
+  if (piston) {
     ds = cd_history_integral(&s->piston, s->t, s->t + dt);
     for (int a = 0; a < 3; a++) vp[a] = ds / dt * s->piston_dir[a];
     fold = driven_force(s);
@@ -517,9 +545,12 @@ static ms_status vv_step(cd_sim *s) {
     }
   }
   reflect_walls(s);
-  if (exact && !(dmax2 <= half * half)) { /* NaN positions also trigger a rebuild */
+  bool build = exact && !(dmax2 <= half * half); /* NaN positions also trigger a rebuild */
+  if (s->dd) build = par_max_int(build); /* every rank builds when one must */
+  if (build) {
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
+    n = (long)p->nlocal;
   }
   s->forces_zeroed = true;
   step_forces(s);
@@ -530,7 +561,7 @@ static ms_status vv_step(cd_sim *s) {
     vy[i] += c * fy[i];
     vz[i] += c * fz[i];
   }
-  if (s->n_driven) {
+  if (piston) {
     s->piston_work -= 0.5 * (fold + driven_force(s)) * ds;
     for (size_t k = 0; k < s->n_driven; k++) {
       int32_t i = s->driven[k];
@@ -550,7 +581,7 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
   memset(out, 0, sizeof *out);
   cd_compute_forces(s, s->sums, NULL, false);
   double ke = 0, mom[3] = {0, 0, 0};
-  for (size_t i = 0; i < p->n; i++) {
+  for (size_t i = 0; i < p->nlocal; i++) {
     if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
     ke += 0.5 * p->mass[i] * (p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
     mom[0] += p->mass[i] * p->vx[i];
@@ -563,7 +594,17 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
     pe += s->sums[l].epot;
     for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++) inside[k] += s->sums[l].inside[k];
   }
-  double broken = s->broken_bonded;
+  double broken = s->broken_bonded, dissipated = s->dissipated, piston_work = s->piston_work;
+  if (s->dd) { /* every rank's share (pairs booked once: cd_force.c) */
+    double v[8] = {ke, mom[0], mom[1], mom[2], pe, broken, dissipated, piston_work};
+    par_sum_doubles(v, 8);
+    ke = v[0], mom[0] = v[1], mom[1] = v[2], mom[2] = v[3], pe = v[4], broken = v[5];
+    dissipated = v[6], piston_work = v[7];
+    int64_t in64[CD_MAX_MATERIALS * CD_MAX_MATERIALS];
+    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++) in64[k] = inside[k];
+    par_sum_int64s(in64, CD_MAX_MATERIALS * CD_MAX_MATERIALS);
+    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++) inside[k] = (long)in64[k];
+  }
   if (s->cfg.cutoff == CD_CUTOFF_PLAIN)
     for (int a = 0; a < s->nmat; a++)
       for (int b = 0; b < s->nmat; b++)
@@ -571,10 +612,10 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
                   (double)(s->n_inside0[a][b] - inside[a * CD_MAX_MATERIALS + b]);
   out->kinetic = ke;
   out->potential = pe;
-  out->dissipated = s->dissipated;
+  out->dissipated = dissipated;
   out->broken = broken;
-  out->piston_work = s->piston_work;
-  out->total = ke + pe + s->dissipated + broken - s->piston_work;
+  out->piston_work = piston_work;
+  out->total = ke + pe + dissipated + broken - piston_work;
   for (int a = 0; a < 3; a++) out->momentum[a] = mom[a];
 }
 
@@ -584,7 +625,7 @@ void cd_sim_virial(cd_sim *s, double volume, double stress[6]) {
   double w[6] = {0, 0, 0, 0, 0, 0};
   for (int l = 0; l < s->nl->nlayer; l++)
     for (int c = 0; c < 6; c++) w[c] += s->sums[l].vir[c];
-  for (size_t i = 0; i < p->n; i++) {
+  for (size_t i = 0; i < p->nlocal; i++) {
     if (p->flags[i] & PTL_REMOVED) continue;
     double mi = p->mass[i], v[3] = {p->vx[i], p->vy[i], p->vz[i]};
     w[0] += mi * v[0] * v[0];
@@ -594,6 +635,7 @@ void cd_sim_virial(cd_sim *s, double volume, double stress[6]) {
     w[4] += mi * v[1] * v[2];
     w[5] += mi * v[2] * v[0];
   }
+  if (s->dd) par_sum_doubles(w, 6);
   for (int c = 0; c < 6; c++) stress[c] = w[c] / volume;
 }
 
@@ -607,14 +649,14 @@ double cd_von_mises(const double t[6]) {
 double cd_free_surface_velocity(const cd_sim *s, int axis) {
   const ptl_state *p = s->p;
   const double *v = axis == 0 ? p->vx : (axis == 1 ? p->vy : p->vz);
-  double sum = 0.0;
-  size_t cnt = 0;
-  for (size_t i = 0; i < p->n; i++)
+  double sum[2] = {0.0, 0.0}; /* Σ v, count */
+  for (size_t i = 0; i < p->nlocal; i++)
     if ((p->flags[i] & PTL_SURFACE) && !(p->flags[i] & PTL_REMOVED)) {
-      sum += v[i];
-      cnt++;
+      sum[0] += v[i];
+      sum[1] += 1.0;
     }
-  return cnt ? sum / (double)cnt : NAN;
+  if (s->dd) par_sum_doubles(sum, 2);
+  return sum[1] > 0 ? sum[0] / sum[1] : NAN;
 }
 
 long cd_sim_rebuilds(const cd_sim *s) { return s->nl ? s->nl->nbuild : 0; }
@@ -626,4 +668,20 @@ size_t cd_sim_bytes(const cd_sim *s) {
   if (s->rkn) /* r^n and one acceleration per stage */
     b += (size_t)(1 + rkn_integrator_scheme(s->rkn)->stages) * 3 * s->p->n * sizeof(double);
   return b;
+}
+
+/* ---- MPI (cd_par.c) ---- */
+void cd_sim_set_mpi(cd_sim *s, const cd_mpi_config *cfg) {
+  s->mpi = *cfg;
+  s->mpi_on = true;
+}
+
+const cd_mpi_stats *cd_sim_mpi_stats(const cd_sim *s) { return s->dd ? cd_dd_stats(s->dd) : NULL; }
+
+bool cd_sim_owns_position(const cd_sim *s, const double x[3]) {
+  return s->dd ? cd_dd_owns(s->dd, x) : true;
+}
+
+void cd_sim_refresh_ghosts(cd_sim *s) {
+  if (s->dd) cd_dd_refresh(s, true);
 }

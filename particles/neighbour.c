@@ -185,6 +185,7 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   const bool per[3] = {box->bc[ax[0]] == CD_BC_PERIODIC, box->bc[ax[1]] == CD_BC_PERIODIC,
                        box->bc[ax[2]] == CD_BC_PERIODIC};
   const double *x = p->x, *y = p->y, *z = p->z;
+  const int32_t nloc = (int32_t)p->nlocal;
   int32_t *buf = nl->buf[layer];
   size_t cap = nl->buf_cap[layer], len = 0;
   int32_t cand[CD_MAX_CAND + 8], img[CD_MAX_CAND + 2]; /* one particle's candidates */
@@ -251,6 +252,20 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
             img[2 * nimg + 1] = st[e].code;
           }
         }
+      }
+      if (i >= nloc) { /* a ghost lists owned particles only: no ghost-ghost pairs (docs/mpi.md) */
+        int m = 0;
+        for (int q = 0; q < nc; q++)
+          if (cand[q] < nloc) cand[m++] = cand[q];
+        nc = m;
+        m = 0;
+        for (int q = 0; q < nimg; q++)
+          if (img[2 * q] < nloc) {
+            img[2 * m] = img[2 * q];
+            img[2 * m + 1] = img[2 * q + 1];
+            m++;
+          }
+        nimg = m;
       }
       if (partners) {
         for (int q = 0; q < nc; q++)
@@ -436,7 +451,8 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
     cs[0] = 0;
   }
   for (int l = 0; l <= n0; l++) nl->layer_start[l] = cs[(size_t)l * n1 * n2];
-  if (reorder) reorder_particles(nl, p, partners ? partners : NULL, cs[ncells]);
+  /* with ghosts (MPI) the owned particles must stay in [0, nlocal): cd_par.c sorts them */
+  if (reorder && p->nlocal == n) reorder_particles(nl, p, partners ? partners : NULL, cs[ncells]);
   /* positions in cell order, so that the candidate tests read them contiguously */
   const int32_t nsorted = cs[ncells];
 #pragma omp parallel for schedule(static) if (CD_PAR(n))

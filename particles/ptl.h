@@ -27,6 +27,8 @@ enum {
 
 typedef struct ptl_state {
   size_t n, cap;        /* particles in use / allocated (never grows during a run) */
+  size_t nlocal;        /* owned particles [0, nlocal); under MPI the ghost copies of other
+                         * ranks' particles follow in [nlocal, n) (docs/mpi.md). Serial: n */
   int dim;              /* 3 (fcc) or 2 (triangular, plane strain: z == 0, vz == 0) */
   double *x, *y, *z;    /* positions, cm */
   double *vx, *vy, *vz; /* velocities, km/s */
@@ -43,6 +45,11 @@ void ptl_state_free(ptl_state *s);
 size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat);
 /* Bytes held by the arrays above (for the memory-per-particle figure). */
 size_t ptl_state_bytes(const ptl_state *s);
+/* Grow the capacity to at least cap (contents kept). */
+void ptl_state_reserve(ptl_state *s, size_t cap);
+/* Keep only the particles [lo, hi) (moved to the front, order kept): a rank's share of a
+ * particle set every rank generated identically (docs/mpi.md). */
+void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi);
 
 /* splitmix64 (the benchmark's generator): u_k in [0,1) is the k-th output (k from 0) of the
  * generator started from `seed` (bench/cd_lammps, /work/shared/bench/cd_lammps.md). */
@@ -182,6 +189,52 @@ typedef struct cd_energy {
 
 typedef struct cd_neigh cd_neigh; /* link cells + Verlet lists (particles/neighbour.c) */
 
+/* ---- CD domain partition (particles/cd_partition.c, docs/mpi.md) ---- */
+typedef enum cd_partition_method { CD_PART_SLAB = 0, CD_PART_METIS } cd_partition_method;
+typedef struct cd_partition_stats {
+  double imbalance; /* max part weight / mean part weight (weights as given) */
+  long edge_cut;    /* edges of the 26-neighbour coarse-cell graph joining different parts */
+  long halo_cells;  /* Σ over parts of the cells not in the part but adjacent to it */
+} cd_partition_stats;
+/* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
+ * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
+ * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
+ * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
+ * fixed seed, so every rank calling it with the same input gets the same owner map (no
+ * broadcast needed). nparts == 1 → all zero. stats may be NULL.
+ * METIS with nparts ≥ cells gives cell c to part c. Σ(weight+1) above 2^30 is scaled down
+ * for METIS's 32-bit weights. MS_ERR_INPUT: bad arguments, negative weights, more than
+ * 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
+ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                             int nparts, cd_partition_method method, int slab_axis,
+                             int32_t *owner, cd_partition_stats *stats);
+
+/* Cluster dynamics on MPI ranks (particles/cd_par.c, docs/mpi.md): the box is cut into coarse
+ * cells (>= r_list wide) owned by ranks (cd_partition_cells, recomputed when the load is
+ * uneven); each rank integrates the particles of its cells and holds ghost copies of the other
+ * ranks' particles in adjacent cells. */
+typedef struct cd_mpi_config {
+  cd_partition_method partition;
+  double rebalance_threshold; /* repartition when max/mean owned particles exceeds it (0: never) */
+  int rebalance_interval;     /* list builds between two repartition attempts (>= 1) */
+} cd_mpi_config;
+typedef struct cd_mpi_stats {
+  int ranks;
+  int ncell[3];                  /* coarse cells */
+  size_t owned, ghosts;          /* this rank, at the last list build */
+  size_t global, max_owned, total_ghosts;
+  double imbalance;              /* max owned / mean owned, at the last list build */
+  cd_partition_stats partition;  /* of the owner map in use (weights = particle counts) */
+  long partitions;               /* partitions computed (1 = the initial one) */
+  long rebalances;               /* repartitions because of imbalance */
+  bool rebalanced;               /* set by a rebalance, cleared by cd_sim_mpi_stats_take */
+  long rebalance_step;           /* step of the last rebalance, imbalance before and after */
+  double rebalance_before, rebalance_after;
+  double exchange_s;             /* wall time in ghost refreshes and migrations, this rank */
+  double exchanged_doubles;      /* received, this rank */
+  long lost_bonds;               /* bonded mode: partners not found on the rank at a migration */
+} cd_mpi_stats;
+
 typedef struct cd_sim {
   ptl_state *p;                 /* owned */
   cd_box box;
@@ -217,6 +270,9 @@ typedef struct cd_sim {
   double stage_force[3];
   int stage;
   double wall_time_force, wall_time_neigh;
+  struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
+  cd_mpi_config mpi;
+  bool mpi_on;                  /* cd_sim_set_mpi was called */
 } cd_sim;
 
 enum { CD_MAX_PARTNERS = 16 };
@@ -233,6 +289,21 @@ void cd_sim_free(cd_sim *s);
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
+/* Before cd_sim_init: distribute over the MPI ranks (no effect on one rank). Each rank then
+ * passes its own share of the particles to cd_sim_create (disjoint shares whose union is the
+ * system, any split, e.g. ptl_state_keep_range of a set generated on every rank); cd_sim_init
+ * partitions the coarse cells and migrates every particle to its owner. From then on p holds
+ * the owned particles in [0, nlocal) and ghosts in [nlocal, n) (positions current after every
+ * force evaluation); diagnostics (energy, virial, profile, free-surface velocity, snapshot)
+ * are collective and return global values on every rank. */
+void cd_sim_set_mpi(cd_sim *s, const cd_mpi_config *cfg);
+/* Decomposition figures (NULL when not distributed). */
+const cd_mpi_stats *cd_sim_mpi_stats(const cd_sim *s);
+/* True when this rank owns the coarse cell containing x (periodic axes wrapped): whether a
+ * particle read from a file belongs here. Serial: always true. */
+bool cd_sim_owns_position(const cd_sim *s, const double x[3]);
+/* Bring the ghosts' positions and velocities up to date (collective; no-op serially). */
+void cd_sim_refresh_ghosts(cd_sim *s);
 /* One step of cfg.integrator (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN.
  * After an RKN step p->f holds the forces of the scheme's last stage, not of x^{n+1}. */
 ms_status cd_sim_step(cd_sim *s);
@@ -269,26 +340,6 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
 /* HDF5 particle snapshot (positions, velocities, material, gid, per-particle σ_u and
  * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
 ms_status cd_write_snapshot(cd_sim *s, const char *path);
-
-/* ---- CD domain partition (particles/cd_partition.c, docs/mpi.md) ---- */
-typedef enum cd_partition_method { CD_PART_SLAB = 0, CD_PART_METIS } cd_partition_method;
-typedef struct cd_partition_stats {
-  double imbalance; /* max part weight / mean part weight (weights as given) */
-  long edge_cut;    /* edges of the 26-neighbour coarse-cell graph joining different parts */
-  long halo_cells;  /* Σ over parts of the cells not in the part but adjacent to it */
-} cd_partition_stats;
-/* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
- * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
- * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
- * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
- * fixed seed, so every rank calling it with the same input gets the same owner map (no
- * broadcast needed). nparts == 1 → all zero. stats may be NULL.
- * METIS with nparts ≥ cells gives cell c to part c. Σ(weight+1) above 2^30 is scaled down
- * for METIS's 32-bit weights. MS_ERR_INPUT: bad arguments, negative weights, more than
- * 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
-ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
-                             int nparts, cd_partition_method method, int slab_axis,
-                             int32_t *owner, cd_partition_stats *stats);
 
 /* ---- checkpoint / restart (particles/cd_checkpoint.c, docs/mpi.md) ---- */
 /* Rebuild the lists with renumbering and recompute the forces: what a restart does, so the run

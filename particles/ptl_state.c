@@ -2,6 +2,7 @@
 #include "ptl.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 ptl_state *ptl_state_create(size_t cap, int dim) {
   ptl_state *s = ms_calloc(1, sizeof *s);
@@ -37,6 +38,7 @@ void ptl_state_free(ptl_state *s) {
 size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat) {
   if (s->n >= s->cap) return (size_t)-1;
   size_t i = s->n++;
+  s->nlocal = s->n;
   s->x[i] = x;
   s->y[i] = y;
   s->z[i] = s->dim == 2 ? 0.0 : z;
@@ -47,6 +49,36 @@ size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, in
   s->mat[i] = (uint8_t)mat;
   s->flags[i] = 0;
   return i;
+}
+
+void ptl_state_reserve(ptl_state *s, size_t cap) {
+  if (cap <= s->cap) return;
+  ptl_state *t = ptl_state_create(cap, s->dim);
+  double *src[] = {s->x, s->y, s->z, s->vx, s->vy, s->vz, s->fx, s->fy, s->fz, s->mass};
+  double *dst[] = {t->x, t->y, t->z, t->vx, t->vy, t->vz, t->fx, t->fy, t->fz, t->mass};
+  for (size_t k = 0; k < sizeof src / sizeof *src; k++) memcpy(dst[k], src[k], s->n * sizeof(double));
+  memcpy(t->gid, s->gid, s->n * sizeof *s->gid);
+  memcpy(t->mat, s->mat, s->n);
+  memcpy(t->flags, s->flags, s->n);
+  t->n = s->n;
+  t->nlocal = s->nlocal;
+  /* swap the arrays into s, free the old ones with t */
+  ptl_state tmp = *s;
+  *s = *t;
+  *t = tmp;
+  ptl_state_free(t);
+}
+
+void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi) {
+  if (hi > s->n) hi = s->n;
+  if (lo > hi) lo = hi;
+  size_t m = hi - lo;
+  double *arr[] = {s->x, s->y, s->z, s->vx, s->vy, s->vz, s->fx, s->fy, s->fz, s->mass};
+  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) memmove(arr[k], arr[k] + lo, m * sizeof(double));
+  memmove(s->gid, s->gid + lo, m * sizeof *s->gid);
+  memmove(s->mat, s->mat + lo, m);
+  memmove(s->flags, s->flags + lo, m);
+  s->n = s->nlocal = m;
 }
 
 size_t ptl_state_bytes(const ptl_state *s) {

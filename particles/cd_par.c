@@ -1,0 +1,555 @@
+/* cd_par.c — cluster dynamics on MPI ranks: coarse-cell ownership, migration, ghosts
+ * (docs/mpi.md, "Cluster dynamics on MPI ranks").
+ *
+ * The box is cut into coarse cells at least r_list = R_c + skin wide, so every pair that the
+ * neighbour lists can hold joins particles of the same or of adjacent (26-stencil) cells. Each
+ * cell belongs to one rank (cd_partition_cells on the all-reduced particle counts: every rank
+ * computes the same owner map). At every list build the particles move to the owner of their
+ * cell (migration), and each owned particle in a cell adjacent to another rank's cell is sent
+ * there as a ghost. Between builds a particle moves less than skin/2, so the ghosts of the build
+ * cover every pair that can come within R_c before the next one; their positions and velocities
+ * are refreshed before every force evaluation. Ghosts keep their wrapped coordinates: the local
+ * list builder finds periodic images exactly as in a serial run.
+ *
+ * Message layout: a full particle record is CD_REC doubles (x, y, z, vx, vy, vz, mass, gid, mat,
+ * flags; + CD_MAX_PARTNERS partner gids in bonded mode); gids are exact in a double below 2^53.
+ */
+#include "cd_impl.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { CD_REC = 10 };
+
+struct cd_dd {
+  int rank, size;
+  /* coarse grid */
+  int nc[3];
+  double lo[3], len[3], inv_w[3];
+  bool per[3];
+  size_t ncells;
+  int32_t *owner, *owner_new; /* [ncells] */
+  double *part;    /* [size] part weights */
+  int64_t *weight; /* [ncells] scratch */
+  int slab_axis;
+  /* per rank: migration counts and displacements (doubles) */
+  int *mcnt_s, *mcnt_r, *mdsp_s, *mdsp_r;
+  /* ghost neighbours: ranks, counts and displacements per neighbour (particles, then doubles) */
+  int nnbr;
+  int *nbr, *gcnt_s, *gcnt_r, *gdsp_s, *gdsp_r, *xcnt_s, *xcnt_r, *xdsp_s, *xdsp_r;
+  int32_t *send_idx; /* owned particles sent, grouped by neighbour */
+  size_t nsend;
+  double *sbuf, *rbuf;
+  size_t sbuf_cap, rbuf_cap;
+  int32_t *cell;   /* [cap] coarse cell of each owned particle */
+  int32_t *perm;   /* [cap] sort scratch */
+  double *tmp;     /* [cap] sort scratch */
+  int64_t *pgid;   /* bonded: [cap][CD_MAX_PARTNERS] partner gids */
+  int32_t *gid_map;/* bonded: gid -> local index, [global] (−1 elsewhere) */
+  long builds_since;
+  cd_mpi_stats st;
+};
+
+static void grow(double **buf, size_t *cap, size_t need) {
+  if (need <= *cap) return;
+  free(*buf);
+  *cap = need + need / 4 + 64;
+  *buf = ms_aligned_alloc(*cap, sizeof(double));
+}
+
+static int wrap_index(int k, int n) { return k < 0 ? k + n : (k >= n ? k - n : k); }
+
+static int32_t cell_of(const cd_dd *d, double x, double y, double z) {
+  const double r[3] = {x, y, z};
+  int k[3];
+  for (int a = 0; a < 3; a++) {
+    double u = (r[a] - d->lo[a]) * d->inv_w[a];
+    int c = u < 0 ? 0 : (u >= d->nc[a] ? d->nc[a] - 1 : (int)u);
+    k[a] = (u != u) ? 0 : c; /* NaN: cell 0 (the run stops at the next check) */
+  }
+  return k[0] + d->nc[0] * (k[1] + d->nc[1] * k[2]);
+}
+
+/* Ranks other than this one owning a cell of the 26-stencil of cell c (ascending, distinct). */
+static int foreign_ranks(const cd_dd *d, int32_t c, int *out) {
+  const int k[3] = {(int)(c % d->nc[0]), (int)((c / d->nc[0]) % d->nc[1]),
+                    (int)(c / ((size_t)d->nc[0] * d->nc[1]))};
+  int n = 0;
+  for (int o = 0; o < 27; o++) {
+    if (o == 13) continue;
+    int m[3] = {k[0] + o % 3 - 1, k[1] + (o / 3) % 3 - 1, k[2] + o / 9 - 1};
+    bool ok = true;
+    for (int a = 0; a < 3 && ok; a++) {
+      if (m[a] >= 0 && m[a] < d->nc[a]) continue;
+      if (d->per[a]) m[a] = wrap_index(m[a], d->nc[a]);
+      else ok = false;
+    }
+    if (!ok) continue;
+    int r = d->owner[m[0] + d->nc[0] * (m[1] + (size_t)d->nc[1] * m[2])];
+    if (r == d->rank) continue;
+    int q = 0;
+    while (q < n && out[q] < r) q++;
+    if (q < n && out[q] == r) continue;
+    memmove(out + q + 1, out + q, (size_t)(n - q) * sizeof *out);
+    out[q] = r;
+    n++;
+  }
+  return n;
+}
+
+/* Periodic axes: positions into [lo, hi), as the list builder does (idempotent there). */
+static void wrap_positions(const cd_sim *s, size_t n) {
+  double *pos[3] = {s->p->x, s->p->y, s->p->z};
+  for (int a = 0; a < 3; a++) {
+    if (s->box.bc[a] != CD_BC_PERIODIC) continue;
+    const double la = s->box.lo[a], len = s->box.hi[a] - s->box.lo[a];
+    double *xa = pos[a];
+    for (size_t i = 0; i < n; i++) {
+      double w = xa[i] - la;
+      if (w < 0.0 || w >= len) xa[i] -= len * floor(w / len);
+      if (xa[i] >= la + len) xa[i] -= len;
+    }
+  }
+}
+
+/* Coarse grid: wall and periodic axes span the box; free axes the box given to the run if it
+ * has an extent there, else the particles' extent now. Particles outside a free axis' range
+ * fall into its end cells (which then are wider than r_list: still correct, since only
+ * adjacency matters). */
+static void make_grid(cd_sim *s) {
+  cd_dd *d = s->dd;
+  const double rlist = s->rc_max + s->cfg.skin;
+  const double *pos[3] = {s->p->x, s->p->y, s->p->z};
+  for (int a = 0; a < 3; a++) {
+    double lo = s->box.lo[a], hi = s->box.hi[a];
+    d->per[a] = s->box.bc[a] == CD_BC_PERIODIC;
+    if (s->box.bc[a] == CD_BC_FREE && !(hi > lo)) {
+      double mn = INFINITY, mx = -INFINITY;
+      for (size_t i = 0; i < s->p->nlocal; i++) {
+        mn = fmin(mn, pos[a][i]);
+        mx = fmax(mx, pos[a][i]);
+      }
+      lo = par_min_double(mn);
+      hi = par_max_double(mx);
+      if (!(hi >= lo)) lo = hi = 0.0;
+    }
+    d->lo[a] = lo;
+    d->len[a] = hi - lo;
+    d->nc[a] = (int)fmin(floor(d->len[a] / rlist), 1 << 20);
+    if (d->nc[a] < 1) d->nc[a] = 1;
+  }
+  /* at most ~4 million cells (the owner map is replicated on every rank) */
+  while ((double)d->nc[0] * d->nc[1] * d->nc[2] > 4.0e6) {
+    int big = 0;
+    for (int a = 1; a < 3; a++)
+      if (d->nc[a] > d->nc[big]) big = a;
+    d->nc[big] = (d->nc[big] + 1) / 2;
+  }
+  for (int a = 0; a < 3; a++) d->inv_w[a] = d->len[a] > 0 ? d->nc[a] / d->len[a] : 0.0;
+  d->slab_axis = 2;
+  if (d->nc[1] > d->nc[d->slab_axis]) d->slab_axis = 1;
+  if (d->nc[0] > d->nc[d->slab_axis]) d->slab_axis = 0;
+  size_t ncells = (size_t)d->nc[0] * d->nc[1] * d->nc[2];
+  if (ncells != d->ncells) {
+    free(d->owner);
+    free(d->owner_new);
+    free(d->weight);
+    d->ncells = ncells;
+    d->owner = ms_calloc(ncells, sizeof *d->owner);
+    d->owner_new = ms_calloc(ncells, sizeof *d->owner_new);
+    d->weight = ms_calloc(ncells, sizeof *d->weight);
+  }
+  for (int a = 0; a < 3; a++) d->st.ncell[a] = d->nc[a];
+}
+
+/* Imbalance (max / mean part weight) of an owner map. */
+static double map_imbalance(const cd_dd *d, const int32_t *owner, double *part) {
+  memset(part, 0, (size_t)d->size * sizeof *part);
+  double tot = 0;
+  for (size_t c = 0; c < d->ncells; c++) {
+    part[owner[c]] += (double)d->weight[c];
+    tot += (double)d->weight[c];
+  }
+  double mx = 0;
+  for (int r = 0; r < d->size; r++) mx = fmax(mx, part[r]);
+  return tot > 0 ? mx * d->size / tot : 1.0;
+}
+
+/* Owner map from the all-reduced particle counts of the cells (the same on every rank). The
+ * partitioner weighs a cell weight + 1; counts are scaled by 64 so that empty cells (a free
+ * axis' room for ejecta) weigh next to nothing. With `only_if_better`, the new map replaces
+ * the old one only when it lowers the imbalance by more than 1 %. Returns whether it did. */
+static bool partition(cd_sim *s, bool only_if_better, ms_status *status) {
+  cd_dd *d = s->dd;
+  const ptl_state *p = s->p;
+  memset(d->weight, 0, d->ncells * sizeof *d->weight);
+  for (size_t i = 0; i < p->nlocal; i++)
+    if (!(p->flags[i] & PTL_REMOVED)) d->weight[cell_of(d, p->x[i], p->y[i], p->z[i])] += 64;
+  par_sum_int64s(d->weight, d->ncells);
+  cd_partition_stats ps;
+  ms_status st = cd_partition_cells(d->nc, d->per, d->weight, d->size, s->mpi.partition,
+                                    d->slab_axis, d->owner_new, &ps);
+  *status = par_agree_status(st);
+  d->builds_since = 0;
+  if (*status != MS_OK) return false;
+  double old = only_if_better ? map_imbalance(d, d->owner, d->part) : INFINITY;
+  double now = map_imbalance(d, d->owner_new, d->part);
+  if (!(now < old * 0.99)) return false;
+  int32_t *t = d->owner;
+  d->owner = d->owner_new;
+  d->owner_new = t;
+  d->st.partition = ps;
+  d->st.partition.imbalance = now;
+  d->st.partitions++;
+  return true;
+}
+
+ms_status cd_dd_create(cd_sim *s) {
+  cd_dd *d = ms_calloc(1, sizeof *d);
+  s->dd = d;
+  d->rank = par_rank();
+  d->size = par_size();
+  d->st.ranks = d->size;
+  ptl_state *p = s->p;
+  d->st.global = (size_t)par_sum_long((long)p->nlocal);
+  ptl_state_reserve(p, d->st.global); /* a rank never holds a particle twice */
+  const size_t cap = p->cap + 1;
+  d->cell = ms_calloc(cap, sizeof *d->cell);
+  d->perm = ms_calloc(cap, sizeof *d->perm);
+  d->tmp = ms_calloc(cap, sizeof *d->tmp);
+  const int P = d->size;
+  int **arr[] = {&d->mcnt_s, &d->mcnt_r, &d->mdsp_s, &d->mdsp_r, &d->nbr, &d->gcnt_s, &d->gcnt_r,
+                 &d->gdsp_s, &d->gdsp_r, &d->xcnt_s, &d->xcnt_r, &d->xdsp_s, &d->xdsp_r};
+  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) *arr[k] = ms_calloc((size_t)P + 1, sizeof(int));
+  d->send_idx = ms_calloc(cap, sizeof *d->send_idx);
+  if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
+    d->pgid = ms_aligned_alloc(cap * CD_MAX_PARTNERS, sizeof *d->pgid);
+    d->gid_map = ms_calloc(cap, sizeof *d->gid_map);
+    for (size_t k = 0; k < cap; k++) d->gid_map[k] = -1;
+  }
+  d->part = ms_calloc((size_t)d->size, sizeof *d->part);
+  make_grid(s);
+  ms_status st;
+  partition(s, false, &st);
+  return st;
+}
+
+void cd_dd_free(cd_dd *d) {
+  if (!d) return;
+  void *arr[] = {d->owner, d->owner_new, d->part, d->weight, d->mcnt_s, d->mcnt_r, d->mdsp_s, d->mdsp_r, d->nbr,
+                 d->gcnt_s, d->gcnt_r, d->gdsp_s, d->gdsp_r, d->xcnt_s, d->xcnt_r, d->xdsp_s,
+                 d->xdsp_r, d->send_idx, d->sbuf, d->rbuf, d->cell, d->perm, d->tmp, d->pgid,
+                 d->gid_map};
+  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) free(arr[k]);
+  free(d);
+}
+
+void cd_dd_regrid(cd_sim *s) {
+  ms_status st;
+  make_grid(s);
+  partition(s, false, &st);
+}
+
+bool cd_dd_owns(const cd_dd *d, const double x[3]) {
+  double r[3] = {x[0], x[1], x[2]};
+  for (int a = 0; a < 3; a++)
+    if (d->per[a] && d->len[a] > 0) r[a] -= d->len[a] * floor((r[a] - d->lo[a]) / d->len[a]);
+  return d->owner[cell_of(d, r[0], r[1], r[2])] == d->rank;
+}
+
+const cd_mpi_stats *cd_dd_stats(const cd_dd *d) { return &d->st; }
+
+/* ---- particle records ---- */
+
+static int rec_len(const cd_sim *s) { return CD_REC + (s->dd->pgid ? CD_MAX_PARTNERS : 0); }
+
+static void pack(const cd_sim *s, size_t i, double *r) {
+  const ptl_state *p = s->p;
+  r[0] = p->x[i], r[1] = p->y[i], r[2] = p->z[i];
+  r[3] = p->vx[i], r[4] = p->vy[i], r[5] = p->vz[i];
+  r[6] = p->mass[i];
+  r[7] = (double)p->gid[i];
+  r[8] = p->mat[i];
+  r[9] = p->flags[i];
+  if (s->dd->pgid)
+    for (int k = 0; k < CD_MAX_PARTNERS; k++) r[CD_REC + k] = (double)s->dd->pgid[i * CD_MAX_PARTNERS + k];
+}
+
+static void unpack(cd_sim *s, size_t i, const double *r) {
+  ptl_state *p = s->p;
+  p->x[i] = r[0], p->y[i] = r[1], p->z[i] = r[2];
+  p->vx[i] = r[3], p->vy[i] = r[4], p->vz[i] = r[5];
+  p->fx[i] = p->fy[i] = p->fz[i] = 0.0;
+  p->mass[i] = r[6];
+  p->gid[i] = (int64_t)r[7];
+  p->mat[i] = (uint8_t)r[8];
+  p->flags[i] = (uint8_t)r[9];
+  if (s->dd->pgid)
+    for (int k = 0; k < CD_MAX_PARTNERS; k++) s->dd->pgid[i * CD_MAX_PARTNERS + k] = (int64_t)r[CD_REC + k];
+}
+
+/* Copy particle i to slot k (k <= i), partner gids included. */
+static void move_particle(cd_sim *s, size_t i, size_t k) {
+  if (i == k) return;
+  ptl_state *p = s->p;
+  double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->fx, p->fy, p->fz, p->mass};
+  for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) arr[a][k] = arr[a][i];
+  p->gid[k] = p->gid[i];
+  p->mat[k] = p->mat[i];
+  p->flags[k] = p->flags[i];
+  s->dd->cell[k] = s->dd->cell[i];
+  if (s->dd->pgid)
+    memcpy(s->dd->pgid + k * CD_MAX_PARTNERS, s->dd->pgid + i * CD_MAX_PARTNERS,
+           CD_MAX_PARTNERS * sizeof *s->dd->pgid);
+}
+
+/* Owned particles into coarse-cell order (stable counting sort by cell), for memory locality
+ * of the lists built without renumbering. */
+static void sort_by_cell(cd_sim *s) {
+  cd_dd *d = s->dd;
+  ptl_state *p = s->p;
+  const size_t n = p->nlocal;
+  /* counting sort through the weight array (reused as cell cursors) */
+  int64_t *cur = d->weight;
+  memset(cur, 0, d->ncells * sizeof *cur);
+  for (size_t i = 0; i < n; i++) cur[d->cell[i]]++;
+  int64_t acc = 0;
+  for (size_t c = 0; c < d->ncells; c++) {
+    int64_t m = cur[c];
+    cur[c] = acc;
+    acc += m;
+  }
+  for (size_t i = 0; i < n; i++) d->perm[cur[d->cell[i]]++] = (int32_t)i; /* perm[new] = old */
+  double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->mass};
+  for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) {
+    for (size_t q = 0; q < n; q++) d->tmp[q] = arr[a][d->perm[q]];
+    memcpy(arr[a], d->tmp, n * sizeof(double));
+  }
+  int64_t *g = (int64_t *)(void *)d->tmp;
+  for (size_t q = 0; q < n; q++) g[q] = p->gid[d->perm[q]];
+  memcpy(p->gid, g, n * sizeof *g);
+  uint8_t *b = (uint8_t *)(void *)d->tmp;
+  for (size_t q = 0; q < n; q++) b[q] = p->mat[d->perm[q]];
+  memcpy(p->mat, b, n);
+  for (size_t q = 0; q < n; q++) b[q] = p->flags[d->perm[q]];
+  memcpy(p->flags, b, n);
+  int32_t *c = (int32_t *)(void *)d->tmp;
+  for (size_t q = 0; q < n; q++) c[q] = d->cell[d->perm[q]];
+  memcpy(d->cell, c, n * sizeof *c);
+  if (d->pgid) { /* bonded mode: one column of partner gids at a time through tmp */
+    int64_t *col = (int64_t *)(void *)d->tmp;
+    for (int k = 0; k < CD_MAX_PARTNERS; k++) {
+      for (size_t q = 0; q < n; q++) col[q] = d->pgid[(size_t)d->perm[q] * CD_MAX_PARTNERS + k];
+      for (size_t q = 0; q < n; q++) d->pgid[q * CD_MAX_PARTNERS + k] = col[q];
+    }
+  }
+  for (size_t i = 0; i < n; i++) p->fx[i] = p->fy[i] = p->fz[i] = 0.0;
+}
+
+/* Every owned particle to the owner of its cell. */
+static void migrate(cd_sim *s) {
+  cd_dd *d = s->dd;
+  ptl_state *p = s->p;
+  const int P = d->size, L = rec_len(s);
+  size_t n = p->nlocal;
+  for (size_t i = 0; i < n; i++) d->cell[i] = cell_of(d, p->x[i], p->y[i], p->z[i]);
+  memset(d->mcnt_s, 0, (size_t)P * sizeof(int));
+  for (size_t i = 0; i < n; i++) {
+    int r = d->owner[d->cell[i]];
+    if (r != d->rank) d->mcnt_s[r] += L;
+  }
+  size_t nsend = 0;
+  for (int r = 0; r < P; r++) {
+    d->mdsp_s[r] = (int)nsend;
+    nsend += (size_t)d->mcnt_s[r];
+  }
+  grow(&d->sbuf, &d->sbuf_cap, nsend + 1);
+  int *cur = d->xcnt_s; /* scratch cursors */
+  memcpy(cur, d->mdsp_s, (size_t)P * sizeof(int));
+  size_t keep = 0;
+  for (size_t i = 0; i < n; i++) {
+    int r = d->owner[d->cell[i]];
+    if (r != d->rank) {
+      pack(s, i, d->sbuf + cur[r]);
+      cur[r] += L;
+    } else {
+      move_particle(s, i, keep++);
+    }
+  }
+  par_alltoall_ints(d->mcnt_s, d->mcnt_r);
+  size_t nrecv = 0;
+  for (int r = 0; r < P; r++) {
+    d->mdsp_r[r] = (int)nrecv;
+    nrecv += (size_t)d->mcnt_r[r];
+  }
+  grow(&d->rbuf, &d->rbuf_cap, nrecv + 1);
+  par_alltoallv_doubles(d->sbuf, d->mcnt_s, d->mdsp_s, d->rbuf, d->mcnt_r, d->mdsp_r);
+  d->st.exchanged_doubles += (double)nrecv;
+  const size_t nin = nrecv / (size_t)L;
+  for (size_t q = 0; q < nin; q++) {
+    size_t i = keep + q;
+    unpack(s, i, d->rbuf + q * (size_t)L);
+    d->cell[i] = cell_of(d, p->x[i], p->y[i], p->z[i]);
+  }
+  p->nlocal = p->n = keep + nin;
+}
+
+/* Ghosts: each owned particle in a cell next to other ranks' cells goes to each of them. */
+static void send_ghosts(cd_sim *s) {
+  cd_dd *d = s->dd;
+  ptl_state *p = s->p;
+  const int P = d->size, L = rec_len(s);
+  const size_t n = p->nlocal;
+  int ranks[26], nr = 0;
+  int32_t last = -1;
+  memset(d->mcnt_s, 0, (size_t)P * sizeof(int));
+  for (size_t i = 0; i < n; i++) { /* owned particles are in cell order: one stencil per cell */
+    if (p->flags[i] & PTL_REMOVED) continue;
+    if (d->cell[i] != last) nr = foreign_ranks(d, last = d->cell[i], ranks);
+    for (int k = 0; k < nr; k++) d->mcnt_s[ranks[k]]++;
+  }
+  par_alltoall_ints(d->mcnt_s, d->mcnt_r);
+  int *slot = d->mdsp_s; /* rank -> neighbour index */
+  d->nnbr = 0;
+  size_t ns = 0, nrg = 0;
+  for (int r = 0; r < P; r++) {
+    slot[r] = -1;
+    if (r == d->rank || (d->mcnt_s[r] == 0 && d->mcnt_r[r] == 0)) continue;
+    int k = d->nnbr++;
+    slot[r] = k;
+    d->nbr[k] = r;
+    d->gcnt_s[k] = d->mcnt_s[r];
+    d->gcnt_r[k] = d->mcnt_r[r];
+    d->gdsp_s[k] = (int)ns;
+    d->gdsp_r[k] = (int)nrg;
+    ns += (size_t)d->gcnt_s[k];
+    nrg += (size_t)d->gcnt_r[k];
+  }
+  if (n + nrg > p->cap) { /* cannot happen: a rank holds each particle at most once */
+    fprintf(stderr, "cd_par: %zu owned + %zu ghosts exceed the capacity %zu\n", n, nrg, p->cap);
+    abort();
+  }
+  int *cur = d->xcnt_s;
+  for (int k = 0; k < d->nnbr; k++) cur[k] = d->gdsp_s[k];
+  last = -1;
+  for (size_t i = 0; i < n; i++) {
+    if (p->flags[i] & PTL_REMOVED) continue;
+    if (d->cell[i] != last) nr = foreign_ranks(d, last = d->cell[i], ranks);
+    for (int k = 0; k < nr; k++) d->send_idx[cur[slot[ranks[k]]]++] = (int32_t)i;
+  }
+  d->nsend = ns;
+  grow(&d->sbuf, &d->sbuf_cap, ns * (size_t)L + 1);
+  grow(&d->rbuf, &d->rbuf_cap, nrg * (size_t)L + 1);
+  for (size_t q = 0; q < ns; q++) pack(s, (size_t)d->send_idx[q], d->sbuf + q * (size_t)L);
+  for (int k = 0; k < d->nnbr; k++) {
+    d->xcnt_s[k] = d->gcnt_s[k] * L;
+    d->xdsp_s[k] = d->gdsp_s[k] * L;
+    d->xcnt_r[k] = d->gcnt_r[k] * L;
+    d->xdsp_r[k] = d->gdsp_r[k] * L;
+  }
+  par_exchange_doubles(d->nnbr, d->nbr, d->sbuf, d->xcnt_s, d->xdsp_s, d->rbuf, d->xcnt_r,
+                       d->xdsp_r);
+  d->st.exchanged_doubles += (double)(nrg * (size_t)L);
+  for (size_t q = 0; q < nrg; q++) unpack(s, n + q, d->rbuf + q * (size_t)L);
+  p->n = n + nrg;
+  /* the refresh buffers: 6 doubles per particle */
+  grow(&d->sbuf, &d->sbuf_cap, 6 * ns + 1);
+  grow(&d->rbuf, &d->rbuf_cap, 6 * nrg + 1);
+}
+
+void cd_dd_refresh(cd_sim *s, bool positions) {
+  cd_dd *d = s->dd;
+  ptl_state *p = s->p;
+  const double t0 = ms_wall_time();
+  const int w = positions ? 6 : 3;
+  const double *src[6] = {p->x, p->y, p->z, p->vx, p->vy, p->vz};
+  double *dst[6] = {p->x, p->y, p->z, p->vx, p->vy, p->vz};
+  const int off = positions ? 0 : 3;
+  for (size_t q = 0; q < d->nsend; q++) {
+    const int32_t i = d->send_idx[q];
+    for (int c = 0; c < w; c++) d->sbuf[q * (size_t)w + c] = src[off + c][i];
+  }
+  size_t nrg = 0;
+  for (int k = 0; k < d->nnbr; k++) {
+    d->xcnt_s[k] = d->gcnt_s[k] * w;
+    d->xdsp_s[k] = d->gdsp_s[k] * w;
+    d->xcnt_r[k] = d->gcnt_r[k] * w;
+    d->xdsp_r[k] = d->gdsp_r[k] * w;
+    nrg += (size_t)d->gcnt_r[k];
+  }
+  par_exchange_doubles(d->nnbr, d->nbr, d->sbuf, d->xcnt_s, d->xdsp_s, d->rbuf, d->xcnt_r,
+                       d->xdsp_r);
+  const size_t g0 = p->nlocal;
+  for (size_t q = 0; q < nrg; q++)
+    for (int c = 0; c < w; c++) dst[off + c][g0 + q] = d->rbuf[q * (size_t)w + c];
+  if (positions)
+    for (size_t i = g0; i < p->n; i++) p->fx[i] = p->fy[i] = p->fz[i] = 0.0;
+  d->st.exchanged_doubles += (double)(nrg * (size_t)w);
+  d->st.exchange_s += ms_wall_time() - t0;
+}
+
+/* Bonded mode: partner rows as gids before particles move, back to local indices after. */
+static void partners_to_gids(cd_sim *s) {
+  cd_dd *d = s->dd;
+  const ptl_state *p = s->p;
+  for (size_t i = 0; i < p->nlocal; i++)
+    for (int k = 0; k < CD_MAX_PARTNERS; k++) {
+      int32_t j = s->partners[i * CD_MAX_PARTNERS + k];
+      d->pgid[i * CD_MAX_PARTNERS + k] = j >= 0 ? p->gid[j] : -1;
+    }
+}
+
+static void partners_from_gids(cd_sim *s) {
+  cd_dd *d = s->dd;
+  const ptl_state *p = s->p;
+  for (size_t i = 0; i < p->n; i++) d->gid_map[p->gid[i]] = (int32_t)i;
+  long lost = 0;
+  for (size_t i = 0; i < p->n; i++)
+    for (int k = 0; k < CD_MAX_PARTNERS; k++) {
+      int64_t g = d->pgid[i * CD_MAX_PARTNERS + k];
+      int32_t j = g >= 0 ? d->gid_map[g] : -1;
+      /* an owned particle's partner is always within r_list, hence here; ghosts' rows may
+       * name particles this rank does not hold (never needed: no ghost-ghost pairs) */
+      if (g >= 0 && j < 0 && i < p->nlocal) lost++;
+      s->partners[i * CD_MAX_PARTNERS + k] = j;
+    }
+  for (size_t i = 0; i < p->n; i++) d->gid_map[p->gid[i]] = -1;
+  d->st.lost_bonds += lost;
+}
+
+ms_status cd_dd_redistribute(cd_sim *s) {
+  cd_dd *d = s->dd;
+  ptl_state *p = s->p;
+  const double t0 = ms_wall_time();
+  p->n = p->nlocal; /* drop the ghosts */
+  wrap_positions(s, p->nlocal);
+  if (s->partners) partners_to_gids(s);
+  ms_status st = MS_OK;
+  /* rebalance: the load is the owned particle count (the force work per particle is nearly
+   * uniform in a dense body) */
+  const double thr = s->mpi.rebalance_threshold;
+  if (thr > 0 && ++d->builds_since >= (s->mpi.rebalance_interval > 0 ? s->mpi.rebalance_interval : 1)) {
+    const double mean = (double)d->st.global / d->size;
+    const double before = par_max_double((double)p->nlocal) / mean;
+    if (before > thr && partition(s, true, &st)) {
+      d->st.rebalances++;
+      d->st.rebalanced = true;
+      d->st.rebalance_step = s->step;
+      d->st.rebalance_before = before;
+      d->st.rebalance_after = d->st.partition.imbalance;
+    }
+  }
+  migrate(s);
+  sort_by_cell(s);
+  send_ghosts(s);
+  if (s->partners) partners_from_gids(s);
+  d->st.owned = p->nlocal;
+  d->st.ghosts = p->n - p->nlocal;
+  d->st.max_owned = (size_t)par_max_double((double)p->nlocal);
+  d->st.total_ghosts = (size_t)par_sum_long((long)(p->n - p->nlocal));
+  d->st.imbalance = (double)d->st.max_owned * d->size / (double)d->st.global;
+  d->st.exchange_s += ms_wall_time() - t0;
+  return st;
+}
