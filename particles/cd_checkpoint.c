@@ -25,10 +25,11 @@ struct cd_restart {
   double inside0[CD_MAX_MATERIALS * CD_MAX_MATERIALS];
 };
 
-/* Particles this rank writes: all of them while cluster dynamics runs replicated (rank 0 writes,
- * the others add nothing). With the distributed model, the owned ones [0, p->nlocal). */
+/* Particles this rank writes: with the distributed model (cd_par.c) its owned ones
+ * [0, p->nlocal); a serial run's are all of them (written by rank 0 alone when the same serial
+ * run is made on several ranks). */
 static size_t owned_count(const ms_ctx *ctx, const cd_sim *s) {
-  return ctx->rank == 0 ? s->p->n : 0;
+  return s->dd ? s->p->nlocal : (ctx->rank == 0 ? s->p->n : 0);
 }
 
 static const char *const attr_names[] = {"step",          "t",              "dissipated",
@@ -69,10 +70,11 @@ ms_status cd_checkpoint_write(ms_h5 *h, const ms_ctx *ctx, const cd_sim *s) {
   if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/cd/segments", 1, 1, &seg, NULL);
   if (st == MS_OK)
     st = ms_h5_write_doubles_dist(h, "/cd/inside0", ctx->rank == 0 ? 64 : 0, 1, inside0, NULL);
-  const double vals[N_ATTR] = {(double)s->step,          s->t,
-                               s->dissipated,            s->piston_work,
-                               s->broken_bonded,         (double)s->n_broken_bonds,
-                               (double)s->nl->nbuild};
+  /* the balance accumulators are per-rank shares under MPI: the file holds their sums */
+  double acc[4] = {s->dissipated, s->piston_work, s->broken_bonded, (double)s->n_broken_bonds};
+  if (s->dd) par_sum_doubles(acc, 4);
+  const double vals[N_ATTR] = {(double)s->step, s->t,   acc[0], acc[1],
+                               acc[2],          acc[3], (double)s->nl->nbuild};
   for (int k = 0; k < N_ATTR && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "/cd", attr_names[k], vals[k]);
   if (st == MS_OK) st = ms_h5_attr_double(h, "/cd", "particles", par_sum_double(seg));
@@ -144,7 +146,7 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
                 &r->partner_gid, e);
   if (st == MS_OK) {
     r->p = ptl_state_create(nrow, dim);
-    r->p->n = nrow;
+    r->p->n = r->p->nlocal = nrow;
     for (size_t i = 0; i < nrow; i++) {
       r->p->x[i] = pos[3 * i], r->p->y[i] = pos[3 * i + 1], r->p->z[i] = pos[3 * i + 2];
       r->p->vx[i] = vel[3 * i], r->p->vy[i] = vel[3 * i + 1], r->p->vz[i] = vel[3 * i + 2];
@@ -211,6 +213,8 @@ ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e) {
   s->piston_work = r->piston_work;
   s->broken_bonded = r->broken_bonded;
   s->n_broken_bonds = (long)r->n_broken_bonds;
+  if (s->mpi_on && par_size() > 1 && par_rank() != 0) /* MPI: the sums live on rank 0 */
+    s->dissipated = s->piston_work = s->broken_bonded = 0, s->n_broken_bonds = 0;
   ms_status st = cd_sim_init(s); /* renumbers (a no-op on this order), lists, forces */
   if (st == MS_OK) s->nl->nbuild = (long)r->nbuild;
   return st;

@@ -49,6 +49,7 @@ struct cd_dd {
   int64_t *pgid;   /* bonded: [cap][CD_MAX_PARTNERS] partner gids */
   int32_t *gid_map;/* bonded: gid -> local index, [global] (−1 elsewhere) */
   long builds_since;
+  bool replicated; /* until the first migration: every rank holds every particle */
   cd_mpi_stats st;
 };
 
@@ -187,7 +188,7 @@ static bool partition(cd_sim *s, bool only_if_better, ms_status *status) {
   memset(d->weight, 0, d->ncells * sizeof *d->weight);
   for (size_t i = 0; i < p->nlocal; i++)
     if (!(p->flags[i] & PTL_REMOVED)) d->weight[cell_of(d, p->x[i], p->y[i], p->z[i])] += 64;
-  par_sum_int64s(d->weight, d->ncells);
+  if (!d->replicated) par_sum_int64s(d->weight, d->ncells);
   cd_partition_stats ps;
   ms_status st = cd_partition_cells(d->nc, d->per, d->weight, d->size, s->mpi.partition,
                                     d->slab_axis, d->owner_new, &ps);
@@ -213,7 +214,8 @@ ms_status cd_dd_create(cd_sim *s) {
   d->size = par_size();
   d->st.ranks = d->size;
   ptl_state *p = s->p;
-  d->st.global = (size_t)par_sum_long((long)p->nlocal);
+  d->replicated = s->mpi.replicated;
+  d->st.global = d->replicated ? p->nlocal : (size_t)par_sum_long((long)p->nlocal);
   ptl_state_reserve(p, d->st.global); /* a rank never holds a particle twice */
   const size_t cap = p->cap + 1;
   d->cell = ms_calloc(cap, sizeof *d->cell);
@@ -348,13 +350,21 @@ static void sort_by_cell(cd_sim *s) {
   for (size_t i = 0; i < n; i++) p->fx[i] = p->fy[i] = p->fz[i] = 0.0;
 }
 
-/* Every owned particle to the owner of its cell. */
+/* Every owned particle to the owner of its cell (a replicated set: each rank keeps its own). */
 static void migrate(cd_sim *s) {
   cd_dd *d = s->dd;
   ptl_state *p = s->p;
   const int P = d->size, L = rec_len(s);
   size_t n = p->nlocal;
   for (size_t i = 0; i < n; i++) d->cell[i] = cell_of(d, p->x[i], p->y[i], p->z[i]);
+  if (d->replicated) {
+    size_t keep = 0;
+    for (size_t i = 0; i < n; i++)
+      if (d->owner[d->cell[i]] == d->rank) move_particle(s, i, keep++);
+    p->nlocal = p->n = keep;
+    d->replicated = false;
+    return;
+  }
   memset(d->mcnt_s, 0, (size_t)P * sizeof(int));
   for (size_t i = 0; i < n; i++) {
     int r = d->owner[d->cell[i]];
@@ -530,12 +540,12 @@ ms_status cd_dd_redistribute(cd_sim *s) {
   /* rebalance: the load is the owned particle count (the force work per particle is nearly
    * uniform in a dense body) */
   const double thr = s->mpi.rebalance_threshold;
-  if (thr > 0 && ++d->builds_since >= (s->mpi.rebalance_interval > 0 ? s->mpi.rebalance_interval : 1)) {
+  if (thr > 0 && !d->replicated &&
+      ++d->builds_since >= (s->mpi.rebalance_interval > 0 ? s->mpi.rebalance_interval : 1)) {
     const double mean = (double)d->st.global / d->size;
     const double before = par_max_double((double)p->nlocal) / mean;
     if (before > thr && partition(s, true, &st)) {
       d->st.rebalances++;
-      d->st.rebalanced = true;
       d->st.rebalance_step = s->step;
       d->st.rebalance_before = before;
       d->st.rebalance_after = d->st.partition.imbalance;

@@ -23,6 +23,7 @@ typedef enum { SURF_FLAT = 0, SURF_SINE, SURF_RANDOM } surface_kind;
 static const char *const surface_names[] = {"flat", "sine", "random", NULL};
 static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
 static const char *const mode_names[] = {"plain", "bonded", NULL};
+static const char *const partition_names[] = {"slab", "metis", NULL}; /* cd_partition_method */
 
 typedef struct cd_region {
   int mat;                    /* index into the problem's material list */
@@ -67,6 +68,7 @@ struct cd_problem {
   double thermal_amp;
   uint64_t thermal_seed;
   int out_every, profile_axis, profile_bins, snapshots;
+  cd_mpi_config mpi; /* decomposition on MPI ranks (docs/input-cd.md "mpi") */
   double front_u; /* reference velocity for front tracking (piston velocity by default) */
   long checkpoint_every;  /* steps between checkpoints (0: none) */
   double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
@@ -539,6 +541,24 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   p->profile_bins = (int)bins;
   p->snapshots = (int)snaps;
 
+  p->mpi = (cd_mpi_config){.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
+                           .rebalance_interval = 10, .replicated = true};
+  const dk_node *mn = dk_get(sec, "mpi");
+  if (mn && dk_expect_map(e, doc, mn, "mpi")) {
+    int pm = CD_PART_METIS;
+    long iv = 10;
+    dk_read_enum(e, doc, mn, "partition", false, CD_PART_METIS, partition_names, &pm);
+    dk_read_double(e, doc, mn, "rebalance_threshold", MS_DIM_NONE, false, 1.2, 0.0, 1e6,
+                   &p->mpi.rebalance_threshold);
+    dk_read_int(e, doc, mn, "rebalance_interval", false, 10, 1, 1L << 30, &iv);
+    const dk_node *tn = dk_get(mn, "rebalance_threshold");
+    if (tn && p->mpi.rebalance_threshold > 0 && p->mpi.rebalance_threshold < 1)
+      dk_error(e, doc, tn, "rebalance_threshold %g: the imbalance max/mean is >= 1; give a value "
+               ">= 1, or 0 for never", p->mpi.rebalance_threshold);
+    p->mpi.partition = (cd_partition_method)pm;
+    p->mpi.rebalance_interval = (int)iv;
+  }
+
   /* refuse what cannot fit before anything is allocated (also said for a box of too many
    * sites: the estimate tells how far off the deck is) */
   if (e->n == nerr0 + box_too_big) memory_check(p, doc, sec, e);
@@ -835,7 +855,19 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
                    .damping_gamma = p->damping_j > 0 ? c0max / (p->damping_j * p->r0) : 0.0,
                    .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness,
                    .integrator = p->integrator};
+  const bool dist = ctx->size > 1;
+  if (dist && p->integrator != CD_INT_VELOCITY_VERLET) {
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: on %d MPI ranks only the velocity_verlet integrator "
+           "runs (docs/mpi.md); the deck asks for %s", ctx->size, cd_integrator_names[p->integrator]);
+    ptl_state_free(ps);
+    cd_restart_free(rs);
+    ms_h5_close_read(rh);
+    return MS_ERR_INPUT;
+  }
+  const size_t nglobal = ps->n;
   cd_sim *s = cd_sim_create(ps, &p->box, &cfg, p->nmat);
+  /* every rank built (or read) the whole set: cd_sim_init keeps what each rank's cells own */
+  if (dist) cd_sim_set_mpi(s, &p->mpi);
   for (int a = 0; a < p->nmat; a++)
     for (int b = a; b < p->nmat; b++) {
       cd_pair_table *t = ms_calloc(1, sizeof *t);
@@ -875,25 +907,38 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     return st;
   }
   ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
-         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle", ps->n, p->nmat, cfg.dt,
+         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle", nglobal, p->nmat, cfg.dt,
          p->rc, mode_names[p->mode], cfg.damping_gamma, cd_integrator_names[p->integrator],
-         cd_sim_bytes(s) / ps->n);
+         cd_sim_bytes(s) / (ps->nlocal ? ps->nlocal : 1));
+  const cd_mpi_stats *ms = cd_sim_mpi_stats(s);
+  long rebalances_logged = 0;
+  if (ms)
+    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %dx%dx%d coarse cells, %s partition: "
+           "edge cut %ld, imbalance %.3f; owned max %zu, ghosts %zu in all; rebalance above %g "
+           "(checked every %d list builds)", ms->ranks, ms->ncell[0], ms->ncell[1], ms->ncell[2],
+           partition_names[p->mpi.partition], ms->partition.edge_cut, ms->imbalance, ms->max_owned,
+           ms->total_ghosts, p->mpi.rebalance_threshold, p->mpi.rebalance_interval);
 
   /* outputs */
+  /* rank 0 writes the CSV files; every rank runs the same loop (the diagnostics are collective) */
+  const bool root = ctx->rank == 0;
   ms_afile fe = {0}, fp = {0}, ff = {0};
-  char *path = ms_out_path(ctx, "cd_energy.csv");
-  st = ms_afile_open(&fe, path);
-  free(path);
-  if (st == MS_OK) {
-    path = ms_out_path(ctx, "cd_profiles.csv");
-    st = ms_afile_open(&fp, path);
+  if (root) {
+    char *path = ms_out_path(ctx, "cd_energy.csv");
+    st = ms_afile_open(&fe, path);
     free(path);
+    if (st == MS_OK) {
+      path = ms_out_path(ctx, "cd_profiles.csv");
+      st = ms_afile_open(&fp, path);
+      free(path);
+    }
+    if (st == MS_OK) {
+      path = ms_out_path(ctx, "cd_front.csv");
+      st = ms_afile_open(&ff, path);
+      free(path);
+    }
   }
-  if (st == MS_OK) {
-    path = ms_out_path(ctx, "cd_front.csv");
-    st = ms_afile_open(&ff, path);
-    free(path);
-  }
+  if (dist) st = par_agree_status(st);
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot open output files");
     if (fe.f) ms_afile_abort(&fe);
@@ -904,7 +949,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     return st;
   }
   ms_afile *streams[CD_NSTREAMS] = {&fe, &fp, &ff};
-  if (!rs) write_headers(fe.f, fp.f, ff.f); /* a restart writes back the text so far */
+  if (!rs && root) write_headers(fe.f, fp.f, ff.f); /* a restart writes back the text so far */
 
   double lo = p->box.lo[axis], hi = p->box.hi[axis];
   if (p->box.bc[axis] != CD_BC_PERIODIC) { /* free axis: the extent may grow; pad by 50 % */
@@ -937,6 +982,12 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   for (long k = step0; k <= nsteps && st == MS_OK; k++) {
     if (k > step0) st = cd_sim_step(s);
     if (st != MS_OK) break;
+    if (ms && ms->rebalances > rebalances_logged) {
+      rebalances_logged = ms->rebalances;
+      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: rebalance at step %ld: imbalance %.3f -> %.3f, "
+             "edge cut %ld", ms->rebalance_step, ms->rebalance_before, ms->rebalance_after,
+             ms->partition.edge_cut);
+    }
     if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
       st = write_checkpoint(ctx, p, s, streams, front, nf);
       if (st != MS_OK) break;
@@ -945,24 +996,28 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     if (out) {
       cd_energy en;
       cd_sim_energy(s, &en);
-      write_energy_row(fe.f, s, &en, cd_free_surface_velocity(s, axis));
+      const double vfs = cd_free_surface_velocity(s, axis);
+      if (root) write_energy_row(fe.f, s, &en, vfs);
       cd_profile(s, axis, lo, hi, p->profile_bins, area, prof);
       for (int b = 0; b < p->profile_bins; b++) {
         double row[CD_PROFILE_NCOL + 1];
         row[0] = s->t;
         memcpy(row + 1, prof + (size_t)b * CD_PROFILE_NCOL, CD_PROFILE_NCOL * sizeof(double));
-        if (row[2] > 0) ms_csv_row(fp.f, CD_PROFILE_NCOL + 1, row);
+        if (row[2] > 0 && root) ms_csv_row(fp.f, CD_PROFILE_NCOL + 1, row);
       }
       if (p->front_u > 0) {
         double z = cd_front_position(prof, p->profile_bins, axis, p->front_u, 0.5);
         double row[2] = {s->t, z};
-        ms_csv_row(ff.f, 2, row);
+        if (root) ms_csv_row(ff.f, 2, row);
         if (isfinite(z) && nf < CD_MAX_FRONT) {
           front[2 * nf] = s->t;
           front[2 * nf++ + 1] = z;
         }
       }
       ms_progress_update(&prog, s->t, k);
+      if (ms && k % (10L * p->out_every) == 0)
+        ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: step %ld: owned max %zu (imbalance %.3f), "
+               "ghosts %zu in all", k, ms->max_owned, ms->imbalance, ms->total_ghosts);
     }
     if (snap_every && (k % snap_every == 0 || k == nsteps)) {
       char name[64];
@@ -987,14 +1042,24 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
              (m * sxy - sx * sy) / (m * sxx - sx * sx));
   }
   ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %ld steps, %ld list builds, %ld broken bonds, wall "
-         "force %.2f s, lists %.2f s", s->step, cd_sim_rebuilds(s), s->n_broken_bonds,
-         s->wall_time_force, s->wall_time_neigh);
+         "force %.2f s, lists %.2f s", s->step, cd_sim_rebuilds(s),
+         dist ? par_sum_long(s->n_broken_bonds) : s->n_broken_bonds, s->wall_time_force,
+         s->wall_time_neigh);
+  if (ms) {
+    const double xmax = par_max_double(ms->exchange_s), xmin = par_min_double(ms->exchange_s);
+    const double recv = par_sum_double(ms->exchanged_doubles);
+    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %ld partitions (%ld rebalances), "
+           "imbalance %.3f at the end; migration and ghost exchange %.3f-%.3f s per rank; %.4g "
+           "doubles received in all; %ld bonds lost at migrations", ms->ranks, ms->partitions,
+           ms->rebalances, ms->imbalance, xmin, xmax, recv, par_sum_long(ms->lost_bonds));
+  }
   free(prof);
-  if (st == MS_OK) {
+  if (st == MS_OK && root) {
     st = ms_afile_commit(&fe);
     if (st == MS_OK) st = ms_afile_commit(&fp); else ms_afile_abort(&fp);
     if (st == MS_OK) st = ms_afile_commit(&ff); else ms_afile_abort(&ff);
-  } else {
+    if (st != MS_OK) ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot write the CSV files");
+  } else if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: stopped at t = %g (%s)", s->t, ms_status_str(st));
     ms_afile_abort(&fe);
     ms_afile_abort(&fp);

@@ -217,6 +217,8 @@ typedef struct cd_mpi_config {
   cd_partition_method partition;
   double rebalance_threshold; /* repartition when max/mean owned particles exceeds it (0: never) */
   int rebalance_interval;     /* list builds between two repartition attempts (>= 1) */
+  bool replicated;            /* every rank passes the whole particle set (each keeps what its
+                               * cells own); false: disjoint shares (migrated to their owners) */
 } cd_mpi_config;
 typedef struct cd_mpi_stats {
   int ranks;
@@ -227,7 +229,6 @@ typedef struct cd_mpi_stats {
   cd_partition_stats partition;  /* of the owner map in use (weights = particle counts) */
   long partitions;               /* partitions computed (1 = the initial one) */
   long rebalances;               /* repartitions because of imbalance */
-  bool rebalanced;               /* set by a rebalance, cleared by cd_sim_mpi_stats_take */
   long rebalance_step;           /* step of the last rebalance, imbalance before and after */
   double rebalance_before, rebalance_after;
   double exchange_s;             /* wall time in ghost refreshes and migrations, this rank */
@@ -289,10 +290,11 @@ void cd_sim_free(cd_sim *s);
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
-/* Before cd_sim_init: distribute over the MPI ranks (no effect on one rank). Each rank then
- * passes its own share of the particles to cd_sim_create (disjoint shares whose union is the
- * system, any split, e.g. ptl_state_keep_range of a set generated on every rank); cd_sim_init
- * partitions the coarse cells and migrates every particle to its owner. From then on p holds
+/* Before cd_sim_init: distribute over the MPI ranks (no effect on one rank). Each rank passes
+ * to cd_sim_create either the whole particle set (cfg->replicated: generated or read
+ * identically on every rank) or its own share (disjoint shares whose union is the system, any
+ * split, e.g. ptl_state_keep_range); cd_sim_init partitions the coarse cells and keeps (resp.
+ * migrates) every particle on the owner of its cell. From then on p holds
  * the owned particles in [0, nlocal) and ghosts in [nlocal, n) (positions current after every
  * force evaluation); diagnostics (energy, virial, profile, free-surface velocity, snapshot)
  * are collective and return global values on every rank. */
