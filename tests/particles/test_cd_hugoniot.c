@@ -28,7 +28,7 @@ static bool full_run = false;
 static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
-  double D, D_ahead, rho_ratio, pzz, pxx, sigma_u, sigma_rh, up_behind;
+  double D, D_ahead, D_mom, rho_ratio, pzz, pxx, sigma_u, sigma_rh, up_behind;
 } shock_result;
 
 /* Front seen from the undisturbed side: scanning down from the far end, the first place where
@@ -142,13 +142,16 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   const double blo = -0.5 * dz;
   const int nbin = (int)(L / bw) + 20;
   double *prof = calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof);
-  double tf[64], zf[64], zb[64];
+  double tf[64], zf[64], zb[64], pm[64];
   int nf = 0;
   for (long k = 1; k <= nsteps; k++) {
     assert_int_equal(cd_sim_step(s), MS_OK);
     if (k % every == 0 && nf < 64) {
       cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
       tf[nf] = s->t;
+      cd_energy en;
+      cd_sim_energy(s, &en);
+      pm[nf] = en.momentum[2];
       zf[nf] = cd_front_position(prof, nbin, 2, up, 0.5);
       zb[nf++] = front_from_ahead(prof, nbin, up, 0.5);
       if (dump)
@@ -162,6 +165,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   shock_result r = {0};
   r.D = fit_slope(tf, zf, nf, 0.25 * tf[nf - 1]);
   r.D_ahead = fit_slope(tf, zb, nf, 0.25 * tf[nf - 1]);
+  /* momentum of the sample grows at the piston force: dΠ/dt = ρ0 A D up for a steady shock */
+  r.D_mom = fit_slope(tf, pm, nf, 0.25 * tf[nf - 1]) / (eos_rho0(eos) * box.hi[0] * box.hi[1] * up);
   /* shocked state: bins between the piston + 5a and the front − 5a at the last frame */
   cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
   double zp = 2 * a + up * s->t, zfront = cd_front_position(prof, nbin, 2, up, 0.5);
@@ -211,8 +216,8 @@ static void test_hugoniot(void **state) {
   const double ups_full[] = {1.0, 1.5, 2.0, 3.0, 4.0, 5.0};
   const double ups_ci[2][2] = {{2.0, 3.0}, {2.0, 4.0}};
   const bool ci = !full_run && opt_nup == 0 && opt_mode < 0 && opt_curve < 0;
-  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (D/(D-u)) | rho/rho0 (bins) | P_zz bins GPa | rho0 D up GPa | P_xx,yy GPa | sigma_u GPa |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (D/(D-u)) | rho/rho0 (bins) | P_zz bins GPa | rho0 D up GPa | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int c = 0; c < 2; c++) {
     if (opt_curve >= 0 && c != opt_curve) continue;
     for (int mode = CD_CUTOFF_BONDED; mode >= CD_CUTOFF_PLAIN; mode--) {
@@ -226,9 +231,9 @@ static void test_hugoniot(void **state) {
         eos_hugoniot_point hp;
         double upl[1] = {up};
         double eos_us = eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
-        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | %.3f | %.1f | %.1f | %.1f | %.2f |\n",
+        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | %.3f | %.1f | %.1f | %.1f | %.2f |\n",
                cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
-               r.D, r.D_ahead, us, 100 * (r.D - us) / us, eos_us, r.D / (r.D - up), r.rho_ratio,
+               r.D, r.D_ahead, r.D_mom, us, 100 * (r.D - us) / us, eos_us, r.D / (r.D - up), r.rho_ratio,
                r.pzz, r.sigma_rh, r.pxx, r.sigma_u);
         fflush(stdout);
         /* paper 002 §2: the close-packed cluster medium needs no plasticity model for
