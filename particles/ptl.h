@@ -199,15 +199,20 @@ typedef struct cd_partition_stats {
 /* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
  * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
  * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
- * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
- * fixed seed, so every rank calling it with the same input gets the same owner map (no
- * broadcast needed). nparts == 1 → all zero. stats may be NULL.
- * METIS with nparts ≥ cells gives cell c to part c. Σ(weight+1) above 2^30 is scaled down
- * for METIS's 32-bit weights. MS_ERR_INPUT: bad arguments, negative weights, more than
- * 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
+ * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight =
+ * 16·weight + 1 (empty cells cost little but not nothing), fixed seed, so every rank calling it
+ * with the same input gets the same owner map (no broadcast needed). nparts == 1 → all zero.
+ * stats may be NULL. METIS with nparts ≥ cells gives cell c to part c. Vertex weights summing
+ * above 2^30 are scaled down for METIS's 32-bit idx_t. MS_ERR_INPUT: bad arguments, negative
+ * weights, more than 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
 ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
                              int nparts, cd_partition_method method, int slab_axis,
                              int32_t *owner, cd_partition_stats *stats);
+/* Per-part figures of an owner map: halo[p] = cells outside part p adjacent to it (its ghost
+ * cells), neighbours[p] = distinct other parts adjacent to p (its messages per exchange).
+ * Arrays of nparts entries; either may be NULL. */
+void cd_partition_halo(const int ncell[3], const bool periodic[3], const int32_t *owner,
+                       int nparts, long *halo, int *neighbours);
 
 /* Cluster dynamics on MPI ranks (particles/cd_par.c, docs/mpi.md): the box is cut into coarse
  * cells (>= r_list wide) owned by ranks (cd_partition_cells, recomputed when the load is

@@ -29,8 +29,9 @@ static bool adjacent(const int n[3], const bool per[3], int64_t a, int64_t b) {
   return true;
 }
 
+/* Brute-force figures; halo[p] and nbrs[p] (distinct adjacent parts) per part. */
 static void brute_stats(const int n[3], const bool per[3], const int64_t *w, int nparts,
-                        const int32_t *owner, cd_partition_stats *st) {
+                        const int32_t *owner, cd_partition_stats *st, long *halo, int *nbrs) {
   int64_t nv = ncells(n);
   double *pw = calloc((size_t)nparts, sizeof(double)), tot = 0, mx = 0;
   for (int64_t c = 0; c < nv; ++c) {
@@ -44,13 +45,24 @@ static void brute_stats(const int n[3], const bool per[3], const int64_t *w, int
     for (int64_t b = a + 1; b < nv; ++b)
       if (owner[a] != owner[b] && adjacent(n, per, a, b)) st->edge_cut++;
   st->halo_cells = 0;
-  for (int p = 0; p < nparts; ++p)
+  for (int p = 0; p < nparts; ++p) {
+    halo[p] = 0;
+    nbrs[p] = 0;
     for (int64_t c = 0; c < nv; ++c) {
       if (owner[c] == p) continue;
       bool near = false;
       for (int64_t b = 0; b < nv && !near; ++b) near = owner[b] == p && adjacent(n, per, c, b);
-      st->halo_cells += near;
+      halo[p] += near;
     }
+    st->halo_cells += halo[p];
+    for (int q = 0; q < nparts; ++q) {
+      bool touch = false;
+      for (int64_t a = 0; a < nv && !touch && q != p; ++a)
+        for (int64_t b = 0; b < nv && !touch && owner[a] == p; ++b)
+          touch = owner[b] == q && adjacent(n, per, a, b);
+      nbrs[p] += touch;
+    }
+  }
   free(pw);
 }
 
@@ -82,7 +94,9 @@ static void test_slab_known_weights(void **state) {
   for (int64_t c = 0; c < 48; ++c) assert_int_equal(owner[c], c / 16);
   assert_true(st.imbalance == 1.0);
   cd_partition_stats bf;
-  brute_stats(n, per, u, 3, owner, &bf);
+  long halo[5];
+  int nbrs[5];
+  brute_stats(n, per, u, 3, owner, &bf, halo, nbrs);
   assert_int_equal(st.edge_cut, bf.edge_cut);
   assert_int_equal(st.halo_cells, bf.halo_cells);
   assert_int_equal(st.halo_cells, 4 * 16); /* the middle part sees both neighbours' planes */
@@ -151,6 +165,18 @@ static void test_periodic_wrap(void **state) {
   assert_int_equal(cd_partition_cells(ring, px, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
   assert_int_equal(st.edge_cut, 2);
   assert_int_equal(st.halo_cells, 4);
+  const int ring8[3] = {8, 1, 1};
+  long halo[4];
+  int nbrs[4];
+  for (int per = 0; per < 2; ++per) { /* 4 slabs of 2 cells: ends have 1 neighbour unless wrapped */
+    assert_int_equal(cd_partition_cells(ring8, per ? px : open, w, 4, CD_PART_SLAB, 0, owner, NULL), MS_OK);
+    cd_partition_halo(ring8, per ? px : open, owner, 4, halo, nbrs);
+    for (int p = 0; p < 4; ++p) {
+      bool end = !per && (p == 0 || p == 3);
+      assert_int_equal(nbrs[p], end ? 1 : 2);
+      assert_int_equal(halo[p], end ? 1 : 2);
+    }
+  }
   assert_int_equal(cd_partition_cells(ring, open, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
   assert_int_equal(st.edge_cut, 1);
   assert_int_equal(st.halo_cells, 2);
@@ -169,8 +195,9 @@ static void test_periodic_wrap(void **state) {
   assert_int_equal(st.edge_cut, (8 * 7 + 12 * 11 + 6 * 17 + 26) / 2);
 }
 
-/* The reported figures equal a brute-force count over all cell pairs, for both methods, several
- * part counts and mixed periodic/open axes (including a periodic axis of 2 cells). */
+/* The reported figures and the per-part halo / neighbour-part counts (cd_partition_halo) equal a
+ * brute-force count over all cell pairs, for both methods, several part counts and mixed
+ * periodic/open axes (including a periodic axis of 2 cells). */
 static void test_stats_brute_force(void **state) {
   (void)state;
   const int grids[2][3] = {{6, 5, 4}, {7, 2, 3}};
@@ -190,7 +217,14 @@ static void test_stats_brute_force(void **state) {
           cd_partition_method meth = m ? CD_PART_METIS : CD_PART_SLAB;
           assert_int_equal(cd_partition_cells(n, pers[g], w, parts[k], meth, axis, owner, &st),
                            MS_OK);
-          brute_stats(n, pers[g], w, parts[k], owner, &bf);
+          long halo[5], bhalo[5];
+          int nbrs[5], bnbrs[5];
+          brute_stats(n, pers[g], w, parts[k], owner, &bf, bhalo, bnbrs);
+          cd_partition_halo(n, pers[g], owner, parts[k], halo, nbrs);
+          for (int p = 0; p < parts[k]; ++p) {
+            assert_int_equal(halo[p], bhalo[p]);
+            assert_int_equal(nbrs[p], bnbrs[p]);
+          }
           assert_int_equal(st.edge_cut, bf.edge_cut);
           assert_int_equal(st.halo_cells, bf.halo_cells);
           /* the same sum of the same integers (exact in double) divided the same way */
