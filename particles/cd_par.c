@@ -563,3 +563,11 @@ ms_status cd_dd_redistribute(cd_sim *s) {
   d->st.exchange_s += ms_wall_time() - t0;
   return st;
 }
+
+void cd_sim_ghost_owners(const cd_sim *s, int32_t *owner) {
+  const cd_dd *d = s->dd;
+  if (!d) return;
+  /* the ghosts of the last build arrived grouped by neighbour rank (send_ghosts) */
+  for (int k = 0; k < d->nnbr; k++)
+    for (int q = 0; q < d->gcnt_r[k]; q++) owner[d->gdsp_r[k] + q] = d->nbr[k];
+}

@@ -7,10 +7,11 @@
  * 26-neighbour cell graph cut by the partition. Two methods:
  *   - slabs: contiguous ranges of cell planes along one axis, cut where the cumulative weight
  *     crosses k·W/nparts (a plane goes to the part holding the midpoint of its weight);
- *   - METIS k-way on the 26-neighbour graph, vertex weight = 16·particles + 1 (an empty cell
- *     costs about 1/16 of a particle: cell-list bookkeeping; with particles + 1 the many empty
- *     cells around ejecta weighed as much as particles and the particle imbalance of the default
- *     deck's late snapshot was 1.4 instead of 1.03–1.12), unit edge weights, fixed seed.
+ *   - METIS k-way on the 26-neighbour graph, vertex weight = weight + 1 (no cell weighs 0),
+ *     unit edge weights, fixed seed. Callers pass particle counts scaled up (cd_par.c: 64 per
+ *     particle) so that an empty cell weighs next to nothing: with unscaled counts the many
+ *     empty cells around ejecta weighed as much as particles and the particle imbalance of the
+ *     default deck's late snapshot was 1.36–1.48 instead of 1.01–1.12 (docs/benchmarks.md).
  * Both are pure functions of their input, so every rank computes the same map without a
  * broadcast (METIS is deterministic for a fixed seed and input on one build).
  */
@@ -21,9 +22,6 @@
 #include <string.h>
 
 #include <metis.h>
-
-/* METIS vertex weight of a cell: PARTICLE_WEIGHT · particles + 1 */
-enum { PARTICLE_WEIGHT = 16 };
 
 /* The distinct neighbours of cell (ix, iy, iz) in the 26-neighbour stencil, periodic axes
  * wrapped, the cell itself excluded (a periodic axis of 1 or 2 cells maps several offsets onto
@@ -114,15 +112,15 @@ static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int
     for (idx_t c = 0; c < nv; ++c) owner[c] = (int32_t)c;
     return MS_OK;
   }
-  /* vertex weights 16 w + 1 in idx_t; if their sum would overflow a 32-bit idx_t, particle
-   * counts are scaled down (rounded) so the total stays below 2^30 */
+  /* vertex weights w + 1 in idx_t; if their sum would overflow a 32-bit idx_t, the weights
+   * are scaled down (rounded) so the total stays below 2^30 */
   double total = 0;
-  for (idx_t c = 0; c < nv; ++c) total += (double)weight[c] * PARTICLE_WEIGHT + 1;
+  for (idx_t c = 0; c < nv; ++c) total += (double)weight[c] + 1;
   const double limit = 1073741824.0; /* 2^30 */
   const double scale = total > limit ? (limit - (double)nv) / (total - (double)nv) : 1.0;
   idx_t *vwgt = ms_calloc((size_t)nv, sizeof(idx_t));
   for (idx_t c = 0; c < nv; ++c)
-    vwgt[c] = (idx_t)llround((double)weight[c] * PARTICLE_WEIGHT * scale) + 1;
+    vwgt[c] = (idx_t)llround((double)weight[c] * scale) + 1;
   idx_t *part = ms_calloc((size_t)nv, sizeof(idx_t));
   idx_t ncon = 1, np = nparts, objval = 0, nvtx = nv;
   idx_t opts[METIS_NOPTIONS];

@@ -199,11 +199,12 @@ typedef struct cd_partition_stats {
 /* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
  * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
  * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
- * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight =
- * 16·weight + 1 (empty cells cost little but not nothing), fixed seed, so every rank calling it
- * with the same input gets the same owner map (no broadcast needed). nparts == 1 → all zero.
- * stats may be NULL. METIS with nparts ≥ cells gives cell c to part c. Vertex weights summing
- * above 2^30 are scaled down for METIS's 32-bit idx_t. MS_ERR_INPUT: bad arguments, negative
+ * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
+ * fixed seed, so every rank calling it with the same input gets the same owner map (no
+ * broadcast needed). nparts == 1 → all zero. stats may be NULL. Pass particle counts scaled up
+ * (e.g. ×64, as cd_par.c does) so that empty cells weigh little against particles. METIS with
+ * nparts ≥ cells gives cell c to part c. Vertex weights summing above 2^30 are scaled down for
+ * METIS's 32-bit idx_t. MS_ERR_INPUT: bad arguments, negative
  * weights, more than 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
 ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
                              int nparts, cd_partition_method method, int slab_axis,
@@ -311,6 +312,9 @@ const cd_mpi_stats *cd_sim_mpi_stats(const cd_sim *s);
 bool cd_sim_owns_position(const cd_sim *s, const double x[3]);
 /* Bring the ghosts' positions and velocities up to date (collective; no-op serially). */
 void cd_sim_refresh_ghosts(cd_sim *s);
+/* The rank owning each ghost: owner[j] for particle nlocal + j, j < n − nlocal (for the
+ * distributed fragment finder, cpl_fragments_find_dist). Serial: nothing to fill. */
+void cd_sim_ghost_owners(const cd_sim *s, int32_t *owner);
 /* One step of cfg.integrator (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN.
  * After an RKN step p->f holds the forces of the scheme's last stage, not of x^{n+1}. */
 ms_status cd_sim_step(cd_sim *s);

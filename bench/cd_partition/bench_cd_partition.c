@@ -1,13 +1,15 @@
 /* Partition quality of the cluster-dynamics coarse-cell graph (docs/benchmarks.md "CD
  * partition"): METIS vs plain slabs (cd_partition_cells).
  *
- *   bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,8,16,64]
- *       a particle snapshot (/particles/x; attributes of /particles: r0, period_x.. and lo_x.. of periodic axes):
- *       coarse cells of K·r0 (default 4) over the particles' bounding box (over the period on
- *       periodic axes), weight = particles per cell; per part count: imbalance, edge cut, halo
- *       cells (Σ and max per part) of METIS and of slabs along every axis with > 1 cell.
+ *   bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,8,16,64] [--scale S]
+ *       a particle snapshot (/particles/x; attributes of /particles: r0, period_x.. and lo_x..
+ *       of periodic axes): coarse cells of K·r0 (default 4) over the particles' bounding box
+ *       (over the period on periodic axes), weight = S × particles per cell (default 64, what
+ *       cd_par.c passes); per part count: imbalance, edge cut, halo cells (Σ and max per part)
+ *       of METIS and of slabs along every axis with > 1 cell.
  *   bench_cd_partition grid NX NY NZ PPC P1 [P2 ...] [--periodic]
- *       a uniform NX×NY×NZ grid, PPC particles per cell: one CSV row per (method, parts):
+ *       a uniform NX×NY×NZ grid, PPC particles per cell (weight 64·PPC): one CSV row per
+ *       (method, parts):
  *       method,parts,cells,imbalance,edge_cut,halo_sum,halo_max,halo_mean,nbr_max,nbr_mean,seconds
  *       (tools/cd_comm_model.py builds the communication model from these rows).
  */
@@ -69,14 +71,16 @@ static int parse_parts(const char *s, int *parts, int max) {
 static int cmd_snapshot(int argc, char **argv) {
   const char *path = argv[0];
   double kcell = 4;
+  long scale = 64;
   int parts[16] = {2, 4, 8, 16, 64}, nparts = 5;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--cell") && i + 1 < argc) kcell = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--scale") && i + 1 < argc) scale = atol(argv[++i]);
     else if (!strcmp(argv[i], "--parts") && i + 1 < argc) nparts = parse_parts(argv[++i], parts, 16);
     else nparts = -1;
   }
-  if (nparts < 1 || !(kcell > 0)) {
-    fprintf(stderr, "bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,...]\n");
+  if (nparts < 1 || !(kcell > 0) || scale < 1) {
+    fprintf(stderr, "bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,...] [--scale S]\n");
     return 2;
   }
   dk_errors e;
@@ -129,12 +133,12 @@ static int cmd_snapshot(int argc, char **argv) {
       c += (size_t)q * stride;
       stride *= (size_t)nc[a];
     }
-    wt[c]++;
+    wt[c] += scale;
   }
   size_t occupied = 0;
   for (size_t c = 0; c < nv; ++c) occupied += wt[c] > 0;
-  printf("# %s: %zu particles, r0 = %.4g cm, cells %d x %d x %d of %.3g r0 (%zu, %zu occupied)\n",
-         path, n, r0, nc[0], nc[1], nc[2], kcell, nv, occupied);
+  printf("# %s: %zu particles, r0 = %.4g cm, cells %d x %d x %d of %.3g r0 (%zu, %zu occupied), "
+         "weight %ld per particle\n", path, n, r0, nc[0], nc[1], nc[2], kcell, nv, occupied, scale);
   printf("# extent [cm]: x %.4g..%.4g  y %.4g..%.4g  z %.4g..%.4g; periodic %d%d%d\n", lo[0], hi[0],
          lo[1], hi[1], lo[2], hi[2], per[0], per[1], per[2]);
   printf("| parts | method | imbalance | edge cut | halo cells (sum) | halo max/part | neighbour parts max |\n");
@@ -175,7 +179,7 @@ static int cmd_grid(int argc, char **argv) {
   size_t nv = (size_t)nc[0] * (size_t)nc[1] * (size_t)nc[2];
   if (nc[0] < 1 || nc[1] < 1 || nc[2] < 1 || ppc < 0 || np < 1) return 2;
   int64_t *w = ms_calloc(nv, sizeof *w);
-  for (size_t c = 0; c < nv; ++c) w[c] = ppc;
+  for (size_t c = 0; c < nv; ++c) w[c] = 64 * ppc;
   int32_t *owner = ms_calloc(nv, sizeof *owner);
   printf("method,parts,cells,imbalance,edge_cut,halo_sum,halo_max,halo_mean,nbr_max,nbr_mean,seconds\n");
   for (int k = 0; k < np; ++k)
