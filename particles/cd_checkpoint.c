@@ -21,6 +21,9 @@
 struct cd_restart {
   ptl_state *p;
   int64_t *partner_gid; /* [n][CD_MAX_PARTNERS] or NULL */
+  int32_t *owner;       /* MPI, same rank count: coarse-cell owner map (NULL otherwise) */
+  size_t owner_cells;
+  double builds_since;
   double step, t, dissipated, piston_work, broken_bonded, n_broken_bonds, nbuild;
   double inside0[CD_MAX_MATERIALS * CD_MAX_MATERIALS];
 };
@@ -77,6 +80,17 @@ ms_status cd_checkpoint_write(ms_h5 *h, const ms_ctx *ctx, const cd_sim *s) {
                                acc[2],          acc[3], (double)s->nl->nbuild};
   for (int k = 0; k < N_ATTR && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "/cd", attr_names[k], vals[k]);
+  if (st == MS_OK && s->dd) { /* the decomposition, for a restart on as many ranks */
+    size_t ncells = 0;
+    long since = 0;
+    const int32_t *owner = cd_dd_owner(s->dd, &ncells, &since);
+    const size_t mine = ctx->rank == 0 ? ncells : 0;
+    int64_t *o = ms_calloc(mine + 1, sizeof *o);
+    for (size_t c = 0; c < mine; c++) o[c] = owner[c];
+    st = ms_h5_write_ints_dist(h, "/cd/owner", mine, o);
+    free(o);
+    if (st == MS_OK) st = ms_h5_attr_double(h, "/cd", "builds_since", (double)since);
+  }
   if (st == MS_OK) st = ms_h5_attr_double(h, "/cd", "particles", par_sum_double(seg));
   free(buf);
   free(ibuf);
@@ -144,6 +158,25 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
   if (st == MS_OK && bonded)
     st = read_i(h, "/cd/partners", row0 * CD_MAX_PARTNERS, nrow * CD_MAX_PARTNERS,
                 &r->partner_gid, e);
+  /* same rank count: the owner map, so every rank gets its old particles back in their order */
+  if (st == MS_OK && (int)ranks == ctx->size && ctx->size > 1 && ms_h5_exists(h, "/cd/owner")) {
+    int64_t *o = NULL;
+    size_t nc = 0, ncol = 0;
+    st = ms_h5_read_ints_rows(h, "/cd/owner", 0, SIZE_MAX, &o, &nc, &ncol, e);
+    if (st == MS_OK) st = ms_h5_read_attr_double(h, "/cd", "builds_since", &r->builds_since, e);
+    if (st == MS_OK) {
+      r->owner = ms_calloc(nc + 1, sizeof *r->owner);
+      r->owner_cells = nc;
+      for (size_t c = 0; c < nc && st == MS_OK; c++) {
+        if (o[c] < 0 || o[c] >= ctx->size) {
+          dk_error_at(e, "checkpoint", 0, 0, "'/cd/owner' names rank %lld", (long long)o[c]);
+          st = MS_ERR_INPUT;
+        }
+        r->owner[c] = (int32_t)o[c];
+      }
+    }
+    free(o);
+  }
   if (st == MS_OK) {
     r->p = ptl_state_create(nrow, dim);
     r->p->n = r->p->nlocal = nrow;
@@ -165,7 +198,6 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
     }
     memcpy(r->inside0, in0, sizeof r->inside0);
   }
-  (void)ctx;
   free(dseg), free(pos), free(vel), free(mass), free(in0), free(gid), free(mat), free(flags);
   if (st != MS_OK) {
     cd_restart_free(r);
@@ -215,8 +247,11 @@ ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e) {
   s->n_broken_bonds = (long)r->n_broken_bonds;
   if (s->mpi_on && par_size() > 1 && par_rank() != 0) /* MPI: the sums live on rank 0 */
     s->dissipated = s->piston_work = s->broken_bonded = 0, s->n_broken_bonds = 0;
+  if (r->owner) s->mpi.owner = r->owner, s->mpi.owner_cells = r->owner_cells;
   ms_status st = cd_sim_init(s); /* renumbers (a no-op on this order), lists, forces */
+  s->mpi.owner = NULL;
   if (st == MS_OK) s->nl->nbuild = (long)r->nbuild;
+  if (st == MS_OK && s->dd && r->owner) cd_dd_set_builds_since(s->dd, (long)r->builds_since);
   return st;
 }
 
@@ -224,5 +259,6 @@ void cd_restart_free(cd_restart *r) {
   if (!r) return;
   ptl_state_free(r->p);
   free(r->partner_gid);
+  free(r->owner);
   free(r);
 }

@@ -106,6 +106,9 @@ void cd_dd_refresh(cd_sim *s, bool positions);
 /* The box changed (affine deformation): new coarse grid and partition. Collective. */
 void cd_dd_regrid(cd_sim *s);
 bool cd_dd_owns(const cd_dd *d, const double x[3]);
+/* Checkpoints: the owner map in use and the list builds since the last rebalance attempt. */
+const int32_t *cd_dd_owner(const cd_dd *d, size_t *ncells, long *builds_since);
+void cd_dd_set_builds_since(cd_dd *d, long builds_since);
 const cd_mpi_stats *cd_dd_stats(const cd_dd *d);
 
 #endif /* MSCALE_CD_IMPL_H */

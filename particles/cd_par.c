@@ -235,8 +235,20 @@ ms_status cd_dd_create(cd_sim *s) {
   make_grid(s);
   ms_status st;
   partition(s, false, &st);
+  if (st == MS_OK && s->mpi.owner && s->mpi.owner_cells == d->ncells) { /* restart */
+    memcpy(d->owner, s->mpi.owner, d->ncells * sizeof *d->owner);
+    d->st.partition.imbalance = map_imbalance(d, d->owner, d->part);
+  }
   return st;
 }
+
+const int32_t *cd_dd_owner(const cd_dd *d, size_t *ncells, long *builds_since) {
+  *ncells = d->ncells;
+  *builds_since = d->builds_since;
+  return d->owner;
+}
+
+void cd_dd_set_builds_since(cd_dd *d, long builds_since) { d->builds_since = builds_since; }
 
 void cd_dd_free(cd_dd *d) {
   if (!d) return;

@@ -225,6 +225,10 @@ typedef struct cd_mpi_config {
   int rebalance_interval;     /* list builds between two repartition attempts (>= 1) */
   bool replicated;            /* every rank passes the whole particle set (each keeps what its
                                * cells own); false: disjoint shares (migrated to their owners) */
+  const int32_t *owner;       /* restart on the same rank count: the checkpoint's coarse-cell
+                               * owner map (used instead of a new partition if the grid has
+                               * owner_cells cells), so every rank gets its old particles back */
+  size_t owner_cells;
 } cd_mpi_config;
 typedef struct cd_mpi_stats {
   int ranks;
