@@ -49,6 +49,7 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
     for (size_t k = 0; k < sizeof ds / sizeof ds[0] && s == MS_OK; ++k)
       s = ms_h5_write_doubles(h, ds[k].name, ds[k].n0, ds[k].n1, ds[k].d, ds[k].u);
     if (s == MS_OK) s = ms_h5_attr_double(h, "/", "time", g->t);
+    if (s == MS_OK) s = ms_h5_attr_double(h, "/", "step", (double)g->step);
     if (s == MS_OK) s = ms_h5_attr_string(h, "/", "time_units", ms_unit_label(MS_DIM_TIME));
     if (s == MS_OK) {
       static const char *const geo[] = {"planar", "cylindrical", "spherical"};

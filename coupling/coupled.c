@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "cont.h"
+#include "cont_run.h"
 #include "ptl.h"
 
 enum { SURF_FLAT = 0, SURF_GROOVES, SURF_RANDOM };
@@ -768,6 +769,17 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   return MS_OK;
 }
 
+/* A particle step failed: the guard's finding (cd_sim_guard: step, time on the particles' clock,
+ * particle, quantity) and the state it found, particles_unstable.h5 (docs/reliability.md §5). */
+static void particles_unstable(const ms_ctx *ctx, cd_sim *sim, ms_status st, double t_start) {
+  ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g): %s", t_start,
+         st == MS_ERR_UNSTABLE ? cd_sim_error(sim) : ms_status_str(st));
+  char *path = ms_out_path(ctx, "particles_unstable.h5");
+  if (cd_write_snapshot(sim, path) == MS_OK)
+    ms_log(ctx, MS_LOG_ERROR, "coupled: final state written to particles_unstable.h5");
+  free(path);
+}
+
 /* Two-way coupling (docs/coupling.md §6): the grid ends at the interface node and runs through
  * the continuum problem's own loop (profiles, histories, x–t data as in a grid-only run); per
  * grid step the node gets the impulse the particles received in the previous step as a
@@ -864,8 +876,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
     w->f_prev = f;
   }
   if (st != MS_OK) {
-    ms_log(w->ctx, MS_LOG_ERROR, "coupled: particle step failed (%s) at t = %g",
-           ms_status_str(st), sim->t);
+    particles_unstable(w->ctx, sim, st, 0.0);
     return st;
   }
   w->p_avg = imp / (dtg * area);
@@ -1194,8 +1205,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       p_particles = -fsum / area; /* compression pushes the piston towards −x */
     }
     if (st != MS_OK) {
-      ms_log(ctx, MS_LOG_ERROR, "coupled: particle step %ld failed (%s) at t = %g", step,
-             ms_status_str(st), t_start + sim->t);
+      particles_unstable(ctx, sim, st, t_start);
       break;
     }
     bool out_now = step * p->n_out >= next_out * nsteps;

@@ -84,6 +84,37 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
   return NAN;
 }
 
+const char *cd_sim_error(const cd_sim *s) { return s->err; }
+
+ms_status cd_sim_guard(cd_sim *s) {
+  const ptl_state *p = s->p;
+  const double *q[6] = {p->x, p->y, p->z, p->vx, p->vy, p->vz};
+  static const char *const name[6] = {"x", "y", "z", "vx", "vy", "vz"};
+  const double step_max = 0.5 * s->cfg.r0;
+  for (size_t i = 0; i < p->nlocal; i++) { /* owned particles (ghosts are another rank's) */
+    if (p->flags[i] & PTL_REMOVED) continue;
+    char what[200] = "";
+    for (int c = 0; c < 6 && !what[0]; c++)
+      if (!isfinite(q[c][i])) snprintf(what, sizeof what, "non-finite %s = %g", name[c], q[c][i]);
+    double v = sqrt(p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
+    if (!what[0] && v * s->cfg.dt > step_max)
+      snprintf(what, sizeof what, "speed |v| = %g km/s moves it %.3g r0 per step, more than 0.5 "
+               "r0: the time step cannot follow it (reduce dt/courant or the drive)",
+               v, v * s->cfg.dt / s->cfg.r0);
+    for (int a = 0; a < 3 && !what[0]; a++)
+      if (s->box.bc[a] == CD_BC_WALL && !(q[a][i] >= s->box.lo[a] && q[a][i] <= s->box.hi[a]))
+        snprintf(what, sizeof what, "left the box through the wall: %s = %g outside [%g, %g]",
+                 name[a], q[a][i], s->box.lo[a], s->box.hi[a]);
+    if (what[0]) {
+      snprintf(s->err, sizeof s->err, "unstable at step %ld, t = %.9g: particle %zu (%s"
+               "at %g, %g, %g): %s", s->step, s->t, i,
+               p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i], p->z[i], what);
+      return MS_ERR_UNSTABLE;
+    }
+  }
+  return MS_OK;
+}
+
 ms_status cd_write_snapshot(cd_sim *s, const char *path) {
   const ptl_state *p = s->p;
   const size_t n = p->nlocal; /* MPI: each rank writes its owned particles (collective file) */
@@ -116,6 +147,7 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
     if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/material", n, mat);
     if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/gid", n, p->gid);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", s->t);
+    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)s->step);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "r0", s->cfg.r0);
     if (st == MS_OK) st = ms_h5_close(h); else ms_h5_abort(h);
   }

@@ -1028,6 +1028,14 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     }
   }
   ms_progress_finish(&prog, s->t, s->step);
+  if (st == MS_ERR_UNSTABLE) { /* the guard's finding, the state it found, the series so far */
+    if (cd_sim_error(s)[0]) /* on the rank that found it */
+      ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: %s", cd_sim_error(s));
+    char *sp = ms_out_path(ctx, "cd_snap_unstable.h5");
+    if (cd_write_snapshot(s, sp) == MS_OK)
+      ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: final state written to cd_snap_unstable.h5");
+    free(sp);
+  }
   if (nf > 3) {
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     int m = 0;
@@ -1054,12 +1062,13 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
            ms->rebalances, ms->imbalance, xmin, xmax, recv, par_sum_long(ms->lost_bonds));
   }
   free(prof);
-  if (st == MS_OK && root) {
-    st = ms_afile_commit(&fe);
-    if (st == MS_OK) st = ms_afile_commit(&fp); else ms_afile_abort(&fp);
-    if (st == MS_OK) st = ms_afile_commit(&ff); else ms_afile_abort(&ff);
-    if (st != MS_OK) ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot write the CSV files");
-  } else if (st != MS_OK) {
+  if ((st == MS_OK || st == MS_ERR_UNSTABLE) && root) { /* unstable: keep the series so far */
+    ms_status sc = ms_afile_commit(&fe);
+    if (sc == MS_OK) sc = ms_afile_commit(&fp); else ms_afile_abort(&fp);
+    if (sc == MS_OK) sc = ms_afile_commit(&ff); else ms_afile_abort(&ff);
+    if (sc != MS_OK) ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot write the CSV files");
+    if (st == MS_OK) st = sc;
+  } else if (st != MS_OK && st != MS_ERR_UNSTABLE) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: stopped at t = %g (%s)", s->t, ms_status_str(st));
     ms_afile_abort(&fe);
     ms_afile_abort(&fp);

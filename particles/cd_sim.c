@@ -349,21 +349,15 @@ static void reflect_walls(cd_sim *s) {
 
 /* After the integrator: damping sub-step, clock, and the periodic NaN check. */
 static ms_status end_step(cd_sim *s) {
-  ptl_state *p = s->p;
-  const long n = (long)p->nlocal;
-  const double *vx = p->vx, *vy = p->vy, *vz = p->vz;
   if (s->cfg.damping_gamma > 0.0) {
     if (s->dd) cd_dd_refresh(s, false); /* the ghosts' velocities after the kick */
     s->dissipated += cd_damping_step(s);
   }
   s->t += s->cfg.dt;
   s->step++;
-  if (s->step % 100 == 0) {
-    double sum = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : sum) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) sum += vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-    int bad = !isfinite(sum);
-    if (s->dd) bad = par_max_int(bad); /* every rank stops together */
+  if (s->step % CD_GUARD_EVERY == 0) {
+    int bad = cd_sim_guard(s) != MS_OK; /* the finding names a particle of this rank */
+    if (s->dd) bad = par_max_int(bad);  /* every rank stops together */
     if (bad) return MS_ERR_UNSTABLE;
   }
   return MS_OK;

@@ -284,6 +284,7 @@ typedef struct cd_sim {
   struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
   cd_mpi_config mpi;
   bool mpi_on;                  /* cd_sim_set_mpi was called */
+  char err[320];                /* what the instability guard found (cd_sim_error) */
 } cd_sim;
 
 enum { CD_MAX_PARTNERS = 16 };
@@ -319,9 +320,19 @@ void cd_sim_refresh_ghosts(cd_sim *s);
 /* The rank owning each ghost: owner[j] for particle nlocal + j, j < n − nlocal (for the
  * distributed fragment finder, cpl_fragments_find_dist). Serial: nothing to fill. */
 void cd_sim_ghost_owners(const cd_sim *s, int32_t *owner);
-/* One step of cfg.integrator (plus the damping sub-step if Γ > 0). MS_ERR_UNSTABLE on NaN.
+/* One step of cfg.integrator (plus the damping sub-step if Γ > 0). Every CD_GUARD_EVERY steps
+ * the instability guard (cd_sim_guard) runs: MS_ERR_UNSTABLE, with cd_sim_error saying why
+ * (on the rank that found it; every rank stops together).
  * After an RKN step p->f holds the forces of the scheme's last stage, not of x^{n+1}. */
 ms_status cd_sim_step(cd_sim *s);
+enum { CD_GUARD_EVERY = 10 };
+/* Instability guard (docs/reliability.md §5): a non-finite position or velocity, a particle
+ * moving more than half the nearest-neighbour distance in one step (the step cannot resolve
+ * its collisions, e.g. a piston faster than the lattice can follow), or a particle beyond a
+ * wall (it crossed it within one step). MS_ERR_UNSTABLE with a message naming the step, time,
+ * particle and quantity (cd_sim_error), else MS_OK. */
+ms_status cd_sim_guard(cd_sim *s);
+const char *cd_sim_error(const cd_sim *s);
 /* Energies and momentum at the current state (one extra pass over the pairs). */
 void cd_sim_energy(cd_sim *s, cd_energy *out);
 /* Compression-positive virial stress of the whole system (the pressure tensor)

@@ -14,6 +14,8 @@
 #                                  create no output directory (refused before anything runs)
 # Passes if mscale exits with exactly 2, every expectation is met, and stderr shows no
 # sanitizer report (a crash is a signal: exit code > 128, never 2).
+# MSCALE_TEST_WRAPPER (e.g. "valgrind --error-exitcode=1 ...", tools/valgrind_unit.sh) is put in
+# front of every mscale command.
 # The memory limit is capped (at 64 GiB unless MSCALE_MEMORY_LIMIT is set) so that cases refused
 # for their size do not depend on the machine.
 set -u
@@ -44,9 +46,9 @@ if [ -n "$run" ]; then
   for a in "$@"; do
     case $a in -*) args="$args $a" ;; *) args="$args $dir/$a" ;; esac
   done
-  (cd "$dir" && "$mscale" "$sub" $args) >"$out" 2>"$err"
+  (cd "$dir" && ${MSCALE_TEST_WRAPPER:-} "$mscale" "$sub" $args) >"$out" 2>"$err"
 else
-  "$mscale" check "$case" >"$out" 2>"$err"
+  ${MSCALE_TEST_WRAPPER:-} "$mscale" check "$case" >"$out" 2>"$err"
 fi
 rc=$?
 fail=0
@@ -89,7 +91,7 @@ check_result() {
 }
 check_result "mscale (exit $rc)"
 if printf '%s\n' "$directives" | grep -q '^also-run: *yes'; then
-  "$mscale" run "$case" -o "$rundir/out" >"$out" 2>"$err"
+  ${MSCALE_TEST_WRAPPER:-} "$mscale" run "$case" -o "$rundir/out" >"$out" 2>"$err"
   rc=$?
   check_result "mscale run (exit $rc)"
   if [ -e "$rundir/out" ]; then
