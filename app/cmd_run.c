@@ -32,6 +32,18 @@ static char *default_outdir(const char *deck) {
   return out;
 }
 
+/* A YAML double-quoted scalar: the command line and paths may hold quotes, backslashes or
+ * control characters, and run_info.yaml must still load (docs/reliability.md §6). */
+static void put_quoted(FILE *f, const char *prefix, const char *s) {
+  fputs(prefix, f);
+  for (; *s; s++) {
+    unsigned char c = (unsigned char)*s;
+    if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
+    else if (c < 0x20 || c == 0x7f) fprintf(f, "\\x%02x", c);
+    else fputc(c, f);
+  }
+}
+
 static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char *deck,
                            const char *started, ms_status s, double wall) {
   char *path = ms_out_path(ctx, "run_info.yaml");
@@ -40,8 +52,9 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
     fprintf(af.f, "# What produced this run directory.\nprogram: mscale\nversion: %s\n",
             MSCALE_VERSION_STRING);
     fprintf(af.f, "command: \"");
-    for (int i = 0; i < argc; i++) fprintf(af.f, "%s%s", i ? " " : "mscale ", argv[i]);
-    fprintf(af.f, "\"\ndeck: \"%s\"\nranks: %d\nstarted: \"%s\"\n", deck, ctx->size, started);
+    for (int i = 0; i < argc; i++) put_quoted(af.f, i ? " " : "mscale ", argv[i]);
+    put_quoted(af.f, "\"\ndeck: \"", deck);
+    fprintf(af.f, "\"\nranks: %d\nstarted: \"%s\"\n", ctx->size, started);
     fprintf(af.f, "status: %s\nstatus_message: \"%s\"\nwall_time_s: %.3f\n",
             s == MS_OK ? "completed" : "failed", ms_status_str(s), wall);
     ms_afile_commit(&af);

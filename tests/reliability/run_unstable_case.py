@@ -44,6 +44,9 @@ def main():
         for text in expects:
             if text not in r.stderr:
                 fail.append("stderr does not contain '%s'" % text)
+        info = os.path.join(out, "run_info.yaml")  # the run directory records the failure too
+        if not os.path.exists(info) or "status: failed" not in open(info).read():
+            fail.append("run_info.yaml missing or without 'status: failed'")
         m = re.search(r"unstable at step (\d+), t = ([-+0-9.eE]+):", r.stderr)
         if not m:
             fail.append("no 'unstable at step N, t = T:' message")
