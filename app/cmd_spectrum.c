@@ -33,8 +33,11 @@ static void spectrum_usage(FILE *f) {
           "  --fragments FILE  also write the per-fragment table (id,count,mass,d,x,y,z,vx,vy,\n"
           "                    vz,rg) to FILE\n\n"
           "Snapshot datasets: /particles/x [n][3] cm, /particles/mass [n] g, optional\n"
-          "/particles/v [n][3] km/s (docs/coupling.md). Exit 0 ok, 1 I/O failure, 2 bad\n"
-          "usage or a bad snapshot (missing dataset, wrong shape, non-finite value).\n",
+          "/particles/v [n][3] km/s and /particles/gid [n] (distinct global ids: fragments\n"
+          "are then numbered by their smallest gid, so a snapshot of an MPI run, stored in\n"
+          "rank order, gives the same table as a serial one) (docs/coupling.md). Exit 0 ok,\n"
+          "1 I/O failure, 2 bad usage or a bad snapshot (missing dataset, wrong shape,\n"
+          "non-finite value, repeated gid).\n",
           SPECTRUM_DEFAULT_BOND);
 }
 
@@ -66,9 +69,11 @@ static bool parse_triple(const char *s, double out[3]) {
 typedef struct snapshot {
   size_t n;
   double *x, *y, *z, *vx, *vy, *vz, *mass;
+  int64_t *gid; /* /particles/gid if present: fragments numbered by smallest gid */
 } snapshot;
 
 static void snapshot_free(snapshot *s) {
+  free(s->gid);
   free(s->x);
   free(s->y);
   free(s->z);
@@ -76,6 +81,33 @@ static void snapshot_free(snapshot *s) {
   free(s->vy);
   free(s->vz);
   free(s->mass);
+}
+
+static int cmp_gid(const void *a, const void *b) {
+  int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* Optional /particles/gid (cluster-dynamics snapshots; a run on MPI ranks stores its particles
+ * in rank order): [n] distinct integers >= 0. With it, fragment ids follow the smallest gid, so
+ * the table does not depend on the storage order (docs/mpi.md "Fragments on MPI ranks"). */
+static bool gid_read(ms_h5r *h, const char *path, snapshot *s, dk_errors *e) {
+  size_t ng = 0, ncol = 0;
+  if (ms_h5_read_ints_rows(h, "/particles/gid", 0, SIZE_MAX, &s->gid, &ng, &ncol, e) != MS_OK)
+    return false;
+  const char *bad = NULL;
+  if (ng != s->n || ncol != 1)
+    bad = "must have one integer per particle";
+  int64_t *sorted = ms_calloc(ng + 1, sizeof *sorted);
+  memcpy(sorted, s->gid, ng * sizeof *sorted);
+  qsort(sorted, ng, sizeof *sorted, cmp_gid);
+  for (size_t i = 0; i < ng && !bad; i++)
+    if (sorted[i] < 0 || (i > 0 && sorted[i] == sorted[i - 1]))
+      bad = "must hold distinct integers >= 0";
+  free(sorted);
+  if (bad)
+    dk_error_at(e, path, 0, 0, "dataset '/particles/gid' (%zu x %zu) %s", ng, ncol, bad);
+  return bad == NULL;
 }
 
 /* Read and check the datasets; every problem goes to e (naming the file). */
@@ -168,6 +200,8 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
   free(xyz);
   free(vel);
   free(m);
+  if (ok && ms_h5_exists(h, "/particles/gid") && !gid_read(h, path, s, e))
+    ok = false;
   return ok ? MS_OK : MS_ERR_INPUT;
 }
 
@@ -288,7 +322,7 @@ int cmd_spectrum(int argc, char **argv) {
     dk_errors_print(&e, stderr);
     rc = 2;
   } else {
-    cpl_particles p = {s.n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.mass, NULL, NULL};
+    cpl_particles p = {s.n, s.x, s.y, s.z, s.vx, s.vy, s.vz, s.mass, NULL, s.gid};
     cpl_fragments f;
     cpl_fragments_init(&f);
     st = cpl_fragments_find(&f, &p, &o);

@@ -149,6 +149,14 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", s->t);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)s->step);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "r0", s->cfg.r0);
+    /* periodic axes as the coupling snapshots name them (`mscale spectrum` reads them) */
+    static const char *const pname[3] = {"period_x", "period_y", "period_z"};
+    static const char *const lname[3] = {"lo_x", "lo_y", "lo_z"};
+    for (int a = 0; a < s->p->dim && st == MS_OK; a++)
+      if (s->box.bc[a] == CD_BC_PERIODIC) {
+        st = ms_h5_attr_double(h, "particles", pname[a], s->box.hi[a] - s->box.lo[a]);
+        if (st == MS_OK) st = ms_h5_attr_double(h, "particles", lname[a], s->box.lo[a]);
+      }
     if (st == MS_OK) st = ms_h5_close(h); else ms_h5_abort(h);
   }
   const size_t nglobal = s->dd ? (size_t)par_sum_long((long)n) : n;

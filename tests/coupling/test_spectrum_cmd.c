@@ -257,6 +257,74 @@ static void test_bad_snapshots(void **state) {
   remove(path);
 }
 
+/* A snapshot with /particles/gid (as cluster dynamics writes, in rank order under MPI): stored
+ * in reverse order with gid = the original index, it gives the same --fragments table as the
+ * snapshot in the original order (fragments numbered by smallest gid, not by storage index);
+ * without gids the reversed snapshot numbers them differently. A repeated gid exits 2. */
+static void write_ordered(const char *path, bool reverse, bool with_gid, bool repeat_gid) {
+  double xyz[3 * NPART], vel[3 * NPART], mass[NPART], x2[3 * NPART], v2[3 * NPART], m2[NPART];
+  int64_t gid[NPART];
+  make_particles(xyz, vel, mass);
+  for (int j = 0; j < NPART; j++) {
+    int i = reverse ? NPART - 1 - j : j;
+    memcpy(x2 + 3 * j, xyz + 3 * i, 3 * sizeof(double));
+    memcpy(v2 + 3 * j, vel + 3 * i, 3 * sizeof(double));
+    m2[j] = mass[i];
+    gid[j] = repeat_gid && j == 1 ? 7 : i + 100; /* ids need not start at 0 */
+  }
+  if (repeat_gid)
+    gid[0] = 7;
+  ms_h5 *h = ms_h5_create(path);
+  assert_non_null(h);
+  assert_int_equal(ms_h5_write_doubles(h, "particles/x", NPART, 3, x2, "cm"), MS_OK);
+  assert_int_equal(ms_h5_write_doubles(h, "particles/v", NPART, 3, v2, "km/s"), MS_OK);
+  assert_int_equal(ms_h5_write_doubles(h, "particles/mass", NPART, 1, m2, "g"), MS_OK);
+  if (with_gid)
+    assert_int_equal(ms_h5_write_ints(h, "particles/gid", NPART, gid), MS_OK);
+  assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
+  assert_int_equal(ms_h5_close(h), MS_OK);
+}
+
+static char *table_of(const char *path, const char *table_path) {
+  char *out, *err;
+  const char *argv[] = {"spectrum", path, "--fragments", table_path};
+  assert_int_equal(run(&out, &err, 4, argv), 0);
+  free(out);
+  free(err);
+  char *t = read_all(table_path);
+  remove(table_path);
+  return t;
+}
+
+static void test_gid_order(void **state) {
+  (void)state;
+  char path[256], table_path[256];
+  snprintf(path, sizeof path, "%s", tmp_name("gid.h5"));
+  snprintf(table_path, sizeof table_path, "%s", tmp_name("gid.csv"));
+  write_ordered(path, false, true, false);
+  char *fwd = table_of(path, table_path);
+  write_ordered(path, true, true, false);
+  char *rev = table_of(path, table_path);
+  write_ordered(path, true, false, false);
+  char *rev_index = table_of(path, table_path);
+  assert_non_null(strstr(fwd, "\n0,36,")); /* the block holds the smallest gid */
+  assert_string_equal(rev, fwd);
+  assert_non_null(strstr(rev_index, "\n0,1,")); /* by index: the last single comes first */
+  assert_true(strcmp(rev_index, fwd) != 0);
+  free(fwd);
+  free(rev);
+  free(rev_index);
+  write_ordered(path, false, true, true);
+  char *out, *err;
+  const char *argv[] = {"spectrum", path};
+  assert_int_equal(run(&out, &err, 2, argv), 2);
+  assert_non_null(strstr(err, "'/particles/gid'"));
+  assert_non_null(strstr(err, "distinct"));
+  free(out);
+  free(err);
+  remove(path);
+}
+
 static void test_usage(void **state) {
   (void)state;
   char *out, *err;
@@ -341,6 +409,7 @@ int main(void) {
       cmocka_unit_test(test_bad_snapshots),
       cmocka_unit_test(test_usage),
       cmocka_unit_test(test_snapshot_writer),
+      cmocka_unit_test(test_gid_order),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
