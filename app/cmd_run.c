@@ -14,7 +14,7 @@ static void run_usage(FILE *f) {
           "  --quiet     no progress line\n"
           "  --verbose   debug messages in the log\n"
           "  --restart FILE  continue from a checkpoint the same deck wrote (discrete_model,\n"
-          "              cluster_dynamics; docs/mpi.md)\n\n"
+          "              cluster_dynamics, coupled one-way; docs/mpi.md)\n\n"
           "The deck is validated completely before anything runs (see `mscale check`).\n"
           "OUTDIR receives deck.resolved.yaml (defaults filled in), run.log, run_info.yaml and\n"
           "the problem's data (CSV with units headers, HDF5 + XDMF for ParaView).\n"
@@ -117,7 +117,7 @@ int cmd_run(int argc, char **argv) {
   } else if (restart && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)
       fprintf(stderr, "mscale run: --restart is not available for this deck's problem type "
-                      "(only discrete_model and cluster_dynamics write checkpoints)\n");
+                      "(discrete_model, cluster_dynamics and coupled write checkpoints)\n");
     s = MS_ERR_INPUT;
   } else {
     char *outdir = outdir_arg ? ms_strdup(outdir_arg) : default_outdir(deck);

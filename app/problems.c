@@ -51,7 +51,7 @@ static const problem_type problem_types[] = {
      (problem_free_fn)dm_problem_free},
 #endif
 #ifdef MSCALE_HAVE_COUPLING
-    {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", false,
+    {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", true,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
      (problem_free_fn)cpl_problem_free},
 #endif

@@ -9,7 +9,7 @@
  * problem's own loop (its outputs — profiles, histories, x–t diagram — land in the run
  * directory and its tag histories drive the particles); the other is advanced in lock-step with
  * the particles and the transport to supply the gas state at the current time. */
-#include "cpl_impl.h"
+#include "cpl_checkpoint.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -48,6 +48,9 @@ struct cpl_problem {
   double t_end;
   long n_out;
   double check_window;
+  long checkpoint_every;  /* particle steps between checkpoints (0: none; one-way runs) */
+  double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
+  uint64_t deck_hash;     /* of the resolved deck: a restart must use the same one */
   /* fragments, drag, transport */
   double bond, jet_margin;
   long frag_every;
@@ -187,6 +190,12 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   else if (dk_expect_map(e, doc, T, "time")) {
     dk_read_positive(e, doc, T, "end", MS_DIM_TIME, true, 0, &p->t_end);
     dk_read_int(e, doc, T, "outputs", false, 4, 1, 1000, &p->n_out);
+    dk_read_int(e, doc, T, "checkpoint_every", false, 0, 0, 1L << 40, &p->checkpoint_every);
+    dk_read_double(e, doc, T, "checkpoint_time", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
+                   &p->checkpoint_time);
+    if (p->checkpoint_every > 0 && p->checkpoint_time > 0)
+      dk_error(e, doc, dk_get(T, "checkpoint_time"), "give time.checkpoint_every (particle "
+               "steps) or time.checkpoint_time (simulated time), not both");
   }
   const dk_node *F = dk_get(sec, "fragments");
   p->bond = 1.2;
@@ -317,10 +326,15 @@ consistency_done:
              p->surf_wavelength);
   if (e->n == nerr0 && p->grid_out) /* before build_region allocates the lattice */
     memory_check(p, doc, sec, e);
+  if (e->n == nerr0 && p->drive_mode == DRIVE_TWO_WAY &&
+      (p->checkpoint_every > 0 || p->checkpoint_time > 0))
+    dk_error(e, doc, T, "checkpoints are written by one-way runs (drive.mode velocity or "
+             "transmitting), not by drive.mode two_way (docs/coupling.md)");
   if (e->n != nerr0) {
     cpl_problem_free(p);
     return NULL;
   }
+  p->deck_hash = dk_hash(doc, NULL);
   return p;
 }
 
@@ -429,6 +443,7 @@ typedef struct gas_ctx {
   double area;
   ms_status st;
   double returned_p, returned_e; /* what the gas received (absolute, g·km/s and kJ) */
+  cpl_gaslog *log;               /* sources recorded for checkpoints (NULL: none) */
 } gas_ctx;
 
 /* The gas at x receives momentum −dp (along the grid axis: the 1D gas has no transverse
@@ -451,6 +466,7 @@ static void gas_deposit(void *user, const double x[3], double t0, double t1, con
   }
   c->returned_p -= dp[0];
   c->returned_e -= de;
+  if (c->log) cpl_gaslog_source(c->log, s.cell, -dp[0] / c->area, -de / c->area);
 }
 
 static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
@@ -986,7 +1002,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     cont_grid *gg = cont_problem_grid(p->gas_grid);
     /* the gas grid's first node sits on the particles' nominal free surface */
     w.gas = (gas_ctx){gg, p->gas_layer, p->mats->m[p->gas_mat].viscosity,
-                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0};
+                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL};
   }
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
@@ -1043,6 +1059,10 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
 }
 
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
+  if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
+    return MS_ERR_INPUT;
+  }
   if (p->drive_mode == DRIVE_TWO_WAY)
     return run_two_way(ctx, p);
   ms_status st;
@@ -1124,7 +1144,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   const double Z = p->impedance > 0 ? p->impedance : sqrt(1.5) * rho0 * c0;
   const double area = reg.area;
   double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
-  st = cd_sim_init(sim);
+  st = ctx->restart ? MS_OK : cd_sim_init(sim); /* a restart initialises from its checkpoint */
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: particle set-up failed (%s)", ms_status_str(st));
     cd_sim_free(sim);
@@ -1135,7 +1155,9 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
 
   /* 3. the particle phase, with the live grid supplying the gas */
   cont_grid *glive = cont_problem_grid(p->grid_live);
-  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, 0.0, reg.area, MS_OK, 0, 0};
+  gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, 0.0, reg.area, MS_OK, 0, 0,
+                 NULL};
+  cpl_loop_state ls = {0}; /* checkpoints (set up below) */
   cpl_fragments fr;
   cpl_fragments_init(&fr);
   cpl_fragment_opts fo;
@@ -1159,7 +1181,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     st = MS_ERR_IO;
     goto particle_done;
   }
-  {
+  if (!ctx->restart) { /* a restart writes back the text so far */
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
     ms_csv_header(f_ej,
@@ -1177,13 +1199,45 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   size_t fs_cap = (size_t)(nsteps / p->frag_every) + (size_t)p->n_out + 4, fs_n = 0;
   double *fs_t = ms_calloc(fs_cap, sizeof(double)), *fs_ug = ms_calloc(fs_cap, sizeof(double)),
          *fs_up = ms_calloc(fs_cap, sizeof(double));
+  /* checkpoints (docs/coupling.md): the loop state at the end of a step, with the gas grid's
+   * history so that a restart can rebuild it */
+  const long ckpt_every =
+      p->checkpoint_every > 0
+          ? p->checkpoint_every
+          : (p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / cfg.dt)) : 0);
+  ms_afile *const csv[2] = {&af_ej, &af_fs};
+  ls.fs_cap = fs_cap, ls.fs_t = fs_t, ls.fs_ug = fs_ug, ls.fs_up = fs_up;
+  ls.gaslog.on = ckpt_every > 0;
+  gas.log = ls.gaslog.on ? &ls.gaslog : NULL;
+  long step0 = 0;
   cd_energy e0;
-  cd_sim_energy(sim, &e0);
+  if (ctx->restart) {
+    st = cpl_checkpoint_restore(ctx, p->deck_hash, sim, &ls, glive, csv, 2);
+    if (st == MS_OK && sim->p->n != n) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu",
+             sim->p->n, n);
+      st = MS_ERR_INPUT;
+    }
+    ps = reg.ps = sim->p;
+    step0 = ls.step, next_out = ls.next_out, last_search = ls.last_search;
+    p_particles = ls.p_particles, fs_n = ls.fs_n, e0 = ls.e0;
+    gas.returned_p = ls.returned_p, gas.returned_e = ls.returned_e;
+  } else {
+    cd_sim_energy(sim, &e0);
+  }
   ms_log(ctx, MS_LOG_DEBUG, "coupled: initial energy: kinetic %g potential %g total %g", e0.kinetic,
          e0.potential, e0.total);
   ms_progress prog;
-  ms_progress_start(&prog, ctx, "particles", t_start, p->t_end);
-  for (long step = 1; step <= nsteps && st == MS_OK; step++) {
+  ms_progress_start(&prog, ctx, "particles", t_start + sim->t, p->t_end);
+  for (long step = step0 + 1; step <= nsteps && st == MS_OK; step++) {
+    if (ckpt_every > 0 && step - 1 > step0 && (step - 1) % ckpt_every == 0) {
+      ls.step = step - 1, ls.next_out = next_out, ls.last_search = last_search;
+      ls.p_particles = p_particles, ls.e0 = e0, ls.fs_n = fs_n;
+      ls.returned_p = gas.returned_p, ls.returned_e = gas.returned_e;
+      st = cpl_checkpoint_write(ctx, p->deck_hash, sim, &ls, csv, 2);
+      if (st != MS_OK)
+        break;
+    }
     if (p->drive_mode == 1) {
       /* grid state over the step: mean velocity (exact displacement) and sample-side
        * pressure at the mid-step */
@@ -1233,6 +1287,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
         ms_log(ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(glive));
         break;
       }
+      cpl_gaslog_run_to(&ls.gaslog, t_abs);
       /* a velocity kick over the search interval (operator splitting; drag is slow on the
        * particle time step) */
       st = drag_kick(p, &fr, &view, &sel, &gas, t_abs, (double)(step - last_search) * cfg.dt, ps,
@@ -1349,7 +1404,9 @@ particle_done:
       st = s2;
   }
 
-  /* 4. transport of the ejecta to the detector */
+  /* 4. transport of the ejecta to the detector (not checkpointed: no gas log) */
+  gas.log = NULL;
+  cpl_gaslog_free(&ls.gaslog);
   if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t)
     st = transport_phase(ctx, p, &fr, &sel, &gas, t_start + sim->t, x_fs + p->det_distance, rho0);
   cpl_fragments_free(&fr);

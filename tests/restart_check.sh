@@ -2,8 +2,9 @@
 # Checkpoint/restart of a deck through `mscale run` (docs/mpi.md, "Checkpoint/restart"):
 #  1. the deck runs to its end (checkpoints on) -> full/;
 #  2. if HALF_SED is not "-": the deck edited by HALF_SED (an earlier end) runs -> half/, and
-#     the full deck restarts from half's last checkpoint -> cont/; FILES must be byte-identical
-#     to full/'s (CSV with cmp, HDF5 with h5diff: bitwise on the same rank count);
+#     the full deck restarts from half's last checkpoint -> cont/ (with "-": from full/'s last
+#     checkpoint); FILES must be byte-identical to full/'s (CSV with cmp, HDF5 with h5diff:
+#     bitwise on the same rank count);
 #  3. kill -9 while a checkpoint write is held open (MSCALE_CHECKPOINT_DELAY): the .part file
 #     and the previous checkpoint are both left; the previous one restarts and ends identical;
 #  4. refusals, each exit 2 with a message: a checkpoint written by a different deck (DIFF_SED),
@@ -37,6 +38,11 @@ if [ "$HALF_SED" != "-" ]; then
     || { cat "$T/stderr"; echo "FAIL: restart from the half run"; exit 1; }
   grep -o "restarted from .*" "$T/cont/run.log"
   same "$T/full" "$T/cont" "run to the end vs half run + restart"
+else
+  run "$T/deck.yaml" -o "$T/cont" --restart "$T/full/$CKPT" \
+    || { cat "$T/stderr"; echo "FAIL: restart from the last checkpoint"; exit 1; }
+  grep -o "restarted from .*" "$T/cont/run.log"
+  same "$T/full" "$T/cont" "run to the end vs restart from its last checkpoint"
 fi
 
 # kill -9 inside a checkpoint write: wait for a complete checkpoint and a .part of the next one

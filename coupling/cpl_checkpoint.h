@@ -1,0 +1,48 @@
+/* cpl_checkpoint.h — private to coupling/: checkpoint/restart of the one-way `coupled` run
+ * (coupling/cpl_checkpoint.c, docs/coupling.md "Checkpoint/restart"). */
+#ifndef MSCALE_CPL_CHECKPOINT_H
+#define MSCALE_CPL_CHECKPOINT_H
+
+#include "cont.h"
+#include "cpl_impl.h"
+#include "ptl.h"
+
+/* What the particle phase did to the live gas grid, in order: advance to time t, or a cell
+ * source (drag.gas_return). A restart replays it on a fresh grid, which then holds the same
+ * bits as the interrupted run's (the 1D grid is cheap next to the particles; the grid's own
+ * state never has to be serialised). Rows [kind, a, b, c]. */
+typedef struct cpl_gaslog {
+  bool on; /* record (checkpoints enabled) */
+  size_t n, cap;
+  double *row;
+} cpl_gaslog;
+void cpl_gaslog_run_to(cpl_gaslog *l, double t);
+void cpl_gaslog_source(cpl_gaslog *l, size_t cell, double dp, double de);
+void cpl_gaslog_free(cpl_gaslog *l);
+
+/* The particle-phase loop's own state at the end of a step. */
+typedef struct cpl_loop_state {
+  long step, next_out, last_search;
+  double p_particles;            /* transmitting piston: the particles' pressure, last step */
+  cd_energy e0;                  /* at the start of the particle phase */
+  double returned_p, returned_e; /* gas return so far */
+  size_t fs_n, fs_cap;           /* drive-check samples (arrays owned by the run) */
+  double *fs_t, *fs_ug, *fs_up;
+  cpl_gaslog gaslog;
+} cpl_loop_state;
+
+#define CPL_CHECKPOINT_NAME "coupled_checkpoint.h5"
+
+/* Refresh the particles (cd_sim_refresh) and write OUTDIR/coupled_checkpoint.h5: particles,
+ * loop state, the gas log and the text so far of the streamed CSV files. Every rank. */
+ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+                               const cpl_loop_state *ls, ms_afile *const *csv, int ncsv);
+/* Restart: replaces sim's particles by the checkpoint's and initialises sim from them
+ * (cd_sim_init_restart), restores the loop state (ls->fs_* arrays must have room: fs_cap),
+ * replays the gas log on `gas` and writes the CSV text back. Every rank; MS_ERR_INPUT with a
+ * message for another deck or a damaged file. */
+ms_status cpl_checkpoint_restore(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+                                 cpl_loop_state *ls, cont_grid *gas, ms_afile *const *csv,
+                                 int ncsv);
+
+#endif
