@@ -4,7 +4,10 @@
 #   bench/cd_lammps/run_compare.sh BUILD_DIR LAMMPS_DIR [REPS] [CASES] [THREADS]
 # LAMMPS_DIR: a writable copy of /work/shared/bench/lammps where gen/ was made by
 # `/usr/bin/python3 gen_inputs.py gen` (run.sh does it). Prints one markdown row per run pair:
-# loop times, particle-steps/s and the ratio, with the 1-minute load average before each pair.
+# loop times, particle-steps/s and the ratio, with the 1-minute load average before each pair;
+# then the CPU seconds of the loop (LAMMPS: loop time × its "% CPU use" × ranks; mscale: process
+# CPU time, all threads) and the ratio of particle-steps per CPU-second, the fairer figure when
+# other processes share the cores.
 set -u
 BENCH=$1/bench/cd_lammps/cd_lammps_bench
 LMPDIR=$2
@@ -13,8 +16,8 @@ CASES=${4:-"A B"}
 THREADS=${5:-"1 2"}
 declare -A NP=([A]=256000 [B]=320000) STEPS=([A]=1000 [B]=2000) INP=([A]=in.bulk [B]=in.piston)
 cp "$LMPDIR"/in.bulk "$LMPDIR"/in.piston "$LMPDIR"/gen/ 2>/dev/null
-echo "| rep | problem | ranks/threads | load (1 min) | LAMMPS loop s | mscale loop s | LAMMPS p-steps/s | mscale p-steps/s | ratio |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| rep | problem | ranks/threads | load (1 min) | LAMMPS loop s | mscale loop s | LAMMPS p-steps/s | mscale p-steps/s | ratio | LAMMPS CPU s | mscale CPU s | CPU ratio |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 for rep in $(seq 1 "$REPS"); do
   for c in $CASES; do
     for nt in $THREADS; do
@@ -23,11 +26,15 @@ for rep in $(seq 1 "$REPS"); do
       (cd "$LMPDIR/gen" && OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np "$nt" \
          lmp -in "${INP[$c]}" -log "$log" -screen none > /dev/null 2>&1)
       tl=$(awk '/^Loop time of/{print $4}' "$log")
+      cl=$(awk -v nt="$nt" -v tl="$tl" '/% CPU use with/{sub("%", "", $1); print tl * $1 / 100 * nt}' "$log")
       rm -f "$log"
-      tm=$(OMP_NUM_THREADS=$nt OMP_PROC_BIND=true "$BENCH" "$c" | awk '/^loop time/{print $3}')
+      out=$(OMP_NUM_THREADS=$nt OMP_PROC_BIND=true "$BENCH" "$c")
+      tm=$(echo "$out" | awk '/^loop time/{print $3}')
+      cm=$(echo "$out" | awk '/^process CPU time/{print $7}')
       n=${NP[$c]}; s=${STEPS[$c]}
       awk -v r="$rep" -v c="$c" -v nt="$nt" -v ld="$load" -v tl="$tl" -v tm="$tm" -v n="$n" -v s="$s" \
-        'BEGIN{pl=n*s/tl; pm=n*s/tm; printf "| %d | %s | %d | %s | %.2f | %.2f | %.3g | %.3g | %.2f |\n", r, c, nt, ld, tl, tm, pl, pm, pm/pl}'
+        -v cl="$cl" -v cm="$cm" \
+        'BEGIN{pl=n*s/tl; pm=n*s/tm; printf "| %d | %s | %d | %s | %.2f | %.2f | %.3g | %.3g | %.2f | %.2f | %.2f | %.2f |\n", r, c, nt, ld, tl, tm, pl, pm, pm/pl, cl, cm, cl/cm}'
     done
   done
 done
