@@ -16,17 +16,7 @@
 
 #include "cpl.h"
 #include "ptl.h"
-
-static int failures = 0;
-#define CHECK(cond, ...)                                                                      \
-  do {                                                                                        \
-    if (!(cond)) {                                                                            \
-      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                    \
-      fprintf(stderr, __VA_ARGS__);                                                           \
-      fputc('\n', stderr);                                                                    \
-      failures++;                                                                             \
-    }                                                                                         \
-  } while (0)
+#include "mpi_check.h"
 
 static ms_ctx ctx;
 static const double PI = 3.14159265358979323846;

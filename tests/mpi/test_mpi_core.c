@@ -6,17 +6,7 @@
 #include <string.h>
 
 #include "core.h"
-
-static int failures = 0;
-#define CHECK(cond, ...)                                                                      \
-  do {                                                                                        \
-    if (!(cond)) {                                                                            \
-      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                    \
-      fprintf(stderr, __VA_ARGS__);                                                           \
-      fputc('\n', stderr);                                                                    \
-      failures++;                                                                             \
-    }                                                                                         \
-  } while (0)
+#include "mpi_check.h"
 
 /* Global row i of the test dataset: three components that identify it exactly. */
 static void row_values(size_t i, double *v) {
