@@ -447,7 +447,6 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
   return MS_OK;
 }
 
-
 /* ---------------------------------------------------------------------------------------- */
 /* Statistics, in three passes over the particles with per-fragment accumulators, so that a
  * distributed search can run each pass on its own particles and sum the accumulators across
