@@ -40,9 +40,11 @@ x = np.stack([np.arange(n) * 1e-3, np.zeros(n), np.zeros(n)], axis=1)
 mass = np.full(n, 1e-9)
 
 
-def snapshot(name, x=x, mass=mass, r0=1e-3, x_name="x"):
+def snapshot(name, x=x, mass=mass, r0=1e-3, x_name="x", gid=None):
     with h5py.File(name, "w") as f:
         g = f.create_group("particles")
+        if gid is not None:
+            g["gid"] = gid
         if r0 is not None:
             g.attrs["r0"] = r0
         if x is not None:
@@ -59,5 +61,6 @@ xnan[3, 1] = np.nan
 snapshot("snap_x_nan.h5", x=xnan)
 snapshot("snap_no_r0.h5", r0=None)
 snapshot("snap_x_int.h5", x=np.zeros((n, 3), dtype=np.int32))
+snapshot("snap_gid_repeated.h5", gid=np.array([0, 1, 2, 3, 3, 5, 6, 7], dtype=np.int64))
 import os
 os.remove("full_ok_for_truncation.h5")
