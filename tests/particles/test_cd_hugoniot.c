@@ -1,14 +1,25 @@
 /* Hugoniot validation of cluster dynamics (paper 002 §1.1, DESIGN.md §5.1): a piston driven at
- * up into an fcc aluminium slab ([001], periodic cross-section, free far end); D is measured by
- * tracking the front (bin-mean velocity = up/2) and fitting z_f(t) over t >= T/4. Cold curves:
- * Table 1 of paper 002 (OSA, eos/data/al_osa_cold.txt) and the cold-curve Mie–Grüneisen form
- * (rho0 2.71, c0 5.35, n 4). Reference: experimental Al Hugoniot Us = 5.35 + 1.34 up.
+ * up into an fcc aluminium slab (shock along [001] unless --orient; periodic cross-section, free
+ * far end). Cold curves: Table 1 of paper 002 (OSA, eos/data/al_osa_cold.txt) and the
+ * cold-curve Mie–Grüneisen form (rho0 2.71, c0 5.35, n 4). Reference: experimental Al Hugoniot
+ * Us = 5.35 + 1.34 up, and the cold curve's own EOS Hugoniot (`mscale hugoniot`, Γ0 = 2).
+ * Shock speed, four ways (they agree for a steady shock; their spread is the measurement's
+ * uncertainty, validation.md):
+ *   D          front = first bin, scanning from the piston, where the bin-mean vz < up/2;
+ *              least-squares slope of z_f(t) over t >= T/4;
+ *   D ahead    the same front found scanning from the undisturbed side (a dip of the noisy
+ *              front zone below up/2 does not stop it);
+ *   D momentum slope of the sample's momentum / (ρ0 A up): the piston force, P = ρ0 D up;
+ *   D mass     up ρ/(ρ − ρ0) with ρ the mean bin density behind the front.
  *
- * CI (default): bonded cutoff (the remedy of the known trap), 6x6x180 cells, up = 2, 3 km/s
- * with the Table-1 curve and up = 2, 4 with the MG curve; asserts |D − Us|/Us < 3 %.
- * (On 4x4x100 cells D is still 5 % high: the front's start-up transient; validation.md.)
+ * CI (default): bonded cutoff (the remedy of the known trap), 6x6x180 cells. Asserted: D within
+ * 3 % of Us at up = 2, 3 km/s (Table-1 curve) and 2, 4 (MG curve); at up = 1.5 (Table 1) the
+ * ordered lattice is too stiff (paper 002 §2; validation.md), asserted as over-stiff by less
+ * than 6 % (momentum and mass D).
  * Full table (docs/validation.md "Cluster dynamics"):
- *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain}) */
+ *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
+ * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
+ *   --integrator NAME --dump FILE (binned profiles at every sample, CSV). */
 #include <math.h>
 #include <omp.h>
 #include <setjmp.h>
@@ -28,7 +39,7 @@ static bool full_run = false;
 static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
-  double D, D_ahead, D_mom, rho_ratio, pzz, pxx, sigma_u, sigma_rh, up_behind;
+  double D, D_ahead, D_mom, rho_ratio, pzz, pxx, sigma_u, up_behind;
 } shock_result;
 
 /* Front seen from the undisturbed side: scanning down from the far end, the first place where
@@ -184,10 +195,28 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   r.rho_ratio = cnt ? rho / cnt / eos_rho0(eos) : NAN;
   r.pzz = cnt ? pzz / cnt : NAN;
   r.up_behind = cnt ? vz / cnt : NAN;
-  r.sigma_rh = eos_rho0(eos) * r.D * up;
   free(prof);
   cd_sim_free(s);
   return r;
+}
+
+/* P(ρ) references at the measured density: the experimental fit Us = c0 + s up gives
+ * P = ρ0 c0² η/(1 − s η)², η = 1 − ρ0/ρ; the EOS Hugoniot is solved for the up whose density is ρ
+ * (bisection: ρ_H(up) increases with up). */
+static double p_exp_at(double rho0, double rho) {
+  const double c0 = 5.35, sl = 1.34, eta = 1.0 - rho0 / rho;
+  return rho0 * c0 * c0 * eta / ((1.0 - sl * eta) * (1.0 - sl * eta));
+}
+
+static double p_eos_at(const eos_t *eos, double rho) {
+  double lo = 0.0, hi = 10.0;
+  eos_hugoniot_point hp = {0};
+  for (int it = 0; it < 50; it++) {
+    double mid = 0.5 * (lo + hi), up[1] = {mid};
+    if (eos_hugoniot(eos, eos_rho0(eos), 0.0, 1, up, &hp) != MS_OK) return NAN;
+    if (hp.rho < rho) lo = mid; else hi = mid;
+  }
+  return hp.p;
 }
 
 static eos_t *table1(void) {
@@ -214,15 +243,16 @@ static void test_hugoniot(void **state) {
   eos_t *curves[2] = {table1(), eos_create_mg_cold(2.71, 5.35, 4.0, 2.0, true)};
   const char *cname[2] = {"Table-1 OSA", "MG cold n=4"};
   const double ups_full[] = {1.0, 1.5, 2.0, 3.0, 4.0, 5.0};
-  const double ups_ci[2][2] = {{2.0, 3.0}, {2.0, 4.0}};
+  const double ups_ci[2][3] = {{1.5, 2.0, 3.0}, {2.0, 4.0}};
+  const int nup_ci[2] = {3, 2};
   const bool ci = !full_run && opt_nup == 0 && opt_mode < 0 && opt_curve < 0;
-  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (D/(D-u)) | rho/rho0 (bins) | P_zz bins GPa | rho0 D up GPa | P_xx,yy GPa | sigma_u GPa |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int c = 0; c < 2; c++) {
     if (opt_curve >= 0 && c != opt_curve) continue;
     for (int mode = CD_CUTOFF_BONDED; mode >= CD_CUTOFF_PLAIN; mode--) {
       if (opt_mode >= 0 ? mode != opt_mode : (!full_run && mode == CD_CUTOFF_PLAIN)) continue;
-      int nup = opt_nup ? opt_nup : (full_run ? 6 : 2);
+      int nup = opt_nup ? opt_nup : (full_run ? 6 : nup_ci[c]);
       for (int k = 0; k < nup; k++) {
         double up = opt_nup ? opt_ups[k] : (full_run ? ups_full[k] : ups_ci[c][k]);
         shock_result r = piston_shock(curves[c], (cd_cutoff_mode)mode, up, opt_nx, opt_nz,
@@ -231,15 +261,28 @@ static void test_hugoniot(void **state) {
         eos_hugoniot_point hp;
         double upl[1] = {up};
         double eos_us = eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
-        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | %.3f | %.1f | %.1f | %.1f | %.2f |\n",
+        const double d_mass = up * r.rho_ratio / (r.rho_ratio - 1.0);
+        const double rho = r.rho_ratio * eos_rho0(curves[c]);
+        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | "
+               "%.1f | %.1f | %.1f | %.1f | %.2f |\n",
                cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
-               r.D, r.D_ahead, r.D_mom, us, 100 * (r.D - us) / us, eos_us, r.D / (r.D - up), r.rho_ratio,
-               r.pzz, r.sigma_rh, r.pxx, r.sigma_u);
+               r.D, r.D_ahead, r.D_mom, d_mass, us, 100 * (r.D - us) / us, eos_us, r.rho_ratio,
+               r.pzz, p_exp_at(eos_rho0(curves[c]), rho), p_eos_at(curves[c], rho), r.pxx, r.sigma_u);
         fflush(stdout);
-        /* paper 002 §2: the close-packed cluster medium needs no plasticity model for
-         * up > 1.5–2 km/s; measured here: +7 % at 1.5 (too stiff), within 1 % from 2 to 4 km/s
-         * (validation.md). 3 % on the CI size for the CI points (2–4 km/s). */
-        if (ci) assert_true(fabs(r.D - us) / us < 0.03);
+        /* Paper 002 §2: the close-packed cluster medium needs no plasticity model for
+         * up > 1.5–2 km/s and is too stiff below. Measured here (validation.md): at the CI
+         * points (2–4 km/s) the four D estimates lie within −3.4 … +3.1 % of Us (their spread,
+         * up to 2.5 %, is the CI size's measurement uncertainty), the front D within 2.6 %. At
+         * 1.5 km/s the lattice stays ordered behind the front and carries a shear stress
+         * (σ_u ≈ 7 GPa): the transient-free estimates (momentum, mass) give +3.7, +4.0 %,
+         * and a run twice as long +3.6 … +4.7 % with all four — the model's own
+         * over-stiffness, bounded here at 6 %, not a 3 % agreement. */
+        if (ci && up >= 2.0) assert_true(fabs(r.D - us) / us < 0.03);
+        if (ci && up < 2.0)
+          for (int q = 0; q < 2; q++) {
+            const double d = q ? d_mass : r.D_mom;
+            assert_true(d > us && d < 1.06 * us);
+          }
       }
     }
   }
