@@ -281,73 +281,6 @@ bool ms_h5_exists(ms_h5r *h, const char *name) {
   return H5Lexists(h->file, buf, H5P_DEFAULT) > 0;
 }
 
-ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
-                             dk_errors *e) {
-  *data = NULL;
-  *n0 = *n1 = 0;
-  if (!ms_h5_exists(h, name)) {
-    dk_error_at(e, h->path, 0, 0, "dataset '%s' is missing", name);
-    return MS_ERR_INPUT;
-  }
-  hid_t ds = H5Dopen2(h->file, name, H5P_DEFAULT);
-  if (ds < 0) {
-    dk_error_at(e, h->path, 0, 0, "'%s' is not a dataset", name);
-    return MS_ERR_INPUT;
-  }
-  hid_t space = H5Dget_space(ds);
-  hid_t type = H5Dget_type(ds);
-  int rank = H5Sget_simple_extent_ndims(space);
-  hsize_t dims[2] = {0, 1};
-  ms_status s = MS_OK;
-  if (rank < 1 || rank > 2 || H5Tget_class(type) != H5T_FLOAT) {
-    dk_error_at(e, h->path, 0, 0, "dataset '%s' must be a 1D or 2D floating-point array", name);
-    s = MS_ERR_INPUT;
-  } else {
-    H5Sget_simple_extent_dims(space, dims, NULL);
-    if (rank == 1) dims[1] = 1;
-    /* Refuse sizes that cannot be real before allocating: a damaged or hostile file can declare
-     * any shape (fuzz_h5 found 2^30 x 8 declared with nothing stored -> an 8 GiB calloc). Without
-     * filters (mscale writes none) the file must store every element; with filters, at least
-     * the result must fit in half of this machine's memory. */
-    hsize_t count = dims[1] ? dims[0] * dims[1] : 0, elem = H5Tget_size(type);
-    hsize_t stored = H5Dget_storage_size(ds);
-    hid_t dcpl = H5Dget_create_plist(ds);
-    int nfilters = dcpl >= 0 ? H5Pget_nfilters(dcpl) : 0;
-    if (dcpl >= 0) H5Pclose(dcpl);
-    double ram = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
-    if (dims[1] && dims[0] > (hsize_t)SIZE_MAX / sizeof(double) / dims[1]) {
-      dk_error_at(e, h->path, 0, 0, "dataset '%s' declares an impossible size", name);
-      s = MS_ERR_INPUT;
-    } else if (nfilters == 0 && (double)stored < (double)count * (double)elem) {
-      dk_error_at(e, h->path, 0, 0,
-                  "dataset '%s' of shape [%llu][%llu] stores only %llu of its %llu bytes "
-                  "(truncated or damaged file?)",
-                  name, (unsigned long long)dims[0], (unsigned long long)dims[1],
-                  (unsigned long long)stored, (unsigned long long)count * elem);
-      s = MS_ERR_INPUT;
-    } else if (ram > 0 && (double)count * sizeof(double) > 0.5 * ram) {
-      dk_error_at(e, h->path, 0, 0, "dataset '%s' needs %.3g GiB, more than half of this "
-                  "machine's memory (%.3g GiB)", name,
-                  (double)count * sizeof(double) / 1073741824.0, ram / 1073741824.0);
-      s = MS_ERR_INPUT;
-    } else {
-      double *buf = calloc(count ? (size_t)count : 1, sizeof *buf);
-      if (!buf || H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
-        dk_error_at(e, h->path, 0, 0, "cannot read dataset '%s'", name);
-        free(buf);
-        s = MS_ERR_INPUT;
-      } else {
-        *data = buf;
-        *n0 = (size_t)dims[0];
-        *n1 = (size_t)dims[1];
-      }
-    }
-  }
-  H5Tclose(type);
-  H5Sclose(space);
-  H5Dclose(ds);
-  return s;
-}
 
 /* Rows [row0, row0 + nrow) of a 1D/2D dataset of class `cls` read as `memtype` (elem bytes). */
 static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow, H5T_class_t cls,
@@ -374,14 +307,29 @@ static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow
   } else {
     H5Sget_simple_extent_dims(space, dims, NULL);
     if (rank == 1) dims[1] = 1;
-    hsize_t count = dims[0] * dims[1], stored = H5Dget_storage_size(ds);
     if (nrow == SIZE_MAX && row0 <= dims[0]) nrow = (size_t)(dims[0] - row0);
+    /* Refuse sizes that cannot be real before allocating: a damaged or hostile file can declare
+     * any shape (fuzz_h5 found 2^30 x 8 declared with nothing stored -> an 8 GiB calloc). Without
+     * filters (mscale writes none) the file must store every element; with filters, at least
+     * the result must fit in half of this machine's memory. */
+    hsize_t count = dims[1] ? dims[0] * dims[1] : 0, tsize = H5Tget_size(type);
+    hsize_t stored = H5Dget_storage_size(ds);
+    hid_t dcpl = H5Dget_create_plist(ds);
+    int nfilters = dcpl >= 0 ? H5Pget_nfilters(dcpl) : 0;
+    if (dcpl >= 0) H5Pclose(dcpl);
+    double ram = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     if (dims[1] && dims[0] > (hsize_t)SIZE_MAX / elem / dims[1]) {
       dk_error_at(e, h->path, 0, 0, "dataset '%s' declares an impossible size", name);
-    } else if ((double)stored < (double)count * (double)H5Tget_size(type)) {
-      dk_error_at(e, h->path, 0, 0, "dataset '%s' stores only %llu of its %llu bytes (truncated "
-                  "or damaged file?)", name, (unsigned long long)stored,
-                  (unsigned long long)(count * H5Tget_size(type)));
+    } else if (nfilters == 0 && (double)stored < (double)count * (double)tsize) {
+      dk_error_at(e, h->path, 0, 0,
+                  "dataset '%s' of shape [%llu][%llu] stores only %llu of its %llu bytes "
+                  "(truncated or damaged file?)",
+                  name, (unsigned long long)dims[0], (unsigned long long)dims[1],
+                  (unsigned long long)stored, (unsigned long long)(count * tsize));
+    } else if (ram > 0 && (double)count * (double)elem > 0.5 * ram) {
+      dk_error_at(e, h->path, 0, 0, "dataset '%s' needs %.3g GiB, more than half of this "
+                  "machine's memory (%.3g GiB)", name,
+                  (double)count * (double)elem / 1073741824.0, ram / 1073741824.0);
     } else if (row0 > dims[0] || nrow > dims[0] - row0) {
       dk_error_at(e, h->path, 0, 0, "dataset '%s' has %llu rows, rows %zu..%zu were asked for",
                   name, (unsigned long long)dims[0], row0, row0 + nrow);
@@ -410,6 +358,12 @@ static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow
   H5Sclose(space);
   H5Dclose(ds);
   return s;
+}
+
+ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t *n0, size_t *n1,
+                             dk_errors *e) {
+  return read_rows(h, name, 0, SIZE_MAX, H5T_FLOAT, H5T_NATIVE_DOUBLE, sizeof(double),
+                   (void **)data, n0, n1, e);
 }
 
 ms_status ms_h5_read_doubles_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
