@@ -12,7 +12,9 @@
  *
  * Bitwise continuation: the run calls cd_sim_refresh right before each checkpoint and the
  * restart does the same thing in cd_sim_init, so both continue from the same particle order,
- * lists and forces; velocities and positions are stored exactly (IEEE doubles). */
+ * lists and forces; velocities and positions are stored exactly (IEEE doubles). Under MPI the
+ * owner map of the coarse cells (/cd/owner) is stored too and reused by a restart on the same
+ * rank count. */
 #include "cd_impl.h"
 
 #include <stdlib.h>
@@ -134,10 +136,12 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
                 total, ranks, r->step);
     st = MS_ERR_INPUT;
   }
-  /* Which rows this rank reads: its own segment when the rank count is the same and the model
-   * is distributed (bitwise continuation); otherwise every row, keeping the particles it owns
-   * (replicated cluster dynamics owns all of them). */
-  size_t row0 = 0, nrow = (size_t)total;
+  /* Every rank reads every row, as the set-up generates the whole lattice on every rank;
+   * cd_sim_init then keeps the particles this rank's cells own (on the same rank count, with
+   * the checkpoint's owner map: exactly the segment it wrote, in its order). Reading only the
+   * own segment (row0 = Σ segments of lower ranks) would need a set-up that starts from
+   * disjoint shares with the partners of other ranks as gids. */
+  const size_t row0 = 0, nrow = (size_t)total;
   if (st == MS_OK) st = read_d(h, "/cd/segments", 0, (size_t)ranks, 1, &dseg, e);
   if (st == MS_OK) {
     double sum = 0;
