@@ -544,11 +544,10 @@ static void write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, s
 /* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView): current positions
  * X + w, reference positions, w, u, |u|, Cauchy stress (9 components) and its pressure
  * −tr Σ/3, von Mises intensity and Σ_xx. */
-static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, int index) {
+static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, long step,
+                           const char *name) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = m->s;
-  char name[64];
-  snprintf(name, sizeof name, "dm_snapshot_%03d.h5", index);
   char *path = ms_out_path(ctx, name);
   double *S = malloc(9 * s->n * sizeof(double));
   double *x = malloc(3 * nreal * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
@@ -577,6 +576,7 @@ static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double 
     if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/von_mises", nreal, 1, vm, "GPa");
     if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_xx", nreal, 1, sxx, "GPa");
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", t);
+    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)step);
     if (st == MS_OK)
       st = ms_h5_close(h);
     else
@@ -589,8 +589,8 @@ static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double 
                            {"pressure", "particles/pressure", 1, false},
                            {"von_mises", "particles/von_mises", 1, false},
                            {"sigma_xx", "particles/sigma_xx", 1, false}};
-    char xname[64];
-    snprintf(xname, sizeof xname, "dm_snapshot_%03d.xmf", index);
+    char xname[64]; /* the sidecar: NAME.h5 -> NAME.xmf */
+    snprintf(xname, sizeof xname, "%.*s.xmf", (int)strcspn(name, "."), name);
     char *xmf = ms_out_path(ctx, xname);
     st = ms_xdmf_write_points(xmf, name, "particles/x", nreal, 3, t, 6, attr);
     free(xmf);
@@ -713,6 +713,39 @@ static void rod_analysis(dm_problem *p, const double *hist, size_t nrec, double 
   lag_fit(p, hist, first, nrec, xprobe, sh, &A);
   p->sum.amp_err = A - 1.0;
   p->sum.phase_err = sh * c / L;
+}
+
+/* Instability guard report (docs/reliability.md §5): step `step` failed (rkn_step met a
+ * non-finite acceleration and left the state at the step's start, time t). Names the first
+ * particle whose displacement, velocity or acceleration at that state is not finite (each rank
+ * looks at the particles it owns: dm_dist_accel is the integrator's own, collective force
+ * call), and rank 0 writes the gathered state (m->s) as dm_snapshot_unstable.h5. */
+static void report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_dist *d,
+                            const dm_state *ls, size_t nreal, long step, double t) {
+  const dm_state *s = m->s;
+  double *acc = ms_calloc(3 * ls->n + 1, sizeof *acc);
+  dm_dist_accel(d, t, ls->w, acc); /* its status is the finding itself */
+  const double *field[3] = {ls->w, ls->u, acc};
+  static const char *const fname[3] = {"displacement w", "velocity u", "acceleration"};
+  char what[200] = "";
+  for (int f = 0; f < 3 && !what[0]; f++)
+    for (size_t i = 0; i < nreal && !what[0]; i++) {
+      long l = dm_dist_local_index(d, i);
+      for (int a = 0; l >= 0 && a < 3 && !what[0]; a++)
+        if (!isfinite(field[f][3 * l + a]))
+          snprintf(what, sizeof what, "particle %zu (at %g, %g, %g): non-finite %s_%c = %g", i,
+                   s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2], fname[f], "xyz"[a],
+                   field[f][3 * l + a]);
+    }
+  free(acc);
+  if (what[0] || ctx->rank == 0)
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: unstable at step %ld, t = %.9g: %s", step + 1, t,
+           what[0] ? what : "non-finite acceleration in a stage of the step (the state at its "
+                            "start is finite)");
+  if (ctx->rank == 0) {
+    write_snapshot(octx, m, nreal, t, step, "dm_snapshot_unstable.h5");
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: final state written to dm_snapshot_unstable.h5");
+  }
 }
 
 static void contact_analysis(dm_problem *p, const dm_model *m, size_t nreal, double t) {
@@ -1023,6 +1056,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   }
   ms_progress prog;
   ms_progress_start(&prog, ctx, "discrete model", step0 * dt, sum->t_end);
+  long last_step = step0; /* the last step begun */
   for (long step = step0; step <= nsteps && st == MS_OK; ++step) {
     double t = step * dt;
     if (p->checkpoint_every > 0 && step > step0 && step % p->checkpoint_every == 0 &&
@@ -1080,9 +1114,12 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
           dm_dist_global_stress(d);
           gathered = 1;
         }
-        write_snapshot(&octx, m, nreal, t, (int)q);
+        char name[64];
+        snprintf(name, sizeof name, "dm_snapshot_%03d.h5", (int)q);
+        write_snapshot(&octx, m, nreal, t, step, name);
       }
     if (step == nsteps) break;
+    last_step = step;
     double w0 = ms_wall_time(), c0 = cpu_time();
     st = rkn_step(ig, t, dt, ls->w, ls->u, dm_dist_accel, dm_dist_constrain, d);
     wall += ms_wall_time() - w0;
@@ -1126,8 +1163,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   sum->cpu_s = cpu;
   long nrun = nsteps - step0;
   sum->particle_steps_per_s = wall > 0 ? (double)nreal * nrun / wall : 0;
-  if (st == MS_ERR_UNSTABLE)
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: non-finite acceleration (unstable)");
+  if (st == MS_ERR_UNSTABLE) report_unstable(ctx, &octx, m, d, ls, nreal, last_step, last_step * dt);
 
   /* analyses against the exact solutions */
   dm_dist_global_stress(d);
