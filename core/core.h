@@ -365,6 +365,9 @@ int par_rank(void);
 int par_size(void);
 /* In-place element-wise sum over ranks of v[0..n) (exact: integers). */
 void par_sum_int64s(int64_t *v, size_t n);
+/* Cumulative wall and process CPU time spent inside the par_* calls of distributed particle
+ * runs (reductions, all-to-all, neighbour exchange), waits included. */
+void par_comm_time(double *wall, double *cpu);
 /* Point-to-point exchange with `nnbr` neighbour ranks (ranks[k]): send[sdispl[k]..+scount[k])
  * goes to ranks[k], recv[rdispl[k]..+rcount[k]) comes from it (counts in doubles). Every rank
  * must list each partner that lists it. Allocation-free after the first call. No-op serially. */

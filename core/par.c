@@ -5,8 +5,29 @@
 #include <mpi.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static bool mpi_started_here = false;
+
+/* Time spent inside the MPI calls that distributed particle runs make every step (waits
+ * included): on a shared machine a rank spins there while its peer is descheduled, so speed
+ * figures subtract it from the process CPU time (bench/cd_mpi). */
+static double comm_wall, comm_cpu;
+typedef struct comm_clock { double wall, cpu; } comm_clock;
+static double cpu_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+static comm_clock comm_start(void) { return (comm_clock){ms_wall_time(), cpu_now()}; }
+static void comm_stop(comm_clock c) {
+  comm_wall += ms_wall_time() - c.wall;
+  comm_cpu += cpu_now() - c.cpu;
+}
+void par_comm_time(double *wall, double *cpu) {
+  *wall = comm_wall;
+  *cpu = comm_cpu;
+}
 
 ms_status par_init(int *argc, char ***argv, ms_ctx *ctx) {
   int initialized = 0;
@@ -39,7 +60,11 @@ void par_barrier(void) {
 
 static double reduce_double(double v, MPI_Op op) {
   double r = v;
-  if (active()) MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, op, MPI_COMM_WORLD);
+  if (active()) {
+    comm_clock c = comm_start();
+    MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, op, MPI_COMM_WORLD);
+    comm_stop(c);
+  }
   return r;
 }
 
@@ -55,7 +80,11 @@ long par_sum_long(long v) {
 
 int par_max_int(int v) {
   int r = v;
-  if (active()) MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (active()) {
+    comm_clock c = comm_start();
+    MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    comm_stop(c);
+  }
   return r;
 }
 
@@ -76,8 +105,10 @@ void par_sum_doubles(double *v, size_t n) {
 void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,
                            const int *rcount, const int *rdispl) {
   if (active()) {
+    comm_clock c = comm_start();
     MPI_Alltoallv(send, scount, sdispl, MPI_DOUBLE, recv, rcount, rdispl, MPI_DOUBLE,
                   MPI_COMM_WORLD);
+    comm_stop(c);
   } else if (scount[0] > 0) {
     memcpy(recv + rdispl[0], send + sdispl[0], (size_t)scount[0] * sizeof(double));
   }
@@ -96,14 +127,23 @@ int par_size(void) {
 }
 
 void par_sum_int64s(int64_t *v, size_t n) {
-  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (active() && n > 0) {
+    comm_clock c = comm_start();
+    MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+    comm_stop(c);
+  }
 }
 
 /* ---- distributed fragment analysis (coupling/fragments_dist.c) ---- */
 
 void par_alltoall_ints(const int *send, int *recv) {
-  if (active()) MPI_Alltoall(send, 1, MPI_INT, recv, 1, MPI_INT, MPI_COMM_WORLD);
-  else recv[0] = send[0];
+  if (active()) {
+    comm_clock c = comm_start();
+    MPI_Alltoall(send, 1, MPI_INT, recv, 1, MPI_INT, MPI_COMM_WORLD);
+    comm_stop(c);
+  } else {
+    recv[0] = send[0];
+  }
 }
 
 void par_alltoallv_int64(const int64_t *send, const int *scount, const int *sdispl, int64_t *recv,
@@ -149,6 +189,7 @@ void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const 
     nbr_req_cap = 2 * nnbr;
     nbr_req = ms_calloc((size_t)nbr_req_cap, sizeof *nbr_req);
   }
+  comm_clock c = comm_start();
   int nreq = 0;
   for (int k = 0; k < nnbr; k++)
     if (rcount[k] > 0)
@@ -159,4 +200,5 @@ void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const 
       MPI_Isend(send + sdispl[k], scount[k], MPI_DOUBLE, ranks[k], 77, MPI_COMM_WORLD,
                 &nbr_req[nreq++]);
   MPI_Waitall(nreq, nbr_req, MPI_STATUSES_IGNORE);
+  comm_stop(c);
 }

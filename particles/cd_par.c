@@ -40,7 +40,7 @@ struct cd_dd {
   int nnbr;
   int *nbr, *gcnt_s, *gcnt_r, *gdsp_s, *gdsp_r, *xcnt_s, *xcnt_r, *xdsp_s, *xdsp_r;
   int32_t *send_idx; /* owned particles sent, grouped by neighbour */
-  size_t nsend;
+  size_t nsend, send_cap;
   double *sbuf, *rbuf;
   size_t sbuf_cap, rbuf_cap;
   int32_t *cell;   /* [cap] coarse cell of each owned particle */
@@ -225,7 +225,6 @@ ms_status cd_dd_create(cd_sim *s) {
   int **arr[] = {&d->mcnt_s, &d->mcnt_r, &d->mdsp_s, &d->mdsp_r, &d->nbr, &d->gcnt_s, &d->gcnt_r,
                  &d->gdsp_s, &d->gdsp_r, &d->xcnt_s, &d->xcnt_r, &d->xdsp_s, &d->xdsp_r};
   for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) *arr[k] = ms_calloc((size_t)P + 1, sizeof(int));
-  d->send_idx = ms_calloc(cap, sizeof *d->send_idx);
   if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
     d->pgid = ms_aligned_alloc(cap * CD_MAX_PARTNERS, sizeof *d->pgid);
     d->gid_map = ms_calloc(cap, sizeof *d->gid_map);
@@ -319,23 +318,39 @@ static void move_particle(cd_sim *s, size_t i, size_t k) {
            CD_MAX_PARTNERS * sizeof *s->dd->pgid);
 }
 
-/* Owned particles into coarse-cell order (stable counting sort by cell), for memory locality
- * of the lists built without renumbering. */
+/* Sort key of a coarse cell: its index in the list builder's traversal order (neighbour.c:
+ * layer-major along the axis with most cells, z on ties, then the other two in order). The
+ * coarse cells of a periodic axis are the builder's link cells, so owned particles end up in
+ * the order the force loops visit them, as the serial run's renumbering arranges. */
+static int32_t traversal_key(const cd_dd *d, int32_t c) {
+  const int k[3] = {(int)(c % d->nc[0]), (int)((c / d->nc[0]) % d->nc[1]),
+                    (int)(c / ((size_t)d->nc[0] * d->nc[1]))};
+  int ax[3] = {2, 0, 1};
+  if (d->nc[1] > d->nc[ax[0]]) ax[0] = 1;
+  if (d->nc[0] > d->nc[ax[0]]) ax[0] = 0;
+  for (int a = 0, m = 1; a < 3; a++)
+    if (a != ax[0]) ax[m++] = a;
+  return (int32_t)(((size_t)k[ax[0]] * d->nc[ax[1]] + k[ax[1]]) * d->nc[ax[2]] + k[ax[2]]);
+}
+
+/* Owned particles into the builder's cell order (stable counting sort), for memory locality of
+ * the lists built without renumbering; d->cell follows. */
 static void sort_by_cell(cd_sim *s) {
   cd_dd *d = s->dd;
   ptl_state *p = s->p;
   const size_t n = p->nlocal;
-  /* counting sort through the weight array (reused as cell cursors) */
+  /* counting sort through the weight array (reused as cursors), keys through perm */
   int64_t *cur = d->weight;
   memset(cur, 0, d->ncells * sizeof *cur);
-  for (size_t i = 0; i < n; i++) cur[d->cell[i]]++;
+  int32_t *key = (int32_t *)(void *)d->tmp;
+  for (size_t i = 0; i < n; i++) cur[key[i] = traversal_key(d, d->cell[i])]++;
   int64_t acc = 0;
   for (size_t c = 0; c < d->ncells; c++) {
     int64_t m = cur[c];
     cur[c] = acc;
     acc += m;
   }
-  for (size_t i = 0; i < n; i++) d->perm[cur[d->cell[i]]++] = (int32_t)i; /* perm[new] = old */
+  for (size_t i = 0; i < n; i++) d->perm[cur[key[i]]++] = (int32_t)i; /* perm[new] = old */
   double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->mass};
   for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) {
     for (size_t q = 0; q < n; q++) d->tmp[q] = arr[a][d->perm[q]];
@@ -452,6 +467,11 @@ static void send_ghosts(cd_sim *s) {
   if (n + nrg > p->cap) { /* cannot happen: a rank holds each particle at most once */
     fprintf(stderr, "cd_par: %zu owned + %zu ghosts exceed the capacity %zu\n", n, nrg, p->cap);
     abort();
+  }
+  if (ns + 1 > d->send_cap) { /* a particle may go to up to 26 ranks */
+    free(d->send_idx);
+    d->send_cap = ns + ns / 4 + 64;
+    d->send_idx = ms_calloc(d->send_cap, sizeof *d->send_idx);
   }
   int *cur = d->xcnt_s;
   for (int k = 0; k < d->nnbr; k++) cur[k] = d->gdsp_s[k];

@@ -229,6 +229,7 @@ int main(int argc, char **argv) {
   eos_destroy(eos);
   int all = (int)par_sum_long(failures);
   if (my_rank == 0) printf("%s (%d failures over %d ranks)\n", all ? "FAILED" : "OK", all, ctx.size);
+  ms_ctx_close(&ctx);
   par_finalize();
   return all ? 1 : 0;
 }
