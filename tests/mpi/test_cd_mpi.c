@@ -22,19 +22,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mpi_check.h"
 #include "ptl.h"
 
-static int failures = 0;
 static int my_rank = 0;
-#define CHECK(cond, ...)                                                                      \
-  do {                                                                                        \
-    if (!(cond)) {                                                                            \
-      fprintf(stderr, "FAIL rank %d %s:%d: ", my_rank, __FILE__, __LINE__);                   \
-      fprintf(stderr, __VA_ARGS__);                                                           \
-      fputc('\n', stderr);                                                                    \
-      failures++;                                                                             \
-    }                                                                                         \
-  } while (0)
 
 #define R0 5.0e-4
 #define C0 5.35
