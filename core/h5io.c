@@ -83,7 +83,10 @@ static ms_status write_dataset(ms_h5 *h, const char *name, int rank, const hsize
   hid_t ds = H5Dcreate2(h->file, name, filetype, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
   herr_t rc = -1;
   if (ds >= 0) {
-    rc = H5Dwrite(ds, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+    /* an empty dataset (e.g. no rows recorded yet) is created, not written */
+    rc = H5Sget_simple_extent_npoints(space) > 0
+             ? H5Dwrite(ds, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data)
+             : 0;
     if (rc >= 0 && write_units(ds, units)) rc = -1;
     H5Dclose(ds);
   }
@@ -139,7 +142,8 @@ static ms_status write_rows_dist(ms_h5 *h, const char *name, size_t n_local, siz
     }
     hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
     H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE);
-    rc = H5Dwrite(ds, memtype, mspace, fspace, dxpl, data);
+    /* an empty dataset is created, not written (the same decision on every rank) */
+    rc = total * ncomp > 0 ? H5Dwrite(ds, memtype, mspace, fspace, dxpl, data) : 0;
     H5Pclose(dxpl);
     H5Sclose(mspace);
     if (rc >= 0 && write_units(ds, units)) rc = -1;
@@ -338,11 +342,8 @@ static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow
       hsize_t start[2] = {row0, 0}, cnt[2] = {nrow, dims[1]};
       hid_t mspace = H5Screate_simple(rank, cnt, NULL);
       H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, cnt, NULL);
-      if (nrow == 0) {
-        H5Sselect_none(space);
-        H5Sselect_none(mspace);
-      }
-      if (!buf || H5Dread(ds, memtype, mspace, space, H5P_DEFAULT, buf) < 0) {
+      const bool empty = nrow == 0 || dims[1] == 0;
+      if (!buf || (!empty && H5Dread(ds, memtype, mspace, space, H5P_DEFAULT, buf) < 0)) {
         dk_error_at(e, h->path, 0, 0, "cannot read dataset '%s'", name);
         free(buf);
       } else {

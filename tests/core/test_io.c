@@ -128,6 +128,66 @@ static void test_hdf5_round_trip(void **state) {
   remove("/tmp/mscale_test_not.h5");
 }
 
+/* What checkpoints need (core/checkpoint.c): row ranges, int64 rows, bytes, string attributes,
+ * empty datasets (nothing recorded yet), the deck hash. */
+static void test_hdf5_checkpoint_helpers(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test_ckpt.h5";
+  ms_h5 *h = ms_h5_create_collective(path); /* no MPI running: an ordinary file */
+  assert_non_null(h);
+  double x[8] = {0, 1, 10, 11, 20, 21, 30, 31};
+  int64_t g[4] = {-1, 5, 1LL << 40, 7};
+  assert_int_equal(ms_h5_write_doubles_dist(h, "/a/x", 4, 2, x, "cm"), MS_OK);
+  assert_int_equal(ms_h5_write_doubles_dist(h, "/a/empty", 0, 2, x, NULL), MS_OK);
+  assert_int_equal(ms_h5_write_ints_dist(h, "/a/g", 4, g), MS_OK);
+  assert_int_equal(ms_h5_write_bytes_dist(h, "/a/text", 5, "a,b\n1"), MS_OK);
+  assert_int_equal(ms_h5_attr_string(h, "/", "deck_hash", "00ff"), MS_OK);
+  assert_int_equal(ms_h5_close(h), MS_OK);
+  dk_errors e;
+  dk_errors_init(&e);
+  ms_h5r *r = ms_h5_open_read(path, &e);
+  assert_non_null(r);
+  double *v = NULL;
+  size_t n = 0, nc = 0;
+  assert_int_equal(ms_h5_read_doubles_rows(r, "/a/x", 1, 2, &v, &n, &nc, &e), MS_OK);
+  assert_int_equal(n, 2);
+  assert_int_equal(nc, 2);
+  assert_memory_equal(v, x + 2, 4 * sizeof *v); /* rows 1 and 2 exactly */
+  free(v);
+  assert_int_equal(ms_h5_read_doubles_rows(r, "/a/empty", 0, SIZE_MAX, &v, &n, &nc, &e), MS_OK);
+  assert_int_equal(n, 0);
+  free(v);
+  assert_int_equal(ms_h5_read_doubles_rows(r, "/a/x", 3, 2, &v, &n, &nc, &e), MS_ERR_INPUT);
+  assert_true(has_error(&e, "has 4 rows, rows 3..5 were asked for"));
+  int64_t *gi = NULL;
+  assert_int_equal(ms_h5_read_ints_rows(r, "/a/g", 0, SIZE_MAX, &gi, &n, &nc, &e), MS_OK);
+  assert_int_equal(n, 4);
+  assert_memory_equal(gi, g, sizeof g);
+  free(gi);
+  assert_int_equal(ms_h5_read_ints_rows(r, "/a/x", 0, SIZE_MAX, &gi, &n, &nc, &e), MS_ERR_INPUT);
+  char *text = NULL;
+  assert_int_equal(ms_h5_read_bytes(r, "/a/text", &text, &n, &e), MS_OK);
+  assert_int_equal(n, 5);
+  assert_string_equal(text, "a,b\n1");
+  free(text);
+  assert_int_equal(ms_h5_read_attr_string(r, "/", "deck_hash", &text, &e), MS_OK);
+  assert_string_equal(text, "00ff");
+  free(text);
+  assert_int_equal(ms_h5_read_attr_string(r, "/", "absent", &text, &e), MS_ERR_INPUT);
+  ms_h5_close_read(r);
+  remove(path);
+  /* the deck hash: defaults and skipped keys */
+  dk_doc *a = dk_load_string("p: {x: 1, t_end: 2}\n", "a.yaml", &e);
+  dk_doc *b = dk_load_string("p: {x: 1, t_end: 3}\n", "b.yaml", &e);
+  dk_doc *c = dk_load_string("p: {x: 2, t_end: 2}\n", "c.yaml", &e);
+  const char *const skip[] = {"p.t_end", NULL};
+  assert_true(dk_hash(a, NULL) != dk_hash(b, NULL));
+  assert_true(dk_hash(a, skip) == dk_hash(b, skip));
+  assert_true(dk_hash(a, skip) != dk_hash(c, skip));
+  dk_free(a), dk_free(b), dk_free(c);
+  dk_errors_free(&e);
+}
+
 static void test_xdmf(void **state) {
   (void)state;
   const char *path = "/tmp/mscale_test.xmf";
@@ -148,6 +208,7 @@ static void test_xdmf(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_atomic_file), cmocka_unit_test(test_table_reader),
-      cmocka_unit_test(test_hdf5_round_trip), cmocka_unit_test(test_xdmf)};
+      cmocka_unit_test(test_hdf5_round_trip), cmocka_unit_test(test_hdf5_checkpoint_helpers),
+      cmocka_unit_test(test_xdmf)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -46,6 +46,8 @@ int main(int argc, char **argv) {
   if (h) {
     CHECK(ms_h5_write_doubles_dist(h, "/particles/x", n_local, 3, rows, "cm") == MS_OK, "write x");
     CHECK(ms_h5_write_ints_dist(h, "/particles/id", n_local, ids) == MS_OK, "write id");
+    /* nothing recorded yet on any rank (a checkpoint's history at its first write) */
+    CHECK(ms_h5_write_doubles_dist(h, "/empty", 0, 2, rows, NULL) == MS_OK, "write empty");
     CHECK(ms_h5_attr_double(h, "/", "time", 1.25) == MS_OK, "attribute");
     CHECK(ms_h5_close(h) == MS_OK, "close");
   }
@@ -66,6 +68,9 @@ int main(int argc, char **argv) {
         /* bit-identical: the values travel through HDF5 unchanged */
         CHECK(memcmp(v, back + 3 * i, sizeof v) == 0, "row %zu differs", i);
       }
+      double *none = NULL;
+      CHECK(ms_h5_read_doubles(in, "/empty", &none, &n0, &n1, &e) == MS_OK && n0 == 0, "empty");
+      free(none);
       double t = 0;
       CHECK(ms_h5_read_attr_double(in, "/", "time", &t, &e) == MS_OK && t == 1.25, "time attr");
       free(back);
