@@ -438,7 +438,8 @@ static ms_status rkn_step_cd(cd_sim *s) {
     vmax2 = v2 > vmax2 ? v2 : vmax2;
     amax2 = a2 > amax2 ? a2 : amax2;
   }
-  const double reach = dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
+  const double reach =
+      dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
   const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
   if (!(sqrt(dmax2) + reach <= half)) { /* NaN also rebuilds */
     ms_status st = rebuild(s);
