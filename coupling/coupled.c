@@ -1366,10 +1366,19 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     p->sum.fragments = fr.n;
     p->sum.ejected_mass = cpl_ejected_mass(&fr, &sel);
     /* jets vs spall (docs/coupling.md §9): measured against the flat free surface's (the
-     * grid's) peak velocity up to the end of the particle phase */
-    double u_ref = 0;
+     * grid's) jump-off velocity, its first peak: from breakout (5 % of the maximum over the
+     * phase, as in the drive check) until it first falls below 90 % of the running maximum
+     * (later peaks are reverberations in the unbroken grid) */
+    double u_all = 0, u_ref = 0;
     for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++)
+      u_all = fmax(u_all, hf.u[k]);
+    for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++) {
+      if (hf.u[k] < 0.05 * u_all)
+        continue;
+      if (hf.u[k] < 0.9 * u_ref)
+        break;
       u_ref = fmax(u_ref, hf.u[k]);
+    }
     cpl_particles view = particle_view(ps, skip);
     const double normal[3] = {1, 0, 0};
     cpl_ejecta_classify(&fr, &view, normal, u_ref, p->jet_margin, &p->sum.classes);
@@ -1377,7 +1386,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     const cpl_ejecta_classes *ec = &p->sum.classes;
     ms_log(ctx, MS_LOG_INFO,
            "coupled: detached material at t = %.5g (bulk %.4g g): jets (faster than %.4g km/s = "
-           "(1 + %g) x the grid's peak free-surface velocity %.4g) %.4g g in %zu fragments, "
+           "(1 + %g) x the grid's free-surface jump-off velocity %.4g) %.4g g in %zu fragments, "
            "slower (spall layers, debris) %.4g g in %zu fragments; fastest %.4g km/s",
            t_start + sim->t, ec->m_bulk, (1 + p->jet_margin) * u_ref, p->jet_margin, u_ref,
            ec->m_jet, ec->n_jet, ec->m_slow, ec->n_slow, ec->v_max);

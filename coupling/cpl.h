@@ -387,7 +387,7 @@ typedef struct cpl_run_summary {
   size_t fragments;      /* at the end of the particle phase */
   double ejected_mass;   /* g (every fragment but the largest) */
   cpl_ejecta_classes classes; /* jets vs slow detached material at the end (one-way runs) */
-  double u_ref;               /* the grid's peak free-surface velocity they are measured by */
+  double u_ref;               /* the grid's free-surface jump-off velocity (first peak) */
   size_t transported, arrived;
   /* two-way coupling: interface impulse and work as the grid received them vs as the particles
    * did (per unit area), their relative mismatch, and the end state */
