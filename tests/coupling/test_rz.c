@@ -1,6 +1,6 @@
 /* Rz80 / Rz20 at reduced size (paper 002 §4.2; docs/coupling.md §9), CI-sized: the decks
  * inputs/coupled-rz80.yaml and inputs/coupled-rz20.yaml as documented, with the particle phase
- * cut to t = 0.12 (1.2 µs, ~0.9 µs after breakout) and no transport. The measure is the run's
+ * cut to t = 0.10 (1 µs, ~0.7 µs after breakout) and no transport. The measure is the run's
  * own split of the detached material (cpl_ejecta_classify): every fragment but the bulk (the one
  * holding the deepest particle) is a jet if its centre-of-mass velocity exceeds 1.1 × the grid's
  * peak free-surface velocity u_ref, otherwise slow (spall layers, debris). Masses are compared
@@ -39,7 +39,7 @@ static char *load_deck(void) {
   char *t = strstr(buf, "  transport:");
   if (!e || !t)
     fail_msg("%s: the time.end line or the transport section moved; update the test", path);
-  memcpy(e, "    end: 0.12", strlen(end_line));
+  memcpy(e, "    end: 0.10", strlen(end_line));
   *t = 0;
   return buf;
 }
