@@ -139,6 +139,19 @@ static void memory_check(const cpl_problem *p, dk_doc *doc, const dk_node *sec, 
   ms_mem_free(&m);
 }
 
+/* The gas the fragments fly through (material, layer of its grid); drag needs its viscosity. */
+static void set_gas(cpl_problem *p, int material, int layer, dk_errors *e, dk_doc *doc,
+                    const dk_node *at) {
+  p->gas_mat = material;
+  p->gas_layer = layer;
+  const eos_material *gm = &p->mats->m[material];
+  if (p->drag_law != CPL_DRAG_NONE && !(gm->viscosity > 0))
+    dk_error(e, doc, at,
+             "drag needs the gas viscosity: give material '%s' a 'viscosity' "
+             "(air: 1.8e-9 g/(cm*10us) = 1.8e-5 Pa*s), or set drag.law: none",
+             gm->name);
+}
+
 cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                               dk_errors *e) {
   size_t nerr0 = e->n;
@@ -250,14 +263,7 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
           p->drag_law = CPL_DRAG_NONE;
         } else {
           cont_view gv = cont_grid_view(cont_problem_grid(p->gas_grid));
-          p->gas_mat = gv.material[0];
-          p->gas_layer = gv.layer[0];
-          const eos_material *gm = &mats->m[p->gas_mat];
-          if (p->drag_law != CPL_DRAG_NONE && !(gm->viscosity > 0))
-            dk_error(e, doc, R ? R : sec,
-                     "drag needs the gas viscosity: give material '%s' a 'viscosity' "
-                     "(air: 1.8e-9 g/(cm*10us) = 1.8e-5 Pa*s), or set drag.law: none",
-                     gm->name);
+          set_gas(p, gv.material[0], gv.layer[0], e, doc, R ? R : sec);
         }
         goto consistency_done;
       }
@@ -300,14 +306,7 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
                    "missing",
                    fs_tag);
         } else {
-          p->gas_mat = v.material[nf];
-          p->gas_layer = v.layer[nf];
-          const eos_material *gm = &mats->m[p->gas_mat];
-          if (p->drag_law != CPL_DRAG_NONE && !(gm->viscosity > 0))
-            dk_error(e, doc, R ? R : sec,
-                     "drag needs the gas viscosity: give material '%s' a 'viscosity' "
-                     "(air: 1.8e-9 g/(cm*10us) = 1.8e-5 Pa*s), or set drag.law: none",
-                     gm->name);
+          set_gas(p, v.material[nf], v.layer[nf], e, doc, R ? R : sec);
         }
         if (!mats->m[p->sample_mat].eos)
           dk_error(e, doc, at, "the sample material has no equation of state");

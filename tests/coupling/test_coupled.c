@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "cpl.h"
+#include "cpl_test.h"
 #include "test_util.h"
 
 static const char *const MATERIALS =
@@ -267,30 +268,9 @@ static void test_two_way(void **state) {
       "  drive: {tag: drive, mode: two_way}\n"
       "  particles: {lattice: tri2d, spacing: 2.0e-4, width: 0.004, depth: 0.02}\n"
       "  time: {end: 0.048, outputs: 1}\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(text, "two.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  eos_materials *mats = eos_materials_read(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  cpl_problem *p = cpl_problem_read(doc, dk_get(dk_root(doc), "coupled"), mats, &e);
-  dk_report_unused(&e, doc);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_twoway_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, p), MS_OK);
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
-  const cpl_run_summary *s = cpl_problem_summary(p);
+  cpl_test_run r;
+  cpl_test_run_deck(&r, text, "two.yaml", NULL, 0);
+  const cpl_run_summary *s = cpl_problem_summary(r.p);
   double jerr = (s->impulse_grid + s->impulse_particles) / s->impulse_particles;
   double werr = (s->work_grid + s->work_particles) / s->work_particles;
   printf("two-way: impulse grid %.6g vs particles %.6g (%.2g), work grid %.6g vs particles %.6g "
@@ -309,10 +289,7 @@ static void test_two_way(void **state) {
   assert_true(s->u_interface < 0.25 && s->u_interface > 0.9 * 0.25);
   /* the particles' free surface doubles the transmitted velocity (within 1 %) */
   assert_true(fabs(s->u_free_surface / (2 * s->u_interface) - 1) < 0.01);
-  cpl_problem_free(p);
-  eos_materials_free(mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  cpl_test_run_free(&r);
 }
 
 /* Two-way with a gas layer (`gas:`): the grid writes its usual outputs, the interface balance
@@ -350,40 +327,13 @@ static void test_two_way_gas(void **state) {
       "  fragments: {every: 200}\n"
       "  drag: {gas_return: true}\n"
       "  transport: {detector: 0.1, end: 0.3, windows: 50}\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(text, "twogas.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  eos_materials *mats = eos_materials_read(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  cpl_problem *p = cpl_problem_read(doc, dk_get(dk_root(doc), "coupled"), mats, &e);
-  dk_report_unused(&e, doc);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_twogas_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, p), MS_OK);
   /* the grid's outputs, as in a one-way (or grid-only) run, and the ejecta outputs */
-  const char *files[] = {"profile_0000.csv", "profile_final.csv", "history_drive.csv", "xt.h5",
-                         "interface.csv",    "ejecta_mass.csv",   "fragments.csv",
-                         "arrivals.csv",     "spectrum_detector.csv"};
-  for (size_t k = 0; k < sizeof files / sizeof *files; k++) {
-    char *path = ms_out_path(&ctx, files[k]);
-    if (access(path, R_OK))
-      fail_msg("missing output %s", path);
-    free(path);
-  }
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
-  const cpl_run_summary *s = cpl_problem_summary(p);
+  const char *const files[] = {"profile_0000.csv", "profile_final.csv", "history_drive.csv",
+                               "xt.h5",            "interface.csv",     "ejecta_mass.csv",
+                               "fragments.csv",    "arrivals.csv",      "spectrum_detector.csv"};
+  cpl_test_run r;
+  cpl_test_run_deck(&r, text, "twogas.yaml", files, sizeof files / sizeof *files);
+  const cpl_run_summary *s = cpl_problem_summary(r.p);
   double jerr = (s->impulse_grid + s->impulse_particles) / s->impulse_particles;
   printf("two-way with gas: impulse balance %.2g; free surface %.4f km/s, gas boundary moved "
          "%.5g cm; %zu fragments, %zu transported, %zu arrived; gas received %.4g g*km/s, "
@@ -401,10 +351,7 @@ static void test_two_way_gas(void **state) {
   /* drag slowed them (they outrun the gas pushed by the free surface): the gas received
    * forward momentum and energy */
   assert_true(s->gas_momentum > 0 && s->gas_energy > 0);
-  cpl_problem_free(p);
-  eos_materials_free(mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  cpl_test_run_free(&r);
 }
 
 int main(void) {

@@ -15,17 +15,7 @@
 #include <cmocka.h>
 
 #include "cpl.h"
-
-/* |a − b| ≤ tol, with both values in the failure message (this cmocka has no double asserts). */
-#define assert_double_equal(a, b, tol) assert_close_at((a), (b), (tol), #a, __FILE__, __LINE__)
-static void assert_close_at(double a, double b, double tol, const char *what, const char *file,
-                            int line) {
-  if (!(fabs(a - b) <= tol)) {
-    print_error("%s = %.17g, expected %.17g within %.3g (off by %.3g)\n", what, a, b, tol,
-                fabs(a - b));
-    _fail(file, line);
-  }
-}
+#include "cpl_test.h"
 
 #define PI 3.14159265358979323846
 static const double RHO_AIR = 1.2e-3, MU_AIR = 1.8e-9, RHO_PB = 11.34;

@@ -1,0 +1,71 @@
+/* Helpers shared by the coupling tests (include after <cmocka.h>). */
+#ifndef MSCALE_CPL_TEST_H
+#define MSCALE_CPL_TEST_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "cpl.h"
+
+/* |a − b| ≤ tol, with both values in the failure message (this cmocka has no double asserts). */
+#define assert_double_equal(a, b, tol) assert_close_at((a), (b), (tol), #a, __FILE__, __LINE__)
+static inline void assert_close_at(double a, double b, double tol, const char *what,
+                                   const char *file, int line) {
+  if (!(fabs(a - b) <= tol)) {
+    print_error("%s = %.17g, expected %.17g within %.3g (off by %.3g)\n", what, a, b, tol,
+                fabs(a - b));
+    _fail(file, line);
+  }
+}
+
+/* A `coupled` deck read from text and run in a temporary directory, which must then hold
+ * `files` and is removed; the problem stays for its summary. */
+typedef struct cpl_test_run {
+  dk_errors e;
+  dk_doc *doc;
+  eos_materials *mats;
+  cpl_problem *p;
+} cpl_test_run;
+
+static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const char *name,
+                                     const char *const *files, size_t nfiles) {
+  dk_errors_init(&r->e);
+  r->doc = dk_load_string(text, name, &r->e);
+  assert_non_null(r->doc);
+  dk_read_units(r->doc, &r->e);
+  r->mats = eos_materials_read(r->doc, &r->e);
+  dk_get(dk_root(r->doc), "problem");
+  r->p = cpl_problem_read(r->doc, dk_get(dk_root(r->doc), "coupled"), r->mats, &r->e);
+  dk_report_unused(&r->e, r->doc);
+  dk_errors_print(&r->e, stderr);
+  assert_int_equal(r->e.n, 0);
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.quiet = true;
+  ctx.verbosity = MS_LOG_WARN;
+  char dir[] = "/tmp/mscale_test_cpl_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
+  assert_int_equal(cpl_problem_run(&ctx, r->p), MS_OK);
+  for (size_t k = 0; k < nfiles; k++) {
+    char *path = ms_out_path(&ctx, files[k]);
+    if (access(path, R_OK))
+      fail_msg("missing output %s", path);
+    free(path);
+  }
+  ms_ctx_close(&ctx);
+  char cmd[128];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
+static inline void cpl_test_run_free(cpl_test_run *r) {
+  cpl_problem_free(r->p);
+  eos_materials_free(r->mats);
+  dk_free(r->doc);
+  dk_errors_free(&r->e);
+}
+
+#endif
