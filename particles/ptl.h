@@ -284,7 +284,7 @@ typedef struct cd_sim {
   struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
   cd_mpi_config mpi;
   bool mpi_on;                  /* cd_sim_set_mpi was called */
-  char err[320];                /* what the instability guard found (cd_sim_error) */
+  char err[512];                /* what the instability guard found (cd_sim_error) */
 } cd_sim;
 
 enum { CD_MAX_PARTNERS = 16 };

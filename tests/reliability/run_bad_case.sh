@@ -91,7 +91,10 @@ check_result() {
 }
 check_result "mscale (exit $rc)"
 if printf '%s\n' "$directives" | grep -q '^also-run: *yes'; then
-  ${MSCALE_TEST_WRAPPER:-} "$mscale" run "$case" -o "$rundir/out" >"$out" 2>"$err"
+  # sanitizer build: Open MPI's MPI_Init (in `mscale run`) leaks in dlopen'ed components that
+  # LeakSanitizer cannot suppress by name (as tests/restart_check.sh); valgrind checks leaks
+  ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0" \
+    ${MSCALE_TEST_WRAPPER:-} "$mscale" run "$case" -o "$rundir/out" >"$out" 2>"$err"
   rc=$?
   check_result "mscale run (exit $rc)"
   if [ -e "$rundir/out" ]; then
