@@ -856,14 +856,6 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
                    .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness,
                    .integrator = p->integrator};
   const bool dist = ctx->size > 1;
-  if (dist && p->integrator != CD_INT_VELOCITY_VERLET) {
-    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: on %d MPI ranks only the velocity_verlet integrator "
-           "runs (docs/mpi.md); the deck asks for %s", ctx->size, cd_integrator_names[p->integrator]);
-    ptl_state_free(ps);
-    cd_restart_free(rs);
-    ms_h5_close_read(rh);
-    return MS_ERR_INPUT;
-  }
   const size_t nglobal = ps->n;
   cd_sim *s = cd_sim_create(ps, &p->box, &cfg, p->nmat);
   /* every rank built (or read) the whole set: cd_sim_init keeps what each rank's cells own */

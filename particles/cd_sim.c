@@ -276,9 +276,10 @@ ms_status cd_sim_init(cd_sim *s) {
     if (p->flags[i] & PTL_DRIVEN) s->driven[k++] = (int32_t)i;
   if (s->cfg.integrator != CD_INT_VELOCITY_VERLET) {
     if ((int)s->cfg.integrator < 0 || s->cfg.integrator >= CD_INT_COUNT) return MS_ERR_INPUT;
-    if (s->dd) return MS_ERR_INPUT; /* MPI runs use velocity Verlet (docs/mpi.md) */
-    s->rkn = rkn_create(rkn_of[s->cfg.integrator], 3 * p->n);
-    s->driven_x0 = ms_calloc(3 * s->n_driven + 1, sizeof *s->driven_x0);
+    /* MPI: room for every particle (the owned count changes with migration; rkn_resize) */
+    const size_t cap = s->dd ? p->cap : p->n;
+    s->rkn = rkn_create(rkn_of[s->cfg.integrator], 3 * cap);
+    s->driven_x0 = ms_calloc(3 * (s->dd ? cap : s->n_driven) + 1, sizeof *s->driven_x0);
     /* q_l − x^n = Δt α_l u + Δt² Σ_{k<l} γ_k(α_l − α_k) a_k: reach coefficients */
     const rkn_scheme *sc = rkn_integrator_scheme(s->rkn);
     s->rkn_reach[0] = s->rkn_reach[1] = 0.0;
@@ -350,7 +351,9 @@ static void reflect_walls(cd_sim *s) {
 /* After the integrator: damping sub-step, clock, and the periodic NaN check. */
 static ms_status end_step(cd_sim *s) {
   if (s->cfg.damping_gamma > 0.0) {
-    if (s->dd) cd_dd_refresh(s, false); /* the ghosts' velocities after the kick */
+    /* the ghosts' velocities after the kick; after an RKN step their positions too (they hold
+     * the last stage's) */
+    if (s->dd) cd_dd_refresh(s, s->rkn != NULL);
     s->dissipated += cd_damping_step(s);
   }
   s->t += s->cfg.dt;
@@ -394,7 +397,7 @@ static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
   (void)t;
   cd_sim *s = user;
   ptl_state *p = s->p;
-  const long n = (long)p->n;
+  const long n = (long)p->nlocal; /* MPI: ghosts get the stage positions in step_forces */
   step_forces(s);
   if (s->stage < 3) s->stage_force[s->stage++] = driven_force(s);
   const double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
@@ -418,7 +421,7 @@ static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
 static ms_status rkn_step_cd(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt;
-  const long n = (long)p->n;
+  const long n = (long)p->nlocal;
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   const double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
   const double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
@@ -441,7 +444,9 @@ static ms_status rkn_step_cd(cd_sim *s) {
   const double reach =
       dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
   const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
-  if (!(sqrt(dmax2) + reach <= half)) { /* NaN also rebuilds */
+  bool build = !(sqrt(dmax2) + reach <= half); /* NaN also rebuilds */
+  if (s->dd) build = par_max_int(build);       /* every rank builds when one must */
+  if (build) {
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
   }
@@ -452,6 +457,7 @@ static ms_status rkn_step_cd(cd_sim *s) {
     s->driven_x0[3 * k + 2] = p->z[i];
   }
   s->stage = 0;
+  if (s->dd) rkn_resize(s->rkn, 3 * p->nlocal); /* the owned count changes at a build */
   double *r[3] = {p->x, p->y, p->z}, *u[3] = {p->vx, p->vy, p->vz};
   ms_status st = rkn_step_soa(s->rkn, s->t, dt, 3, r, u, rkn_accel_cd, rkn_constrain_cd, s);
   if (st != MS_OK) return st;
@@ -571,9 +577,15 @@ static ms_status vv_step(cd_sim *s) {
 ms_status cd_sim_step(cd_sim *s) { return s->rkn ? rkn_step_cd(s) : vv_step(s); }
 
 /* ---- diagnostics ---- */
+/* Diagnostics under MPI: ghosts at x^{n+1} (after an RKN step they hold the last stage's). */
+static void diag_ghosts(cd_sim *s) {
+  if (s->dd && s->rkn) cd_dd_refresh(s, true);
+}
+
 void cd_sim_energy(cd_sim *s, cd_energy *out) {
   const ptl_state *p = s->p;
   memset(out, 0, sizeof *out);
+  diag_ghosts(s);
   cd_compute_forces(s, s->sums, NULL, false);
   double ke = 0, mom[3] = {0, 0, 0};
   for (size_t i = 0; i < p->nlocal; i++) {
@@ -616,6 +628,7 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
 
 void cd_sim_virial(cd_sim *s, double volume, double stress[6]) {
   const ptl_state *p = s->p;
+  diag_ghosts(s);
   cd_compute_forces(s, s->sums, NULL, false);
   double w[6] = {0, 0, 0, 0, 0, 0};
   for (int l = 0; l < s->nl->nlayer; l++)
@@ -634,7 +647,10 @@ void cd_sim_virial(cd_sim *s, double volume, double stress[6]) {
   for (int c = 0; c < 6; c++) stress[c] = w[c] / volume;
 }
 
-void cd_sim_particle_virial(cd_sim *s, double *w) { cd_compute_forces(s, s->sums, w, false); }
+void cd_sim_particle_virial(cd_sim *s, double *w) {
+  diag_ghosts(s);
+  cd_compute_forces(s, s->sums, w, false);
+}
 
 double cd_von_mises(const double t[6]) {
   double a = t[0] - t[1], b = t[1] - t[2], c = t[2] - t[0];

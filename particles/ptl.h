@@ -433,6 +433,9 @@ typedef struct rkn_integrator rkn_integrator;
 rkn_integrator *rkn_create(rkn_kind kind, size_t ndof);
 void rkn_destroy(rkn_integrator *ig);
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
+/* Dofs of the next steps, at most the ndof of rkn_create (MPI: the owned particle count changes
+ * at each migration; 0 is allowed: a rank may own nothing). MS_ERR_INPUT beyond it. */
+ms_status rkn_resize(rkn_integrator *ig, size_t ndof);
 /* One step t -> t + dt of (r, u) in place. No allocation. Loops are OpenMP-parallel over dofs
  * with a static schedule (results do not depend on the thread count). */
 ms_status rkn_step(rkn_integrator *ig, double t, double dt, double *r, double *u,

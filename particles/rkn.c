@@ -52,7 +52,7 @@ const rkn_scheme *rkn_scheme_get(rkn_kind kind) {
 
 struct rkn_integrator {
   rkn_scheme s;
-  size_t ndof;
+  size_t ndof, cap; /* dofs in use / allocated */
   double *q;      /* stage positions */
   double *acc[3]; /* stage accelerations a(q_l) */
 };
@@ -62,7 +62,7 @@ rkn_integrator *rkn_create(rkn_kind kind, size_t ndof) {
   if (!s || ndof == 0) return NULL;
   rkn_integrator *ig = ms_calloc(1, sizeof *ig);
   ig->s = *s;
-  ig->ndof = ndof;
+  ig->ndof = ig->cap = ndof;
   ig->q = ms_aligned_alloc(ndof, sizeof(double));
   for (int l = 0; l < s->stages; ++l) ig->acc[l] = ms_aligned_alloc(ndof, sizeof(double));
   return ig;
@@ -76,6 +76,12 @@ void rkn_destroy(rkn_integrator *ig) {
 }
 
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig) { return &ig->s; }
+
+ms_status rkn_resize(rkn_integrator *ig, size_t ndof) {
+  if (ndof > ig->cap) return MS_ERR_INPUT;
+  ig->ndof = ndof;
+  return MS_OK;
+}
 
 /* q = r + Δt α_l u + Δt² Σ_{k<l} γ_k (α_l − α_k) a_k over n entries (a_k = acc[k] + off). */
 static void form_stage(const rkn_scheme *s, int l, double dt, long n, const double *r,

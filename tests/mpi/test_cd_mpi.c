@@ -8,6 +8,7 @@
  *  - the same with slab partition and rebalance_threshold 1.05 checked at every list build: the
  *    shock compresses the bar, so the load moves and repartitions happen (asserted >= 1 on 2+
  *    ranks); the result still matches the serial run;
+ *  - the piston case with the RKN4 integrator (ghosts refreshed at every stage position), 400 steps;
  *  - bonded mode with damping after an affine stretch (bonds break across rank borders, the
  *    damping needs ghost velocities, the coarse grid is remade for the new box): energies,
  *    dissipated and broken energy, broken-bond count.
@@ -31,7 +32,7 @@ static int my_rank = 0;
 #define C0 5.35
 #define UP 2.0
 
-typedef enum { CASE_PISTON, CASE_REBALANCE, CASE_BONDED } case_kind;
+typedef enum { CASE_PISTON, CASE_REBALANCE, CASE_BONDED, CASE_RKN } case_kind;
 
 typedef struct result {
   size_t n;          /* global particle count */
@@ -67,7 +68,8 @@ static cd_sim *make_case(case_kind kind, const eos_t *eos, bool distributed) {
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, piston ? CD_BC_FREE : CD_BC_PERIODIC}};
   cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0,
                    .cutoff = piston ? CD_CUTOFF_PLAIN : CD_CUTOFF_BONDED,
-                   .damping_gamma = piston ? 0.0 : 0.05 * C0 / R0, .lattice = CD_LATTICE_FCC};
+                   .damping_gamma = piston ? 0.0 : 0.05 * C0 / R0, .lattice = CD_LATTICE_FCC,
+                   .integrator = kind == CASE_RKN ? CD_INT_RKN4 : CD_INT_VELOCITY_VERLET};
   if (distributed) {
     const int r = par_rank(), P = par_size();
     ptl_state_keep_range(p, p->n * (size_t)r / (size_t)P, p->n * (size_t)(r + 1) / (size_t)P);
@@ -217,6 +219,7 @@ int main(int argc, char **argv) {
   compare("piston (METIS)", CASE_PISTON, eos, 1000);
   compare("piston (slab, rebalance 1.05)", CASE_REBALANCE, eos, 1000);
   compare("bonded + damping", CASE_BONDED, eos, 300);
+  compare("piston, RKN4", CASE_RKN, eos, 400);
   eos_destroy(eos);
   int all = (int)par_sum_long(failures);
   if (my_rank == 0) printf("%s (%d failures over %d ranks)\n", all ? "FAILED" : "OK", all, ctx.size);
