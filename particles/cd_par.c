@@ -47,7 +47,8 @@ struct cd_dd {
   int32_t *perm;   /* [cap] sort scratch */
   double *tmp;     /* [cap] sort scratch */
   int64_t *pgid;   /* bonded: [cap][CD_MAX_PARTNERS] partner gids */
-  int32_t *gid_map;/* bonded: gid -> local index, [global] (−1 elsewhere) */
+  int32_t *gid_map;/* bonded: gid -> local index, [ngid] (−1 elsewhere) */
+  size_t ngid;     /* gids are creation indices, below the global count */
   long builds_since;
   bool replicated; /* until the first migration: every rank holds every particle */
   cd_mpi_stats st;
@@ -66,9 +67,9 @@ static int32_t cell_of(const cd_dd *d, double x, double y, double z) {
   const double r[3] = {x, y, z};
   int k[3];
   for (int a = 0; a < 3; a++) {
-    double u = (r[a] - d->lo[a]) * d->inv_w[a];
-    int c = u < 0 ? 0 : (u >= d->nc[a] ? d->nc[a] - 1 : (int)u);
-    k[a] = (u != u) ? 0 : c; /* NaN: cell 0 (the run stops at the next check) */
+    const double u = (r[a] - d->lo[a]) * d->inv_w[a];
+    /* outside (or NaN: the run stops at the next check) -> an end cell */
+    k[a] = u >= 0 && u < d->nc[a] ? (int)u : (u >= d->nc[a] ? d->nc[a] - 1 : 0);
   }
   return k[0] + d->nc[0] * (k[1] + d->nc[1] * k[2]);
 }
@@ -224,9 +225,11 @@ ms_status cd_dd_create(cd_sim *s) {
   const int P = d->size;
   int **arr[] = {&d->mcnt_s, &d->mcnt_r, &d->mdsp_s, &d->mdsp_r, &d->nbr, &d->gcnt_s, &d->gcnt_r,
                  &d->gdsp_s, &d->gdsp_r, &d->xcnt_s, &d->xcnt_r, &d->xdsp_s, &d->xdsp_r};
-  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) *arr[k] = ms_calloc((size_t)P + 1, sizeof(int));
+  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++)
+    *arr[k] = ms_calloc((size_t)P + 1, sizeof(int));
   if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
     d->pgid = ms_aligned_alloc(cap * CD_MAX_PARTNERS, sizeof *d->pgid);
+    d->ngid = cap;
     d->gid_map = ms_calloc(cap, sizeof *d->gid_map);
     for (size_t k = 0; k < cap; k++) d->gid_map[k] = -1;
   }
@@ -251,9 +254,10 @@ void cd_dd_set_builds_since(cd_dd *d, long builds_since) { d->builds_since = bui
 
 void cd_dd_free(cd_dd *d) {
   if (!d) return;
-  void *arr[] = {d->owner, d->owner_new, d->part, d->weight, d->mcnt_s, d->mcnt_r, d->mdsp_s, d->mdsp_r, d->nbr,
-                 d->gcnt_s, d->gcnt_r, d->gdsp_s, d->gdsp_r, d->xcnt_s, d->xcnt_r, d->xdsp_s,
-                 d->xdsp_r, d->send_idx, d->sbuf, d->rbuf, d->cell, d->perm, d->tmp, d->pgid,
+  void *arr[] = {d->owner,  d->owner_new, d->part,   d->weight, d->mcnt_s,   d->mcnt_r,
+                 d->mdsp_s, d->mdsp_r,    d->nbr,    d->gcnt_s, d->gcnt_r,   d->gdsp_s,
+                 d->gdsp_r, d->xcnt_s,    d->xcnt_r, d->xdsp_s, d->xdsp_r,   d->send_idx,
+                 d->sbuf,   d->rbuf,      d->cell,   d->perm,   d->tmp,      d->pgid,
                  d->gid_map};
   for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) free(arr[k]);
   free(d);
@@ -287,7 +291,8 @@ static void pack(const cd_sim *s, size_t i, double *r) {
   r[8] = p->mat[i];
   r[9] = p->flags[i];
   if (s->dd->pgid)
-    for (int k = 0; k < CD_MAX_PARTNERS; k++) r[CD_REC + k] = (double)s->dd->pgid[i * CD_MAX_PARTNERS + k];
+    for (int k = 0; k < CD_MAX_PARTNERS; k++)
+      r[CD_REC + k] = (double)s->dd->pgid[i * CD_MAX_PARTNERS + k];
 }
 
 static void unpack(cd_sim *s, size_t i, const double *r) {
@@ -300,7 +305,8 @@ static void unpack(cd_sim *s, size_t i, const double *r) {
   p->mat[i] = (uint8_t)r[8];
   p->flags[i] = (uint8_t)r[9];
   if (s->dd->pgid)
-    for (int k = 0; k < CD_MAX_PARTNERS; k++) s->dd->pgid[i * CD_MAX_PARTNERS + k] = (int64_t)r[CD_REC + k];
+    for (int k = 0; k < CD_MAX_PARTNERS; k++)
+      s->dd->pgid[i * CD_MAX_PARTNERS + k] = (int64_t)r[CD_REC + k];
 }
 
 /* Copy particle i to slot k (k <= i), partner gids included. */
@@ -339,7 +345,7 @@ static void sort_by_cell(cd_sim *s) {
   cd_dd *d = s->dd;
   ptl_state *p = s->p;
   const size_t n = p->nlocal;
-  /* counting sort through the weight array (reused as cursors), keys through perm */
+  /* counting sort through the weight array (reused as cursors), keys held in tmp */
   int64_t *cur = d->weight;
   memset(cur, 0, d->ncells * sizeof *cur);
   int32_t *key = (int32_t *)(void *)d->tmp;
@@ -546,18 +552,22 @@ static void partners_to_gids(cd_sim *s) {
 static void partners_from_gids(cd_sim *s) {
   cd_dd *d = s->dd;
   const ptl_state *p = s->p;
-  for (size_t i = 0; i < p->n; i++) d->gid_map[p->gid[i]] = (int32_t)i;
+  const int64_t ng = (int64_t)d->ngid;
+  for (size_t i = 0; i < p->n; i++)
+    if (p->gid[i] >= 0 && p->gid[i] < ng) d->gid_map[p->gid[i]] = (int32_t)i;
   long lost = 0;
   for (size_t i = 0; i < p->n; i++)
     for (int k = 0; k < CD_MAX_PARTNERS; k++) {
       int64_t g = d->pgid[i * CD_MAX_PARTNERS + k];
-      int32_t j = g >= 0 ? d->gid_map[g] : -1;
-      /* an owned particle's partner is always within r_list, hence here; ghosts' rows may
-       * name particles this rank does not hold (never needed: no ghost-ghost pairs) */
+      int32_t j = g >= 0 && g < ng ? d->gid_map[g] : -1;
+      /* an owned particle's intact bond is evaluated every step, so it breaks before the pair
+       * leaves r_list: the partner is here (else `lost`, reported). Ghosts' rows may name
+       * particles this rank does not hold (never needed: no ghost-ghost pairs). */
       if (g >= 0 && j < 0 && i < p->nlocal) lost++;
       s->partners[i * CD_MAX_PARTNERS + k] = j;
     }
-  for (size_t i = 0; i < p->n; i++) d->gid_map[p->gid[i]] = -1;
+  for (size_t i = 0; i < p->n; i++)
+    if (p->gid[i] >= 0 && p->gid[i] < ng) d->gid_map[p->gid[i]] = -1;
   d->st.lost_bonds += lost;
 }
 
