@@ -171,8 +171,8 @@ static inline int stencil_code(const int ax[3], int s0, int s1, int s2) {
 static inline void add_range(stencil_range *st, int *nst, int32_t q0, int32_t q1, int code,
                              bool same, int32_t cell_q0) {
   if (q0 == q1 || (same && q1 <= cell_q0)) return;
-  stencil_range *last = st + *nst - 1;
-  if (*nst > 0 && last->q1 == q0 && last->code == code && last->same == same)
+  stencil_range *last = *nst > 0 ? st + *nst - 1 : NULL;
+  if (last && last->q1 == q0 && last->code == code && last->same == same)
     last->q1 = q1;
   else
     st[(*nst)++] = (stencil_range){q0, q1, code, same};
