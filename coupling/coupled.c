@@ -443,6 +443,9 @@ typedef struct gas_ctx {
   ms_status st;
   double returned_p, returned_e; /* what the gas received (absolute, g·km/s and kJ) */
   cpl_gaslog *log;               /* sources recorded for checkpoints (NULL: none) */
+  /* MPI, drag kicks: each rank's sources per grid cell (dp, de per cm²), summed over the ranks
+   * before they enter the replicated grid (gas_return_sum); NULL otherwise */
+  double *cell_src;
 } gas_ctx;
 
 /* The gas at x receives momentum −dp (along the grid axis: the 1D gas has no transverse
@@ -458,6 +461,11 @@ static void gas_deposit(void *user, const double x[3], double t0, double t1, con
   if (c->st != MS_OK || !cont_grid_sample(c->g, x[0] - c->offset, &s) ||
       s.layer != c->gas_layer)
     return;
+  if (c->cell_src) {
+    c->cell_src[2 * s.cell] -= dp[0] / c->area;
+    c->cell_src[2 * s.cell + 1] -= de / c->area;
+    return;
+  }
   ms_status st = cont_grid_add_cell_source(c->g, s.cell, -dp[0] / c->area, -de / c->area);
   if (st != MS_OK) {
     c->st = st;
@@ -482,17 +490,24 @@ static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
   return true;
 }
 
+/* Rank 0 writes the CSV files (docs/mpi.md "The coupled problem on MPI ranks"); the other ranks
+ * get NULL and write nothing. */
 static FILE *open_csv(const ms_ctx *ctx, ms_afile *af, const char *name) {
+  memset(af, 0, sizeof *af);
+  if (ctx->rank != 0)
+    return NULL;
   char *path = ms_out_path(ctx, name);
   ms_status s = ms_afile_open(af, path);
   free(path);
   return s == MS_OK ? af->f : NULL;
 }
 
-static ms_status commit_csv(ms_afile *af) { return ms_afile_commit(af); }
+static ms_status commit_csv(ms_afile *af) { return af->f ? ms_afile_commit(af) : MS_OK; }
 
 static ms_status write_table(const ms_ctx *ctx, const char *name, const cpl_fragments *fr, int kind,
                              const cpl_ejecta_sel *sel, const char *title) {
+  if (ctx->rank != 0)
+    return MS_OK;
   ms_afile af;
   FILE *f = open_csv(ctx, &af, name);
   if (!f)
@@ -538,13 +553,35 @@ static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
   return v;
 }
 
+/* MPI: the ranks' drag-kick sources, summed over the ranks, enter every rank's copy of the grid
+ * identically (cell order; serially they enter particle by particle: the same sums to round-off,
+ * since a cell source is additive). */
+static void gas_return_sum(gas_ctx *c) {
+  const size_t ncell = cont_grid_ncells(c->g);
+  double *src = c->cell_src;
+  par_sum_doubles(src, 2 * ncell);
+  c->cell_src = NULL;
+  for (size_t k = 0; k < ncell && c->st == MS_OK; k++) {
+    if (src[2 * k] == 0 && src[2 * k + 1] == 0)
+      continue;
+    c->st = cont_grid_add_cell_source(c->g, k, src[2 * k], src[2 * k + 1]);
+    if (c->st == MS_OK) {
+      c->returned_p += src[2 * k] * c->area;
+      c->returned_e += src[2 * k + 1] * c->area;
+    }
+  }
+  memset(src, 0, 2 * ncell * sizeof *src);
+  c->cell_src = src;
+}
+
 /* Drag on the detached fragments (their share of the fragment's force, cpl_drag_fragments) as a
  * velocity kick over `span`, and with drag.gas_return the opposite momentum and the energy into
  * the gas cell at each kicked particle. MS_ERR_UNSTABLE if the gas refused a return. */
 static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_particles *view,
                            const cpl_ejecta_sel *sel, gas_ctx *gas, double t, double span,
                            ptl_state *ps, const uint8_t *skip, double *fx, double *fy, double *fz) {
-  const size_t n = ps->n;
+  const size_t n = view->n; /* owned particles: each rank kicks its own */
+  double *cell_src = gas->cell_src; /* MPI: gas_deposit collects per cell */
   const bool three_d = ps->dim == 3;
   memset(fx, 0, n * sizeof *fx);
   memset(fy, 0, n * sizeof *fy);
@@ -568,6 +605,8 @@ static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_pa
       gas_deposit(gas, xi, t, t, dp, de);
     }
   }
+  if (cell_src)
+    gas_return_sum(gas);
   return gas->st;
 }
 
@@ -622,9 +661,9 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
   if (st == MS_OK) {
     ms_afile af;
     FILE *f = open_csv(ctx, &af, "arrivals.csv");
-    if (!f) {
+    if (!f && ctx->rank == 0) {
       st = MS_ERR_IO;
-    } else {
+    } else if (f) {
       cpl_write_arrivals(f, tr, NULL);
       st = commit_csv(&af);
     }
@@ -647,9 +686,9 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
     }
     if (st == MS_OK) {
       f = open_csv(ctx, &af, "spectrum_detector.csv");
-      if (!f) {
+      if (!f && ctx->rank == 0) {
         st = MS_ERR_IO;
-      } else {
+      } else if (f) {
         cpl_write_spectrum(f, &det, "fragment spectrum N(g) of the arrivals at the detector");
         st = commit_csv(&af);
       }
@@ -672,7 +711,7 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
   }
   free(gcount);
   cpl_transport_free(tr);
-  return st;
+  return ctx->size > 1 ? par_agree_status(st) : st; /* rank 0's file errors */
 }
 
 /* The particle region between x_drive and x_drive + depth (lattice, surface profile, piston and
@@ -1001,7 +1040,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     cont_grid *gg = cont_problem_grid(p->gas_grid);
     /* the gas grid's first node sits on the particles' nominal free surface */
     w.gas = (gas_ctx){gg, p->gas_layer, p->mats->m[p->gas_mat].viscosity,
-                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL};
+                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL, NULL};
   }
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
@@ -1057,7 +1096,71 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   return st;
 }
 
+/* Under MPI rank 0 ran the grid (cont_problem_run); the tag history h (t, x, u, p_right) goes to
+ * every rank, into *buf (the caller frees it). Serial: nothing to do. */
+static void share_history(const ms_ctx *ctx, cont_history *h, double **buf) {
+  *buf = NULL;
+  if (ctx->size < 2)
+    return;
+  double nd = (double)h->n;
+  par_bcast_doubles(&nd, 1, 0);
+  const size_t n = (size_t)nd;
+  double *b = ms_calloc(4 * n + 1, sizeof *b);
+  if (ctx->rank == 0) {
+    memcpy(b, h->t, n * sizeof *b);
+    memcpy(b + n, h->x, n * sizeof *b);
+    memcpy(b + 2 * n, h->u, n * sizeof *b);
+    memcpy(b + 3 * n, h->p_right, n * sizeof *b);
+  }
+  par_bcast_doubles(b, 4 * n, 0);
+  h->n = n, h->t = b, h->x = b + n, h->u = b + 2 * n, h->p_right = b + 3 * n;
+  *buf = b;
+}
+
+/* What does not run on MPI ranks yet (docs/mpi.md "The coupled problem on MPI ranks"). */
+static ms_status refuse_on_ranks(const ms_ctx *ctx, const cpl_problem *p) {
+  const char *what = NULL;
+  if (p->drive_mode == DRIVE_TWO_WAY)
+    what = "drive.mode two_way";
+  else if (ctx->restart)
+    what = "--restart";
+  else if (p->checkpoint_every > 0 || p->checkpoint_time > 0)
+    what = "time.checkpoint_every / checkpoint_time";
+  if (!what)
+    return MS_OK;
+  ms_log(ctx, MS_LOG_ERROR,
+         "coupled: %s runs on one rank only, not on %d MPI ranks (docs/mpi.md); run it "
+         "without mpirun",
+         what, ctx->size);
+  return MS_ERR_INPUT;
+}
+
+/* The bulk (the fragment holding the deepest particle along x) over all ranks: a one-particle
+ * view of the global deepest particle for cpl_ejecta_classify, so it classifies as serially. */
+static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, double u_ref,
+                          double margin, cpl_ejecta_classes *out) {
+  double deepest = INFINITY;
+  for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
+    if (fr->id[i] >= 0 && view->x[i] < deepest)
+      deepest = view->x[i];
+  const double dmin = par_min_double(deepest);
+  int64_t bulk = -1;
+  for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
+    if (fr->id[i] >= 0 && view->x[i] == dmin)
+      bulk = fr->id[i] > bulk ? fr->id[i] : bulk;
+  bulk = par_max_int64(bulk);
+  double zero = 0;
+  cpl_particles one = {.n = bulk >= 0 ? 1 : 0, .x = &dmin, .y = &zero};
+  cpl_fragments f1 = *fr; /* shallow: the table, and the bulk particle's id */
+  f1.id = &bulk;
+  f1.n_particles = 1;
+  const double normal[3] = {1, 0, 0};
+  cpl_ejecta_classify(&f1, &one, normal, u_ref, margin, out);
+}
+
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
+  if (ctx->size > 1 && refuse_on_ranks(ctx, p) != MS_OK)
+    return MS_ERR_INPUT;
   if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
     return MS_ERR_INPUT;
@@ -1073,9 +1176,14 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   const cont_grid *gout = cont_problem_grid(p->grid_out);
   cont_history hd = cont_grid_history(gout, p->tag_drive);
   cont_history hf = cont_grid_history(gout, p->tag_fs);
+  double *hd_buf, *hf_buf; /* MPI: rank 0's histories on every rank */
+  share_history(ctx, &hd, &hd_buf);
+  share_history(ctx, &hf, &hf_buf);
   cpl_piston drive, fsurf;
   if (cpl_piston_build(&drive, hd.n, hd.t, hd.x, hd.u) != MS_OK ||
       cpl_piston_build(&fsurf, hf.n, hf.t, hf.x, hf.u) != MS_OK) {
+    free(hd_buf);
+    free(hf_buf);
     ms_log(ctx, MS_LOG_ERROR,
            "coupled: the grid's tag histories are unusable (non-finite or "
            "not increasing in time)");
@@ -1099,6 +1207,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
            p->t_end, t_start);
     cpl_piston_free(&drive);
     cpl_piston_free(&fsurf);
+    free(hd_buf);
+    free(hf_buf);
     return MS_ERR_INPUT;
   }
   if (p->t_end > hd.t[hd.n - 1])
@@ -1114,6 +1224,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   if (st != MS_OK) {
     cpl_piston_free(&drive);
     cpl_piston_free(&fsurf);
+    free(hd_buf);
+    free(hf_buf);
     return st;
   }
   cd_sim *sim = reg.sim;
@@ -1143,19 +1255,32 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   const double Z = p->impedance > 0 ? p->impedance : sqrt(1.5) * rho0 * c0;
   const double area = reg.area;
   double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
+  /* MPI: every rank built the whole region; cd_sim_init keeps what each rank's coarse cells own
+   * (the cluster_dynamics defaults: METIS, rebalance above 1.2 checked every 10 list builds) */
+  const bool dist = ctx->size > 1;
+  const size_t nglobal = ps->n;
+  if (dist) {
+    const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
+                              .rebalance_interval = 10, .replicated = true};
+    cd_sim_set_mpi(sim, &mc);
+  }
   st = ctx->restart ? MS_OK : cd_sim_init(sim); /* a restart initialises from its checkpoint */
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: particle set-up failed (%s)", ms_status_str(st));
     cd_sim_free(sim);
     cpl_piston_free(&drive);
     cpl_piston_free(&fsurf);
+    free(hd_buf);
+    free(hf_buf);
     return st;
   }
 
   /* 3. the particle phase, with the live grid supplying the gas */
   cont_grid *glive = cont_problem_grid(p->grid_live);
   gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, 0.0, reg.area, MS_OK, 0, 0,
-                 NULL};
+                 NULL, NULL};
+  if (dist && p->gas_return) /* the transport phase runs replicated: it deposits directly */
+    gas.cell_src = ms_calloc(2 * cont_grid_ncells(glive) + 1, sizeof *gas.cell_src);
   cpl_loop_state ls = {0}; /* checkpoints (set up below) */
   cpl_fragments fr;
   cpl_fragments_init(&fr);
@@ -1169,18 +1294,20 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     fo.box.period[2] = width_z;
   cpl_ejecta_sel sel;
   cpl_ejecta_sel_default(&sel);
-  size_t n = ps->n;
+  size_t n = nglobal; /* owned + ghosts never exceed the global count */
   uint8_t *skip = ms_calloc(n + 1, 1);
+  int32_t *ghost_owner = dist ? ms_calloc(n + 1, sizeof *ghost_owner) : NULL;
   double *fx = ms_calloc(n + 1, sizeof(double)), *fy = ms_calloc(n + 1, sizeof(double)),
          *fz = ms_calloc(n + 1, sizeof(double));
   ms_afile af_ej, af_fs;
   FILE *f_ej = open_csv(ctx, &af_ej, "ejecta_mass.csv");
   FILE *f_fs = open_csv(ctx, &af_fs, "free_surface.csv");
-  if (!f_ej || !f_fs) {
-    st = MS_ERR_IO;
+  st = ctx->rank == 0 && (!f_ej || !f_fs) ? MS_ERR_IO : MS_OK;
+  if (dist)
+    st = par_agree_status(st);
+  if (st != MS_OK)
     goto particle_done;
-  }
-  if (!ctx->restart) { /* a restart writes back the text so far */
+  if (!ctx->restart && f_ej) { /* a restart writes back the text so far */
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
     ms_csv_header(f_ej,
@@ -1252,9 +1379,11 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     st = cd_sim_step(sim);
     if (p->drive_mode == 1) {
       double fsum = 0;
-      for (size_t i = 0; i < ps->n; i++)
+      for (size_t i = 0; i < ps->nlocal; i++)
         if (ps->flags[i] & PTL_DRIVEN)
           fsum += ps->fx[i];
+      if (dist)
+        fsum = par_sum_double(fsum);
       p_particles = -fsum / area; /* compression pushes the piston towards −x */
     }
     if (st != MS_OK) {
@@ -1267,7 +1396,15 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     double t_abs = t_start + sim->t;
     /* fragments, ejected mass, drag kick over the interval since the last search */
     cpl_particles view = particle_view(ps, skip);
-    st = cpl_fragments_find(&fr, &view, &fo);
+    if (dist) { /* owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks") */
+      cd_sim_refresh_ghosts(sim);
+      view = particle_view(ps, skip);
+      cd_sim_ghost_owners(sim, ghost_owner);
+      st = cpl_fragments_find_dist(&fr, &view, ps->nlocal, ghost_owner, &fo, ctx);
+      view.n = ps->nlocal; /* drag, snapshots: each rank its owned particles */
+    } else {
+      st = cpl_fragments_find(&fr, &view, &fo);
+    }
     if (st != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR,
              "coupled: fragment search failed at t = %g (non-finite "
@@ -1279,7 +1416,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     sel.plane = hf.x[0] + cpl_piston_displacement(&fsurf, t_abs);
     double row_ej[3] = {t_abs, cpl_ejected_mass(&fr, &sel), (double)fr.n};
     last_search = step;
-    ms_csv_row(f_ej, 3, row_ej);
+    if (f_ej)
+      ms_csv_row(f_ej, 3, row_ej);
     if (p->drag_law != CPL_DRAG_NONE) {
       st = cont_grid_run_to(glive, t_abs);
       if (st != MS_OK) {
@@ -1299,7 +1437,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     /* free-surface check */
     double ug = cpl_piston_velocity(&fsurf, t_abs), up = cd_free_surface_velocity(sim, 0);
     double row_fs[3] = {t_abs, ug, up};
-    ms_csv_row(f_fs, 3, row_fs);
+    if (f_fs)
+      ms_csv_row(f_fs, 3, row_fs);
     if (fs_n < fs_cap) {
       fs_t[fs_n] = t_abs;
       fs_ug[fs_n] = ug;
@@ -1320,6 +1459,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       snprintf(title, sizeof title, "fragment spectrum N(g) at t = %g (10us), b = %g", t_abs,
                p->bond);
       st = write_table(ctx, name, &fr, 0, &sel, title);
+      if (dist)
+        st = par_agree_status(st); /* rank 0's file error stops every rank */
       if (st != MS_OK)
         break;
       cd_energy en;
@@ -1358,7 +1499,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   if (st == MS_OK) {
     cd_energy en;
     cd_sim_energy(sim, &en);
-    p->sum.particles = n;
+    p->sum.particles = nglobal;
     p->sum.steps = (long)nsteps;
     p->sum.energy_balance = en.piston_work != 0 ? (en.total - e0.total) / en.piston_work : 0.0;
     p->sum.piston_work = en.piston_work;
@@ -1380,7 +1521,12 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     }
     cpl_particles view = particle_view(ps, skip);
     const double normal[3] = {1, 0, 0};
-    cpl_ejecta_classify(&fr, &view, normal, u_ref, p->jet_margin, &p->sum.classes);
+    if (dist) {
+      view.n = ps->nlocal;
+      classify_dist(&fr, &view, u_ref, p->jet_margin, &p->sum.classes);
+    } else {
+      cpl_ejecta_classify(&fr, &view, normal, u_ref, p->jet_margin, &p->sum.classes);
+    }
     p->sum.u_ref = u_ref;
     const cpl_ejecta_classes *ec = &p->sum.classes;
     ms_log(ctx, MS_LOG_INFO,
@@ -1400,6 +1546,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     for (int k = 0; k < 6 && st == MS_OK; k++)
       st = write_table(ctx, names[k], &fr, k, &sel, k == 0 ? title : NULL);
   }
+  if (dist)
+    st = par_agree_status(st);
 particle_done:
   if (f_ej) {
     ms_status s2 = commit_csv(&af_ej);
@@ -1411,19 +1559,26 @@ particle_done:
     if (st == MS_OK)
       st = s2;
   }
+  if (dist)
+    st = par_agree_status(st);
 
   /* 4. transport of the ejecta to the detector (not checkpointed: no gas log) */
   gas.log = NULL;
+  free(gas.cell_src);
+  gas.cell_src = NULL;
   cpl_gaslog_free(&ls.gaslog);
   if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t)
     st = transport_phase(ctx, p, &fr, &sel, &gas, t_start + sim->t, x_fs + p->det_distance, rho0);
   cpl_fragments_free(&fr);
   free(skip);
+  free(ghost_owner);
   free(fx);
   free(fy);
   free(fz);
   cd_sim_free(sim);
   cpl_piston_free(&drive);
   cpl_piston_free(&fsurf);
+  free(hd_buf);
+  free(hf_buf);
   return st;
 }

@@ -1,7 +1,8 @@
 /* Particle snapshots with fragment ids (docs/coupling.md §2): the datasets cd_write_snapshot
- * writes (x, v, mass) plus the fragment of each particle, as int64 (/particles/fragment) and as
- * a double copy for the XDMF sidecar (ParaView colours by it), and the attributes that
- * `mscale spectrum` reads (r0, rho0, time, period_*, lo_*). */
+ * writes (x, v, mass, gid when the view has gids) plus the fragment of each particle, as int64
+ * (/particles/fragment) and as a double copy for the XDMF sidecar (ParaView colours by it), and
+ * the attributes that `mscale spectrum` reads (r0, rho0, time, period_*, lo_*). Collective under
+ * MPI: every rank calls it with its owned particles, stored in rank order (docs/mpi.md). */
 #include "cpl_impl.h"
 
 #include <stdlib.h>
@@ -24,13 +25,15 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
     fid[i] = (double)id[i];
   }
   ms_status st = MS_ERR_IO;
-  ms_h5 *h = ms_h5_create(path);
+  const bool dist = par_size() > 1;
+  ms_h5 *h = dist ? ms_h5_create_collective(path) : ms_h5_create(path);
   if (h) {
-    st = ms_h5_write_doubles(h, "particles/x", n, 3, xyz, "cm");
-    if (!st) st = ms_h5_write_doubles(h, "particles/v", n, 3, vel, "km/s");
-    if (!st) st = ms_h5_write_doubles(h, "particles/mass", n, 1, p->mass, "g");
-    if (!st) st = ms_h5_write_ints(h, "particles/fragment", n, id);
-    if (!st) st = ms_h5_write_doubles(h, "particles/fragment_id", n, 1, fid, "1");
+    st = ms_h5_write_doubles_dist(h, "particles/x", n, 3, xyz, "cm");
+    if (!st) st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
+    if (!st) st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, p->mass, "g");
+    if (!st && p->gid) st = ms_h5_write_ints_dist(h, "particles/gid", n, p->gid);
+    if (!st) st = ms_h5_write_ints_dist(h, "particles/fragment", n, id);
+    if (!st) st = ms_h5_write_doubles_dist(h, "particles/fragment_id", n, 1, fid, "1");
     if (!st) st = ms_h5_attr_double(h, "particles", "time", info->time);
     if (!st) st = ms_h5_attr_double(h, "particles", "r0", info->spacing);
     if (!st && info->rho0 > 0) st = ms_h5_attr_double(h, "particles", "rho0", info->rho0);
@@ -46,7 +49,8 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
     else
       ms_h5_abort(h);
   }
-  if (st == MS_OK) {
+  const size_t nglobal = dist ? (size_t)par_sum_long((long)n) : n;
+  if (st == MS_OK && (!dist || par_rank() == 0)) {
     size_t len = strlen(path);
     char *xmf = ms_calloc(len + 8, 1);
     memcpy(xmf, path, len);
@@ -57,12 +61,12 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
     ms_xdmf_attr attr[] = {{"velocity", "particles/v", 3, false},
                            {"mass", "particles/mass", 1, false},
                            {"fragment", "particles/fragment_id", 1, false}};
-    st = ms_xdmf_write_points(xmf, base, "particles/x", n, 3, info->time, 3, attr);
+    st = ms_xdmf_write_points(xmf, base, "particles/x", nglobal, 3, info->time, 3, attr);
     free(xmf);
   }
   free(xyz);
   free(vel);
   free(fid);
   free(id);
-  return st;
+  return dist ? par_agree_status(st) : st; /* the sidecar is rank 0's */
 }
