@@ -1395,10 +1395,10 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       continue;
     double t_abs = t_start + sim->t;
     /* fragments, ejected mass, drag kick over the interval since the last search */
-    cpl_particles view = particle_view(ps, skip);
-    if (dist) { /* owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks") */
+    if (dist) /* owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks") */
       cd_sim_refresh_ghosts(sim);
-      view = particle_view(ps, skip);
+    cpl_particles view = particle_view(ps, skip);
+    if (dist) {
       cd_sim_ghost_owners(sim, ghost_owner);
       st = cpl_fragments_find_dist(&fr, &view, ps->nlocal, ghost_owner, &fo, ctx);
       view.n = ps->nlocal; /* drag, snapshots: each rank its owned particles */
