@@ -8,18 +8,19 @@
 # - every particle of the last snapshot by gid: positions to 1e-12 cm, velocities to 1e-9 km/s,
 #   and the kinetic energy to 1e-9 relative; fragment ids (numbered by smallest gid) exact.
 #   The ranks sum pair forces in another order, so the particles differ from serial by round-off
-#   amplified over ~550 steps: measured ≤ 1e-15 cm here (docs/mpi.md); a lost ghost pair or a
+#   amplified over ~620 steps: measured 1.0e-15 cm here (docs/mpi.md); a lost ghost pair or a
 #   wrongly reduced piston force shows at ≥ 1e-6;
 # - ejected mass, free-surface velocities and the fragment table (mass, centre, velocity, R_g)
 #   to 1e-8 of their column scale, except the centre along the periodic axis and R_g of the
 #   bulk: it spans the whole periodic width, where the circular mean is round-off (docs/mpi.md
 #   "Fragments on MPI ranks");
-# - the transport arrivals to 1e-5 of their column scale: CVODE (rtol 1e-8) integrates drag in
+# - the transport arrivals to 1e-4 of their column scale: CVODE (rtol 1e-8) integrates drag in
 #   the grid's piecewise-constant cell values, which turns round-off in the start state (and in
-#   the gas, whose returned sources the ranks sum per cell) into ~1e-7: measured 3.7e-7 on 2
-#   ranks; without gas return the serial run's two mirror-image jets, the same state to 10
-#   digits, arrive 3e-7 apart. 1e-5 still fails on a missed or doubled drag kick (the drag slows
-#   these jets by ~2e-3 relative during the flight).
+#   the gas, whose returned sources the ranks sum per cell) into ~1e-6: measured 1.5e-6 on 2 and
+#   3 ranks; without gas return the serial run's two mirror-image jets, the same state to 10
+#   digits, arrive 3e-7 apart. 1e-4 is still 20x below what the transport's drag does to these
+#   jets (it slows them by ~2e-3 relative during the flight); the particle phase's drag kicks
+#   (~5e-4 of the jets' velocity) are checked at 1e-8 in the fragment table.
 # Then the refusals: checkpoints and --restart on several ranks exit 2 with a message.
 # usage: cpl_cli.sh MSCALE MPIEXEC DECK
 set -euo pipefail
@@ -65,7 +66,7 @@ bulk = fr["count"] == fr["count"].max()
 close("fragments.csv", lambda name, x: bulk if name in ("y", "z", "rg") else np.zeros(len(x), bool))
 for f in ("ejecta_mass.csv", "free_surface.csv"):
     close(f)
-close("arrivals.csv", tol=1e-5)
+close("arrivals.csv", tol=1e-4)
 last = sorted(glob.glob(os.path.join(a, "particles_*.h5")))[-1]
 with h5py.File(last) as r, h5py.File(os.path.join(b, os.path.basename(last))) as h:
     g, gr = h["particles/gid"][:], r["particles/gid"][:]
