@@ -493,6 +493,7 @@ static bool yaml_printable(unsigned long c) {
 
 static bool needs_quotes(const char *s) {
   if (!s[0]) return true;
+  if (!strncmp(s, "...", 3)) return true; /* the document end marker (found by fuzz_deck) */
   if (strchr("-?:,[]{}#&*!|>'\"%@` ", s[0])) {
     /* a leading '-' followed by a digit is a number */
     if (!(s[0] == '-' && s[1] >= '0' && s[1] <= '9')) return true;

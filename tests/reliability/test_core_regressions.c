@@ -52,7 +52,8 @@ static void test_resolved_deck_round_trip(void **state) {
                      "bom: \"\\uFEFF\"\n"
                      "tab: \"\\t\"\n"
                      "utf8: \"сталь µs\"\n"
-                     "nested: {\"k: v\": [\"\", \"#\", {\"\": \"\"}]}\n";
+                     "nested: {\"k: v\": [\"\", \"#\", {\"\": \"\"}]}\n"
+                     "\"... n\": \"...\"\n"; /* '...' at a line start ends the document */
   dk_errors e;
   dk_errors_init(&e);
   dk_doc *doc = dk_load_string(text, "t.yaml", &e);
