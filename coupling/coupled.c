@@ -568,6 +568,8 @@ static void gas_return_sum(gas_ctx *c) {
     if (c->st == MS_OK) {
       c->returned_p += src[2 * k] * c->area;
       c->returned_e += src[2 * k + 1] * c->area;
+      if (c->log) /* every rank logs the same sums: a restart replays them bit for bit */
+        cpl_gaslog_source(c->log, k, src[2 * k], src[2 * k + 1]);
     }
   }
   memset(src, 0, 2 * ncell * sizeof *src);
@@ -1119,19 +1121,12 @@ static void share_history(const ms_ctx *ctx, cont_history *h, double **buf) {
 
 /* What does not run on MPI ranks yet (docs/mpi.md "The coupled problem on MPI ranks"). */
 static ms_status refuse_on_ranks(const ms_ctx *ctx, const cpl_problem *p) {
-  const char *what = NULL;
-  if (p->drive_mode == DRIVE_TWO_WAY)
-    what = "drive.mode two_way";
-  else if (ctx->restart)
-    what = "--restart";
-  else if (p->checkpoint_every > 0 || p->checkpoint_time > 0)
-    what = "time.checkpoint_every / checkpoint_time";
-  if (!what)
+  if (p->drive_mode != DRIVE_TWO_WAY)
     return MS_OK;
   ms_log(ctx, MS_LOG_ERROR,
-         "coupled: %s runs on one rank only, not on %d MPI ranks (docs/mpi.md); run it "
-         "without mpirun",
-         what, ctx->size);
+         "coupled: drive.mode two_way runs on one rank only, not on %d MPI ranks (docs/mpi.md); "
+         "run it without mpirun",
+         ctx->size);
   return MS_ERR_INPUT;
 }
 
@@ -1339,9 +1334,10 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   cd_energy e0;
   if (ctx->restart) {
     st = cpl_checkpoint_restore(ctx, p->deck_hash, sim, &ls, glive, csv, 2);
-    if (st == MS_OK && sim->p->n != n) {
+    const size_t nckpt = dist ? (size_t)par_sum_long((long)sim->p->nlocal) : sim->p->n;
+    if (st == MS_OK && nckpt != n) {
       ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu",
-             sim->p->n, n);
+             nckpt, n);
       st = MS_ERR_INPUT;
     }
     ps = reg.ps = sim->p;
