@@ -1156,6 +1156,12 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   if (ctx->size > 1 && refuse_on_ranks(ctx, p) != MS_OK)
     return MS_ERR_INPUT;
+  /* checkpoints of the coupled run are written and read serially (not tested on MPI ranks) */
+  if (ctx->size > 1 && (ctx->restart || p->checkpoint_every > 0 || p->checkpoint_time > 0)) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: checkpoints and --restart need a serial run (not yet "
+           "on MPI ranks; docs/coupling.md)");
+    return MS_ERR_INPUT;
+  }
   if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
     return MS_ERR_INPUT;
