@@ -1156,12 +1156,6 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   if (ctx->size > 1 && refuse_on_ranks(ctx, p) != MS_OK)
     return MS_ERR_INPUT;
-  /* checkpoints of the coupled run are written and read serially (not tested on MPI ranks) */
-  if (ctx->size > 1 && (ctx->restart || p->checkpoint_every > 0 || p->checkpoint_time > 0)) {
-    ms_log(ctx, MS_LOG_ERROR, "coupled: checkpoints and --restart need a serial run (not yet "
-           "on MPI ranks; docs/coupling.md)");
-    return MS_ERR_INPUT;
-  }
   if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
     return MS_ERR_INPUT;
@@ -1417,7 +1411,6 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     /* ejecta: detached fragments ahead of the grid's free surface at this time */
     sel.plane = hf.x[0] + cpl_piston_displacement(&fsurf, t_abs);
     double row_ej[3] = {t_abs, cpl_ejected_mass(&fr, &sel), (double)fr.n};
-    last_search = step;
     if (f_ej)
       ms_csv_row(f_ej, 3, row_ej);
     if (p->drag_law != CPL_DRAG_NONE) {
@@ -1436,6 +1429,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
         break;
       }
     }
+    last_search = step; /* after the kick: its interval is the time since the previous search */
     /* free-surface check */
     double ug = cpl_piston_velocity(&fsurf, t_abs), up = cd_free_surface_velocity(sim, 0);
     double row_fs[3] = {t_abs, ug, up};
