@@ -194,6 +194,11 @@ bool dk_read_string(dk_errors *e, dk_doc *doc, const dk_node *map, const char *k
 /* One of `choices` (NULL-terminated); *out is its index. */
 bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, bool required,
                   int def, const char *const *choices, int *out);
+/* The checkpoint interval keys of a section: `checkpoint_every` (steps, 0 = none) or
+ * `checkpoint_time` (simulated time, 0 = none), not both. `where` prefixes the key names in the
+ * message ("" or "time."), `steps` names what a step is ("steps", "particle steps"). */
+void dk_read_checkpoint_interval(dk_errors *e, dk_doc *doc, const dk_node *map, const char *where,
+                                 const char *steps, long *every, double *time);
 /* A sequence of numbers (or a single number); *out is malloc'd, *n its length. */
 bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
                          ms_dim dim, bool required, double **out, size_t *n);

@@ -298,3 +298,13 @@ void dk_read_units(dk_doc *doc, dk_errors *e) {
   dk_read_enum(e, doc, doc->root, "units", false, 0, names, &u);
   doc->units = u == 1 ? MS_UNITS_SI : MS_UNITS_INTERNAL;
 }
+
+void dk_read_checkpoint_interval(dk_errors *e, dk_doc *doc, const dk_node *map, const char *where,
+                                 const char *steps, long *every, double *time) {
+  dk_read_int(e, doc, map, "checkpoint_every", false, 0, 0, 1L << 40, every);
+  dk_read_double(e, doc, map, "checkpoint_time", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, time);
+  if (*every > 0 && *time > 0)
+    dk_error(e, doc, dk_get(map, "checkpoint_time"),
+             "give %scheckpoint_every (%s) or %scheckpoint_time (simulated time), not both", where,
+             steps, where);
+}

@@ -203,12 +203,8 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   else if (dk_expect_map(e, doc, T, "time")) {
     dk_read_positive(e, doc, T, "end", MS_DIM_TIME, true, 0, &p->t_end);
     dk_read_int(e, doc, T, "outputs", false, 4, 1, 1000, &p->n_out);
-    dk_read_int(e, doc, T, "checkpoint_every", false, 0, 0, 1L << 40, &p->checkpoint_every);
-    dk_read_double(e, doc, T, "checkpoint_time", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
-                   &p->checkpoint_time);
-    if (p->checkpoint_every > 0 && p->checkpoint_time > 0)
-      dk_error(e, doc, dk_get(T, "checkpoint_time"), "give time.checkpoint_every (particle "
-               "steps) or time.checkpoint_time (simulated time), not both");
+    dk_read_checkpoint_interval(e, doc, T, "time.", "particle steps", &p->checkpoint_every,
+                                &p->checkpoint_time);
   }
   const dk_node *F = dk_get(sec, "fragments");
   p->bond = 1.2;

@@ -529,12 +529,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_read_int(e, doc, on, "snapshots", false, 0, 0, 100000, &snaps);
   }
   if (on && dk_node_kind(on) == DK_MAP) {
-    dk_read_int(e, doc, on, "checkpoint_every", false, 0, 0, 1L << 40, &p->checkpoint_every);
-    dk_read_double(e, doc, on, "checkpoint_time", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
-                   &p->checkpoint_time);
-    if (p->checkpoint_every > 0 && p->checkpoint_time > 0)
-      dk_error(e, doc, dk_get(on, "checkpoint_time"), "give checkpoint_every (steps) or "
-               "checkpoint_time (simulated time), not both");
+    dk_read_checkpoint_interval(e, doc, on, "", "steps", &p->checkpoint_every,
+                                &p->checkpoint_time);
   }
   p->out_every = (int)every;
   p->profile_axis = (int)axis;
