@@ -683,9 +683,13 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
       lo[a] = a < p->dim ? fmax(r->lo[a], p->box.lo[a]) : 0.0;
       hi[a] = a < p->dim ? fmin(r->hi[a], p->box.hi[a]) : 0.0;
     }
+    /* grains wrap along a periodic axis that the region spans */
+    bool per[3] = {false, false, false};
+    for (int a = 0; a < p->dim; a++)
+      per[a] = p->box.bc[a] == CD_BC_PERIODIC && r->lo[a] <= p->box.lo[a] && r->hi[a] >= p->box.hi[a];
     owner_filter f = {p, k};
-    size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, r->ngrains, r->grain_seed, r->dmin,
-                              owned_by, &f, &xyz, &grain, &por);
+    size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, per, r->ngrains, r->grain_seed,
+                              r->dmin, owned_by, &f, &xyz, &grain, &por);
     for (size_t i = 0; i < n; i++) site_add(&l, xyz + 3 * i, k, grain_material(r, grain[i]));
     ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
            "residual porosity %.2f %%", k + 1, r->ngrains, n, 100.0 * por);

@@ -7,6 +7,14 @@
  * dmin·r0 to a site of another grain are removed (the later grain in seed order loses it), which
  * leaves the grain boundaries slightly porous; the residual porosity is
  * 1 − N·V_site / V_box. Deterministic for a given seed.
+ *
+ * Periodic axes (`periodic`, may be NULL): the Voronoi distances and the overlap test use the
+ * minimum image, and a grain's lattice point is kept at its position wrapped into the box when
+ * it lies within half a period of the seed (its own minimum image: no point of a grain is taken
+ * twice). Without this the two faces of the box would meet with sites of different grains
+ * arbitrarily close across the periodic boundary. A grain reaching half a period from its seed
+ * meets its own image there: such a seam is a grain boundary too (pairs of one grain count as
+ * lattice pairs only when their unwrapped separation is their minimum-image one).
  */
 #include "ptl.h"
 
@@ -33,10 +41,20 @@ static void random_rotation(int dim, uint64_t seed, int g, double R[9]) {
   memcpy(R, M, sizeof M);
 }
 
+/* component a of x − y, to the nearest image along a periodic axis */
+static double image_delta(double d, double L, bool per) { return per ? d - L * nearbyint(d / L) : d; }
+
 size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], const double hi[3],
-                      int ngrains, uint64_t seed, double dmin, cd_site_filter keep, void *user,
-                      double **xyz_out, int32_t **grain_out, double *porosity) {
+                      const bool periodic[3], int ngrains, uint64_t seed, double dmin,
+                      cd_site_filter keep, void *user, double **xyz_out, int32_t **grain_out,
+                      double *porosity) {
   const int nd = dim == 2 ? 2 : 3;
+  bool per_ax[3] = {false, false, false};
+  double len[3];
+  for (int a = 0; a < 3; a++) {
+    per_ax[a] = periodic && a < nd && periodic[a];
+    len[a] = hi[a] - lo[a];
+  }
   double *seeds = ms_calloc((size_t)3 * ngrains, sizeof *seeds);
   double vbox = 1.0;
   for (int a = 0; a < nd; a++) vbox *= hi[a] - lo[a];
@@ -52,7 +70,7 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
                          sqrt(2.0) * r0};
   const int nb = dim == 2 ? 2 : 4;
   size_t n = 0, cap = 1024;
-  double *xyz = ms_calloc(3 * cap, sizeof *xyz);
+  double *xyz = ms_calloc(3 * cap, sizeof *xyz), *unwrapped = ms_calloc(3 * cap, sizeof *unwrapped);
   int32_t *grain = ms_calloc(cap, sizeof *grain);
   for (int g = 0; g < ngrains; g++) {
     double R[9];
@@ -68,34 +86,60 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
             double x[3];
             for (int a = 0; a < 3; a++) x[a] = seeds[3 * g + a] + R[3 * a] * l[0] + R[3 * a + 1] * l[1] + R[3 * a + 2] * l[2];
             if (dim == 2) x[2] = 0.0;
+            double xu[3] = {x[0], x[1], x[2]};
             bool in = true;
-            for (int a = 0; a < nd; a++)
+            for (int a = 0; a < nd; a++) {
+              if (per_ax[a]) {
+                if (fabs(x[a] - seeds[3 * g + a]) >= 0.5 * len[a]) in = false; /* another image */
+                x[a] -= len[a] * floor((x[a] - lo[a]) / len[a]);
+                if (x[a] >= hi[a]) x[a] = lo[a]; /* rounding of the wrap */
+              }
               if (x[a] < lo[a] || x[a] >= hi[a]) in = false;
+            }
             if (!in) continue;
             /* Voronoi: g must be the nearest seed */
             double d2g = 0;
-            for (int a = 0; a < nd; a++) d2g += (x[a] - seeds[3 * g + a]) * (x[a] - seeds[3 * g + a]);
+            for (int a = 0; a < nd; a++) {
+              const double d = image_delta(x[a] - seeds[3 * g + a], len[a], per_ax[a]);
+              d2g += d * d;
+            }
             bool mine = true;
             for (int h = 0; h < ngrains && mine; h++) {
               if (h == g) continue;
               double d2 = 0;
-              for (int a = 0; a < nd; a++) d2 += (x[a] - seeds[3 * h + a]) * (x[a] - seeds[3 * h + a]);
+              for (int a = 0; a < nd; a++) {
+                const double d = image_delta(x[a] - seeds[3 * h + a], len[a], per_ax[a]);
+                d2 += d * d;
+              }
               if (d2 < d2g || (d2 == d2g && h < g)) mine = false;
             }
             if (!mine || (keep && !keep(user, x))) continue;
             if (n == cap) {
               cap *= 2;
               xyz = ms_realloc(xyz, 3 * cap, sizeof *xyz);
+              unwrapped = ms_realloc(unwrapped, 3 * cap, sizeof *unwrapped);
               grain = ms_realloc(grain, cap, sizeof *grain);
             }
             memcpy(xyz + 3 * n, x, sizeof x);
+            memcpy(unwrapped + 3 * n, xu, sizeof xu);
             grain[n++] = g;
           }
   }
-  /* overlap removal across grain boundaries: cell grid of width dmin·r0 */
+  /* overlap removal across grain boundaries: cell grid of width >= dmin·r0 (a periodic axis
+   * holds a whole number of cells, so the grid wraps) */
   const double w = dmin * r0;
   long nc[3] = {1, 1, 1};
-  for (int a = 0; a < nd; a++) nc[a] = (long)floor((hi[a] - lo[a]) / w) + 1;
+  double cw[3] = {w, w, w};
+  for (int a = 0; a < nd; a++) {
+    nc[a] = per_ax[a] ? (long)fmax(1.0, floor(len[a] / w)) : (long)floor(len[a] / w) + 1;
+    if (per_ax[a]) cw[a] = len[a] / (double)nc[a];
+  }
+  /* neighbour cells −1..1, fewer where a wrapped axis has under 3 cells (no cell twice) */
+  long dlo[3] = {0, 0, 0}, dhi[3] = {0, 0, 0};
+  for (int a = 0; a < nd; a++) {
+    dlo[a] = per_ax[a] && nc[a] < 3 ? 0 : -1;
+    dhi[a] = per_ax[a] && nc[a] < 3 ? nc[a] - 1 : 1;
+  }
   size_t ncell = (size_t)(nc[0] * nc[1] * nc[2]);
   int32_t *head = ms_calloc(ncell, sizeof *head), *next = ms_calloc(n + 1, sizeof *next);
   for (size_t c = 0; c < ncell; c++) head[c] = -1;
@@ -103,16 +147,25 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
   size_t kept = 0;
   for (size_t i = 0; i < n; i++) { /* sites in generation (grain) order: earlier grains win */
     long k[3] = {0, 0, 0};
-    for (int a = 0; a < nd; a++) k[a] = (long)((xyz[3 * i + a] - lo[a]) / w);
-    for (long dz = (nd == 3 ? -1 : 0); dz <= (nd == 3 ? 1 : 0) && !dead[i]; dz++)
-      for (long dy = -1; dy <= 1 && !dead[i]; dy++)
-        for (long dx = -1; dx <= 1 && !dead[i]; dx++) {
-          long c0 = k[0] + dx, c1 = k[1] + dy, c2 = k[2] + dz;
-          if (c0 < 0 || c1 < 0 || c2 < 0 || c0 >= nc[0] || c1 >= nc[1] || c2 >= nc[2]) continue;
-          for (int32_t j = head[(c2 * nc[1] + c1) * nc[0] + c0]; j >= 0; j = next[j]) {
-            if (grain[j] == grain[i]) continue;
-            double d2 = 0;
-            for (int a = 0; a < nd; a++) d2 += (xyz[3 * i + a] - xyz[3 * j + a]) * (xyz[3 * i + a] - xyz[3 * j + a]);
+    for (int a = 0; a < nd; a++) k[a] = (long)fmin((xyz[3 * i + a] - lo[a]) / cw[a], nc[a] - 1);
+    for (long dz = dlo[2]; dz <= dhi[2] && !dead[i]; dz++)
+      for (long dy = dlo[1]; dy <= dhi[1] && !dead[i]; dy++)
+        for (long dx = dlo[0]; dx <= dhi[0] && !dead[i]; dx++) {
+          long c[3] = {k[0] + dx, k[1] + dy, k[2] + dz};
+          bool outside = false;
+          for (int a = 0; a < 3; a++) {
+            if (per_ax[a]) c[a] = (c[a] + nc[a]) % nc[a];
+            outside |= c[a] < 0 || c[a] >= nc[a];
+          }
+          if (outside) continue;
+          for (int32_t j = head[(c[2] * nc[1] + c[1]) * nc[0] + c[0]]; j >= 0; j = next[j]) {
+            double d2 = 0, seam = 0;
+            for (int a = 0; a < nd; a++) {
+              const double d = image_delta(xyz[3 * i + a] - xyz[3 * j + a], len[a], per_ax[a]);
+              d2 += d * d;
+              seam += fabs(d - (unwrapped[3 * i + a] - unwrapped[3 * j + a]));
+            }
+            if (grain[j] == grain[i] && seam < 1e-6 * r0) continue; /* a lattice pair */
             if (d2 < w * w) {
               dead[i] = true;
               break;
@@ -136,6 +189,7 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
   *xyz_out = xyz;
   *grain_out = grain;
   free(seeds);
+  free(unwrapped);
   free(head);
   free(next);
   free(dead);

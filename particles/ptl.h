@@ -79,12 +79,15 @@ size_t cd_lattice_tri(ptl_state *s, int nx, int ny, const double shift[2], const
 
 /* Voronoi polycrystal in the box [lo, hi) (lattice_poly.c): `ngrains` grains with uniformly
  * random lattice orientations; sites closer than dmin·r0 across a grain boundary are removed.
- * `keep` (optional) filters sites. Returns the number of sites; *xyz ([n][3]) and *grain ([n])
- * are malloc'd; *porosity = 1 − n·V_site/V_box. */
+ * `periodic` (NULL: none) marks axes along which the grains and the overlap test wrap
+ * (minimum image), for a polycrystal filling a periodic box. `keep` (optional) filters sites.
+ * Returns the number of sites; *xyz ([n][3]) and *grain ([n]) are malloc'd;
+ * *porosity = 1 − n·V_site/V_box. */
 typedef bool (*cd_site_filter)(void *user, const double x[3]);
 size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], const double hi[3],
-                      int ngrains, uint64_t seed, double dmin, cd_site_filter keep, void *user,
-                      double **xyz, int32_t **grain, double *porosity);
+                      const bool periodic[3], int ngrains, uint64_t seed, double dmin,
+                      cd_site_filter keep, void *user, double **xyz, int32_t **grain,
+                      double *porosity);
 
 /* ---- pair potentials (DESIGN.md §5.1) ---- */
 /* fcc:  E(r) = (√2 ρ0 r0³/12) ε_x((r0/r)³),  f(r) = −dE/dr = (√2/4) r² P_x((r0/r)³);

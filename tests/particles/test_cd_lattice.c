@@ -138,15 +138,18 @@ static void test_von_mises(void **state) {
 }
 
 /* Voronoi polycrystal: every grain present, no two sites of different grains closer than
- * dmin·r0 (brute force), inside the box, a residual porosity that is small but not zero
- * (grain-boundary overlap removal), deterministic for a seed. */
-static void check_poly(int dim) {
+ * dmin·r0 (brute force; across the boundary too when the box is periodic: minimum image),
+ * inside the box, a residual porosity that is small but not zero (grain-boundary overlap
+ * removal), deterministic for a seed. */
+static void check_poly(int dim, bool periodic) {
   const double L = 16 * sqrt(2.0) * R0, lo[3] = {0, 0, 0}, hi[3] = {L, L, dim == 2 ? 0 : L};
+  const bool per[3] = {periodic, periodic, periodic && dim == 3};
   double *x = NULL, *x2 = NULL, por = 0, por2 = 0;
   int32_t *g = NULL, *g2 = NULL;
-  size_t n = cd_polycrystal(dim, R0, R0, lo, hi, 6, 42, 0.8, NULL, NULL, &x, &g, &por);
-  size_t n2 = cd_polycrystal(dim, R0, R0, lo, hi, 6, 42, 0.8, NULL, NULL, &x2, &g2, &por2);
-  printf("polycrystal %dD: %zu sites, porosity %.2f %%\n", dim, n, 100 * por);
+  size_t n = cd_polycrystal(dim, R0, R0, lo, hi, per, 6, 42, 0.8, NULL, NULL, &x, &g, &por);
+  size_t n2 = cd_polycrystal(dim, R0, R0, lo, hi, per, 6, 42, 0.8, NULL, NULL, &x2, &g2, &por2);
+  printf("polycrystal %dD%s: %zu sites, porosity %.2f %%\n", dim, periodic ? " periodic" : "", n,
+         100 * por);
   assert_int_equal(n, n2);
   assert_memory_equal(x, x2, 3 * n * sizeof *x);
   assert_true(por > 0.0 && por < 0.15);
@@ -157,8 +160,13 @@ static void check_poly(int dim) {
     for (int a = 0; a < dim; a++) assert_true(x[3 * i + a] >= lo[a] && x[3 * i + a] < hi[a]);
     for (size_t j = i + 1; j < n; j++) {
       double d2 = 0;
-      for (int a = 0; a < 3; a++) d2 += (x[3 * i + a] - x[3 * j + a]) * (x[3 * i + a] - x[3 * j + a]);
-      if (g[i] != g[j]) worst = fmin(worst, sqrt(d2));
+      for (int a = 0; a < 3; a++) {
+        double d = x[3 * i + a] - x[3 * j + a];
+        if (per[a]) d -= L * nearbyint(d / L);
+        d2 += d * d;
+      }
+      /* periodic: a grain may meet its own image (a seam), so every pair counts */
+      if (g[i] != g[j] || periodic) worst = fmin(worst, sqrt(d2));
       else assert_true(d2 > 0.99 * R0 * R0); /* inside a grain: the perfect lattice */
     }
   }
@@ -169,8 +177,10 @@ static void check_poly(int dim) {
 
 static void test_polycrystal(void **state) {
   (void)state;
-  check_poly(3);
-  check_poly(2);
+  check_poly(3, false);
+  check_poly(2, false);
+  check_poly(3, true);
+  check_poly(2, true);
 }
 
 int main(void) {
