@@ -73,6 +73,9 @@ struct cd_problem {
   long checkpoint_every;  /* steps between checkpoints (0: none) */
   double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
   uint64_t deck_hash;     /* resolved deck (t_end left out) and piston history */
+  bool relax_on;          /* `relax:` given: cd_sim_relax before the piston starts */
+  cd_relax_config relax;  /* times in 10 us; Γ, tau, modulus set at run time from c0 */
+  double relax_j, relax_tau; /* damping J (0: none); box tau in r0/c0 */
 };
 
 static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc,
@@ -537,6 +540,22 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   p->profile_bins = (int)bins;
   p->snapshots = (int)snaps;
 
+  const dk_node *xn = dk_get(sec, "relax");
+  if (xn && dk_expect_map(e, doc, xn, "relax")) {
+    long every = 10;
+    p->relax_on = true;
+    dk_read_double(e, doc, xn, "time", MS_DIM_TIME, true, 0, 0, INFINITY, &p->relax.time);
+    dk_read_double(e, doc, xn, "damping", MS_DIM_NONE, false, 5.0, 0.0, 1e6, &p->relax_j);
+    dk_read_bool(e, doc, xn, "quench", false, true, &p->relax.quench);
+    dk_read_bool(e, doc, xn, "box", false, true, &p->relax.box);
+    dk_read_int(e, doc, xn, "box_every", false, 10, 1, 1L << 30, &every);
+    dk_read_double(e, doc, xn, "tau", MS_DIM_NONE, false, 10.0, 1e-3, 1e9, &p->relax_tau);
+    dk_read_double(e, doc, xn, "max_strain", MS_DIM_NONE, false, 1e-3, 1e-9, 0.1, &p->relax.max_strain);
+    dk_read_bool(e, doc, xn, "plain", false, true, &p->relax.plain);
+    p->relax.box_every = (int)every;
+    p->relax.rebond = true;
+  }
+
   p->mpi = (cd_mpi_config){.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
                            .rebalance_interval = 10, .replicated = true};
   const dk_node *mn = dk_get(sec, "mpi");
@@ -787,6 +806,51 @@ static ms_status restore_outputs(const ms_ctx *ctx, ms_h5r *h, ms_afile *const s
   return st;
 }
 
+/* Thermal velocities: amplitude·(2u − 1) per component, u the splitmix64 output of the
+ * particle's gid (the same on any rank count), mean removed over the integrated particles
+ * (`dist`: over every rank's share). */
+static void add_thermal(const cd_problem *p, ptl_state *ps, bool dist) {
+  double mean[4] = {0, 0, 0, 0}, *v[3] = {ps->vx, ps->vy, ps->vz}; /* Σ dv per axis, count */
+  for (size_t i = 0; i < ps->nlocal; i++) {
+    if (ps->flags[i] & PTL_DRIVEN) continue;
+    for (int c = 0; c < p->dim; c++) {
+      double dv = p->thermal_amp * (2.0 * ptl_splitmix64_uniform(p->thermal_seed, 3 * (uint64_t)ps->gid[i] + c) - 1.0);
+      v[c][i] += dv;
+      mean[c] += dv;
+    }
+    mean[3] += 1.0;
+  }
+  if (dist) par_sum_doubles(mean, 4);
+  for (size_t i = 0; i < ps->nlocal; i++)
+    if (!(ps->flags[i] & PTL_DRIVEN))
+      for (int c = 0; c < p->dim; c++) v[c][i] -= mean[c] / (mean[3] > 0 ? mean[3] : 1.0);
+}
+
+/* The relaxation stage (`relax:`): damped dynamics with the box rescaled toward zero mean
+ * normal stress, then at rest with the bonds of the relaxed packing; logged. */
+static ms_status relax_sample(ms_ctx *ctx, const cd_problem *p, cd_sim *s, double c0max,
+                              size_t nglobal) {
+  cd_relax_config rc = p->relax;
+  double rho0 = 0.0; /* stiffness scale of the box rescale: largest ρ0 times largest c0² */
+  for (int k = 0; k < p->nmat; k++) rho0 = fmax(rho0, eos_rho0(p->mat[k]->eos));
+  rc.damping_gamma = p->relax_j > 0 ? c0max / (p->relax_j * p->r0) : 0.0;
+  rc.tau = p->relax_tau * p->r0 / c0max;
+  rc.modulus = rho0 * c0max * c0max;
+  cd_relax_result r;
+  ms_status st = cd_sim_relax(s, &rc, &r);
+  if (st != MS_OK) return st;
+  const double vsolid = (double)nglobal * cd_cluster_volume(p->lattice, p->r0, p->thickness);
+  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: relaxation: %ld steps; mean stress xx yy zz %.4g "
+         "%.4g %.4g -> %.4g %.4g %.4g GPa; box stretch %.5f %.5f %.5f; density %.5g -> %.5g g/cm3, "
+         "porosity (1 - N V_site/V) %.3f -> %.3f %%; energy released %.4g kJ/g (damping and quench "
+         "%.4g); %ld bonds broken", r.steps, r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0],
+         r.stress[1], r.stress[2], r.lambda[0], r.lambda[1], r.lambda[2], r.mass / r.volume0,
+         r.mass / r.volume, 100.0 * (1.0 - vsolid / r.volume0), 100.0 * (1.0 - vsolid / r.volume),
+         r.energy / r.mass, r.dissipated / r.mass, r.broken_bonds);
+  if (p->thermal_amp > 0) add_thermal(p, s->p, s->dd != NULL);
+  return MS_OK;
+}
+
 ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   cd_restart *rs = NULL;
   ms_h5r *rh = NULL;
@@ -817,23 +881,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     ptl_state_free(ps);
     return MS_ERR_INPUT;
   }
-  /* thermal velocities (splitmix64, mean removed over integrated particles) */
-  if (p->thermal_amp > 0 && !rs) {
-    double mean[3] = {0, 0, 0}, *v[3] = {ps->vx, ps->vy, ps->vz};
-    size_t nm = 0;
-    for (size_t i = 0; i < ps->n; i++) {
-      if (ps->flags[i] & PTL_DRIVEN) continue;
-      for (int c = 0; c < p->dim; c++) {
-        double dv = p->thermal_amp * (2.0 * ptl_splitmix64_uniform(p->thermal_seed, 3 * i + c) - 1.0);
-        v[c][i] += dv;
-        mean[c] += dv;
-      }
-      nm++;
-    }
-    for (size_t i = 0; i < ps->n; i++)
-      if (!(ps->flags[i] & PTL_DRIVEN))
-        for (int c = 0; c < p->dim; c++) v[c][i] -= mean[c] / (double)(nm ? nm : 1);
-  }
+  /* thermal velocities; with a relaxation they are given after it (it ends at rest) */
+  if (p->thermal_amp > 0 && !rs && !p->relax_on) add_thermal(p, ps, false);
   /* free-surface layer: particles within r0 of the farthest one along the piston direction */
   double dir[3] = {p->piston_dir[0], p->piston_dir[1], p->piston_dir[2]};
   int axis = p->profile_axis;
@@ -890,6 +939,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     dk_errors_free(&e);
   } else {
     st = cd_sim_init(s);
+    if (st == MS_OK && p->relax_on) st = relax_sample(ctx, p, s, c0max, nglobal);
   }
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
@@ -948,9 +998,9 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     double L = hi - lo;
     hi += 0.5 * L;
   }
-  double area = 1.0;
+  double area = 1.0; /* of the box at the start (a relaxation may have rescaled it) */
   for (int a = 0; a < p->dim; a++)
-    if (a != axis) area *= p->box.hi[a] - p->box.lo[a];
+    if (a != axis) area *= s->box.hi[a] - s->box.lo[a];
   if (p->dim == 2) area *= p->thickness;
   double *prof = ms_calloc((size_t)p->profile_bins * CD_PROFILE_NCOL, sizeof *prof);
   const long snap_every = p->snapshots > 0 ? (nsteps + p->snapshots - 1) / p->snapshots : 0;

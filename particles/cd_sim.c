@@ -219,6 +219,48 @@ static void step_forces(cd_sim *s) {
   s->wall_time_force += ms_wall_time() - t0;
 }
 
+/* Pairs inside R_c at the start, for the broken-pair energy of the plain cutoff. */
+static void count_inside0(cd_sim *s) {
+  cd_compute_forces(s, s->sums, NULL, false);
+  memset(s->n_inside0, 0, sizeof s->n_inside0);
+  for (int l = 0; l < s->nl->nlayer; l++)
+    for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
+      s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
+  if (s->dd) par_sum_int64s(&s->n_inside0[0][0], CD_MAX_MATERIALS * CD_MAX_MATERIALS);
+  s->have_inside0 = true;
+}
+
+/* Bonded mode: the partners are every pair closer than its R_c now (from the current lists,
+ * which must be built). */
+static ms_status form_partners(cd_sim *s) {
+  const ptl_state *p = s->p;
+  for (size_t k = 0; k < p->cap * CD_MAX_PARTNERS; k++) s->partners[k] = -1;
+  const cd_neigh *nl = s->nl;
+  for (int l = 0; l < nl->nlayer; l++)
+    for (int32_t pos = nl->layer_start[l]; pos < nl->layer_start[l + 1]; pos++) {
+      int32_t i = nl->sorted[pos];
+      const int32_t *lst = nl->buf[l] + nl->first[pos];
+      int np = nl->nplain[pos], ni = nl->nimg[pos];
+      for (int k = 0; k < np + ni; k++) {
+        const int32_t *en = k < np ? lst + k : lst + np + 2 * (k - np);
+        int32_t j = *en & CD_NB_INDEX;
+        const double *sh = nl->shift[k < np ? 13 : en[1]];
+        double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1],
+               dz = p->z[i] - p->z[j] - sh[2];
+        if (dx * dx + dy * dy + dz * dz >= s->pair[p->mat[i]][p->mat[j]]->rc2) continue;
+        int32_t *pi = s->partners + (size_t)i * CD_MAX_PARTNERS;
+        int32_t *pj = s->partners + (size_t)j * CD_MAX_PARTNERS;
+        int ki = 0, kj = 0;
+        while (ki < CD_MAX_PARTNERS && pi[ki] >= 0) ki++;
+        while (kj < CD_MAX_PARTNERS && pj[kj] >= 0) kj++;
+        if (ki == CD_MAX_PARTNERS || kj == CD_MAX_PARTNERS) return MS_ERR_INPUT;
+        pi[ki] = j;
+        pj[kj] = i;
+      }
+    }
+  return rebuild(s); /* the lists take the bonded flags */
+}
+
 ms_status cd_sim_init(cd_sim *s) {
   ptl_state *p = s->p;
   s->rc_max = 0.0;
@@ -237,33 +279,8 @@ ms_status cd_sim_init(cd_sim *s) {
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;
   if (s->cfg.cutoff == CD_CUTOFF_BONDED && !s->partners) { /* a restart brings its own */
-    /* partners: every pair closer than its R_c now */
     s->partners = ms_aligned_alloc(p->cap * CD_MAX_PARTNERS, sizeof(int32_t));
-    for (size_t k = 0; k < p->cap * CD_MAX_PARTNERS; k++) s->partners[k] = -1;
-    const cd_neigh *nl = s->nl;
-    for (int l = 0; l < nl->nlayer; l++)
-      for (int32_t pos = nl->layer_start[l]; pos < nl->layer_start[l + 1]; pos++) {
-        int32_t i = nl->sorted[pos];
-        const int32_t *lst = nl->buf[l] + nl->first[pos];
-        int np = nl->nplain[pos], ni = nl->nimg[pos];
-        for (int k = 0; k < np + ni; k++) {
-          const int32_t *en = k < np ? lst + k : lst + np + 2 * (k - np);
-          int32_t j = *en & CD_NB_INDEX;
-          const double *sh = nl->shift[k < np ? 13 : en[1]];
-          double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1],
-                 dz = p->z[i] - p->z[j] - sh[2];
-          if (dx * dx + dy * dy + dz * dz >= s->pair[p->mat[i]][p->mat[j]]->rc2) continue;
-          int32_t *pi = s->partners + (size_t)i * CD_MAX_PARTNERS;
-          int32_t *pj = s->partners + (size_t)j * CD_MAX_PARTNERS;
-          int ki = 0, kj = 0;
-          while (ki < CD_MAX_PARTNERS && pi[ki] >= 0) ki++;
-          while (kj < CD_MAX_PARTNERS && pj[kj] >= 0) kj++;
-          if (ki == CD_MAX_PARTNERS || kj == CD_MAX_PARTNERS) return MS_ERR_INPUT;
-          pi[ki] = j;
-          pj[kj] = i;
-        }
-      }
-    st = rebuild(s);
+    st = form_partners(s);
     if (st != MS_OK) return st;
   }
   if (s->cfg.damping_gamma > 0.0) s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
@@ -290,16 +307,7 @@ ms_status cd_sim_init(cd_sim *s) {
       s->rkn_reach[1] = fmax(s->rkn_reach[1], c1);
     }
   }
-  /* pairs inside R_c at the start, for the broken-pair energy of the plain cutoff */
-  if (!s->have_inside0) {
-    cd_compute_forces(s, s->sums, NULL, false);
-    memset(s->n_inside0, 0, sizeof s->n_inside0);
-    for (int l = 0; l < s->nl->nlayer; l++)
-      for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++)
-        s->n_inside0[k / CD_MAX_MATERIALS][k % CD_MAX_MATERIALS] += s->sums[l].inside[k];
-    if (s->dd) par_sum_int64s(&s->n_inside0[0][0], CD_MAX_MATERIALS * CD_MAX_MATERIALS);
-    s->have_inside0 = true;
-  }
+  if (!s->have_inside0) count_inside0(s);
   step_forces(s);
   return MS_OK;
 }
@@ -695,4 +703,132 @@ bool cd_sim_owns_position(const cd_sim *s, const double x[3]) {
 
 void cd_sim_refresh_ghosts(cd_sim *s) {
   if (s->dd) cd_dd_refresh(s, true);
+}
+
+/* ---- relaxation before the run (docs/particles-cd.md "Relaxation") ---- */
+
+/* Sample lengths for the mean stress and density: the period along a periodic axis, else the
+ * particles' extent plus one site spacing (the surface layers count half a spacing each);
+ * 2D: the plane-strain thickness along z. Collective. */
+static void sample_lengths(cd_sim *s, double len[3]) {
+  const ptl_state *p = s->p;
+  const double vsite = cd_cluster_volume(s->cfg.lattice, s->cfg.r0, s->cfg.thickness);
+  const double spacing = p->dim == 2 ? sqrt(vsite / s->cfg.thickness) : cbrt(vsite);
+  const double *xs[3] = {p->x, p->y, p->z};
+  for (int a = 0; a < 3; a++) {
+    if (p->dim == 2 && a == 2) {
+      len[a] = s->cfg.thickness;
+      continue;
+    }
+    if (s->box.bc[a] == CD_BC_PERIODIC) {
+      len[a] = s->box.hi[a] - s->box.lo[a];
+      continue;
+    }
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < p->nlocal; i++) {
+      if (p->flags[i] & PTL_REMOVED) continue;
+      lo = fmin(lo, xs[a][i]);
+      hi = fmax(hi, xs[a][i]);
+    }
+    if (s->dd) {
+      lo = par_min_double(lo);
+      hi = par_max_double(hi);
+    }
+    len[a] = hi - lo + spacing;
+  }
+}
+
+/* Mean stress over the sample volume (returned) and the volume. Collective. */
+static double sample_stress(cd_sim *s, double stress[6]) {
+  double len[3];
+  sample_lengths(s, len);
+  const double vol = len[0] * len[1] * len[2];
+  cd_sim_virial(s, vol, stress);
+  return vol;
+}
+
+ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *out) {
+  ptl_state *p = s->p;
+  memset(out, 0, sizeof *out);
+  if (!(rc->time >= 0.0) || (rc->box && !(rc->modulus > 0.0 && rc->tau > 0.0))) return MS_ERR_INPUT;
+  cd_energy e0;
+  cd_sim_energy(s, &e0);
+  out->volume0 = sample_stress(s, out->stress0);
+  double mass = 0.0;
+  for (size_t i = 0; i < p->nlocal; i++)
+    if (!(p->flags[i] & PTL_REMOVED)) mass += p->mass[i];
+  out->mass = s->dd ? par_sum_double(mass) : mass;
+  /* the piston stands still (an empty history is u = 0); the relaxation's damping */
+  const size_t piston_n = s->piston.n;
+  const double gamma_run = s->cfg.damping_gamma;
+  s->piston.n = 0;
+  s->cfg.damping_gamma = rc->damping_gamma;
+  if (rc->damping_gamma > 0.0 && !s->scratch) s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
+  const double diss0 = s->dissipated;
+  const long broken0 = s->n_broken_bonds;
+  /* plain: every pair inside R_c interacts (grain boundaries attract and close); the partner
+   * lists are set aside and the lists rebuilt without bond flags */
+  int32_t *const partners = s->partners;
+  const cd_cutoff_mode mode = s->cfg.cutoff;
+  ms_status st = MS_OK;
+  if (rc->plain && mode == CD_CUTOFF_BONDED) {
+    s->partners = NULL;
+    s->cfg.cutoff = CD_CUTOFF_PLAIN;
+    st = rebuild_lists(s, false);
+    if (st == MS_OK) step_forces(s);
+  }
+  const long nsteps = (long)ceil(rc->time / s->cfg.dt - 1e-9), every = rc->box_every > 0 ? rc->box_every : 10;
+  const double max_strain = rc->max_strain > 0.0 ? rc->max_strain : 1e-3;
+  for (int a = 0; a < 3; a++) out->lambda[a] = 1.0;
+  double quenched = 0.0;
+  for (long k = 1; k <= nsteps && st == MS_OK; k++) {
+    st = cd_sim_step(s);
+    if (st != MS_OK) break;
+    if (rc->quench) { /* stop every particle moving against its force (its kinetic energy goes) */
+      const long n = (long)p->nlocal;
+#pragma omp parallel for schedule(static) reduction(+ : quenched) if (CD_PAR(n))
+      for (long i = 0; i < n; i++) {
+        if (p->vx[i] * p->fx[i] + p->vy[i] * p->fy[i] + p->vz[i] * p->fz[i] >= 0.0) continue;
+        quenched += 0.5 * p->mass[i] * (p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
+        p->vx[i] = p->vy[i] = p->vz[i] = 0.0;
+      }
+    }
+    if (rc->box && k % every == 0) {
+      /* Berendsen-like: strain each axis by (k Δt/τ)·P_aa/M toward P_aa = 0 (compression
+       * positive: a compressed sample expands), at most max_strain per rescale */
+      double sig[6], lam[3] = {1.0, 1.0, 1.0};
+      sample_stress(s, sig);
+      for (int a = 0; a < p->dim; a++) {
+        if (s->box.bc[a] == CD_BC_WALL) continue;
+        const double e = (double)every * s->cfg.dt / rc->tau * sig[a] / rc->modulus;
+        lam[a] = 1.0 + fmax(-max_strain, fmin(max_strain, e));
+        out->lambda[a] *= lam[a];
+      }
+      st = cd_sim_affine(s, lam);
+    }
+  }
+  out->steps = s->step;
+  out->quenched = s->dd ? par_sum_double(quenched) : quenched;
+  out->dissipated = (s->dd ? par_sum_double(s->dissipated - diss0) : s->dissipated - diss0) + out->quenched;
+  out->broken_bonds = s->dd ? par_sum_long(s->n_broken_bonds - broken0) : s->n_broken_bonds - broken0;
+  s->piston.n = piston_n;
+  s->cfg.damping_gamma = gamma_run;
+  s->partners = partners;
+  s->cfg.cutoff = mode;
+  if (st != MS_OK) return st;
+  /* at rest, the clock and the balance start here; bonded: the partners of the relaxed packing */
+  for (size_t i = 0; i < p->n; i++) p->vx[i] = p->vy[i] = p->vz[i] = 0.0;
+  if ((rc->rebond || rc->plain) && mode == CD_CUTOFF_BONDED) st = form_partners(s);
+  if (st != MS_OK) return st;
+  s->t = 0.0;
+  s->step = 0;
+  s->dissipated = s->piston_work = s->broken_bonded = 0.0;
+  s->n_broken_bonds = 0;
+  count_inside0(s);
+  step_forces(s);
+  cd_energy e1;
+  cd_sim_energy(s, &e1);
+  out->energy = e0.kinetic + e0.potential - e1.potential;
+  out->volume = sample_stress(s, out->stress);
+  return MS_OK;
 }

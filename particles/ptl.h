@@ -304,6 +304,41 @@ void cd_sim_free(cd_sim *s);
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
+/* Relaxation before the run (docs/particles-cd.md "Relaxation"), after cd_sim_init: `time` of
+ * damped dynamics with the piston at rest (relative-velocity damping with Γ = damping_gamma,
+ * and/or a quench that stops each particle moving against its force), and with `box` every
+ * box_every steps (0: 10) an affine strain of each non-wall axis by
+ * λ_a − 1 = (box_every Δt/τ)·P_aa/modulus, at most max_strain (0: 1e-3) per rescale, toward
+ * zero mean normal stress P_aa over the sample (Berendsen-like; a periodic axis's period
+ * changes with it). Then every velocity is zeroed, in bonded mode with `rebond` (or `plain`)
+ * the partners are formed anew from the relaxed packing, and time, step and the balance accumulators
+ * restart from zero. Deterministic; collective under MPI. MS_ERR_INPUT: time < 0, or `box`
+ * without modulus, tau > 0. */
+typedef struct cd_relax_config {
+  double time;          /* duration of the damped dynamics */
+  double damping_gamma; /* Γ of eq. 6 during it, 1/time (0: none) */
+  bool quench;          /* zero v_i whenever v_i·f_i < 0 */
+  bool box;             /* rescale the box toward zero mean normal stress */
+  int box_every;
+  double tau, modulus;  /* box relaxation time; stiffness (GPa), e.g. ρ0 c0² */
+  double max_strain;
+  bool rebond;
+  bool plain;           /* bonded runs: relax with the plain cutoff (every pair inside R_c
+                         * attracts, so grain-boundary gaps close), then form the bonds anew */
+} cd_relax_config;
+typedef struct cd_relax_result {
+  long steps;
+  double stress0[6], stress[6]; /* mean stress of the sample before / after (xx yy zz xy yz zx) */
+  double volume0, volume;       /* sample volume before / after: periods of periodic axes,
+                                 * extent + one site spacing along the others */
+  double mass;                  /* of the sample (ρ = mass/volume) */
+  double lambda[3];             /* total stretch of each axis */
+  double energy;                /* kinetic + potential before − potential after */
+  double dissipated;            /* of which the damping and the quench removed */
+  double quenched;
+  long broken_bonds;            /* bonds broken during the relaxation */
+} cd_relax_result;
+ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *cfg, cd_relax_result *out);
 /* Before cd_sim_init: distribute over the MPI ranks (no effect on one rank). Each rank passes
  * to cd_sim_create either the whole particle set (cfg->replicated: generated or read
  * identically on every rank) or its own share (disjoint shares whose union is the system, any

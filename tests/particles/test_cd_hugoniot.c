@@ -40,7 +40,17 @@ static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (expl
 
 typedef struct shock_result {
   double D, D_ahead, D_mom, rho_ratio, pzz, pxx, sigma_u, up_behind;
+  double rho00; /* initial density the momentum and mass estimates use */
 } shock_result;
+
+/* A relaxed polycrystalline sample (--poly): particles at rest, the relaxed box. */
+typedef struct poly_sample {
+  ptl_state *p;
+  cd_box box;
+  double porosity;   /* of the generated packing, 1 − N V_site/V_box */
+  double rho00;      /* mean bin density of the relaxed sample's interior */
+  cd_relax_result rr;
+} poly_sample;
 
 /* Front seen from the undisturbed side: scanning down from the far end, the first place where
  * the bin-mean velocity reaches frac·up (a dip behind a noisy front does not stop it). */
@@ -98,10 +108,10 @@ static void orient_cell(orientation o, double cell[3], int *nb, double basis[6][
   }
 }
 
-static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double up, int nx, int nz,
-                                 orientation orient, cd_integrator integ) {
-  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  /* the cross-section and length of nx × nx × nz cubic cells, in whole cells of `orient` */
+/* The single-crystal slab of nx × nx × nz [001] cubic cells in whole cells of `orient`, the
+ * piston flagged (the sites below 2a, two [001] cells: thicker than R_c + skin). */
+static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_box *box) {
+  const double a = sqrt(2.0) * R0;
   double cell[3], basis[6][3];
   int nb, nc[3];
   orient_cell(orient, cell, &nb, basis);
@@ -116,49 +126,100 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
         for (int b = 0; b < nb; b++)
           ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0], (iy + basis[b][1] + 0.25) * cell[1],
                         (iz + basis[b][2]) * cell[2], m, 0);
-  /* piston: the sites below 2a (two [001] cells, thicker than R_c + skin) */
-  const double zpist = 2.0 * a - 1e-3 * R0;
+  for (size_t i = 0; i < p->n; i++)
+    if (p->z[i] < 2.0 * a - 1e-3 * R0) p->flags[i] = PTL_DRIVEN;
+  *box = (cd_box){.hi = {nc[0] * cell[0], nc[1] * cell[1], nc[2] * cell[2]},
+                  .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  return p;
+}
+
+static cd_config run_config(cd_cutoff_mode mode, cd_integrator integ) {
+  return (cd_config){.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / 5.35, .cutoff = mode,
+                     .sort_every = 8, .lattice = CD_LATTICE_FCC, .integrator = integ};
+}
+
+static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
+  cd_sim *s = cd_sim_create(p, box, cfg, 1);
+  cd_pair_table *t = calloc(1, sizeof *t);
+  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  cd_sim_set_pair(s, 0, 0, t);
+  return s;
+}
+
+/* Mean density of the bins between z0 and z1 of a profile. */
+static double mean_bin_density(const double *prof, int nbin, double z0, double z1) {
+  double rho = 0;
+  int cnt = 0;
+  for (int b = 0; b < nbin; b++) {
+    const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
+    if (row[0] > z0 && row[0] < z1) {
+      rho += row[2];
+      cnt++;
+    }
+  }
+  return cnt ? rho / cnt : NAN;
+}
+
+static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double up, int nx, int nz,
+                                 orientation orient, cd_integrator integ, const poly_sample *poly) {
+  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
+  cd_box box;
+  ptl_state *p;
+  if (poly) { /* a copy of the relaxed sample */
+    box = poly->box;
+    p = ptl_state_create(poly->p->n, 3);
+    for (size_t i = 0; i < poly->p->n; i++) {
+      size_t k = ptl_state_add(p, poly->p->x[i], poly->p->y[i], poly->p->z[i], m, 0);
+      p->flags[k] = poly->p->flags[i];
+    }
+  } else {
+    p = crystal_slab(m, nx, nz, orient, &box);
+  }
+  /* the piston's top: its highest site (single crystal: 2a, as the CI numbers were taken) */
+  double zpist = poly ? -INFINITY : 2.0 * a;
+  if (poly)
+    for (size_t i = 0; i < p->n; i++)
+      if (p->flags[i] & PTL_DRIVEN) zpist = fmax(zpist, p->z[i]);
   double mean[3] = {0, 0, 0}, *v[3] = {p->vx, p->vy, p->vz};
   size_t nfree = 0;
-  for (size_t i = 0; i < p->n; i++) nfree += p->z[i] >= zpist;
+  for (size_t i = 0; i < p->n; i++) nfree += !(p->flags[i] & PTL_DRIVEN);
   for (size_t i = 0; i < p->n; i++) {
-    if (p->z[i] < zpist) { p->flags[i] = PTL_DRIVEN; continue; }
+    if (p->flags[i] & PTL_DRIVEN) continue;
     for (int c = 0; c < 3; c++) {
       v[c][i] = 0.01 * (2.0 * ptl_splitmix64_uniform(12345, 3 * i + c) - 1.0);
       mean[c] += v[c][i] / (double)nfree;
     }
   }
   for (size_t i = 0; i < p->n; i++)
-    if (p->z[i] >= zpist)
+    if (!(p->flags[i] & PTL_DRIVEN))
       for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
-  cd_box box = {.hi = {nc[0] * cell[0], nc[1] * cell[1], nc[2] * cell[2]},
-                .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
-  const double c0 = 5.35;
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / c0, .cutoff = mode,
-                   .sort_every = 8, .lattice = CD_LATTICE_FCC, .integrator = integ};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
-  cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
-  cd_sim_set_pair(s, 0, 0, t);
+  const cd_config cfg = run_config(mode, integ);
+  cd_sim *s = make_sim(eos, p, &box, &cfg);
   double th[1] = {0}, uh[1] = {up}, dir[3] = {0, 0, 1};
   cd_history h = {1, th, uh};
   cd_sim_set_piston(s, &h, dir);
   assert_int_equal(cd_sim_init(s), MS_OK);
   /* run until the front has crossed ~70 % of the slab, at a guessed D = Us(exp) (+20 %) */
-  const double L = box.hi[2], Dg = 5.35 + 1.34 * up;
+  const double L = box.hi[2] - box.lo[2], Dg = 5.35 + 1.34 * up, area = (box.hi[0] - box.lo[0]) * (box.hi[1] - box.lo[1]);
   const long nsteps = (long)(0.7 * L / (1.2 * Dg) / cfg.dt), every = nsteps / 40 + 1;
   /* bins of whole lattice planes (2, 3, 2 planes of [001], [110], [111]: about a wide),
-   * centred between planes */
-  const double dz = cell[2] / (orient == ORIENT_111 ? 3 : 2), bw = lround(a / dz) * dz;
+   * centred between planes (a polycrystal: a wide) */
+  double cell[3], basis[6][3];
+  int nb;
+  orient_cell(orient, cell, &nb, basis);
+  const double dz = poly ? 0.5 * a : cell[2] * R0 / (orient == ORIENT_111 ? 3 : 2),
+               bw = lround(a / dz) * dz;
   const double blo = -0.5 * dz;
   const int nbin = (int)(L / bw) + 20;
   double *prof = calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof);
   double tf[64], zf[64], zb[64], pm[64];
   int nf = 0;
+  shock_result r = {.rho00 = eos_rho0(eos)};
+  if (poly) r.rho00 = poly->rho00;
   for (long k = 1; k <= nsteps; k++) {
     assert_int_equal(cd_sim_step(s), MS_OK);
     if (k % every == 0 && nf < 64) {
-      cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
+      cd_profile(s, 2, blo, blo + nbin * bw, nbin, area, prof);
       tf[nf] = s->t;
       cd_energy en;
       cd_sim_energy(s, &en);
@@ -173,14 +234,13 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
         }
     }
   }
-  shock_result r = {0};
   r.D = fit_slope(tf, zf, nf, 0.25 * tf[nf - 1]);
   r.D_ahead = fit_slope(tf, zb, nf, 0.25 * tf[nf - 1]);
   /* momentum of the sample grows at the piston force: dΠ/dt = ρ0 A D up for a steady shock */
-  r.D_mom = fit_slope(tf, pm, nf, 0.25 * tf[nf - 1]) / (eos_rho0(eos) * box.hi[0] * box.hi[1] * up);
+  r.D_mom = fit_slope(tf, pm, nf, 0.25 * tf[nf - 1]) / (r.rho00 * area * up);
   /* shocked state: bins between the piston + 5a and the front − 5a at the last frame */
-  cd_profile(s, 2, blo, blo + nbin * bw, nbin, box.hi[0] * box.hi[1], prof);
-  double zp = 2 * a + up * s->t, zfront = cd_front_position(prof, nbin, 2, up, 0.5);
+  cd_profile(s, 2, blo, blo + nbin * bw, nbin, area, prof);
+  double zp = zpist + up * s->t, zfront = cd_front_position(prof, nbin, 2, up, 0.5);
   double rho = 0, pzz = 0, vz = 0, pxx = 0, su = 0;
   int cnt = 0;
   for (int b = 0; b < nbin; b++) {
@@ -237,6 +297,110 @@ static double opt_ups[16];
 static int opt_nup = 0, opt_nx = 6, opt_nz = 180, opt_curve = -1, opt_mode = -1;
 static orientation opt_orient = ORIENT_001;
 static cd_integrator opt_integ = CD_INT_VELOCITY_VERLET;
+/* --poly NGRAINS[,DMIN[,SEED]] and --relax TIME[,J[,QUENCH[,PLAIN]]] (TIME in r0/c0, J: damping
+ * Γ = c0/(J r0), 0 = none; QUENCH, PLAIN 1/0: cd_relax_config) */
+static int opt_ngrains = 0;
+static double opt_dmin = 0.8, opt_relax_time = 60.0, opt_relax_j = 5.0;
+static int opt_seed = 7, opt_quench = 1, opt_plain = 1;
+
+/* Hugoniot of a porous sample (paper 002's porous targets; docs/eos.md): initial density
+ * rho00 < ρ0 at P = 0, e = 0 (the pores close without resistance), final state on the
+ * full-density EOS. With t = 1 − rho00/ρ: P = rho00 up²/t (Rayleigh line), e = up²/2 (energy
+ * jump with P0 = 0); solve P_eos(rho00/(1 − t), up²/2) = rho00 up²/t by bisection on t up to
+ * ρ = 2 ρ0 (P_eos − P_R < 0 at small t, > 0 at large t). Returns D = up/t. */
+static double porous_us(const eos_t *eos, double rho00, double up) {
+  double lo = 1e-6, hi = 1.0 - rho00 / (2.0 * eos_rho0(eos));
+  for (int it = 0; it < 100; it++) {
+    const double t = 0.5 * (lo + hi);
+    const double g = eos_pressure(eos, rho00 / (1.0 - t), 0.5 * up * up) - rho00 * up * up / t;
+    if (g < 0) lo = t; else hi = t;
+  }
+  return up / (0.5 * (lo + hi));
+}
+
+/* Voronoi polycrystal slab (nx × nx × nz [001] cells of the single crystal's size, periodic
+ * cross-section, grains wrapping across it), relaxed once by cd_sim_relax: damped/quenched
+ * dynamics with the piston at rest and the box rescaled toward zero mean normal stress. */
+static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
+  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
+  const double lo[3] = {0, 0, 0}, hi[3] = {nx * a, nx * a, nz * a};
+  const bool per[3] = {true, true, false};
+  poly_sample ps = {0};
+  double *xyz = NULL;
+  int32_t *grain = NULL;
+  size_t n = cd_polycrystal(3, R0, 0, lo, hi, per, opt_ngrains, (uint64_t)opt_seed, opt_dmin, NULL,
+                            NULL, &xyz, &grain, &ps.porosity);
+  ptl_state *p = ptl_state_create(n, 3);
+  for (size_t i = 0; i < n; i++) {
+    size_t k = ptl_state_add(p, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], m, 0);
+    if (p->z[k] < 2.0 * a) p->flags[k] = PTL_DRIVEN; /* the piston: the bottom 2a */
+  }
+  free(xyz);
+  free(grain);
+  ps.box = (cd_box){.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  const cd_config cfg = run_config(CD_CUTOFF_BONDED, CD_INT_VELOCITY_VERLET);
+  cd_sim *s = make_sim(eos, p, &ps.box, &cfg);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  const double c0 = eos_c0(eos);
+  const cd_relax_config rc = {.time = opt_relax_time * R0 / c0,
+                              .damping_gamma = opt_relax_j > 0 ? c0 / (opt_relax_j * R0) : 0.0,
+                              .quench = opt_quench != 0, .box = true, .box_every = 10,
+                              .tau = 10.0 * R0 / c0, .modulus = eos_rho0(eos) * c0 * c0,
+                              .rebond = true, .plain = opt_plain != 0};
+  assert_int_equal(cd_sim_relax(s, &rc, &ps.rr), MS_OK);
+  ps.box = s->box;
+  /* interior density: bins 5a away from both ends */
+  double zmax = -INFINITY, zmin = INFINITY;
+  for (size_t i = 0; i < s->p->n; i++) zmax = fmax(zmax, s->p->z[i]), zmin = fmin(zmin, s->p->z[i]);
+  const int nbin = (int)fmin(1e5, (zmax - zmin) / a) + 1;
+  double *prof = calloc((size_t)(unsigned)nbin * CD_PROFILE_NCOL, sizeof *prof);
+  const double area = (ps.box.hi[0] - ps.box.lo[0]) * (ps.box.hi[1] - ps.box.lo[1]);
+  cd_profile(s, 2, zmin - 0.5 * a, zmin - 0.5 * a + nbin * a, nbin, area, prof);
+  ps.rho00 = mean_bin_density(prof, nbin, zmin + 5 * a, zmax - 5 * a);
+  free(prof);
+  ps.p = ptl_state_create(s->p->n, 3);
+  for (size_t i = 0; i < s->p->n; i++) {
+    size_t k = ptl_state_add(ps.p, s->p->x[i], s->p->y[i], s->p->z[i], m, 0);
+    ps.p->flags[k] = s->p->flags[i];
+  }
+  const cd_relax_result *r = &ps.rr;
+  printf("polycrystal: %d grains, min_distance %.2f r0, seed %d, %zu sites, generated porosity "
+         "%.2f %%\n", opt_ngrains, opt_dmin, opt_seed, n, 100 * ps.porosity);
+  printf("relaxation: %ld steps (%.0f r0/c0, J %.1f, quench %d, plain %d): mean stress xx yy zz %.3f %.3f "
+         "%.3f -> %.4f %.4f %.4f GPa; stretch %.5f %.5f %.5f; density (mass/volume) %.4f -> %.4f, "
+         "interior bins %.4f g/cm3 (rho/rho0 %.4f); energy released %.4g kJ/g (dissipated "
+         "%.4g); %ld bonds broken\n", r->steps, opt_relax_time, opt_relax_j, opt_quench, opt_plain,
+         r->stress0[0], r->stress0[1], r->stress0[2], r->stress[0], r->stress[1], r->stress[2],
+         r->lambda[0], r->lambda[1], r->lambda[2], r->mass / r->volume0, r->mass / r->volume,
+         ps.rho00, ps.rho00 / eos_rho0(eos), r->energy / r->mass, r->dissipated / r->mass,
+         r->broken_bonds);
+  fflush(stdout);
+  cd_sim_free(s);
+  return ps;
+}
+
+/* Hugoniot of the relaxed polycrystal (issue #4): the four D estimates against the porous
+ * Hugoniots at the measured initial density of the experimental fit (as a Mie–Grüneisen EOS,
+ * Us = 5.35 + 1.34 up, Γ0 = 2) and of the cold curve's own EOS. */
+static void run_poly(const eos_t *eos, const char *cname, const double *ups, int nup) {
+  poly_sample ps = relax_poly(eos, opt_nx, opt_nz);
+  eos_t *fit = eos_create_mg_linear(eos_rho0(eos), 5.35, 1.34, 2.0);
+  printf("| cold curve | up km/s | rho00/rho0 | D front | D ahead | D momentum | D mass | Us solid | Us porous (fit) | Us porous (cold-curve EOS) | (D-Us porous fit)/Us: front / ahead / momentum / mass | rho/rho0 | P_zz GPa | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (int k = 0; k < nup; k++) {
+    const double up = ups[k];
+    shock_result r = piston_shock(eos, CD_CUTOFF_BONDED, up, opt_nx, opt_nz, ORIENT_001, opt_integ, &ps);
+    const double rho = r.rho_ratio * eos_rho0(eos), d_mass = up * rho / (rho - r.rho00);
+    const double us = 5.35 + 1.34 * up, usp = porous_us(fit, r.rho00, up), usc = porous_us(eos, r.rho00, up);
+    printf("| %s | %.1f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f / %+.1f / %+.1f / %+.1f %% | %.3f | %.1f | %.1f | %.2f |\n",
+           cname, up, r.rho00 / eos_rho0(eos), r.D, r.D_ahead, r.D_mom, d_mass, us, usp, usc,
+           100 * (r.D - usp) / usp, 100 * (r.D_ahead - usp) / usp, 100 * (r.D_mom - usp) / usp,
+           100 * (d_mass - usp) / usp, r.rho_ratio, r.pzz, r.pxx, r.sigma_u);
+    fflush(stdout);
+  }
+  eos_destroy(fit);
+  ptl_state_free(ps.p);
+}
 
 static void test_hugoniot(void **state) {
   (void)state;
@@ -246,6 +410,14 @@ static void test_hugoniot(void **state) {
   const double ups_ci[2][3] = {{1.5, 2.0, 3.0}, {2.0, 4.0}};
   const int nup_ci[2] = {3, 2};
   const bool ci = !full_run && opt_nup == 0 && opt_mode < 0 && opt_curve < 0;
+  if (opt_ngrains > 0) {
+    const double ups_poly[] = {1.5, 2.0, 3.0};
+    const int c = opt_curve > 0 ? 1 : 0;
+    run_poly(curves[c], cname[c], opt_nup ? opt_ups : ups_poly, opt_nup ? opt_nup : 3);
+    eos_destroy(curves[0]);
+    eos_destroy(curves[1]);
+    return;
+  }
   printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int c = 0; c < 2; c++) {
@@ -256,7 +428,7 @@ static void test_hugoniot(void **state) {
       for (int k = 0; k < nup; k++) {
         double up = opt_nup ? opt_ups[k] : (full_run ? ups_full[k] : ups_ci[c][k]);
         shock_result r = piston_shock(curves[c], (cd_cutoff_mode)mode, up, opt_nx, opt_nz,
-                                      opt_orient, opt_integ);
+                                      opt_orient, opt_integ, NULL);
         double us = 5.35 + 1.34 * up;
         eos_hugoniot_point hp;
         double upl[1] = {up};
@@ -312,6 +484,10 @@ int main(int argc, char **argv) {
       k++;
       for (int q = 0; cd_integrator_names[q]; q++)
         if (!strcmp(argv[k], cd_integrator_names[q])) opt_integ = (cd_integrator)q;
+    } else if (!strcmp(argv[k], "--poly") && k + 1 < argc) {
+      sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
+    } else if (!strcmp(argv[k], "--relax") && k + 1 < argc) {
+      sscanf(argv[++k], "%lf,%lf,%d,%d", &opt_relax_time, &opt_relax_j, &opt_quench, &opt_plain);
     } else if (!strcmp(argv[k], "--curve") && k + 1 < argc) {
       opt_curve = !strcmp(argv[++k], "mg");
     } else if (!strcmp(argv[k], "--cutoff") && k + 1 < argc) {

@@ -183,9 +183,72 @@ static void test_polycrystal(void **state) {
   check_poly(2, true);
 }
 
+/* Relaxation stage (cd_sim_relax): a periodic fcc block strained anisotropically (x, y, z by
+ * 0.99, 1.005, 0.98) and given random velocities relaxes to zero mean stress with the box back at
+ * the rest lattice: the stress-free state of the first-shell potential is spacing r0 exactly
+ * (E'(r0) = 0, the second shell √2 r0 lies beyond R_c), so the total stretch must undo the
+ * strain. Tolerances: |P_aa| < 1e-4 GPa after 100 r0/c0 (the rescale converges geometrically,
+ * ~4 % per rescale: from ~2 GPa to < 1e-6 GPa; the bound allows for the quench's residual
+ * vibrations), which is a strain error < 1e-6 at a modulus ~ 100 GPa: stretch within 1e-5.
+ * Plain relaxation of a bonded run re-forms the same first-shell bonds: none broken. At rest
+ * afterwards, clock and balance restarted. */
+static void test_relax(void **state) {
+  (void)state;
+  eos_t *eos = eos_create_mg_cold(2.71, 5.35, 4.0, 2.0, true);
+  const int n = 4;
+  const double m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0), L = n * sqrt(2.0) * R0;
+  for (int plain = 0; plain < 2; plain++) {
+    ptl_state *p = ptl_state_create(4 * n * n * n, 3);
+    const double zero[3] = {0, 0, 0}, sh[3] = {0.25, 0.25, 0.25};
+    cd_lattice_fcc(p, n, n, n, sh, zero, R0, m, 0);
+    for (size_t i = 0; i < p->n; i++) {
+      p->vx[i] = 0.05 * (2 * ptl_splitmix64_uniform(3, 3 * i) - 1);
+      p->vy[i] = 0.05 * (2 * ptl_splitmix64_uniform(3, 3 * i + 1) - 1);
+      p->vz[i] = 0.05 * (2 * ptl_splitmix64_uniform(3, 3 * i + 2) - 1);
+    }
+    cd_box box = {.hi = {L, L, L}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
+    const double c0 = eos_c0(eos);
+    cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / c0, .cutoff = CD_CUTOFF_BONDED,
+                     .lattice = CD_LATTICE_FCC};
+    cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+    cd_pair_table *t = calloc(1, sizeof *t);
+    assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+    cd_sim_set_pair(s, 0, 0, t);
+    assert_int_equal(cd_sim_init(s), MS_OK);
+    const double strain[3] = {0.99, 1.005, 0.98};
+    assert_int_equal(cd_sim_affine(s, strain), MS_OK);
+    cd_relax_config rc = {.time = 100 * R0 / c0, .damping_gamma = c0 / (5 * R0), .quench = true,
+                          .box = true, .tau = 5 * R0 / c0, .modulus = eos_rho0(eos) * c0 * c0,
+                          .rebond = true, .plain = plain};
+    cd_relax_result r;
+    assert_int_equal(cd_sim_relax(s, &rc, &r), MS_OK);
+    printf("relax (plain %d): stress %.3g %.3g %.3g -> %.3g %.3g %.3g GPa, stretch x strain - 1: "
+           "%.2e %.2e %.2e, energy released %.4g kJ/g\n", plain, r.stress0[0], r.stress0[1],
+           r.stress0[2], r.stress[0], r.stress[1], r.stress[2], r.lambda[0] * strain[0] - 1,
+           r.lambda[1] * strain[1] - 1, r.lambda[2] * strain[2] - 1, r.energy / r.mass);
+    assert_true(r.stress0[2] > 1.0); /* the strain did compress */
+    for (int a = 0; a < 3; a++) {
+      assert_true(fabs(r.stress[a]) < 1e-4);
+      assert_true(fabs(r.lambda[a] * strain[a] - 1) < 1e-5);
+      assert_true(fabs(s->box.hi[a] - L) < 1e-5 * L);
+    }
+    assert_true(r.energy > 0 && r.broken_bonds == 0 && s->n_broken_bonds == 0);
+    assert_true(s->t == 0.0 && s->step == 0);
+    for (size_t i = 0; i < s->p->n; i++) assert_true(s->p->vx[i] == 0 && s->p->vy[i] == 0 && s->p->vz[i] == 0);
+    cd_energy en;
+    cd_sim_energy(s, &en);
+    assert_true(en.dissipated == 0 && en.piston_work == 0 && en.broken == 0);
+    /* bad input: box rescale without a modulus */
+    rc.modulus = 0;
+    assert_int_equal(cd_sim_relax(s, &rc, &r), MS_ERR_INPUT);
+    cd_sim_free(s);
+  }
+  eos_destroy(eos);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_fcc_mg), cmocka_unit_test(test_fcc_table1),
                                      cmocka_unit_test(test_tri2d_mg), cmocka_unit_test(test_von_mises),
-                                     cmocka_unit_test(test_polycrystal)};
+                                     cmocka_unit_test(test_polycrystal), cmocka_unit_test(test_relax)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
