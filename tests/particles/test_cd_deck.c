@@ -140,6 +140,14 @@ static void test_bad_input(void **state) {
   expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3", pist), "rejected"); /* and the file:row "jump in time" message */
   free(t);
   unlink(hist);
+  /* a relaxation stage without its time, and with a negative damping (the piston's flow map
+   * closes and a `relax:` map follows) */
+  expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3",
+                        "velocity: 1.0}\n  relax: {damping: 5"), "time");
+  free(t);
+  expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3",
+                        "velocity: 1.0}\n  relax: {time: 1e-4, damping: -1"), "damping");
+  free(t);
 }
 
 /* every example deck inputs/cd-*.yaml reads without errors (they are documentation) */
@@ -147,7 +155,7 @@ static void test_example_decks(void **state) {
   (void)state;
   const char *src = getenv("MSCALE_SOURCE_DIR");
   static const char *const names[] = {"cd-piston-al.yaml", "cd-piston-history.yaml", "cd-dusting.yaml",
-                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml"};
+                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml", "cd-poly-al.yaml"};
   for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
     char path[4096];
     snprintf(path, sizeof path, "%s/inputs/%s", src ? src : "../..", names[k]);
