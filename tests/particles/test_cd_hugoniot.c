@@ -338,7 +338,8 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   free(xyz);
   free(grain);
   ps.box = (cd_box){.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
-  const cd_config cfg = run_config(CD_CUTOFF_BONDED, CD_INT_VELOCITY_VERLET);
+  const cd_config cfg = run_config(opt_mode >= 0 ? (cd_cutoff_mode)opt_mode : CD_CUTOFF_BONDED,
+                                   CD_INT_VELOCITY_VERLET);
   cd_sim *s = make_sim(eos, p, &ps.box, &cfg);
   assert_int_equal(cd_sim_init(s), MS_OK);
   const double c0 = eos_c0(eos);
@@ -389,7 +390,8 @@ static void run_poly(const eos_t *eos, const char *cname, const double *ups, int
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int k = 0; k < nup; k++) {
     const double up = ups[k];
-    shock_result r = piston_shock(eos, CD_CUTOFF_BONDED, up, opt_nx, opt_nz, ORIENT_001, opt_integ, &ps);
+    shock_result r = piston_shock(eos, opt_mode >= 0 ? (cd_cutoff_mode)opt_mode : CD_CUTOFF_BONDED, up,
+                                  opt_nx, opt_nz, ORIENT_001, opt_integ, &ps);
     const double rho = r.rho_ratio * eos_rho0(eos), d_mass = up * rho / (rho - r.rho00);
     const double us = 5.35 + 1.34 * up, usp = porous_us(fit, r.rho00, up), usc = porous_us(eos, r.rho00, up);
     printf("| %s | %.1f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f / %+.1f / %+.1f / %+.1f %% | %.3f | %.1f | %.1f | %.2f |\n",
