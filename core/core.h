@@ -378,6 +378,13 @@ void par_comm_time(double *wall, double *cpu);
  * must list each partner that lists it. Allocation-free after the first call. No-op serially. */
 void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const int *scount,
                           const int *sdispl, double *recv, const int *rcount, const int *rdispl);
+/* The same, split: par_exchange_post starts it (nonblocking; `tag` tells apart several
+ * exchanges posted together, e.g. one per array) and par_exchange_wait completes every posted
+ * exchange. Buffers must stay untouched in between; the caller may compute meanwhile. */
+void par_exchange_post(int nnbr, const int *ranks, const double *send, const int *scount,
+                       const int *sdispl, double *recv, const int *rcount, const int *rdispl,
+                       int tag);
+void par_exchange_wait(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Check-time memory estimate (core/mem_estimate.c): problem readers add their large arrays   *

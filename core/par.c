@@ -176,29 +176,42 @@ void par_allgatherv_doubles(const double *send, int n, double *recv, const int *
   }
 }
 
-/* Requests of the neighbour exchange: grown on first use to 2 per neighbour, then reused (the
- * exchange runs every force evaluation and must not allocate). */
+/* Requests of the neighbour exchanges posted and not yet waited for: grown when a post needs
+ * more (the first steps), then reused, so that the exchange of every force evaluation does not
+ * allocate. */
 static MPI_Request *nbr_req;
-static int nbr_req_cap;
+static int nbr_req_cap, nbr_req_n;
+
+void par_exchange_post(int nnbr, const int *ranks, const double *send, const int *scount,
+                       const int *sdispl, double *recv, const int *rcount, const int *rdispl,
+                       int tag) {
+  if (!active() || nnbr == 0) return;
+  if (nbr_req_n + 2 * nnbr > nbr_req_cap) {
+    nbr_req_cap = nbr_req_n + 2 * nnbr;
+    nbr_req = ms_realloc(nbr_req, (size_t)nbr_req_cap, sizeof *nbr_req);
+  }
+  comm_clock c = comm_start();
+  for (int k = 0; k < nnbr; k++)
+    if (rcount[k] > 0)
+      MPI_Irecv(recv + rdispl[k], rcount[k], MPI_DOUBLE, ranks[k], tag, MPI_COMM_WORLD,
+                &nbr_req[nbr_req_n++]);
+  for (int k = 0; k < nnbr; k++)
+    if (scount[k] > 0)
+      MPI_Isend(send + sdispl[k], scount[k], MPI_DOUBLE, ranks[k], tag, MPI_COMM_WORLD,
+                &nbr_req[nbr_req_n++]);
+  comm_stop(c);
+}
+
+void par_exchange_wait(void) {
+  if (nbr_req_n == 0) return;
+  comm_clock c = comm_start();
+  MPI_Waitall(nbr_req_n, nbr_req, MPI_STATUSES_IGNORE);
+  nbr_req_n = 0;
+  comm_stop(c);
+}
 
 void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const int *scount,
                           const int *sdispl, double *recv, const int *rcount, const int *rdispl) {
-  if (!active() || nnbr == 0) return;
-  if (2 * nnbr > nbr_req_cap) {
-    free(nbr_req);
-    nbr_req_cap = 2 * nnbr;
-    nbr_req = ms_calloc((size_t)nbr_req_cap, sizeof *nbr_req);
-  }
-  comm_clock c = comm_start();
-  int nreq = 0;
-  for (int k = 0; k < nnbr; k++)
-    if (rcount[k] > 0)
-      MPI_Irecv(recv + rdispl[k], rcount[k], MPI_DOUBLE, ranks[k], 77, MPI_COMM_WORLD,
-                &nbr_req[nreq++]);
-  for (int k = 0; k < nnbr; k++)
-    if (scount[k] > 0)
-      MPI_Isend(send + sdispl[k], scount[k], MPI_DOUBLE, ranks[k], 77, MPI_COMM_WORLD,
-                &nbr_req[nreq++]);
-  MPI_Waitall(nreq, nbr_req, MPI_STATUSES_IGNORE);
-  comm_stop(c);
+  par_exchange_post(nnbr, ranks, send, scount, sdispl, recv, rcount, rdispl, 77);
+  par_exchange_wait();
 }

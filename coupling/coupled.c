@@ -1247,11 +1247,12 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   const double area = reg.area;
   double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
   /* MPI: every rank built the whole region; cd_sim_init keeps what each rank's coarse cells own
-   * (the cluster_dynamics defaults: METIS, rebalance above 1.2 checked every 10 list builds) */
+   * (the cluster_dynamics defaults: auto partition, rebalance above 1.2 checked every 10 list
+   * builds) */
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n;
   if (dist) {
-    const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
+    const cd_mpi_config mc = {.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
                               .rebalance_interval = 10, .replicated = true};
     cd_sim_set_mpi(sim, &mc);
   }

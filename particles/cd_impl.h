@@ -100,9 +100,11 @@ void cd_dd_free(cd_dd *d);
 /* At every list build: repartition when due, migrate particles to their owners, sort the owned
  * ones by coarse cell, send full ghost copies, and remap bonded partners. Collective. */
 ms_status cd_dd_redistribute(cd_sim *s);
-/* Ghost refresh before a force evaluation (positions + velocities, ghost forces zeroed) or
- * before the damping sub-step (velocities only). Collective. */
-void cd_dd_refresh(cd_sim *s, bool positions);
+/* Ghost refresh from their owners: CD_REFRESH_X positions (ghost forces zeroed; before a force
+ * evaluation, which reads nothing else of a ghost), CD_REFRESH_V velocities (before the damping
+ * sub-step; and for cd_sim_refresh_ghosts). Collective. */
+enum { CD_REFRESH_X = 1u, CD_REFRESH_V = 2u };
+void cd_dd_refresh(cd_sim *s, unsigned what);
 /* The box changed (affine deformation): new coarse grid and partition. Collective. */
 void cd_dd_regrid(cd_sim *s);
 bool cd_dd_owns(const cd_dd *d, const double x[3]);

@@ -31,7 +31,6 @@ struct cd_dd {
   bool per[3];
   size_t ncells;
   int32_t *owner, *owner_new; /* [ncells] */
-  double *part;    /* [size] part weights */
   int64_t *weight; /* [ncells] scratch */
   int slab_axis;
   /* per rank: migration counts and displacements (doubles) */
@@ -166,23 +165,11 @@ static void make_grid(cd_sim *s) {
   for (int a = 0; a < 3; a++) d->st.ncell[a] = d->nc[a];
 }
 
-/* Imbalance (max / mean part weight) of an owner map. */
-static double map_imbalance(const cd_dd *d, const int32_t *owner, double *part) {
-  memset(part, 0, (size_t)d->size * sizeof *part);
-  double tot = 0;
-  for (size_t c = 0; c < d->ncells; c++) {
-    part[owner[c]] += (double)d->weight[c];
-    tot += (double)d->weight[c];
-  }
-  double mx = 0;
-  for (int r = 0; r < d->size; r++) mx = fmax(mx, part[r]);
-  return tot > 0 ? mx * d->size / tot : 1.0;
-}
-
 /* Owner map from the all-reduced particle counts of the cells (the same on every rank). The
  * partitioner weighs a cell weight + 1; counts are scaled by 64 so that empty cells (a free
  * axis' room for ejecta) weigh next to nothing. With `only_if_better`, the new map replaces
- * the old one only when it lowers the imbalance by more than 1 %. Returns whether it did. */
+ * the old one only when it lowers the load (cd_partition_stats: owned + ghost cost, max over
+ * ranks) by more than 1 %. Returns whether it did. */
 static bool partition(cd_sim *s, bool only_if_better, ms_status *status) {
   cd_dd *d = s->dd;
   const ptl_state *p = s->p;
@@ -190,20 +177,19 @@ static bool partition(cd_sim *s, bool only_if_better, ms_status *status) {
   for (size_t i = 0; i < p->nlocal; i++)
     if (!(p->flags[i] & PTL_REMOVED)) d->weight[cell_of(d, p->x[i], p->y[i], p->z[i])] += 64;
   if (!d->replicated) par_sum_int64s(d->weight, d->ncells);
-  cd_partition_stats ps;
+  cd_partition_stats ps, old;
   ms_status st = cd_partition_cells(d->nc, d->per, d->weight, d->size, s->mpi.partition,
                                     d->slab_axis, d->owner_new, &ps);
+  if (st == MS_OK && only_if_better)
+    st = cd_partition_evaluate(d->nc, d->per, d->weight, d->size, d->owner, &old);
   *status = par_agree_status(st);
   d->builds_since = 0;
   if (*status != MS_OK) return false;
-  double old = only_if_better ? map_imbalance(d, d->owner, d->part) : INFINITY;
-  double now = map_imbalance(d, d->owner_new, d->part);
-  if (!(now < old * 0.99)) return false;
+  if (only_if_better && !(ps.load < old.load * 0.99)) return false;
   int32_t *t = d->owner;
   d->owner = d->owner_new;
   d->owner_new = t;
   d->st.partition = ps;
-  d->st.partition.imbalance = now;
   d->st.partitions++;
   return true;
 }
@@ -233,13 +219,15 @@ ms_status cd_dd_create(cd_sim *s) {
     d->gid_map = ms_calloc(cap, sizeof *d->gid_map);
     for (size_t k = 0; k < cap; k++) d->gid_map[k] = -1;
   }
-  d->part = ms_calloc((size_t)d->size, sizeof *d->part);
   make_grid(s);
   ms_status st;
   partition(s, false, &st);
   if (st == MS_OK && s->mpi.owner && s->mpi.owner_cells == d->ncells) { /* restart */
     memcpy(d->owner, s->mpi.owner, d->ncells * sizeof *d->owner);
-    d->st.partition.imbalance = map_imbalance(d, d->owner, d->part);
+    const cd_partition_method m = d->st.partition.method;
+    st = par_agree_status(
+        cd_partition_evaluate(d->nc, d->per, d->weight, d->size, d->owner, &d->st.partition));
+    d->st.partition.method = m;
   }
   return st;
 }
@@ -254,7 +242,7 @@ void cd_dd_set_builds_since(cd_dd *d, long builds_since) { d->builds_since = bui
 
 void cd_dd_free(cd_dd *d) {
   if (!d) return;
-  void *arr[] = {d->owner,  d->owner_new, d->part,   d->weight, d->mcnt_s,   d->mcnt_r,
+  void *arr[] = {d->owner,  d->owner_new, d->weight, d->mcnt_s,   d->mcnt_r,
                  d->mdsp_s, d->mdsp_r,    d->nbr,    d->gcnt_s, d->gcnt_r,   d->gdsp_s,
                  d->gdsp_r, d->xcnt_s,    d->xcnt_r, d->xdsp_s, d->xdsp_r,   d->send_idx,
                  d->sbuf,   d->rbuf,      d->cell,   d->perm,   d->tmp,      d->pgid,
@@ -502,39 +490,35 @@ static void send_ghosts(cd_sim *s) {
   d->st.exchanged_doubles += (double)(nrg * (size_t)L);
   for (size_t q = 0; q < nrg; q++) unpack(s, n + q, d->rbuf + q * (size_t)L);
   p->n = n + nrg;
-  /* the refresh buffers: 6 doubles per particle */
+  /* the refresh buffer: up to 6 doubles per particle sent (cd_dd_refresh) */
   grow(&d->sbuf, &d->sbuf_cap, 6 * ns + 1);
-  grow(&d->rbuf, &d->rbuf_cap, 6 * nrg + 1);
 }
 
-void cd_dd_refresh(cd_sim *s, bool positions) {
+/* One message per array and neighbour: the owned values are gathered array by array into
+ * sbuf (neighbour blocks in the order of send_idx), and the ghosts' values land directly in
+ * their slots [nlocal + gdsp_r[k], ...) of the particle arrays (they arrived in that order at
+ * the build), so nothing is unpacked. */
+void cd_dd_refresh(cd_sim *s, unsigned what) {
   cd_dd *d = s->dd;
   ptl_state *p = s->p;
   const double t0 = ms_wall_time();
-  const int w = positions ? 6 : 3;
-  const double *src[6] = {p->x, p->y, p->z, p->vx, p->vy, p->vz};
-  double *dst[6] = {p->x, p->y, p->z, p->vx, p->vy, p->vz};
-  const int off = positions ? 0 : 3;
-  for (size_t q = 0; q < d->nsend; q++) {
-    const int32_t i = d->send_idx[q];
-    for (int c = 0; c < w; c++) d->sbuf[q * (size_t)w + c] = src[off + c][i];
+  double *arr[6];
+  int na = 0;
+  if (what & CD_REFRESH_X) arr[na++] = p->x, arr[na++] = p->y, arr[na++] = p->z;
+  if (what & CD_REFRESH_V) arr[na++] = p->vx, arr[na++] = p->vy, arr[na++] = p->vz;
+  const size_t ns = d->nsend, g0 = p->nlocal;
+  const int32_t *restrict idx = d->send_idx;
+  for (int a = 0; a < na; a++) {
+    double *restrict buf = d->sbuf + (size_t)a * ns;
+    const double *restrict src = arr[a];
+    for (size_t q = 0; q < ns; q++) buf[q] = src[idx[q]];
+    par_exchange_post(d->nnbr, d->nbr, buf, d->gcnt_s, d->gdsp_s, arr[a] + g0, d->gcnt_r,
+                      d->gdsp_r, 100 + a);
   }
-  size_t nrg = 0;
-  for (int k = 0; k < d->nnbr; k++) {
-    d->xcnt_s[k] = d->gcnt_s[k] * w;
-    d->xdsp_s[k] = d->gdsp_s[k] * w;
-    d->xcnt_r[k] = d->gcnt_r[k] * w;
-    d->xdsp_r[k] = d->gdsp_r[k] * w;
-    nrg += (size_t)d->gcnt_r[k];
-  }
-  par_exchange_doubles(d->nnbr, d->nbr, d->sbuf, d->xcnt_s, d->xdsp_s, d->rbuf, d->xcnt_r,
-                       d->xdsp_r);
-  const size_t g0 = p->nlocal;
-  for (size_t q = 0; q < nrg; q++)
-    for (int c = 0; c < w; c++) dst[off + c][g0 + q] = d->rbuf[q * (size_t)w + c];
-  if (positions)
+  par_exchange_wait();
+  if (what & CD_REFRESH_X)
     for (size_t i = g0; i < p->n; i++) p->fx[i] = p->fy[i] = p->fz[i] = 0.0;
-  d->st.exchanged_doubles += (double)(nrg * (size_t)w);
+  d->st.exchanged_doubles += (double)((p->n - g0) * (size_t)na);
   d->st.exchange_s += ms_wall_time() - t0;
 }
 

@@ -4,15 +4,19 @@
  * The particle region is covered by a grid of coarse cells, each weighted by its particle
  * count. A part (rank) owns whole cells; its ghosts are the particles of the cells adjacent to
  * it, so the communication of a step is proportional to the halo cells and the edges of the
- * 26-neighbour cell graph cut by the partition. Two methods:
- *   - slabs: contiguous ranges of cell planes along one axis, cut where the cumulative weight
- *     crosses k·W/nparts (a plane goes to the part holding the midpoint of its weight);
+ * 26-neighbour cell graph cut by the partition. Methods:
+ *   - slabs: the cells in plane-major order along one axis, cut where the cumulative weight
+ *     crosses k·W/nparts (a cell goes to the part holding the midpoint of its weight), so a cut
+ *     may fall inside a plane;
  *   - METIS k-way on the 26-neighbour graph, vertex weight = weight + 1 (no cell weighs 0),
  *     unit edge weights, fixed seed. Callers pass particle counts scaled up (cd_par.c: 64 per
  *     particle) so that an empty cell weighs next to nothing: with unscaled counts the many
  *     empty cells around ejecta weighed as much as particles and the particle imbalance of the
  *     default deck's late snapshot was 1.36–1.48 instead of 1.01–1.12 (docs/benchmarks.md).
- * Both are pure functions of their input, so every rank computes the same map without a
+ *   - auto: both, keeping the map of the lower load (max over parts of the owned weight plus
+ *     CD_PART_GHOST_COST × the weight of its halo cells): slabs on a uniform block (no halo
+ *     beyond the cut planes), METIS when the particles are unevenly spread (ejecta).
+ * All are pure functions of their input, so every rank computes the same map without a
  * broadcast (METIS is deterministic for a fixed seed and input on one build).
  */
 #include "ptl.h"
@@ -78,31 +82,37 @@ static void graph_free(cell_graph *g) {
   free(g->adj);
 }
 
-/* Contiguous slabs of cell planes along `axis`, cut by cumulative weight. */
+/* Slabs along `axis`: the cells in plane-major order (the plane along `axis`, then the rows
+ * along the lower other axis, then the higher one) cut into nparts contiguous runs by
+ * cumulative weight; a cell goes to the part holding the midpoint of its weight (cuts at
+ * k·W/nparts), an empty cell to the part of the cell before it. A cut therefore falls inside a
+ * plane when the planes do not divide evenly: every part's weight is within one cell's weight
+ * of W/nparts (43 whole planes on 2 parts gave 1.025) at the price of a step in the boundary
+ * (one extra row of halo cells). Equal cell counts if every weight is 0. */
 static void slab_partition(const int ncell[3], const int64_t *weight, int nparts, int axis,
                            int32_t *owner) {
-  const int np = ncell[axis];
-  double *pw = ms_calloc((size_t)np, sizeof(double));
-  const int64_t nv = (int64_t)ncell[0] * ncell[1] * ncell[2];
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2; /* the other two axes, ascending */
   const int64_t stride[3] = {1, ncell[0], (int64_t)ncell[0] * ncell[1]};
+  const int64_t nv = (int64_t)ncell[0] * ncell[1] * ncell[2];
   double total = 0;
-  for (int64_t c = 0; c < nv; ++c) {
-    int plane = (int)(c / stride[axis] % ncell[axis]);
-    pw[plane] += (double)weight[c];
-    total += (double)weight[c];
-  }
-  int32_t *plane_part = ms_calloc((size_t)np, sizeof(int32_t));
+  for (int64_t c = 0; c < nv; ++c) total += (double)weight[c];
   double acc = 0;
-  for (int p = 0; p < np; ++p) {
-    /* the part holding the midpoint of the plane's weight; equal plane counts if all empty */
-    double at = total > 0 ? (acc + 0.5 * pw[p]) / total : (p + 0.5) / np;
-    int r = (int)(at * nparts);
-    plane_part[p] = r < nparts ? r : nparts - 1;
-    acc += pw[p];
-  }
-  for (int64_t c = 0; c < nv; ++c) owner[c] = plane_part[c / stride[axis] % ncell[axis]];
-  free(pw);
-  free(plane_part);
+  int32_t last = 0;
+  int64_t k = 0; /* position in plane-major order */
+  for (int i0 = 0; i0 < ncell[axis]; ++i0)
+    for (int i1 = 0; i1 < ncell[a1]; ++i1)
+      for (int i2 = 0; i2 < ncell[a2]; ++i2, ++k) {
+        const int64_t c = i0 * stride[axis] + i1 * stride[a1] + i2 * stride[a2];
+        const double w = (double)weight[c];
+        if (total > 0 && w == 0) {
+          owner[c] = last;
+          continue;
+        }
+        const double at = total > 0 ? (acc + 0.5 * w) / total : ((double)k + 0.5) / (double)nv;
+        const int r = (int)(at * nparts);
+        owner[c] = last = r < nparts ? r : nparts - 1;
+        acc += w;
+      }
 }
 
 static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int nparts,
@@ -135,11 +145,18 @@ static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int
   return rc == METIS_OK ? MS_OK : MS_ERR_INTERNAL;
 }
 
-/* Imbalance, edge cut and halo cells of a map (definitions in ptl.h). */
+/* Cost of a ghost particle relative to an owned one in the load model (ptl.h): an owned fcc
+ * particle inside r_list = 1.3 r0 carries 6 half-list entries and its integration; a ghost
+ * adds ~1 list entry (the pairs across the cut, computed on both sides) and 3 doubles packed,
+ * sent and received per force evaluation. bench/cd_mpi on 2 ranks: ~12.8k ghosts per rank
+ * add 1.7 % list entries and ~1.5 % pack/copy time to 128k owned, i.e. ~0.25 each. */
+#define CD_PART_GHOST_COST 0.25
+
+/* Imbalance, edge cut, halo cells and load of a map (definitions in ptl.h). */
 static void partition_stats(const cell_graph *g, const int64_t *weight, int nparts,
                             const int32_t *owner, cd_partition_stats *st) {
-  double *pw = ms_calloc((size_t)nparts, sizeof(double));
-  double total = 0, wmax = 0;
+  double *pw = ms_calloc(2 * (size_t)nparts, sizeof(double)), *hw = pw + nparts;
+  double total = 0, wmax = 0, lmax = 0;
   long cut = 0, halo = 0;
   for (idx_t c = 0; c < g->nv; ++c) {
     pw[owner[c]] += (double)weight[c];
@@ -156,20 +173,22 @@ static void partition_stats(const cell_graph *g, const int64_t *weight, int npar
       if (!dup) seen[ns++] = q;
     }
     halo += ns;
+    for (int m = 0; m < ns; ++m) hw[seen[m]] += (double)weight[c];
   }
-  for (int r = 0; r < nparts; ++r) wmax = fmax(wmax, pw[r]);
+  for (int r = 0; r < nparts; ++r) {
+    wmax = fmax(wmax, pw[r]);
+    lmax = fmax(lmax, pw[r] + CD_PART_GHOST_COST * hw[r]);
+  }
   st->imbalance = total > 0 ? wmax / (total / nparts) : 1.0;
+  st->load = total > 0 ? lmax / (total / nparts) : 1.0;
   st->edge_cut = cut / 2; /* every cut edge was seen from both ends */
   st->halo_cells = halo;
   free(pw);
 }
 
-ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
-                             int nparts, cd_partition_method method, int slab_axis,
-                             int32_t *owner, cd_partition_stats *stats) {
-  if (!ncell || !periodic || !weight || !owner || nparts < 1 || slab_axis < 0 || slab_axis > 2 ||
-      (method != CD_PART_SLAB && method != CD_PART_METIS))
-    return MS_ERR_INPUT;
+static ms_status check_grid(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                            int nparts, const int32_t *owner) {
+  if (!ncell || !periodic || !weight || !owner || nparts < 1) return MS_ERR_INPUT;
   double nv = 1;
   for (int a = 0; a < 3; ++a) {
     if (ncell[a] < 1) return MS_ERR_INPUT;
@@ -179,20 +198,66 @@ ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const i
   if (nv * 26 > 2147483647.0) return MS_ERR_INPUT;
   for (int64_t c = 0; c < (int64_t)nv; ++c)
     if (weight[c] < 0) return MS_ERR_INPUT;
+  return MS_OK;
+}
 
+ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                             int nparts, cd_partition_method method, int slab_axis,
+                             int32_t *owner, cd_partition_stats *stats) {
+  if (check_grid(ncell, periodic, weight, nparts, owner) != MS_OK || slab_axis < 0 ||
+      slab_axis > 2 || (method != CD_PART_SLAB && method != CD_PART_METIS && method != CD_PART_AUTO))
+    return MS_ERR_INPUT;
+  const size_t nv = (size_t)ncell[0] * ncell[1] * ncell[2];
   cell_graph g = {0};
-  const bool need_graph = stats || (method == CD_PART_METIS && nparts > 1);
+  const bool need_graph = stats || (method != CD_PART_SLAB && nparts > 1);
   if (need_graph) graph_build(ncell, periodic, &g);
   ms_status s = MS_OK;
-  if (nparts == 1)
-    memset(owner, 0, (size_t)nv * sizeof *owner);
-  else if (method == CD_PART_SLAB)
+  cd_partition_stats st = {.method = method == CD_PART_METIS ? CD_PART_METIS : CD_PART_SLAB,
+                           .rejected_load = NAN};
+  if (nparts == 1) {
+    memset(owner, 0, nv * sizeof *owner);
+  } else if (method == CD_PART_SLAB) {
     slab_partition(ncell, weight, nparts, slab_axis, owner);
-  else
+  } else if (method == CD_PART_METIS) {
     s = metis_partition(&g, weight, nparts, owner);
-  if (s == MS_OK && stats) partition_stats(&g, weight, nparts, owner, stats);
+  } else { /* both; the METIS map replaces the slabs if its load is lower */
+    int32_t *alt = ms_calloc(nv, sizeof *alt);
+    cd_partition_stats ss, sm;
+    slab_partition(ncell, weight, nparts, slab_axis, owner);
+    partition_stats(&g, weight, nparts, owner, &ss);
+    s = metis_partition(&g, weight, nparts, alt);
+    if (s == MS_OK) {
+      partition_stats(&g, weight, nparts, alt, &sm);
+      st.rejected_load = ss.load;
+      if (sm.load < ss.load) {
+        memcpy(owner, alt, nv * sizeof *owner);
+        st.method = CD_PART_METIS;
+      } else {
+        st.rejected_load = sm.load;
+      }
+    }
+    free(alt);
+  }
+  if (s == MS_OK && stats) {
+    partition_stats(&g, weight, nparts, owner, &st);
+    *stats = st;
+  }
   if (need_graph) graph_free(&g);
   return s;
+}
+
+ms_status cd_partition_evaluate(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                                int nparts, const int32_t *owner, cd_partition_stats *stats) {
+  if (check_grid(ncell, periodic, weight, nparts, owner) != MS_OK || !stats) return MS_ERR_INPUT;
+  const size_t nv = (size_t)ncell[0] * ncell[1] * ncell[2];
+  for (size_t c = 0; c < nv; ++c)
+    if (owner[c] < 0 || owner[c] >= nparts) return MS_ERR_INPUT;
+  cell_graph g = {0};
+  graph_build(ncell, periodic, &g);
+  *stats = (cd_partition_stats){.method = CD_PART_SLAB, .rejected_load = NAN};
+  partition_stats(&g, weight, nparts, owner, stats);
+  graph_free(&g);
+  return MS_OK;
 }
 
 static int cmp_pair(const void *a, const void *b) {

@@ -23,7 +23,7 @@ typedef enum { SURF_FLAT = 0, SURF_SINE, SURF_RANDOM } surface_kind;
 static const char *const surface_names[] = {"flat", "sine", "random", NULL};
 static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
 static const char *const mode_names[] = {"plain", "bonded", NULL};
-static const char *const partition_names[] = {"slab", "metis", NULL}; /* cd_partition_method */
+static const char *const partition_names[] = {"slab", "metis", "auto", NULL}; /* cd_partition_method */
 
 typedef struct cd_region {
   int mat;                    /* index into the problem's material list */
@@ -556,13 +556,13 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     p->relax.rebond = true;
   }
 
-  p->mpi = (cd_mpi_config){.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
+  p->mpi = (cd_mpi_config){.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
                            .rebalance_interval = 10, .replicated = true};
   const dk_node *mn = dk_get(sec, "mpi");
   if (mn && dk_expect_map(e, doc, mn, "mpi")) {
-    int pm = CD_PART_METIS;
+    int pm = CD_PART_AUTO;
     long iv = 10;
-    dk_read_enum(e, doc, mn, "partition", false, CD_PART_METIS, partition_names, &pm);
+    dk_read_enum(e, doc, mn, "partition", false, CD_PART_AUTO, partition_names, &pm);
     dk_read_double(e, doc, mn, "rebalance_threshold", MS_DIM_NONE, false, 1.2, 0.0, 1e6,
                    &p->mpi.rebalance_threshold);
     dk_read_int(e, doc, mn, "rebalance_interval", false, 10, 1, 1L << 30, &iv);
@@ -954,12 +954,20 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
          cd_sim_bytes(s) / (ps->nlocal ? ps->nlocal : 1));
   const cd_mpi_stats *ms = cd_sim_mpi_stats(s);
   long rebalances_logged = 0;
-  if (ms)
-    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %dx%dx%d coarse cells, %s partition: "
-           "edge cut %ld, imbalance %.3f; owned max %zu, ghosts %zu in all; rebalance above %g "
-           "(checked every %d list builds)", ms->ranks, ms->ncell[0], ms->ncell[1], ms->ncell[2],
-           partition_names[p->mpi.partition], ms->partition.edge_cut, ms->imbalance, ms->max_owned,
-           ms->total_ghosts, p->mpi.rebalance_threshold, p->mpi.rebalance_interval);
+  if (ms) {
+    const cd_partition_stats *pst = &ms->partition;
+    char alt[80] = ""; /* auto: the map it did not take */
+    if (!isnan(pst->rejected_load))
+      snprintf(alt, sizeof alt, " (auto; %s: load %.3f)",
+               partition_names[pst->method == CD_PART_SLAB ? CD_PART_METIS : CD_PART_SLAB],
+               pst->rejected_load);
+    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %dx%dx%d coarse cells, %s partition%s: "
+           "edge cut %ld, imbalance %.3f, load %.3f; owned max %zu, ghosts %zu in all; "
+           "rebalance above %g (checked every %d list builds)", ms->ranks, ms->ncell[0],
+           ms->ncell[1], ms->ncell[2], partition_names[pst->method], alt, pst->edge_cut,
+           ms->imbalance, pst->load, ms->max_owned, ms->total_ghosts,
+           p->mpi.rebalance_threshold, p->mpi.rebalance_interval);
+  }
 
   /* outputs */
   /* rank 0 writes the CSV files; every rank runs the same loop (the diagnostics are collective) */
@@ -1027,8 +1035,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     if (ms && ms->rebalances > rebalances_logged) {
       rebalances_logged = ms->rebalances;
       ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: rebalance at step %ld: imbalance %.3f -> %.3f, "
-             "edge cut %ld", ms->rebalance_step, ms->rebalance_before, ms->rebalance_after,
-             ms->partition.edge_cut);
+             "edge cut %ld, %s map", ms->rebalance_step, ms->rebalance_before,
+             ms->rebalance_after, ms->partition.edge_cut, partition_names[ms->partition.method]);
     }
     if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
       st = write_checkpoint(ctx, p, s, streams, front, nf);

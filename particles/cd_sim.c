@@ -205,7 +205,7 @@ static double driven_force(const cd_sim *s) {
 
 /* Forces for the time step; in bonded mode also books broken bonds. */
 static void step_forces(cd_sim *s) {
-  if (s->dd) cd_dd_refresh(s, true);
+  if (s->dd) cd_dd_refresh(s, CD_REFRESH_X);
   double t0 = ms_wall_time();
   if (s->cfg.cutoff == CD_CUTOFF_BONDED) {
     cd_compute_forces(s, s->sums, NULL, true);
@@ -361,7 +361,7 @@ static ms_status end_step(cd_sim *s) {
   if (s->cfg.damping_gamma > 0.0) {
     /* the ghosts' velocities after the kick; after an RKN step their positions too (they hold
      * the last stage's) */
-    if (s->dd) cd_dd_refresh(s, s->rkn != NULL);
+    if (s->dd) cd_dd_refresh(s, CD_REFRESH_V | (s->rkn ? CD_REFRESH_X : 0u));
     s->dissipated += cd_damping_step(s);
   }
   s->t += s->cfg.dt;
@@ -587,7 +587,7 @@ ms_status cd_sim_step(cd_sim *s) { return s->rkn ? rkn_step_cd(s) : vv_step(s); 
 /* ---- diagnostics ---- */
 /* Diagnostics under MPI: ghosts at x^{n+1} (after an RKN step they hold the last stage's). */
 static void diag_ghosts(cd_sim *s) {
-  if (s->dd && s->rkn) cd_dd_refresh(s, true);
+  if (s->dd && s->rkn) cd_dd_refresh(s, CD_REFRESH_X);
 }
 
 void cd_sim_energy(cd_sim *s, cd_energy *out) {
@@ -702,7 +702,7 @@ bool cd_sim_owns_position(const cd_sim *s, const double x[3]) {
 }
 
 void cd_sim_refresh_ghosts(cd_sim *s) {
-  if (s->dd) cd_dd_refresh(s, true);
+  if (s->dd) cd_dd_refresh(s, CD_REFRESH_X | CD_REFRESH_V);
 }
 
 /* ---- relaxation before the run (docs/particles-cd.md "Relaxation") ---- */

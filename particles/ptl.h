@@ -193,25 +193,39 @@ typedef struct cd_energy {
 typedef struct cd_neigh cd_neigh; /* link cells + Verlet lists (particles/neighbour.c) */
 
 /* ---- CD domain partition (particles/cd_partition.c, docs/mpi.md) ---- */
-typedef enum cd_partition_method { CD_PART_SLAB = 0, CD_PART_METIS } cd_partition_method;
+typedef enum cd_partition_method {
+  CD_PART_SLAB = 0,
+  CD_PART_METIS,
+  CD_PART_AUTO
+} cd_partition_method;
 typedef struct cd_partition_stats {
+  cd_partition_method method; /* of the map (CD_PART_AUTO: the one it chose) */
   double imbalance; /* max part weight / mean part weight (weights as given) */
+  double load;      /* max over parts of (part weight + 0.25 × weight of its halo cells, the
+                     * ghosts) / mean part weight: the cost model CD_PART_AUTO minimises */
+  double rejected_load; /* CD_PART_AUTO: the load of the map it did not take; else NaN */
   long edge_cut;    /* edges of the 26-neighbour coarse-cell graph joining different parts */
   long halo_cells;  /* Σ over parts of the cells not in the part but adjacent to it */
 } cd_partition_stats;
 /* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
  * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
- * the graph. CD_PART_SLAB: contiguous ranges of cell planes along slab_axis, split by cumulative
- * weight. CD_PART_METIS: METIS_PartGraphKway on the 26-neighbour graph, vertex weight = weight+1,
- * fixed seed, so every rank calling it with the same input gets the same owner map (no
- * broadcast needed). nparts == 1 → all zero. stats may be NULL. Pass particle counts scaled up
- * (e.g. ×64, as cd_par.c does) so that empty cells weigh little against particles. METIS with
- * nparts ≥ cells gives cell c to part c. Vertex weights summing above 2^30 are scaled down for
- * METIS's 32-bit idx_t. MS_ERR_INPUT: bad arguments, negative
- * weights, more than 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
+ * the graph. CD_PART_SLAB: the cells in plane-major order along slab_axis (then the lower, then
+ * the higher other axis) cut into contiguous runs by cumulative weight (a cut may fall inside a
+ * plane; each part within one cell weight of the mean). CD_PART_METIS: METIS_PartGraphKway on
+ * the 26-neighbour graph, vertex weight = weight+1, fixed seed, so every rank calling it with
+ * the same input gets the same owner map (no broadcast needed). CD_PART_AUTO: both, keeping the
+ * one of lower `load` (stats->method says which; slabs on ties). nparts == 1 → all zero. stats
+ * may be NULL. Pass particle counts scaled up (e.g. ×64, as cd_par.c does) so that empty cells
+ * weigh little against particles. METIS with nparts ≥ cells gives cell c to part c. Vertex
+ * weights summing above 2^30 are scaled down for METIS's 32-bit idx_t. MS_ERR_INPUT: bad
+ * arguments, negative weights, more than 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
 ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
                              int nparts, cd_partition_method method, int slab_axis,
                              int32_t *owner, cd_partition_stats *stats);
+/* The figures of a given owner map (stats->method is meaningless). MS_ERR_INPUT: bad
+ * arguments or an owner outside [0, nparts). */
+ms_status cd_partition_evaluate(const int ncell[3], const bool periodic[3], const int64_t *weight,
+                                int nparts, const int32_t *owner, cd_partition_stats *stats);
 /* Per-part figures of an owner map: halo[p] = cells outside part p adjacent to it (its ghost
  * cells), neighbours[p] = distinct other parts adjacent to p (its messages per exchange).
  * Arrays of nparts entries; either may be NULL. */

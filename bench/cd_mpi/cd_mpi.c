@@ -3,10 +3,11 @@
  * built by bench/cd_lammps's set-up, run on as many ranks as mpirun gives (1 rank: the serial
  * code path, no decomposition).
  *
- *   OMP_NUM_THREADS=1 mpirun -np 1 cd_mpi_bench A [--steps N] [--partition metis|slab]
+ *   OMP_NUM_THREADS=1 mpirun -np 1 cd_mpi_bench A [--steps N] [--partition auto|metis|slab]
  *   OMP_NUM_THREADS=1 mpirun -np 2 cd_mpi_bench A ...
  * Prints the loop wall time (slowest rank), CPU time per rank and summed, particle-steps/s,
- * the decomposition (cells, owned, ghosts, edge cut), exchange time and volume, and the final
+ * the decomposition (cells, owned, ghosts, edge cut, load), exchange time and volume, per rank
+ * the owned/ghost/list-entry counts, force time, CPU outside MPI and peak RSS, and the final
  * energies (which must agree with the 1-rank run to round-off). Efficiency = T1 / (P·T_P) from
  * two such runs (run_scaling.sh interleaves them). */
 #include "cd_lammps_setup.h"
@@ -17,22 +18,36 @@
 #include <string.h>
 #include <time.h>
 
+/* Peak resident memory of this process (VmHWM of /proc/self/status), MB; NaN if unknown. */
+static double peak_rss_mb(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  char line[256];
+  double kb = NAN;
+  while (f && fgets(line, sizeof line, f))
+    if (!strncmp(line, "VmHWM:", 6)) kb = atof(line + 6);
+  if (f) fclose(f);
+  return kb / 1024.0;
+}
+
 int main(int argc, char **argv) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   if (par_init(&argc, &argv, &ctx) != MS_OK) return 1;
   if (argc < 2 || (strcmp(argv[1], "A") && strcmp(argv[1], "B"))) {
-    if (ctx.rank == 0) fprintf(stderr, "usage: %s A|B [--steps N] [--partition metis|slab]\n", argv[0]);
+    if (ctx.rank == 0) fprintf(stderr, "usage: %s A|B [--steps N] [--partition auto|metis|slab]\n", argv[0]);
     par_finalize();
     return 2;
   }
   const bool probB = argv[1][0] == 'B';
   long steps = probB ? 2000 : 1000;
-  cd_partition_method method = CD_PART_METIS;
+  cd_partition_method method = CD_PART_AUTO; /* the decks' default */
   for (int k = 2; k < argc; k++) {
     if (!strcmp(argv[k], "--steps") && k + 1 < argc) steps = atol(argv[++k]);
-    else if (!strcmp(argv[k], "--partition") && k + 1 < argc)
-      method = strcmp(argv[++k], "slab") ? CD_PART_METIS : CD_PART_SLAB;
+    else if (!strcmp(argv[k], "--partition") && k + 1 < argc) {
+      k++;
+      method = !strcmp(argv[k], "slab") ? CD_PART_SLAB
+               : !strcmp(argv[k], "auto") ? CD_PART_AUTO : CD_PART_METIS;
+    }
   }
   eos_t *eos = eos_create_mg_cold(RHO0, C0, NEXP, 2.0, true);
   cd_sim *s = cd_lammps_setup(probB, eos, NULL);
@@ -72,20 +87,40 @@ int main(int argc, char **argv) {
   double xs = ms ? ms->exchange_s : 0.0, xd = ms ? ms->exchanged_doubles : 0.0;
   const double xs_max = par_max_double(xs), xd_sum = par_sum_double(xd);
   const double fw = par_max_double(s->wall_time_force), nw = par_max_double(s->wall_time_neigh);
+  const double pairs = (double)cd_sim_pairs(s);
+  const double pairs_max = par_max_double(pairs), pairs_sum = par_sum_double(pairs);
+  /* per rank: owned, ghosts, list entries, force wall, CPU outside MPI (where the time goes),
+   * peak resident memory */
+  enum { NPR = 6 };
+  double mine[NPR] = {(double)s->p->nlocal, (double)(s->p->n - s->p->nlocal), pairs,
+                      s->wall_time_force, work, peak_rss_mb()};
+  double *all = ms_calloc((size_t)NPR * ctx.size, sizeof *all);
+  int *cnt = ms_calloc((size_t)ctx.size, sizeof *cnt), *dsp = ms_calloc((size_t)ctx.size, sizeof *dsp);
+  for (int r = 0; r < ctx.size; r++) cnt[r] = NPR, dsp[r] = NPR * r;
+  par_allgatherv_doubles(mine, NPR, all, cnt, dsp);
   if (ctx.rank == 0) {
+    for (int r = 0; r < ctx.size; r++) {
+      const double *a = all + NPR * r;
+      printf("rank %d: owned %.0f, ghosts %.0f, list entries %.0f, force %.3f s (%.2f ns per "
+             "entry-step), CPU outside MPI %.3f s, peak RSS %.1f MB\n", r, a[0], a[1], a[2],
+             a[3], 1e9 * a[3] / (a[2] * (double)steps), a[4], a[5]);
+    }
     printf("problem %s on %d rank(s): N = %zu, steps = %ld, setup %.3f s\n", argv[1], ctx.size, n,
            steps, setup);
     if (ms)
-      printf("decomposition: %dx%dx%d coarse cells, %s, owned max %zu, ghosts %zu in all "
-             "(%.2f %% of N), edge cut %ld, imbalance %.4f, rebalances %ld\n",
-             ms->ncell[0], ms->ncell[1], ms->ncell[2], method == CD_PART_METIS ? "metis" : "slab",
-             ms->max_owned, ms->total_ghosts, 100.0 * ms->total_ghosts / n,
-             ms->partition.edge_cut, ms->imbalance, ms->rebalances);
+      printf("decomposition: %dx%dx%d coarse cells, %s%s, owned max %zu, ghosts %zu in all "
+             "(%.2f %% of N), edge cut %ld, imbalance %.4f, load %.4f (other map %.4f), "
+             "rebalances %ld\n", ms->ncell[0], ms->ncell[1], ms->ncell[2],
+             ms->partition.method == CD_PART_METIS ? "metis" : "slab",
+             method == CD_PART_AUTO ? " (auto)" : "", ms->max_owned, ms->total_ghosts,
+             100.0 * ms->total_ghosts / n, ms->partition.edge_cut, ms->imbalance,
+             ms->partition.load, ms->partition.rejected_load, ms->rebalances);
     printf("loop wall %.3f s (slowest rank; force %.3f, lists+migration %.3f, exchange %.3f), "
            "rebuilds %ld\n", wall_max, fw, nw, xs_max, cd_sim_rebuilds(s));
     printf("loop CPU %.3f s summed over ranks (max rank %.3f); CPU outside MPI calls: max rank "
            "%.3f s; wall inside MPI calls: max rank %.3f s\n", cpu_sum, cpu_max, work_max,
            comm_wall_max);
+    printf("list entries: max rank %.0f, all ranks %.0f\n", pairs_max, pairs_sum);
     printf("exchanged %.4g doubles in all (%.3g per particle-step)\n", xd_sum,
            xd_sum / ((double)n * steps));
     printf("particle-steps/s %.4g (wall), %.4g per CPU-second\n", (double)n * steps / wall_max,
@@ -95,6 +130,9 @@ int main(int argc, char **argv) {
     printf("energies: step 0 total %.15g; step %ld KE %.15g PE %.15g total %.15g\n", e0.total,
            steps, e1.kinetic, e1.potential, e1.total);
   }
+  free(all);
+  free(cnt);
+  free(dsp);
   cd_sim_free(s);
   eos_destroy(eos);
   par_finalize();

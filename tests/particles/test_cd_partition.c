@@ -29,7 +29,8 @@ static bool adjacent(const int n[3], const bool per[3], int64_t a, int64_t b) {
   return true;
 }
 
-/* Brute-force figures; halo[p] and nbrs[p] (distinct adjacent parts) per part. */
+/* Brute-force figures; halo[p] and nbrs[p] (distinct adjacent parts) per part. The load is
+ * max_p (weight of p + 0.25 × weight of p's halo cells) / mean (ptl.h). */
 static void brute_stats(const int n[3], const bool per[3], const int64_t *w, int nparts,
                         const int32_t *owner, cd_partition_stats *st, long *halo, int *nbrs) {
   int64_t nv = ncells(n);
@@ -45,15 +46,19 @@ static void brute_stats(const int n[3], const bool per[3], const int64_t *w, int
     for (int64_t b = a + 1; b < nv; ++b)
       if (owner[a] != owner[b] && adjacent(n, per, a, b)) st->edge_cut++;
   st->halo_cells = 0;
+  st->load = 0;
   for (int p = 0; p < nparts; ++p) {
     halo[p] = 0;
     nbrs[p] = 0;
+    double hw = 0;
     for (int64_t c = 0; c < nv; ++c) {
       if (owner[c] == p) continue;
       bool near = false;
       for (int64_t b = 0; b < nv && !near; ++b) near = owner[b] == p && adjacent(n, per, c, b);
       halo[p] += near;
+      hw += near ? (double)w[c] : 0.0;
     }
+    st->load = fmax(st->load, (pw[p] + 0.25 * hw) / (tot / nparts));
     st->halo_cells += halo[p];
     for (int q = 0; q < nparts; ++q) {
       bool touch = false;
@@ -100,6 +105,68 @@ static void test_slab_known_weights(void **state) {
   assert_int_equal(st.edge_cut, bf.edge_cut);
   assert_int_equal(st.halo_cells, bf.halo_cells);
   assert_int_equal(st.halo_cells, 4 * 16); /* the middle part sees both neighbours' planes */
+}
+
+/* Planes that do not divide evenly: 5 uniform planes of 4×3 cells along x on 2 parts are cut
+ * inside the middle plane, after its first 6 cells in (y, z) row order: 30 | 30 cells. */
+static void test_slab_cut_inside_plane(void **state) {
+  (void)state;
+  const int n[3] = {5, 4, 3};
+  const bool per[3] = {true, false, false};
+  int64_t w[60];
+  for (int c = 0; c < 60; ++c) w[c] = 7;
+  int32_t owner[60];
+  cd_partition_stats st;
+  assert_int_equal(cd_partition_cells(n, per, w, 2, CD_PART_SLAB, 0, owner, &st), MS_OK);
+  for (int64_t c = 0; c < 60; ++c) {
+    const int64_t x = c % 5, y = c / 5 % 4; /* z order inside a y row: rows y = 0, 1 first */
+    assert_int_equal(owner[c], x < 2 || (x == 2 && y < 2) ? 0 : 1);
+  }
+  assert_true(st.imbalance == 1.0); /* whole planes would give 36 | 24: 1.2 */
+  assert_true(st.method == CD_PART_SLAB && isnan(st.rejected_load));
+}
+
+/* auto keeps the map of lower load: on a uniform 16³ block, slabs for 2 parts (one cut plane
+ * each side; METIS is no flatter and a little less even) and METIS for 8 parts (2-plane slabs
+ * have halos as large as themselves: load (2 + 0.25·2)/2 = 1.25, METIS's 8³ corner blocks
+ * ~(512 + 0.25·217)/512 = 1.11); the map returned is the chosen method's own, and the other's
+ * load is reported. */
+static void test_auto_choice(void **state) {
+  (void)state;
+  const int n[3] = {16, 16, 16};
+  const bool per[3] = {false, false, false};
+  const int64_t nv = ncells(n);
+  int64_t *w = malloc((size_t)nv * sizeof *w);
+  for (int64_t c = 0; c < nv; ++c) w[c] = 64;
+  int32_t *oa = malloc((size_t)nv * sizeof *oa), *ob = malloc((size_t)nv * sizeof *ob);
+  const int parts[2] = {2, 8};
+  const cd_partition_method expect[2] = {CD_PART_SLAB, CD_PART_METIS};
+  for (int k = 0; k < 2; ++k) {
+    cd_partition_stats sa, sb, sother;
+    assert_int_equal(cd_partition_cells(n, per, w, parts[k], CD_PART_AUTO, 2, oa, &sa), MS_OK);
+    printf("16^3, %d parts: auto took %s, load %.4f (other %.4f)\n", parts[k],
+           sa.method == CD_PART_SLAB ? "slab" : "metis", sa.load, sa.rejected_load);
+    assert_int_equal(sa.method, expect[k]);
+    assert_int_equal(cd_partition_cells(n, per, w, parts[k], expect[k], 2, ob, &sb), MS_OK);
+    assert_memory_equal(oa, ob, (size_t)nv * sizeof *oa);
+    assert_true(sa.load == sb.load && sa.load <= sa.rejected_load);
+    assert_int_equal(cd_partition_cells(n, per, w, parts[k],
+                                        expect[k] == CD_PART_SLAB ? CD_PART_METIS : CD_PART_SLAB,
+                                        2, ob, &sother), MS_OK);
+    assert_true(sother.load == sa.rejected_load);
+    cd_partition_stats ev;
+    assert_int_equal(cd_partition_evaluate(n, per, w, parts[k], oa, &ev), MS_OK);
+    assert_true(ev.load == sa.load && ev.edge_cut == sa.edge_cut && ev.imbalance == sa.imbalance);
+  }
+  cd_partition_stats s8;
+  assert_int_equal(cd_partition_cells(n, per, w, 8, CD_PART_SLAB, 2, ob, &s8), MS_OK);
+  assert_true(fabs(s8.load - 1.25) < 1e-15); /* an inner slab: 2 planes + 2 halo planes */
+  oa[0] = 8; /* an owner outside [0, parts) */
+  cd_partition_stats ev;
+  assert_int_equal(cd_partition_evaluate(n, per, w, 8, oa, &ev), MS_ERR_INPUT);
+  free(w);
+  free(oa);
+  free(ob);
 }
 
 /* On a uniform 16³ block, METIS cuts no more edges than slabs for 4..16 parts (slabs cut
@@ -196,7 +263,7 @@ static void test_periodic_wrap(void **state) {
 }
 
 /* The reported figures and the per-part halo / neighbour-part counts (cd_partition_halo) equal a
- * brute-force count over all cell pairs, for both methods, several part counts and mixed
+ * brute-force count over all cell pairs, for every method, several part counts and mixed
  * periodic/open axes (including a periodic axis of 2 cells). */
 static void test_stats_brute_force(void **state) {
   (void)state;
@@ -210,11 +277,12 @@ static void test_stats_brute_force(void **state) {
       w[c] = (int64_t)(50 * ptl_splitmix64_uniform(11 + (uint64_t)g, (uint64_t)c));
     int32_t *owner = malloc((size_t)nv * sizeof *owner);
     const int parts[] = {1, 2, 3, 5};
-    for (int m = 0; m < 2; ++m)
+    for (int m = 0; m < 3; ++m)
       for (size_t k = 0; k < 4; ++k)
         for (int axis = 0; axis < 3; ++axis) {
           cd_partition_stats st, bf;
-          cd_partition_method meth = m ? CD_PART_METIS : CD_PART_SLAB;
+          const cd_partition_method meth = (cd_partition_method[]){CD_PART_SLAB, CD_PART_METIS,
+                                                                   CD_PART_AUTO}[m];
           assert_int_equal(cd_partition_cells(n, pers[g], w, parts[k], meth, axis, owner, &st),
                            MS_OK);
           long halo[5], bhalo[5];
@@ -229,15 +297,26 @@ static void test_stats_brute_force(void **state) {
           assert_int_equal(st.halo_cells, bf.halo_cells);
           /* the same sum of the same integers (exact in double) divided the same way */
           assert_true(fabs(st.imbalance - bf.imbalance) <= 1e-14 * bf.imbalance);
+          assert_true(fabs(st.load - bf.load) <= 1e-14 * bf.load); /* summed in another order */
           if (parts[k] == 1) assert_int_equal(st.edge_cut, 0);
-          if (m == 0) { /* slabs: every plane along the axis belongs to one part, in order */
-            int64_t stride = axis == 0 ? 1 : axis == 1 ? n[0] : (int64_t)n[0] * n[1];
-            for (int64_t c = 0; c < nv; ++c) {
-              int64_t plane = c / stride % n[axis];
-              int64_t c0 = plane * stride; /* first cell of the plane */
-              assert_int_equal(owner[c], owner[c0]);
-              if (plane > 0) assert_true(owner[c0] >= owner[c0 - stride]);
-            }
+          if (st.method == CD_PART_SLAB) { /* slabs: parts non-decreasing in plane-major order, each within one
+                         * cell weight of the mean (the midpoint rule) */
+            const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+            const int64_t stride[3] = {1, n[0], (int64_t)n[0] * n[1]};
+            double total = 0, wmax = 0, pw[5] = {0};
+            int32_t prev = 0;
+            for (int i0 = 0; i0 < n[axis]; ++i0)
+              for (int i1 = 0; i1 < n[a1]; ++i1)
+                for (int i2 = 0; i2 < n[a2]; ++i2) {
+                  int64_t c = i0 * stride[axis] + i1 * stride[a1] + i2 * stride[a2];
+                  assert_true(owner[c] >= prev);
+                  prev = owner[c];
+                  pw[owner[c]] += (double)w[c];
+                  total += (double)w[c];
+                  wmax = fmax(wmax, (double)w[c]);
+                }
+            for (int p = 0; p < parts[k]; ++p)
+              assert_true(fabs(pw[p] - total / parts[k]) <= wmax);
           }
         }
     free(w);
@@ -263,6 +342,7 @@ int main(void) {
       cmocka_unit_test(test_slab_known_weights), cmocka_unit_test(test_metis_beats_slabs),
       cmocka_unit_test(test_determinism),        cmocka_unit_test(test_periodic_wrap),
       cmocka_unit_test(test_stats_brute_force),  cmocka_unit_test(test_bad_arguments),
+      cmocka_unit_test(test_slab_cut_inside_plane), cmocka_unit_test(test_auto_choice),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
