@@ -90,10 +90,10 @@ int main(int argc, char **argv) {
   const double pairs = (double)cd_sim_pairs(s);
   const double pairs_max = par_max_double(pairs), pairs_sum = par_sum_double(pairs);
   /* per rank: owned, ghosts, list entries, force wall, CPU outside MPI (where the time goes),
-   * peak resident memory */
-  enum { NPR = 6 };
+   * peak resident memory, wall inside MPI calls and in ghost refreshes + migrations */
+  enum { NPR = 8 };
   double mine[NPR] = {(double)s->p->nlocal, (double)(s->p->n - s->p->nlocal), pairs,
-                      s->wall_time_force, work, peak_rss_mb()};
+                      s->wall_time_force, work, peak_rss_mb(), mw1 - mw0, xs};
   double *all = ms_calloc((size_t)NPR * ctx.size, sizeof *all);
   int *cnt = ms_calloc((size_t)ctx.size, sizeof *cnt), *dsp = ms_calloc((size_t)ctx.size, sizeof *dsp);
   for (int r = 0; r < ctx.size; r++) cnt[r] = NPR, dsp[r] = NPR * r;
@@ -102,8 +102,9 @@ int main(int argc, char **argv) {
     for (int r = 0; r < ctx.size; r++) {
       const double *a = all + NPR * r;
       printf("rank %d: owned %.0f, ghosts %.0f, list entries %.0f, force %.3f s (%.2f ns per "
-             "entry-step), CPU outside MPI %.3f s, peak RSS %.1f MB\n", r, a[0], a[1], a[2],
-             a[3], 1e9 * a[3] / (a[2] * (double)steps), a[4], a[5]);
+             "entry-step), CPU outside MPI %.3f s, wall in MPI %.3f s (ghosts %.3f s), peak RSS "
+             "%.1f MB\n", r, a[0], a[1], a[2], a[3], 1e9 * a[3] / (a[2] * (double)steps), a[4],
+             a[6], a[7], a[5]);
     }
     printf("problem %s on %d rank(s): N = %zu, steps = %ld, setup %.3f s\n", argv[1], ctx.size, n,
            steps, setup);
