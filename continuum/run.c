@@ -94,6 +94,27 @@ static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double
 
 static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *h);
 
+/* Rank 0 writes the files. A hooked run goes on every rank (the coupled problem's replicated
+ * grid, docs/mpi.md "The coupled problem on MPI ranks"): there every rank learns rank 0's write
+ * status, so that all of them stop together. */
+typedef struct file_writer {
+  const ms_ctx *ctx;
+  bool agree; /* hooked run on several ranks */
+} file_writer;
+
+static ms_status agreed(const file_writer *w, ms_status s) {
+  return w->agree ? par_agree_status(s) : s;
+}
+static ms_status write_profile(const file_writer *w, const cont_grid *g, const char *stem) {
+  return agreed(w, w->ctx->rank == 0 ? cont_write_profile(w->ctx, g, stem) : MS_OK);
+}
+static ms_status write_histories(const file_writer *w, const cont_grid *g, long stride) {
+  return agreed(w, w->ctx->rank == 0 ? cont_write_histories(w->ctx, g, stride) : MS_OK);
+}
+static ms_status write_xt(const file_writer *w, const xt_data *xt, int quantity) {
+  return agreed(w, w->ctx->rank == 0 ? xt_write(w->ctx, xt, quantity) : MS_OK);
+}
+
 /* The 1D grid is cheap and serial: under MPI rank 0 runs it and writes every file (two ranks
  * writing the same outputs would race); the other ranks wait and share its status. */
 ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
@@ -101,7 +122,8 @@ ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p) {
   return par_agree_status(s);
 }
 
-/* Hooked runs belong to the caller's (serial) coupling loop: every rank that calls runs. */
+/* Hooked runs belong to the caller's coupling loop: every rank that calls runs (the hooks keep
+ * the copies equal; rank 0 writes the files). */
 ms_status cont_problem_run_hooked(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *hooks) {
   if (hooks && hooks->end > 0) p->t_end = hooks->end;
   return run_on_this_rank(ctx, p, hooks);
@@ -110,6 +132,7 @@ ms_status cont_problem_run_hooked(ms_ctx *ctx, cont_problem *p, const cont_step_
 static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_hooks *h) {
   cont_grid *g = p->grid;
   ms_status s = MS_OK;
+  const file_writer fw = {ctx, h != NULL && ctx->size > 1};
   cont_balance b0 = cont_grid_balance(g);
   double e0 = b0.internal + b0.kinetic, mom0 = b0.momentum;
   ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g",
@@ -128,7 +151,7 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   while (next_out < p->n_out && p->out_times[next_out] <= 0.0) {
     char stem[32];
     snprintf(stem, sizeof stem, "profile_%04zu", next_out);
-    s = cont_write_profile(ctx, g, stem);
+    s = write_profile(&fw, g, stem);
     if (s) goto done;
     ++next_out;
   }
@@ -149,17 +172,19 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
     if (s == MS_OK && h && h->after && (s = h->after(h->user, g)) != MS_OK) break;
     if (s != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR, "continuum: %s", cont_grid_error(g));
-      ms_status s2 = cont_write_profile(ctx, g, "profile_unstable");
-      if (s2 == MS_OK)
+      /* every rank that runs the grid failed alike: no agreement needed (fw.agree off) */
+      const file_writer fail = {ctx, false};
+      ms_status s2 = write_profile(&fail, g, "profile_unstable");
+      if (s2 == MS_OK && ctx->rank == 0)
         ms_log(ctx, MS_LOG_ERROR, "continuum: final state written to profile_unstable.h5/.csv");
-      cont_write_histories(ctx, g, p->history_stride);
+      write_histories(&fail, g, p->history_stride);
       break;
     }
     if (g->t >= target) {
       if (next_out < p->n_out && g->t >= p->out_times[next_out]) {
         char stem[32];
         snprintf(stem, sizeof stem, "profile_%04zu", next_out);
-        s = cont_write_profile(ctx, g, stem);
+        s = write_profile(&fw, g, stem);
         if (s) break;
         log_balance(ctx, g, e0, mom0);
         ++next_out;
@@ -179,12 +204,13 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   ms_progress_finish(&prog, g->t, g->step);
   if (s == MS_OK) {
     log_balance(ctx, g, e0, mom0);
-    s = cont_write_profile(ctx, g, "profile_final");
-    if (!s) s = cont_write_histories(ctx, g, p->history_stride);
-    if (!s && p->xt_frames > 0) s = xt_write(ctx, &xt, p->xt_quantity);
+    s = write_profile(&fw, g, "profile_final");
+    if (!s) s = write_histories(&fw, g, p->history_stride);
+    if (!s && p->xt_frames > 0) s = write_xt(&fw, &xt, p->xt_quantity);
   } else if (s == MS_ERR_UNSTABLE && p->xt_frames > 0) {
     xt_add(&xt, g);
-    xt_write(ctx, &xt, p->xt_quantity);
+    const file_writer fail = {ctx, false};
+    write_xt(&fail, &xt, p->xt_quantity);
   }
 done:
   xt_free(&xt);

@@ -350,6 +350,10 @@ void par_bcast_doubles(double *v, size_t n, int root);
 void par_bcast_ints(int32_t *v, size_t n, int root);
 /* In-place element-wise sum over ranks of v[0..n). */
 void par_sum_doubles(double *v, size_t n);
+/* The same sum in a fixed order (rank order, on rank 0, then broadcast): identical bits on every
+ * rank, reproducible for a given rank count whatever the MPI library's algorithm. For values
+ * that enter state every rank keeps a copy of (the coupled problem's replicated grid). */
+void par_sum_doubles_ordered(double *v, size_t n);
 /* All-to-all personalised exchange of doubles: counts and displacements (in doubles) per rank,
  * arrays of ctx->size entries. Serial: copies send[sdispl[0]..] to recv[rdispl[0]..]. */
 void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,

@@ -109,6 +109,44 @@ void par_sum_doubles(double *v, size_t n) {
   if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
 }
 
+/* Fixed-order sum: rank 0 gathers every rank's v and adds them in rank order
+ * ((v_0 + v_1) + v_2 ...), then broadcasts the sums. Every rank gets the same bits, and they
+ * depend only on the operands and the rank count, not on the MPI library's reduction algorithm:
+ * what enters a replicated state (the coupled problem's grid, docs/mpi.md) stays bitwise equal
+ * on every rank and reproducible on the same rank count. Chunked so that rank 0 buffers at most
+ * ORDERED_MAX doubles; the buffer grows on first use and is reused (no allocation per call). */
+enum { ORDERED_MAX = 1 << 17 };
+static double *ordered_buf;
+static size_t ordered_cap;
+
+void par_sum_doubles_ordered(double *v, size_t n) {
+  if (!active() || n == 0) return;
+  int size = 1, rank = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (size == 1) return;
+  const size_t per = (size_t)size, chunk = ORDERED_MAX / per > 0 ? ORDERED_MAX / per : 1;
+  const size_t need = (n < chunk ? n : chunk) * per;
+  if (rank == 0 && need > ordered_cap) {
+    free(ordered_buf);
+    ordered_cap = need;
+    ordered_buf = ms_calloc(ordered_cap, sizeof *ordered_buf);
+  }
+  comm_clock c = comm_start();
+  for (size_t off = 0; off < n; off += chunk) {
+    const size_t m = n - off < chunk ? n - off : chunk;
+    MPI_Gather(v + off, (int)m, MPI_DOUBLE, ordered_buf, (int)m, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    if (rank == 0)
+      for (size_t j = 0; j < m; j++) {
+        double s = ordered_buf[j];
+        for (size_t r = 1; r < per; r++) s += ordered_buf[r * m + j];
+        v[off + j] = s;
+      }
+    MPI_Bcast(v + off, (int)m, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
+  comm_stop(c);
+}
+
 void par_alltoallv_doubles(const double *send, const int *scount, const int *sdispl, double *recv,
                            const int *rcount, const int *rdispl) {
   if (active()) {

@@ -549,13 +549,31 @@ static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
   return v;
 }
 
-/* MPI: the ranks' drag-kick sources, summed over the ranks, enter every rank's copy of the grid
- * identically (cell order; serially they enter particle by particle: the same sums to round-off,
- * since a cell source is additive). */
+/* Fragments of the particle region (piston and removed particles excluded); on MPI ranks the
+ * distributed search over owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks"), after
+ * which *view covers the owned particles only (each rank kicks and writes its own). */
+static ms_status find_fragments(const ms_ctx *ctx, cd_sim *sim, cpl_fragments *fr,
+                                const cpl_fragment_opts *fo, uint8_t *skip, int32_t *ghost_owner,
+                                cpl_particles *view) {
+  if (ctx->size < 2) {
+    *view = particle_view(sim->p, skip);
+    return cpl_fragments_find(fr, view, fo);
+  }
+  cd_sim_refresh_ghosts(sim);
+  *view = particle_view(sim->p, skip);
+  cd_sim_ghost_owners(sim, ghost_owner);
+  ms_status st = cpl_fragments_find_dist(fr, view, sim->p->nlocal, ghost_owner, fo, ctx);
+  view->n = sim->p->nlocal;
+  return st;
+}
+
+/* MPI: the ranks' drag-kick sources, summed over the ranks in rank order (the same bits on every
+ * rank), enter every rank's copy of the grid identically (cell order; serially they enter
+ * particle by particle: the same sums to round-off, since a cell source is additive). */
 static void gas_return_sum(gas_ctx *c) {
   const size_t ncell = cont_grid_ncells(c->g);
   double *src = c->cell_src;
-  par_sum_doubles(src, 2 * ncell);
+  par_sum_doubles_ordered(src, 2 * ncell);
   c->cell_src = NULL;
   for (size_t k = 0; k < ncell && c->st == MS_OK; k++) {
     if (src[2 * k] == 0 && src[2 * k + 1] == 0)
@@ -712,6 +730,36 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
   return ctx->size > 1 ? par_agree_status(st) : st; /* rank 0's file errors */
 }
 
+/* MPI: the grids are replicated, every rank advancing its copy with the same operands (what
+ * the ranks contribute enters through fixed-order sums or broadcasts). Guard: a digest of every
+ * copy's node and cell arrays, compared over the ranks at the end of the run; a difference is an
+ * internal error (MS_ERR_INTERNAL on every rank). Serial: nothing to compare. */
+static ms_status check_replicated(const ms_ctx *ctx, const cont_grid *g1, const cont_grid *g2) {
+  if (ctx->size < 2)
+    return MS_OK;
+  uint64_t h = 0xcbf29ce484222325ull; /* FNV-1a offset basis */
+  const cont_grid *grids[2] = {g1, g2};
+  for (int k = 0; k < 2; k++) {
+    if (!grids[k])
+      continue;
+    cont_view v = cont_grid_view(grids[k]);
+    h = dk_hash_doubles(h, v.x, v.nnodes);
+    h = dk_hash_doubles(h, v.u, v.nnodes);
+    h = dk_hash_doubles(h, v.rho, v.ncells);
+    h = dk_hash_doubles(h, v.e, v.ncells);
+    h = dk_hash_doubles(h, v.p, v.ncells);
+  }
+  const int64_t mine = (int64_t)h, top = par_max_int64(mine);
+  if (par_max_int(mine != top) == 0) {
+    ms_log(ctx, MS_LOG_INFO, "coupled: the replicated grid is bitwise identical on all %d ranks",
+           ctx->size);
+    return MS_OK;
+  }
+  ms_log(ctx, MS_LOG_ERROR, "coupled: the replicated grid differs between the ranks (rank %d)",
+         ctx->rank);
+  return MS_ERR_INTERNAL;
+}
+
 /* The particle region between x_drive and x_drive + depth (lattice, surface profile, piston and
  * surface layers, pair table); the piston history is set by the caller. */
 typedef struct region {
@@ -850,9 +898,13 @@ typedef struct two_way {
   cpl_fragment_opts fo;
   cpl_ejecta_sel sel;
   uint8_t *skip;
+  int32_t *ghost_owner; /* MPI: owner rank of each ghost (fragment search) */
   double *fx, *fy, *fz;
   double ta, xa, traction; /* interface node before the current grid step; its load */
-  double p_avg, Jg, Jp, Wg, f_prev, w_before, dtg_last, owed;
+  double p_avg, Jg, Jp, Wg, dtg_last, owed;
+  double f_prev;    /* force on this rank's driven particles after the last particle step */
+  double pw;        /* piston work (all ranks) at the end of the last grid step */
+  double w_before;  /* ... and at the end of the one before */
   long gsteps, psteps, next_out, last_search;
   gas_ctx gas; /* gas.g == NULL: no gas section */
 } two_way;
@@ -874,15 +926,16 @@ static ms_status two_way_before(void *user, cont_grid *g) {
 static ms_status two_way_fragments(two_way *w, double t) {
   cpl_problem *p = w->p;
   ptl_state *ps = w->reg.ps;
-  cpl_particles view = particle_view(ps, w->skip);
-  ms_status st = cpl_fragments_find(&w->fr, &view, &w->fo);
+  cpl_particles view;
+  ms_status st = find_fragments(w->ctx, w->reg.sim, &w->fr, &w->fo, w->skip, w->ghost_owner, &view);
   if (st != MS_OK || !w->gas.g)
     return st;
   /* ejecta: detached fragments ahead of the gas grid's first node (the particles' free surface
    * as the gas sees it) */
   w->sel.plane = cont_grid_view(w->gas.g).x[0] + w->gas.offset;
   double row[3] = {t, cpl_ejected_mass(&w->fr, &w->sel), (double)w->fr.n};
-  ms_csv_row(w->f_ej, 3, row);
+  if (w->f_ej)
+    ms_csv_row(w->f_ej, 3, row);
   if (p->drag_law != CPL_DRAG_NONE) {
     double span = (double)(w->psteps - w->last_search) * w->reg.sim->cfg.dt;
     st = drag_kick(p, &w->fr, &view, &w->sel, &w->gas, t, span, ps, w->skip, w->fx, w->fy, w->fz);
@@ -915,12 +968,12 @@ static ms_status two_way_after(void *user, cont_grid *g) {
   sim->piston.t[1] = sim->t + dtg;
   sim->piston.u[0] = sim->piston.u[1] = ubar;
   double imp = 0;
-  w->w_before = sim->piston_work;
+  w->w_before = w->pw;
   for (long k = 0; k < nsub && st == MS_OK; k++) {
-    st = cd_sim_step(sim);
+    st = cd_sim_step(sim); /* MPI: the status is the same on every rank */
     w->psteps++;
     double f = 0;
-    for (size_t i = 0; i < ps->n; i++)
+    for (size_t i = 0; i < ps->nlocal; i++)
       if (ps->flags[i] & PTL_DRIVEN)
         f += ps->fx[i];
     /* impulse on the particles from the piston: velocity Verlet's ½(F_old + F_new) Δt */
@@ -931,11 +984,22 @@ static ms_status two_way_after(void *user, cont_grid *g) {
     particles_unstable(w->ctx, sim, st, 0.0);
     return st;
   }
+  /* MPI: each rank holds the impulse on its own driven particles (linear in their forces, so the
+   * shares add up to the whole even when driven particles migrate between the sub-steps) and its
+   * share of the piston work; one fixed-order sum per grid step gives every rank the same bits,
+   * so the replicated grids stay bitwise equal (docs/mpi.md "The coupled problem on MPI ranks") */
+  double shares[2] = {imp, sim->piston_work};
+  if (w->ctx->size > 1)
+    par_sum_doubles_ordered(shares, 2);
+  imp = shares[0];
+  w->pw = shares[1];
   w->p_avg = imp / (dtg * area);
   w->Jp += w->p_avg * dtg;
   w->owed += w->p_avg * dtg;
   w->dtg_last = dtg;
   double ufs = cd_free_surface_velocity(sim, 0);
+  if (w->ctx->size > 1) /* an all-reduced mean: rank 0's bits drive every rank's gas grid */
+    par_bcast_doubles(&ufs, 1, 0);
   if (w->gas.g) {
     /* the gas ahead is pushed by the particles' free surface */
     cont_grid_set_node_velocity(w->gas.g, 0, ufs);
@@ -945,8 +1009,9 @@ static ms_status two_way_after(void *user, cont_grid *g) {
       return st;
     }
   }
-  double row[8] = {tb, ubar, w->p_avg, ufs, w->Jg, w->Jp, w->Wg, sim->piston_work / area};
-  ms_csv_row(w->f_if, 8, row);
+  double row[8] = {tb, ubar, w->p_avg, ufs, w->Jg, w->Jp, w->Wg, w->pw / area};
+  if (w->f_if)
+    ms_csv_row(w->f_if, 8, row);
   bool out_now = tb >= p->t_end * (double)w->next_out / (double)p->n_out * (1 - 1e-12);
   if (out_now || (w->gas.g && w->psteps - w->last_search >= p->frag_every)) {
     st = two_way_fragments(w, tb);
@@ -958,6 +1023,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
     snprintf(name, sizeof name, "particles_%04ld.h5", w->next_out);
     char *path = ms_out_path(w->ctx, name);
     cpl_particles view = particle_view(ps, w->skip);
+    view.n = ps->nlocal; /* MPI: written collectively, each rank its owned particles */
     cpl_snapshot_info info = {tb, w->reg.a, w->reg.rho0, w->fo.box};
     st = cpl_write_snapshot(path, &view, &w->fr, &info);
     free(path);
@@ -965,8 +1031,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
            "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
            "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
            "particles %.6g (per cm^2); %zu fragments",
-           tb, w->gsteps, w->psteps, ubar, w->p_avg, w->Jg, w->Jp, w->Wg,
-           sim->piston_work / area, w->fr.n);
+           tb, w->gsteps, w->psteps, ubar, w->p_avg, w->Jg, w->Jp, w->Wg, w->pw / area, w->fr.n);
     w->next_out++;
   }
   p->sum.u_interface = ubar;
@@ -991,6 +1056,15 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   double th[2] = {0, 1}, uh[2] = {0, 0}, dir[3] = {1, 0, 0};
   cd_history ph = {2, th, uh};
   cd_sim_set_piston(sim, &ph, dir);
+  /* MPI: the particles distributed as in the one-way run; the grids replicated (every rank
+   * advances them alike; docs/mpi.md "The coupled problem on MPI ranks") */
+  const bool dist = ctx->size > 1;
+  const size_t nglobal = ps->n; /* owned + ghosts never exceed it */
+  if (dist) {
+    const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
+                              .rebalance_interval = 10, .replicated = true};
+    cd_sim_set_mpi(sim, &mc);
+  }
   st = cd_sim_init(sim);
   if (st != MS_OK) {
     cd_sim_free(sim);
@@ -999,17 +1073,23 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   ms_afile af_if, af_ej;
   w.f_if = open_csv(ctx, &af_if, "interface.csv");
   w.f_ej = p->gas_grid ? open_csv(ctx, &af_ej, "ejecta_mass.csv") : NULL;
-  if (!w.f_if || (p->gas_grid && !w.f_ej)) {
+  st = ctx->rank == 0 && (!w.f_if || (p->gas_grid && !w.f_ej)) ? MS_ERR_IO : MS_OK;
+  if (dist)
+    st = par_agree_status(st);
+  if (st != MS_OK) {
     if (w.f_if)
       ms_afile_abort(&af_if);
+    if (w.f_ej)
+      ms_afile_abort(&af_ej);
     cd_sim_free(sim);
-    return MS_ERR_IO;
+    return st;
   }
   static const char *const names[] = {"t",      "u_interface", "p_particles", "u_free_surface",
                                       "J_grid", "J_particles", "W_grid",      "W_particles"};
   static const char *const units[] = {"10us",     "km/s",     "GPa",     "km/s",
                                       "GPa*10us", "GPa*10us", "kJ/cm^2", "kJ/cm^2"};
-  ms_csv_header(w.f_if,
+  if (w.f_if)
+    ms_csv_header(w.f_if,
                 "two-way interface: node velocity, particle pressure, impulse and work "
                 "per unit area as the grid and the particles received them",
                 8, names, units);
@@ -1027,11 +1107,12 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   if (w.reg.fcc)
     w.fo.box.period[2] = w.reg.width_z;
   cpl_ejecta_sel_default(&w.sel);
-  w.skip = ms_calloc(ps->n + 1, 1);
-  w.fx = ms_calloc(ps->n + 1, sizeof(double));
-  w.fy = ms_calloc(ps->n + 1, sizeof(double));
-  w.fz = ms_calloc(ps->n + 1, sizeof(double));
-  for (size_t i = 0; i < ps->n; i++)
+  w.skip = ms_calloc(nglobal + 1, 1);
+  w.ghost_owner = dist ? ms_calloc(nglobal + 1, sizeof *w.ghost_owner) : NULL;
+  w.fx = ms_calloc(nglobal + 1, sizeof(double));
+  w.fy = ms_calloc(nglobal + 1, sizeof(double));
+  w.fz = ms_calloc(nglobal + 1, sizeof(double));
+  for (size_t i = 0; i < ps->nlocal; i++)
     if (ps->flags[i] & PTL_DRIVEN)
       w.f_prev += ps->fx[i];
   if (p->gas_grid) {
@@ -1039,22 +1120,29 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     /* the gas grid's first node sits on the particles' nominal free surface */
     w.gas = (gas_ctx){gg, p->gas_layer, p->mats->m[p->gas_mat].viscosity,
                       w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL, NULL};
+    if (dist && p->gas_return) /* per-cell sources summed over the ranks (gas_return_sum) */
+      w.gas.cell_src = ms_calloc(2 * cont_grid_ncells(gg) + 1, sizeof *w.gas.cell_src);
   }
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
          x_if0, p->depth, w.reg.cfg.dt, p->gas_grid ? ", gas grid beyond the free surface" : "");
   cont_step_hooks hooks = {two_way_before, two_way_after, &w, p->t_end};
   st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
-  ms_status s2 = ms_afile_commit(&af_if);
+  ms_status s2 = commit_csv(&af_if);
   if (st == MS_OK)
     st = s2;
   if (w.f_ej) {
-    s2 = ms_afile_commit(&af_ej);
+    s2 = commit_csv(&af_ej);
     if (st == MS_OK)
       st = s2;
   }
+  /* the transport runs replicated and deposits its returns directly */
+  free(w.gas.cell_src);
+  w.gas.cell_src = NULL;
   if (st == MS_OK)
     st = write_table(ctx, "spectrum.csv", &w.fr, 0, NULL, NULL);
+  if (dist) /* rank 0's file errors stop every rank */
+    st = par_agree_status(st);
   if (p->gas_grid) /* at the end of the particle phase (the transport moves it on) */
     p->sum.gas_shift = cont_grid_view(w.gas.g).x[0] + w.gas.offset - w.reg.x_top;
   if (st == MS_OK && p->gas_grid) {
@@ -1062,11 +1150,13 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
                             "diameter_hist.csv", "ejecta_velocity.csv"};
     for (int k = 0; k < 5 && st == MS_OK; k++)
       st = write_table(ctx, tables[k], &w.fr, k + 1, &w.sel, NULL);
+    if (dist)
+      st = par_agree_status(st);
     if (st == MS_OK && p->det_distance > 0 && p->transport_end > cont_grid_time(g))
       st = transport_phase(ctx, p, &w.fr, &w.sel, &w.gas, cont_grid_time(g),
                            w.reg.x_top + p->det_distance, w.reg.rho0);
   }
-  p->sum.particles = ps->n;
+  p->sum.particles = nglobal;
   p->sum.steps = w.psteps;
   p->sum.fragments = w.fr.n;
   p->sum.ejected_mass = p->gas_grid ? cpl_ejected_mass(&w.fr, &w.sel) : 0.0;
@@ -1076,7 +1166,9 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   p->sum.impulse_particles = w.Jp - w.owed;
   p->sum.work_grid = w.Wg;
   p->sum.work_particles = w.w_before / w.reg.area;
-  p->sum.piston_work = sim->piston_work;
+  p->sum.piston_work = w.pw;
+  if (st == MS_OK)
+    st = check_replicated(ctx, g, w.gas.g);
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
          "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
@@ -1087,6 +1179,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
          (w.Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
   cpl_fragments_free(&w.fr);
   free(w.skip);
+  free(w.ghost_owner);
   free(w.fx);
   free(w.fy);
   free(w.fz);
@@ -1115,17 +1208,6 @@ static void share_history(const ms_ctx *ctx, cont_history *h, double **buf) {
   *buf = b;
 }
 
-/* What does not run on MPI ranks yet (docs/mpi.md "The coupled problem on MPI ranks"). */
-static ms_status refuse_on_ranks(const ms_ctx *ctx, const cpl_problem *p) {
-  if (p->drive_mode != DRIVE_TWO_WAY)
-    return MS_OK;
-  ms_log(ctx, MS_LOG_ERROR,
-         "coupled: drive.mode two_way runs on one rank only, not on %d MPI ranks (docs/mpi.md); "
-         "run it without mpirun",
-         ctx->size);
-  return MS_ERR_INPUT;
-}
-
 /* The bulk (the fragment holding the deepest particle along x) over all ranks: a one-particle
  * view of the global deepest particle for cpl_ejecta_classify, so it classifies as serially. */
 static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, double u_ref,
@@ -1150,8 +1232,6 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
 }
 
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
-  if (ctx->size > 1 && refuse_on_ranks(ctx, p) != MS_OK)
-    return MS_ERR_INPUT;
   if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
     return MS_ERR_INPUT;
@@ -1375,8 +1455,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       for (size_t i = 0; i < ps->nlocal; i++)
         if (ps->flags[i] & PTL_DRIVEN)
           fsum += ps->fx[i];
-      if (dist)
-        fsum = par_sum_double(fsum);
+      if (dist) /* rank order: every rank's piston gets the same bits */
+        par_sum_doubles_ordered(&fsum, 1);
       p_particles = -fsum / area; /* compression pushes the piston towards −x */
     }
     if (st != MS_OK) {
@@ -1388,16 +1468,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       continue;
     double t_abs = t_start + sim->t;
     /* fragments, ejected mass, drag kick over the interval since the last search */
-    if (dist) /* owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks") */
-      cd_sim_refresh_ghosts(sim);
-    cpl_particles view = particle_view(ps, skip);
-    if (dist) {
-      cd_sim_ghost_owners(sim, ghost_owner);
-      st = cpl_fragments_find_dist(&fr, &view, ps->nlocal, ghost_owner, &fo, ctx);
-      view.n = ps->nlocal; /* drag, snapshots: each rank its owned particles */
-    } else {
-      st = cpl_fragments_find(&fr, &view, &fo);
-    }
+    cpl_particles view;
+    st = find_fragments(ctx, sim, &fr, &fo, skip, ghost_owner, &view);
     if (st != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR,
              "coupled: fragment search failed at t = %g (non-finite "
@@ -1562,6 +1634,8 @@ particle_done:
   cpl_gaslog_free(&ls.gaslog);
   if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t)
     st = transport_phase(ctx, p, &fr, &sel, &gas, t_start + sim->t, x_fs + p->det_distance, rho0);
+  if (st == MS_OK)
+    st = check_replicated(ctx, glive, NULL);
   cpl_fragments_free(&fr);
   free(skip);
   free(ghost_owner);

@@ -7,12 +7,8 @@
 #     relative 1e-8 of each column's scale and the snapshot positions to 1e-12 cm (the runs then
 #     differ by force summation order only, as any two rank counts: ~1e-13 after these steps).
 # usage: cd_restart_mpi.sh MSCALE MPIEXEC DECK
-set -euo pipefail
-mscale=$1 mpiexec=$2 deck=$3
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-export OMP_NUM_THREADS=1
-mpi() { np=$1; shift; "$mpiexec" --oversubscribe --allow-run-as-root -np "$np" "$mscale" run "$@" --quiet; }
+source "$(dirname "$0")/cli_common.sh"
+mpi() { np=$1; shift; mpirun "$np" "$mscale" run "$@" --quiet; }
 sed -e 's/t_end: 1.5e-3/t_end: 7.5e-4/' "$deck" > "$work/half.yaml"
 mpi 2 "$deck" -o "$work/full"
 mpi 2 "$work/half.yaml" -o "$work/half"

@@ -23,67 +23,17 @@
 #   (~5e-4 of the jets' velocity) are checked at 1e-8 in the fragment table.
 # Then checkpoint/restart on 2 ranks: a run writing checkpoints every 300 steps, restarted from
 # its last (step 600) on 2 ranks must end with byte-identical CSV files (the same rank count
-# restores the owner map: the same arithmetic), and on 1 rank with the same spectrum. Last,
-# drive.mode two_way on 2 ranks is refused (exit 2, message).
+# restores the owner map: the same arithmetic), and on 1 rank with the same spectrum.
+# (The comparisons: compare_cpl_runs.py.)
 # usage: cpl_cli.sh MSCALE MPIEXEC DECK
-set -euo pipefail
-mscale=$1 mpiexec=$2 deck=$3
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-export OMP_NUM_THREADS=1
-mpirun() { "$mpiexec" --oversubscribe --allow-run-as-root -np "$@"; }
+source "$(dirname "$0")/cli_common.sh"
 "$mscale" run "$deck" -o "$work/serial" --quiet
 for np in 1 2 3; do
   mpirun $np "$mscale" run "$deck" -o "$work/np$np" --quiet
   grep -q "cluster_dynamics on $np ranks:\|running .* on $np rank" "$work/np$np/run.log" ||
     { echo "np $np: no rank count in run.log"; exit 1; }
-  /usr/bin/python3 - "$work/serial" "$work/np$np" <<'EOF'
-import sys, glob, os
-import numpy as np, h5py
-a, b = sys.argv[1], sys.argv[2]
-def table(d, f):
-    lines = [l for l in open(os.path.join(d, f)) if not l.startswith("#")]
-    t = np.genfromtxt(lines, delimiter=",", names=True)
-    return np.atleast_1d(t)
-spectra = ["spectrum.csv", "spectrum_detector.csv"] + sorted(
-    os.path.basename(p) for p in glob.glob(os.path.join(a, "spectrum_0*.csv")))
-for f in spectra:
-    x, y = table(a, f), table(b, f)
-    assert x.shape == y.shape and (x["g"] == y["g"]).all() and (x["count"] == y["count"]).all(), f
-    assert np.allclose(x["mass"], y["mass"], rtol=1e-12, atol=0), f
-print(f"{b}: {len(spectra)} spectra identical ({int(table(a, 'spectrum.csv')['count'].sum())} fragments)")
-def close(f, skip=lambda name, x: np.zeros(len(x), bool), tol=1e-8):
-    x, y = table(a, f), table(b, f)
-    assert x.shape == y.shape, (f, x.shape, y.shape)
-    worst = 0.0
-    for name in x.dtype.names:
-        keep = ~skip(name, x)
-        scale = max(np.abs(x[name]).max(), 1e-300)
-        err = np.abs(x[name] - y[name])[keep].max(initial=0) / scale
-        worst = max(worst, err)
-        assert err < tol, (f, name, err)
-    print(f"{b}: {f} max deviation {worst:.2e} of the column scale")
-fr = table(a, "fragments.csv")
-assert (fr["count"] == table(b, "fragments.csv")["count"]).all(), "fragment sizes"
-bulk = fr["count"] == fr["count"].max()
-close("fragments.csv", lambda name, x: bulk if name in ("y", "z", "rg") else np.zeros(len(x), bool))
-for f in ("ejecta_mass.csv", "free_surface.csv"):
-    close(f)
-close("arrivals.csv", tol=1e-4)
-last = sorted(glob.glob(os.path.join(a, "particles_*.h5")))[-1]
-with h5py.File(last) as r, h5py.File(os.path.join(b, os.path.basename(last))) as h:
-    g, gr = h["particles/gid"][:], r["particles/gid"][:]
-    assert len(g) == len(gr) and len(np.unique(g)) == len(g), "every particle once"
-    o, orf = np.argsort(g), np.argsort(gr)
-    assert (g[o] == gr[orf]).all()
-    dx = np.abs(h["particles/x"][:][o] - r["particles/x"][:][orf]).max()
-    dv = np.abs(h["particles/v"][:][o] - r["particles/v"][:][orf]).max()
-    assert (h["particles/fragment"][:][o] == r["particles/fragment"][:][orf]).all(), "fragment ids"
-    ke = lambda f, k: 0.5 * (f["particles/mass"][:][k] * (f["particles/v"][:][k] ** 2).sum(1)).sum()
-    de = abs(ke(h, o) - ke(r, orf)) / ke(r, orf)
-    print(f"{b}: {len(g)} particles: max |dx| {dx:.1e} cm, |dv| {dv:.1e} km/s, kinetic energy {de:.1e}")
-    assert dx < 1e-12 and dv < 1e-9 and de < 1e-9, (dx, dv, de)
-EOF
+  /usr/bin/python3 "$(dirname "$0")/compare_cpl_runs.py" "$work/serial" "$work/np$np" \
+    --dx 1e-12 --dv 1e-9 --csv ejecta_mass.csv free_surface.csv
 done
 # checkpoint/restart on 2 ranks (docs/mpi.md "Checkpoint / restart")
 sed 's/^    outputs: 2/    outputs: 2\n    checkpoint_every: 300/' "$deck" > "$work/ckpt.yaml"
@@ -101,10 +51,4 @@ for f in "$work"/ck2/*.csv; do # spectrum_0001.csv (before the checkpoint) is on
 done
 cmp "$work/ck1/spectrum.csv" "$work/ckA/spectrum.csv"
 echo "restart: $n CSV files byte-identical on 2 ranks, spectrum identical on 1 rank"
-# two_way is refused on several ranks before anything runs
-if mpirun 2 "$mscale" run "$(dirname "$0")/../../inputs/coupled-two-way.yaml" -o "$work/tw" \
-     --quiet 2> "$work/err.txt"; then
-  echo "two_way not refused"; exit 1
-fi
-grep -q "two_way runs on one rank only" "$work/err.txt" || { cat "$work/err.txt"; exit 1; }
 echo "cpl_cli: OK"

@@ -11,18 +11,13 @@
 # sample, spans the periodic width: its x centre (a circular mean of a full ring of particles)
 # and its R_g are not defined to round-off, so they are left out.
 # usage: frag_cli.sh MSCALE MPIEXEC DECK
-set -euo pipefail
-mscale=$1 mpiexec=$2 deck=$3
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/cli_common.sh"
 src=$(cd "$(dirname "$deck")" && pwd)
 sed -e "s#file: \.\./eos#file: $src/../eos#" -e 's/t_end: 3.0e-3/t_end: 6.0e-3/' \
     -e 's/snapshots: 3}/snapshots: 1}/' "$deck" > "$work/deck.yaml"
 grep -q "t_end: 6.0e-3" "$work/deck.yaml" || { echo "deck edit failed"; exit 1; }
-export OMP_NUM_THREADS=1
 "$mscale" run "$work/deck.yaml" -o "$work/np1" --quiet
-"$mpiexec" --oversubscribe --allow-run-as-root -np 2 "$mscale" run "$work/deck.yaml" \
-  -o "$work/np2" --quiet
+mpirun 2 "$mscale" run "$work/deck.yaml" -o "$work/np2" --quiet
 for np in 1 2; do
   snap=$(ls "$work/np$np"/cd_snap_*.h5 | tail -1)
   h5dump -a /particles/period_x "$snap" | grep -q "0.01" || { echo "no period_x"; exit 1; }

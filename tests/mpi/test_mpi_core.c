@@ -1,5 +1,6 @@
-/* The MPI layer and parallel HDF5: reductions agree with the serial formula, and a dataset
- * written collectively by any number of ranks holds the same bytes as a serial write. */
+/* The MPI layer and parallel HDF5: reductions agree with the serial formula (the fixed-order sum
+ * bit for bit with the rank-order sum), and a dataset written collectively by any number of
+ * ranks holds the same bytes as a serial write. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,6 +29,25 @@ int main(int argc, char **argv) {
   CHECK(par_sum_long(r) == (long)p * (p - 1) / 2, "sum long");
   CHECK(par_agree_status(r == p - 1 ? MS_ERR_UNSTABLE : MS_OK) == MS_ERR_UNSTABLE,
         "the failing rank's status must reach every rank");
+
+  /* fixed-order sum: rank r's element j is a value whose sums round (1/(r+3) scaled by j), so
+   * the order matters; the result must be ((v_0 + v_1) + v_2) ... computed here from every
+   * rank's values, bit for bit, on every rank. 100 000 elements: more than one chunk (2^17/P) on
+   * 2 and 3 ranks. */
+  {
+    const size_t n = 100000;
+    double *v = ms_calloc(n, sizeof *v);
+    for (size_t j = 0; j < n; j++) v[j] = (1.0 + (double)j) / (double)(r + 3);
+    par_sum_doubles_ordered(v, n);
+    size_t bad = 0;
+    for (size_t j = 0; j < n; j++) {
+      double s = (1.0 + (double)j) / 3.0;
+      for (int q = 1; q < p; q++) s += (1.0 + (double)j) / (double)(q + 3);
+      bad += memcmp(&s, v + j, sizeof s) != 0;
+    }
+    CHECK(bad == 0, "ordered sum: %zu of %zu elements differ from the rank-order sum", bad, n);
+    free(v);
+  }
 
   /* 1000 rows split unevenly over the ranks (rank r gets a share proportional to r + 1) */
   const size_t total = 1000;
