@@ -15,18 +15,8 @@
 /* cmocka needs the headers above */
 #include <cmocka.h>
 
-#include "cpl.h"
-
-/* |a − b| ≤ tol, with both values in the failure message (this cmocka has no double asserts). */
-#define assert_double_equal(a, b, tol) assert_close_at((a), (b), (tol), #a, __FILE__, __LINE__)
-static void assert_close_at(double a, double b, double tol, const char *what, const char *file,
-                            int line) {
-  if (!(fabs(a - b) <= tol)) {
-    print_error("%s = %.17g, expected %.17g within %.3g (off by %.3g)\n", what, a, b, tol,
-                fabs(a - b));
-    _fail(file, line);
-  }
-}
+#include "cpl_test.h"
+#include "frag_points.h"
 
 /* ---- helpers ---------------------------------------------------------------------------- */
 
@@ -39,46 +29,10 @@ static double urand(void) { /* splitmix64 → [0, 1) */
   return (double)(z >> 11) * 0x1.0p-53;
 }
 
-typedef struct cloud {
-  size_t n;
-  double *x, *y, *z, *vx, *vy, *vz, *m;
-  uint8_t *skip;
-} cloud;
-
-static void cloud_alloc(cloud *c, size_t n) {
-  c->n = n;
-  size_t k = n ? n : 1;
-  c->x = calloc(k, sizeof(double));
-  c->y = calloc(k, sizeof(double));
-  c->z = calloc(k, sizeof(double));
-  c->vx = calloc(k, sizeof(double));
-  c->vy = calloc(k, sizeof(double));
-  c->vz = calloc(k, sizeof(double));
-  c->m = calloc(k, sizeof(double));
-  c->skip = calloc(k, 1);
-}
-
-static void cloud_free(cloud *c) {
-  free(c->x);
-  free(c->y);
-  free(c->z);
-  free(c->vx);
-  free(c->vy);
-  free(c->vz);
-  free(c->m);
-  free(c->skip);
-}
+typedef frag_points cloud;
 
 static cpl_particles view(const cloud *c, bool use_skip, bool use_z) {
-  cpl_particles p = {c->n,  c->x,  c->y, use_z ? c->z : NULL,      c->vx,
-                     c->vy, c->vz, c->m, use_skip ? c->skip : NULL, NULL};
-  return p;
-}
-
-static double mi(double d, double period) {
-  if (period > 0)
-    d -= period * nearbyint(d / period);
-  return d;
+  return frag_points_view(c, use_skip, use_z, false);
 }
 
 /* Reference labelling: O(n²) adjacency matrix, BFS from the smallest unvisited index. */
@@ -90,9 +44,9 @@ static size_t brute_force(const cpl_particles *p, const cpl_fragment_opts *o, in
     for (size_t k = i + 1; k < n; k++) {
       if (p->skip && (p->skip[i] || p->skip[k]))
         continue;
-      double dx = mi(p->x[k] - p->x[i], o->box.period[0]);
-      double dy = mi(p->y[k] - p->y[i], o->box.period[1]);
-      double dz = mi((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
+      double dx = frag_min_image(p->x[k] - p->x[i], o->box.period[0]);
+      double dy = frag_min_image(p->y[k] - p->y[i], o->box.period[1]);
+      double dz = frag_min_image((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
       if (dx * dx + dy * dy + dz * dz <= L2)
         adj[i * n + k] = adj[k * n + i] = 1;
     }
@@ -174,9 +128,9 @@ static void check_against_brute_force(const cpl_particles *p, const cpl_fragment
     for (size_t k = 0; k < n; k++) {
       if (k == i)
         continue;
-      double dx = mi(p->x[k] - p->x[i], o->box.period[0]);
-      double dy = mi(p->y[k] - p->y[i], o->box.period[1]);
-      double dz = mi((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
+      double dx = frag_min_image(p->x[k] - p->x[i], o->box.period[0]);
+      double dy = frag_min_image(p->y[k] - p->y[i], o->box.period[1]);
+      double dz = frag_min_image((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
       if (dx * dx + dy * dy + dz * dz <= R * R) {
         if (m == cap)
           nbr = realloc(nbr, (cap *= 2) * sizeof *nbr);
@@ -264,7 +218,7 @@ static void test_random_sets(void **state) {
           continue; /* keep the O(n²) reference within seconds */
         rng_state = 1000 * dim + 10 * si + bi;
         cloud c;
-        cloud_alloc(&c, n);
+        frag_points_alloc(&c, n);
         double side = dim == 3 ? cbrt((double)n) : sqrt((double)n);
         for (size_t i = 0; i < n; i++) {
           c.x[i] = side * urand();
@@ -278,7 +232,7 @@ static void test_random_sets(void **state) {
         /* the same with a lattice spacing ≠ 1 (only b·a matters) */
         cpl_fragment_opts o = opts(bonds[bi] / 0.25, 0.25);
         check_against_brute_force(&p, &o);
-        cloud_free(&c);
+        frag_points_free(&c);
       }
 }
 
@@ -297,7 +251,7 @@ static void test_random_periodic(void **state) {
         size_t n = (size_t)(side * side * side);
         rng_state = 99 + 7 * si + 3 * bi + (uint64_t)mask;
         cloud c;
-        cloud_alloc(&c, n);
+        frag_points_alloc(&c, n);
         cpl_fragment_opts o = opts(bonds[bi], 1.0);
         int m = mask == 1 ? 1 : mask == 4 ? 3 : 7;
         for (int a = 0; a < 3; a++) {
@@ -312,7 +266,7 @@ static void test_random_periodic(void **state) {
         }
         cpl_particles p = view(&c, false, true);
         check_against_brute_force(&p, &o);
-        cloud_free(&c);
+        frag_points_free(&c);
       }
 }
 
@@ -322,7 +276,7 @@ static void test_sparse_spread(void **state) {
   (void)state;
   rng_state = 5;
   cloud c;
-  cloud_alloc(&c, 600);
+  frag_points_alloc(&c, 600);
   for (size_t i = 0; i < c.n; i++) {
     double far = i % 50 == 0 ? 1e6 * (1 + urand()) : 0.0;
     c.x[i] = far + 6 * urand();
@@ -333,7 +287,7 @@ static void test_sparse_spread(void **state) {
   cpl_particles p = view(&c, false, true);
   cpl_fragment_opts o = opts(1.0, 1.0);
   check_against_brute_force(&p, &o);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* ---- constructed cases ------------------------------------------------------------------- */
@@ -351,7 +305,7 @@ static void test_chains(void **state) {
   (void)state;
   size_t n = 200;
   cloud c;
-  cloud_alloc(&c, n);
+  frag_points_alloc(&c, n);
   double a = 3e-4; /* 3 µm */
   for (size_t i = 0; i < n; i++) {
     size_t pos = (i * 73) % n; /* a permutation of 0..n-1 (73 coprime with 200) */
@@ -378,7 +332,7 @@ static void test_chains(void **state) {
   assert_int_equal(f.count[1], 69);
   assert_int_equal(f.count[2], 80);
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* Rings of N points on a circle: chord 2R sin(π/N); bonded when chord ≤ b·a. Several rings
@@ -390,7 +344,7 @@ static void test_rings_and_isolated(void **state) {
   for (size_t r = 0; r < 4; r++)
     n += sizes[r];
   cloud c;
-  cloud_alloc(&c, n);
+  frag_points_alloc(&c, n);
   double a = 1.0;
   size_t i = 0;
   for (size_t r = 0; r < 4; r++) {
@@ -434,7 +388,7 @@ static void test_rings_and_isolated(void **state) {
   /* a ring broken below the chord length: all singletons */
   assert_int_equal(find_n(&c, opts(0.999, a), &f), n);
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* Periodic wrap: a chain crossing the periodic boundary is one fragment only when the axis
@@ -442,7 +396,7 @@ static void test_rings_and_isolated(void **state) {
 static void test_periodic_wrap(void **state) {
   (void)state;
   cloud c;
-  cloud_alloc(&c, 6);
+  frag_points_alloc(&c, 6);
   double P = 10.0, lo = -2.0;
   /* three particles just below lo + P, three just above lo: a chain through the boundary */
   double xs[6] = {lo + P - 0.25, lo + 0.25, lo + P - 1.25, lo + 1.25, lo + P - 2.25, lo + 2.25};
@@ -476,7 +430,7 @@ static void test_periodic_wrap(void **state) {
   cpl_particles p = view(&c, false, true);
   assert_int_equal(cpl_fragments_find(&f, &p, &bad), MS_ERR_INPUT);
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* Per-fragment statistics against direct sums over the reference partition (open box). */
@@ -485,7 +439,7 @@ static void test_statistics(void **state) {
   rng_state = 31;
   size_t n = 300;
   cloud c;
-  cloud_alloc(&c, n);
+  frag_points_alloc(&c, n);
   for (size_t i = 0; i < n; i++) {
     c.x[i] = 8 * urand();
     c.y[i] = 8 * urand();
@@ -535,7 +489,7 @@ static void test_statistics(void **state) {
     assert_double_equal(3.14159265358979323846 / 6 * d * d * d * o.rho0, M, 1e-14 * M);
   }
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* Numbering by gid: the same cloud stored in a shuffled order with gid = original index gives
@@ -548,8 +502,8 @@ static void test_gid_numbering(void **state) {
     const double side = 9.0;
     rng_state = 4242 + (uint64_t)per;
     cloud c, s;
-    cloud_alloc(&c, n);
-    cloud_alloc(&s, n);
+    frag_points_alloc(&c, n);
+    frag_points_alloc(&s, n);
     cpl_fragment_opts o = opts(0.8, 1.0); /* ~1.8 bonds per particle: below percolation */
     o.rho0 = 2.0;
     for (int a = 0; a < 3 && per; a++)
@@ -608,8 +562,8 @@ static void test_gid_numbering(void **state) {
     cpl_fragments_free(&g);
     free(perm);
     free(gid);
-    cloud_free(&c);
-    cloud_free(&s);
+    frag_points_free(&c);
+    frag_points_free(&s);
   }
 }
 
@@ -617,7 +571,7 @@ static void test_gid_numbering(void **state) {
 static void test_bad_input(void **state) {
   (void)state;
   cloud c;
-  cloud_alloc(&c, 3);
+  frag_points_alloc(&c, 3);
   for (int i = 0; i < 3; i++)
     c.m[i] = 1;
   c.x[1] = NAN;
@@ -634,7 +588,7 @@ static void test_bad_input(void **state) {
   assert_int_equal(cpl_fragments_find(&f, &p, &(cpl_fragment_opts){.bond = 0, .spacing = 1}),
                    MS_ERR_INPUT);
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 /* ---- outputs ------------------------------------------------------------------------------ */
@@ -653,7 +607,7 @@ static char *slurp(FILE *f) {
 static void test_csv_outputs(void **state) {
   (void)state;
   cloud c;
-  cloud_alloc(&c, 10);
+  frag_points_alloc(&c, 10);
   /* fragments: {0,1,2} at x≈0 (bulk, at rest), {3,4} at x≈10, singles 5..9 further out */
   double xs[10] = {0, 1, 2, 10, 11, 20, 30, 40, 50, 60};
   for (int i = 0; i < 10; i++) {
@@ -726,7 +680,7 @@ static void test_csv_outputs(void **state) {
   assert_non_null(strstr(s, "id,count,mass,d,x,y,z,vx,vy,vz,rg\n0,3,3,"));
   free(s);
   cpl_fragments_free(&f);
-  cloud_free(&c);
+  frag_points_free(&c);
 }
 
 int main(void) {

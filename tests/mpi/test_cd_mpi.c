@@ -23,8 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mpi_check.h"
-#include "ptl.h"
+#include "cd_mpi_test.h"
 
 static int my_rank = 0;
 
@@ -70,27 +69,16 @@ static cd_sim *make_case(case_kind kind, const eos_t *eos, bool distributed) {
                    .cutoff = piston ? CD_CUTOFF_PLAIN : CD_CUTOFF_BONDED,
                    .damping_gamma = piston ? 0.0 : 0.05 * C0 / R0, .lattice = CD_LATTICE_FCC,
                    .integrator = kind == CASE_RKN ? CD_INT_RKN4 : CD_INT_VELOCITY_VERLET};
-  if (distributed) {
-    const int r = par_rank(), P = par_size();
-    ptl_state_keep_range(p, p->n * (size_t)r / (size_t)P, p->n * (size_t)(r + 1) / (size_t)P);
-  }
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
-  cd_pair_table *t = calloc(1, sizeof *t);
-  if (cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0) != MS_OK)
-    abort();
-  cd_sim_set_pair(s, 0, 0, t);
+  cd_sim *s = cd_test_create(p, &box, &cfg, eos, distributed);
   if (piston) {
     double tt[1] = {0.0}, uu[1] = {UP}, dir[3] = {0, 0, 1};
     cd_history h = {1, tt, uu};
     cd_sim_set_piston(s, &h, dir);
   }
-  if (distributed) {
-    cd_mpi_config mc = {.partition = kind == CASE_REBALANCE ? CD_PART_SLAB : CD_PART_METIS,
-                        .rebalance_threshold = kind == CASE_REBALANCE ? 1.05 : 0.0,
-                        .rebalance_interval = 1};
-    cd_sim_set_mpi(s, &mc);
-  }
-  CHECK(cd_sim_init(s) == MS_OK, "init");
+  const cd_mpi_config mc = {.partition = kind == CASE_REBALANCE ? CD_PART_SLAB : CD_PART_METIS,
+                            .rebalance_threshold = kind == CASE_REBALANCE ? 1.05 : 0.0,
+                            .rebalance_interval = 1};
+  cd_test_init(s, distributed ? &mc : NULL);
   if (kind == CASE_BONDED) CHECK(cd_sim_affine(s, (double[3]){1.15, 1.15, 1.15}) == MS_OK, "affine");
   return s;
 }

@@ -15,9 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cd_mpi_test.h"
 #include "cpl.h"
-#include "ptl.h"
-#include "mpi_check.h"
 
 #define R0 5.0e-4
 #define C0 5.35
@@ -43,21 +42,10 @@ static cd_sim *make_block(const eos_t *eos, bool distributed) {
                 .bc = {CD_BC_FREE, CD_BC_FREE, CD_BC_FREE}};
   cd_config cfg = {.r0 = R0, .skin = 0.2 * R0, .dt = 0.05 * R0 / C0, .cutoff = CD_CUTOFF_PLAIN,
                    .lattice = CD_LATTICE_FCC};
-  if (distributed) {
-    const int r = par_rank(), P = par_size();
-    ptl_state_keep_range(p, p->n * (size_t)r / (size_t)P, p->n * (size_t)(r + 1) / (size_t)P);
-  }
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
-  cd_pair_table *t = calloc(1, sizeof *t);
-  if (cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0) != MS_OK)
-    abort();
-  cd_sim_set_pair(s, 0, 0, t);
-  if (distributed) {
-    cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.05,
-                        .rebalance_interval = 1};
-    cd_sim_set_mpi(s, &mc);
-  }
-  CHECK(cd_sim_init(s) == MS_OK, "init");
+  cd_sim *s = cd_test_create(p, &box, &cfg, eos, distributed);
+  const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.05,
+                            .rebalance_interval = 1};
+  cd_test_init(s, distributed ? &mc : NULL);
   for (long k = 0; k < STEPS; k++)
     if (cd_sim_step(s) != MS_OK) {
       CHECK(false, "step %ld failed", k);

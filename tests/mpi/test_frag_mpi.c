@@ -16,6 +16,7 @@
 
 #include "cpl.h"
 #include "ptl.h"
+#include "frag_points.h"
 #include "mpi_check.h"
 
 static ms_ctx ctx;
@@ -24,10 +25,7 @@ static const double PI = 3.14159265358979323846;
 /* ---- global particle sets (identical on every rank) ---- */
 typedef struct gset {
   const char *name;
-  size_t n;
-  double *x, *y, *z, *vx, *vy, *vz, *m;
-  uint8_t *skip;
-  int64_t *gid;
+  frag_points p;        /* gid = global index until a set shuffles them */
   cpl_fragment_opts o;
   double lo[3], ext[3]; /* region for the decompositions */
 } gset;
@@ -35,38 +33,17 @@ typedef struct gset {
 static uint64_t rng_k;
 static double urand(void) { return ptl_splitmix64_uniform(2026, rng_k++); }
 
+/* n points at the origin with random velocities and masses */
 static void gset_alloc(gset *g, const char *name, size_t n) {
   memset(g, 0, sizeof *g);
   g->name = name;
-  g->n = n;
-  g->x = ms_calloc(n, sizeof(double));
-  g->y = ms_calloc(n, sizeof(double));
-  g->z = ms_calloc(n, sizeof(double));
-  g->vx = ms_calloc(n, sizeof(double));
-  g->vy = ms_calloc(n, sizeof(double));
-  g->vz = ms_calloc(n, sizeof(double));
-  g->m = ms_calloc(n, sizeof(double));
-  g->skip = ms_calloc(n, 1);
-  g->gid = ms_calloc(n, sizeof(int64_t));
+  frag_points_alloc(&g->p, n);
   for (size_t i = 0; i < n; ++i) {
-    g->gid[i] = (int64_t)i;
-    g->vx[i] = urand() - 0.5;
-    g->vy[i] = urand() - 0.5;
-    g->vz[i] = urand() - 0.5;
-    g->m[i] = 0.5 + urand();
+    g->p.vx[i] = urand() - 0.5;
+    g->p.vy[i] = urand() - 0.5;
+    g->p.vz[i] = urand() - 0.5;
+    g->p.m[i] = 0.5 + urand();
   }
-}
-
-static void gset_free(gset *g) {
-  free(g->x);
-  free(g->y);
-  free(g->z);
-  free(g->vx);
-  free(g->vy);
-  free(g->vz);
-  free(g->m);
-  free(g->skip);
-  free(g->gid);
 }
 
 /* Random points in a box of side `side` (bond 0.85: clusters of all sizes below percolation);
@@ -75,11 +52,11 @@ static void make_random(gset *g, bool periodic) {
   const double side = 10.0;
   gset_alloc(g, periodic ? "random periodic" : "random open", 1400);
   g->o = (cpl_fragment_opts){.bond = 0.85, .spacing = 1.0, .rho0 = 2.7};
-  for (size_t i = 0; i < g->n; ++i) {
-    g->x[i] = side * urand();
-    g->y[i] = side * urand();
-    g->z[i] = side * urand();
-    g->skip[i] = urand() < 0.03;
+  for (size_t i = 0; i < g->p.n; ++i) {
+    g->p.x[i] = side * urand();
+    g->p.y[i] = side * urand();
+    g->p.z[i] = side * urand();
+    g->p.skip[i] = urand() < 0.03;
   }
   for (int a = 0; a < 3; ++a) {
     g->lo[a] = 0;
@@ -103,14 +80,14 @@ static void make_chains(gset *g) {
   double y = 0;
   for (int run = 0; run < 8; ++run) {
     for (size_t k = 0; k < nrun; ++k, ++i) {
-      g->x[i] = (double)(run % 2 ? nrun - 1 - k : k) * step; /* each run starts where the last ended */
-      g->y[i] = y;
-      g->z[i] = 0;
+      g->p.x[i] = (double)(run % 2 ? nrun - 1 - k : k) * step; /* each run starts where the last ended */
+      g->p.y[i] = y;
+      g->p.z[i] = 0;
     }
     if (run < 7)
       for (int k = 1; k <= 3; ++k, ++i) { /* three steps up at the turn */
-        g->x[i] = g->x[i - 1];
-        g->y[i] = y + k * step;
+        g->p.x[i] = g->p.x[i - 1];
+        g->p.y[i] = y + k * step;
       }
     y += 4 * step;
   }
@@ -118,22 +95,22 @@ static void make_chains(gset *g) {
     size_t nk = (size_t)ceil(2 * PI * radii[r] / step);
     for (size_t k = 0; k < nk; ++k, ++i) { /* chord 2R sin(π/nk) ≤ step */
       double th = 2 * PI * (double)k / (double)nk;
-      g->x[i] = side / 2 + radii[r] * cos(th);
-      g->y[i] = side / 2 + radii[r] * sin(th);
-      g->z[i] = 5.0 + 3.0 * r;
+      g->p.x[i] = side / 2 + radii[r] * cos(th);
+      g->p.y[i] = side / 2 + radii[r] * sin(th);
+      g->p.z[i] = 5.0 + 3.0 * r;
     }
   }
   for (size_t k = 0; k < 200; ++k, ++i) { /* a grid of isolated points, 2 apart */
-    g->x[i] = 2.0 * (double)(k % 20);
-    g->y[i] = 2.0 * (double)(k / 20 % 10);
-    g->z[i] = 30.0;
+    g->p.x[i] = 2.0 * (double)(k % 20);
+    g->p.y[i] = 2.0 * (double)(k / 20 % 10);
+    g->p.z[i] = 30.0;
   }
   /* shuffled gids (Fisher–Yates) */
-  for (size_t k = g->n - 1; k > 0; --k) {
+  for (size_t k = g->p.n - 1; k > 0; --k) {
     size_t j = (size_t)(urand() * (double)(k + 1));
-    int64_t t = g->gid[k];
-    g->gid[k] = g->gid[j];
-    g->gid[j] = t;
+    int64_t t = g->p.gid[k];
+    g->p.gid[k] = g->p.gid[j];
+    g->p.gid[j] = t;
   }
   for (int a = 0; a < 3; ++a) {
     g->lo[a] = -1;
@@ -153,31 +130,31 @@ static void make_periodic_ring(gset *g) {
   g->o.box.period[0] = side;
   size_t i = 0;
   for (size_t k = 0; k < nr; ++k, ++i) { /* closes: last to first is step through the wrap */
-    g->x[i] = (double)k * step;
-    g->y[i] = 2;
-    g->z[i] = 2;
+    g->p.x[i] = (double)k * step;
+    g->p.y[i] = 2;
+    g->p.z[i] = 2;
   }
   for (size_t k = 0; k + 1 < nr; ++k, ++i) { /* gap of 2 steps at the wrap: not closed */
-    g->x[i] = 0.5 * step + (double)k * step;
-    g->y[i] = 6;
-    g->z[i] = 2;
+    g->p.x[i] = 0.5 * step + (double)k * step;
+    g->p.y[i] = 6;
+    g->p.z[i] = 2;
   }
   for (size_t k = 0; k < 60; ++k, ++i) { /* within 0.8 of (5, 2, 2): bonded to the ring */
     double r = 0.8 * cbrt(urand()), th = acos(2 * urand() - 1), ph = 2 * PI * urand();
-    g->x[i] = 5 + r * sin(th) * cos(ph);
-    g->y[i] = 2 + r * sin(th) * sin(ph);
-    g->z[i] = 2 + r * cos(th);
+    g->p.x[i] = 5 + r * sin(th) * cos(ph);
+    g->p.y[i] = 2 + r * sin(th) * sin(ph);
+    g->p.z[i] = 2 + r * cos(th);
   }
-  for (; i < g->n; ++i) {
-    g->x[i] = side * urand();
-    g->y[i] = 10 + 8 * urand();
-    g->z[i] = 8 * urand();
+  for (; i < g->p.n; ++i) {
+    g->p.x[i] = side * urand();
+    g->p.y[i] = 10 + 8 * urand();
+    g->p.z[i] = 8 * urand();
   }
-  for (size_t k = g->n - 1; k > 0; --k) {
+  for (size_t k = g->p.n - 1; k > 0; --k) {
     size_t j = (size_t)(urand() * (double)(k + 1));
-    int64_t t = g->gid[k];
-    g->gid[k] = g->gid[j];
-    g->gid[j] = t;
+    int64_t t = g->p.gid[k];
+    g->p.gid[k] = g->p.gid[j];
+    g->p.gid[j] = t;
   }
   g->lo[0] = 0, g->ext[0] = side;
   g->lo[1] = 0, g->ext[1] = 20;
@@ -185,12 +162,11 @@ static void make_periodic_ring(gset *g) {
 }
 
 /* ---- decompositions ---- */
-static double mi(double d, double P) { return P > 0 ? d - P * nearbyint(d / P) : d; }
 
 static bool within(const gset *g, size_t i, size_t k, double L) {
-  double dx = mi(g->x[k] - g->x[i], g->o.box.period[0]);
-  double dy = mi(g->y[k] - g->y[i], g->o.box.period[1]);
-  double dz = mi(g->z[k] - g->z[i], g->o.box.period[2]);
+  double dx = frag_min_image(g->p.x[k] - g->p.x[i], g->o.box.period[0]);
+  double dy = frag_min_image(g->p.y[k] - g->p.y[i], g->o.box.period[1]);
+  double dz = frag_min_image(g->p.z[k] - g->p.z[i], g->o.box.period[2]);
   return dx * dx + dy * dy + dz * dz <= L * L;
 }
 
@@ -208,9 +184,9 @@ static void cells_build(const gset *g, cells *c) {
     if (c->nc[a] < 1) c->nc[a] = 1;
     c->per[a] = g->o.box.period[a] > 0;
   }
-  c->of = ms_calloc(g->n, sizeof *c->of);
-  const double *pos[3] = {g->x, g->y, g->z};
-  for (size_t i = 0; i < g->n; ++i) {
+  c->of = ms_calloc(g->p.n, sizeof *c->of);
+  const double *pos[3] = {g->p.x, g->p.y, g->p.z};
+  for (size_t i = 0; i < g->p.n; ++i) {
     int q[3];
     for (int a = 0; a < 3; ++a) {
       double s = (pos[a][i] - g->lo[a]) / g->ext[a] * c->nc[a];
@@ -246,18 +222,18 @@ typedef enum { SLABS = 0, METIS_CELLS } decomp;
 static void decompose(const gset *g, decomp how, int32_t *owner, uint8_t *ghost) {
   const int P = ctx.size, me = ctx.rank;
   double L = g->o.bond * g->o.spacing;
-  memset(ghost, 0, g->n);
+  memset(ghost, 0, g->p.n);
   if (how == SLABS) {
-    for (size_t i = 0; i < g->n; ++i) {
-      double s = (g->x[i] - g->lo[0]) / g->ext[0];
+    for (size_t i = 0; i < g->p.n; ++i) {
+      double s = (g->p.x[i] - g->lo[0]) / g->ext[0];
       if (g->o.box.period[0] > 0) s -= floor(s);
       int r = (int)(s * P);
       owner[i] = r < 0 ? 0 : r >= P ? P - 1 : r;
     }
     /* ghosts: exactly the particles within b·a of an owned one (the minimum the finder needs) */
-    for (size_t k = 0; k < g->n; ++k) {
+    for (size_t k = 0; k < g->p.n; ++k) {
       if (owner[k] == me) continue;
-      for (size_t i = 0; i < g->n && !ghost[k]; ++i)
+      for (size_t i = 0; i < g->p.n && !ghost[k]; ++i)
         if (owner[i] == me && within(g, i, k, L)) ghost[k] = 1;
     }
     return;
@@ -267,14 +243,14 @@ static void decompose(const gset *g, decomp how, int32_t *owner, uint8_t *ghost)
   size_t nv = (size_t)c.nc[0] * (size_t)c.nc[1] * (size_t)c.nc[2];
   int64_t *w = ms_calloc(nv, sizeof *w);
   int32_t *cown = ms_calloc(nv, sizeof *cown);
-  for (size_t i = 0; i < g->n; ++i) w[c.of[i]]++;
+  for (size_t i = 0; i < g->p.n; ++i) w[c.of[i]]++;
   CHECK(cd_partition_cells(c.nc, c.per, w, P, CD_PART_METIS, 0, cown, NULL) == MS_OK, "METIS");
-  for (size_t i = 0; i < g->n; ++i) owner[i] = cown[c.of[i]];
+  for (size_t i = 0; i < g->p.n; ++i) owner[i] = cown[c.of[i]];
   /* ghosts: every particle of the cells adjacent to the rank's cells (a CD halo layer) */
   uint8_t *near = ms_calloc(nv, 1);
   for (size_t b = 0; b < nv; ++b)
     if (cown[b] == me) mark_neighbourhood(&c, b, near);
-  for (size_t i = 0; i < g->n; ++i) ghost[i] = owner[i] != me && near[c.of[i]];
+  for (size_t i = 0; i < g->p.n; ++i) ghost[i] = owner[i] != me && near[c.of[i]];
   free(w);
   free(cown);
   free(near);
@@ -290,21 +266,21 @@ static void run_case(const gset *g, decomp how) {
   const int me = ctx.rank;
   const char *dname = how == SLABS ? "x slabs" : "METIS cells";
   /* serial reference on all particles */
-  cpl_particles pg = {g->n, g->x, g->y, g->z, g->vx, g->vy, g->vz, g->m, g->skip, g->gid};
+  cpl_particles pg = frag_points_view(&g->p, true, true, true);
   cpl_fragments ref;
   cpl_fragments_init(&ref);
   CHECK(cpl_fragments_find(&ref, &pg, &g->o) == MS_OK, "serial");
 
-  int32_t *owner = ms_calloc(g->n, sizeof *owner);
-  uint8_t *ghost = ms_calloc(g->n, 1);
+  int32_t *owner = ms_calloc(g->p.n, sizeof *owner);
+  uint8_t *ghost = ms_calloc(g->p.n, 1);
   decompose(g, how, owner, ghost);
   /* local arrays: owned in a shuffled order, then ghosts (periodic axes shifted by a period) */
   size_t no = 0, ngh = 0;
-  for (size_t i = 0; i < g->n; ++i) no += owner[i] == me, ngh += ghost[i];
+  for (size_t i = 0; i < g->p.n; ++i) no += owner[i] == me, ngh += ghost[i];
   size_t nl = no + ngh;
   size_t *src = ms_calloc(nl + 1, sizeof *src);
   size_t a = 0, b = no;
-  for (size_t i = 0; i < g->n; ++i) {
+  for (size_t i = 0; i < g->p.n; ++i) {
     if (owner[i] == me) src[a++] = i;
     else if (ghost[i]) src[b++] = i;
   }
@@ -313,16 +289,15 @@ static void run_case(const gset *g, decomp how) {
     src[k] = src[j];
     src[j] = t;
   }
-  double *x = ms_calloc(nl + 1, sizeof *x), *y = ms_calloc(nl + 1, sizeof *y),
-         *z = ms_calloc(nl + 1, sizeof *z), *vx = ms_calloc(nl + 1, sizeof *vx),
-         *vy = ms_calloc(nl + 1, sizeof *vy), *vz = ms_calloc(nl + 1, sizeof *vz),
-         *m = ms_calloc(nl + 1, sizeof *m);
-  uint8_t *skip = ms_calloc(nl + 1, 1);
-  int64_t *gid = ms_calloc(nl + 1, sizeof *gid);
+  frag_points loc; /* this rank's arrays */
+  frag_points_alloc(&loc, nl);
+  double *x = loc.x, *y = loc.y, *z = loc.z, *vx = loc.vx, *vy = loc.vy, *vz = loc.vz, *m = loc.m;
+  uint8_t *skip = loc.skip;
+  int64_t *gid = loc.gid;
   int32_t *gown = ms_calloc(ngh + 1, sizeof *gown);
   for (size_t l = 0; l < nl; ++l) {
     size_t i = src[l];
-    x[l] = g->x[i], y[l] = g->y[i], z[l] = g->z[i];
+    x[l] = g->p.x[i], y[l] = g->p.y[i], z[l] = g->p.z[i];
     if (l >= no) { /* ghosts: positions only; an image position on periodic axes */
       const double *per = g->o.box.period;
       x[l] += per[0] * (x[l] < g->lo[0] + 0.5 * per[0] ? 1 : -1);
@@ -330,12 +305,12 @@ static void run_case(const gset *g, decomp how) {
       vx[l] = vy[l] = vz[l] = m[l] = NAN; /* must not be read */
       gown[l - no] = owner[i];
     } else {
-      vx[l] = g->vx[i], vy[l] = g->vy[i], vz[l] = g->vz[i], m[l] = g->m[i];
+      vx[l] = g->p.vx[i], vy[l] = g->p.vy[i], vz[l] = g->p.vz[i], m[l] = g->p.m[i];
     }
-    skip[l] = g->skip[i];
-    gid[l] = g->gid[i];
+    skip[l] = g->p.skip[i];
+    gid[l] = g->p.gid[i];
   }
-  cpl_particles pl = {nl, x, y, z, vx, vy, vz, m, skip, gid};
+  cpl_particles pl = frag_points_view(&loc, true, true, true);
   cpl_fragments f;
   cpl_fragments_init(&f);
   ms_status st = cpl_fragments_find_dist(&f, &pl, no, gown, &g->o, &ctx);
@@ -343,7 +318,7 @@ static void run_case(const gset *g, decomp how) {
   if (st == MS_OK) {
     if (me == 0)
       printf("%-18s %-12s np %d: %zu particles, %zu fragments, %d label rounds\n", g->name, dname,
-             ctx.size, g->n, f.n, f.rounds);
+             ctx.size, g->p.n, f.n, f.rounds);
     CHECK(f.n == ref.n && f.n_particles == no, "%s / %s: %zu fragments, serial %zu", g->name,
           dname, f.n, ref.n);
     /* ids: the reference labels the global particle index (gid is a permutation of it there) */
@@ -388,15 +363,7 @@ static void run_case(const gset *g, decomp how) {
   free(owner);
   free(ghost);
   free(src);
-  free(x);
-  free(y);
-  free(z);
-  free(vx);
-  free(vy);
-  free(vz);
-  free(m);
-  free(skip);
-  free(gid);
+  frag_points_free(&loc);
   free(gown);
 }
 
@@ -411,7 +378,7 @@ int main(int argc, char **argv) {
   for (int s = 0; s < 4; ++s) {
     run_case(&sets[s], SLABS);
     run_case(&sets[s], METIS_CELLS);
-    gset_free(&sets[s]);
+    frag_points_free(&sets[s].p);
   }
   int total = (int)par_sum_long(failures);
   if (ctx.rank == 0) printf("%s: %d failure(s) on %d rank(s)\n", total ? "FAILED" : "passed", total, ctx.size);
