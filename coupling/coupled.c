@@ -869,6 +869,17 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   return MS_OK;
 }
 
+/* MPI: every rank built the whole region; cd_sim_init keeps what each rank's coarse cells own
+ * (the cluster_dynamics defaults: auto partition, rebalance above 1.2 checked every 10 list
+ * builds). Serial: nothing to do. */
+static void distribute_region(const ms_ctx *ctx, cd_sim *sim) {
+  if (ctx->size < 2)
+    return;
+  const cd_mpi_config mc = {.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
+                            .rebalance_interval = 10, .replicated = true};
+  cd_sim_set_mpi(sim, &mc);
+}
+
 /* A particle step failed: the guard's finding (cd_sim_guard: step, time on the particles' clock,
  * particle, quantity) and the state it found, particles_unstable.h5 (docs/reliability.md §5). */
 static void particles_unstable(const ms_ctx *ctx, cd_sim *sim, ms_status st, double t_start) {
@@ -1060,11 +1071,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
    * advances them alike; docs/mpi.md "The coupled problem on MPI ranks") */
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n; /* owned + ghosts never exceed it */
-  if (dist) {
-    const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.2,
-                              .rebalance_interval = 10, .replicated = true};
-    cd_sim_set_mpi(sim, &mc);
-  }
+  distribute_region(ctx, sim);
   st = cd_sim_init(sim);
   if (st != MS_OK) {
     cd_sim_free(sim);
@@ -1326,16 +1333,9 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   const double Z = p->impedance > 0 ? p->impedance : sqrt(1.5) * rho0 * c0;
   const double area = reg.area;
   double p_particles = 0.0; /* pressure of the particles on the piston layer, last step */
-  /* MPI: every rank built the whole region; cd_sim_init keeps what each rank's coarse cells own
-   * (the cluster_dynamics defaults: auto partition, rebalance above 1.2 checked every 10 list
-   * builds) */
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n;
-  if (dist) {
-    const cd_mpi_config mc = {.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
-                              .rebalance_interval = 10, .replicated = true};
-    cd_sim_set_mpi(sim, &mc);
-  }
+  distribute_region(ctx, sim);
   st = ctx->restart ? MS_OK : cd_sim_init(sim); /* a restart initialises from its checkpoint */
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: particle set-up failed (%s)", ms_status_str(st));
