@@ -195,8 +195,8 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     dk_read_double(e, doc, gn, "min_distance", MS_DIM_NONE, false, 0.8, 0.1, 1.0, &r->dmin);
     r->ngrains = (int)ng;
     r->grain_seed = (uint64_t)seed;
-    if (r->shape != SHAPE_BOX || r->surface != SURF_FLAT)
-      dk_error(e, doc, gn, "a polycrystal fills a box region with a flat surface");
+    if (r->shape != SHAPE_BOX)
+      dk_error(e, doc, gn, "a polycrystal fills a box region");
     const dk_node *ml = dk_get(gn, "materials");
     if (ml && dk_expect_seq(e, doc, ml, "polycrystal materials")) {
       double *fr = NULL;
@@ -698,9 +698,16 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
     if (r->ngrains == 0 || !r->rotate) continue;
     double lo[3], hi[3], *xyz = NULL, por = 0;
     int32_t *grain = NULL;
+    /* a profiled face reaches up to `amplitude` beyond hi: grains fill that box and the owner
+     * filter cuts the profile; the sine and random profiles average zero over the periodic
+     * extent, so the region's volume is that of the flat box (the porosity's reference) */
+    double vbox = 1.0;
     for (int a = 0; a < 3; a++) {
       lo[a] = a < p->dim ? fmax(r->lo[a], p->box.lo[a]) : 0.0;
       hi[a] = a < p->dim ? fmin(r->hi[a], p->box.hi[a]) : 0.0;
+      if (a < p->dim) vbox *= hi[a] - lo[a];
+      if (r->surface != SURF_FLAT && a == r->surface_axis)
+        hi[a] = fmin(r->hi[a] + r->amplitude, p->box.hi[a]);
     }
     /* grains wrap along a periodic axis that the region spans */
     bool per[3] = {false, false, false};
@@ -709,6 +716,7 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
     owner_filter f = {p, k};
     size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, per, r->ngrains, r->grain_seed,
                               r->dmin, owned_by, &f, &xyz, &grain, &por);
+    if (r->surface != SURF_FLAT) por = 1.0 - (double)n * vol / (p->dim == 2 ? vbox * p->thickness : vbox);
     for (size_t i = 0; i < n; i++) site_add(&l, xyz + 3 * i, k, grain_material(r, grain[i]));
     ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
            "residual porosity %.2f %%", k + 1, r->ngrains, n, 100.0 * por);
