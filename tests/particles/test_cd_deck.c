@@ -62,6 +62,37 @@ static bool has_error(const dk_errors *e, const char *needle) {
   return false;
 }
 
+/* Reads a deck that must have no errors and runs it into a fresh temporary directory `dir`
+ * (a mkdtemp template, filled in). */
+static cd_problem *run_deck(const char *text, char *dir, dk_errors *e, dk_doc **doc, eos_materials **m) {
+  cd_problem *p = read_deck(text, e, doc, m);
+  dk_errors_print(e, stderr);
+  assert_int_equal(e->n, 0);
+  assert_non_null(p);
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.quiet = true;
+  assert_non_null(mkdtemp(dir));
+  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
+  assert_int_equal(cd_problem_run(&ctx, p), MS_OK);
+  ms_ctx_close(&ctx);
+  return p;
+}
+
+/* Removes a run directory and every file in it (snapshot names carry the step number). */
+static void remove_run_dir(const char *dir) {
+  char path[512];
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  for (struct dirent *de; (de = readdir(d));)
+    if (de->d_name[0] != '.') {
+      snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
+      unlink(path);
+    }
+  closedir(d);
+  rmdir(dir);
+}
+
 static void test_good_deck_runs(void **state) {
   (void)state;
   dk_errors e;
@@ -69,17 +100,8 @@ static void test_good_deck_runs(void **state) {
   dk_doc *doc;
   eos_materials *m;
   char *text = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3", "velocity: 1.0");
-  cd_problem *p = read_deck(text, &e, &doc, &m);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  assert_non_null(p);
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
   char dir[] = "/tmp/cd_deck_test_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cd_problem_run(&ctx, p), MS_OK);
+  cd_problem *p = run_deck(text, dir, &e, &doc, &m);
   char path[512];
   snprintf(path, sizeof path, "%s/cd_energy.csv", dir);
   FILE *f = fopen(path, "r");
@@ -87,16 +109,7 @@ static void test_good_deck_runs(void **state) {
   fclose(f);
   snprintf(path, sizeof path, "%s/cd_snap_000000.xmf", dir);
   assert_int_equal(access(path, R_OK), 0);
-  ms_ctx_close(&ctx);
-  /* clean up the run directory (names as written by cd_problem_run and the core) */
-  static const char *const outs[] = {"cd_energy.csv", "cd_profiles.csv", "cd_front.csv", "run.log",
-                                     "cd_snap_000000.h5", "cd_snap_000000.xmf", "cd_snap_000011.h5",
-                                     "cd_snap_000011.xmf"};
-  for (size_t k = 0; k < sizeof outs / sizeof *outs; k++) {
-    snprintf(path, sizeof path, "%s/%s", dir, outs[k]);
-    unlink(path);
-  }
-  rmdir(dir);
+  remove_run_dir(dir);
   cd_problem_free(p);
   eos_materials_free(m);
   dk_free(doc);
@@ -184,18 +197,8 @@ static void test_polycrystal_profiled(void **state) {
   dk_errors_init(&e);
   dk_doc *doc;
   eos_materials *m;
-  cd_problem *p = read_deck(text, &e, &doc, &m);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  assert_non_null(p);
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
   char dir[] = "/tmp/cd_poly_test_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cd_problem_run(&ctx, p), MS_OK);
-  ms_ctx_close(&ctx);
+  cd_problem *p = run_deck(text, dir, &e, &doc, &m);
   char path[512];
   snprintf(path, sizeof path, "%s/cd_snap_000000.h5", dir);
   ms_h5r *h = ms_h5_open_read(path, &e);
@@ -220,15 +223,7 @@ static void test_polycrystal_profiled(void **state) {
   assert_true(crest_top > y1 + amp - r0);
   assert_true(nsample > 0.8 * dense && nsample < dense);
   free(x);
-  DIR *d = opendir(dir); /* the run's files (snapshot names carry the step number) */
-  assert_non_null(d);
-  for (struct dirent *de; (de = readdir(d));)
-    if (de->d_name[0] != '.') {
-      snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
-      unlink(path);
-    }
-  closedir(d);
-  rmdir(dir);
+  remove_run_dir(dir);
   cd_problem_free(p);
   eos_materials_free(m);
   dk_free(doc);
@@ -241,7 +236,8 @@ static void test_example_decks(void **state) {
   (void)state;
   const char *src = getenv("MSCALE_SOURCE_DIR");
   static const char *const names[] = {"cd-piston-al.yaml", "cd-piston-history.yaml", "cd-dusting.yaml",
-                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml", "cd-poly-al.yaml"};
+                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml", "cd-poly-al.yaml",
+                                      "cd-rz80-polycrystal.yaml"};
   for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
     char path[4096];
     snprintf(path, sizeof path, "%s/inputs/%s", src ? src : "../..", names[k]);
