@@ -118,6 +118,10 @@ static void update_halo(cd_dd *d) {
   int ranks[26];
   for (size_t c = 0; c < d->ncells; c++) {
     const int nr = d->owner[c] == d->rank ? foreign_ranks(d, (int32_t)c, ranks) : 0;
+    if (nr == 0) {
+      d->halo_start[c + 1] = (int32_t)n;
+      continue;
+    }
     if (n + (size_t)nr > d->halo_cap) {
       d->halo_cap = 2 * (n + (size_t)nr) + 64;
       d->halo_rank = ms_realloc(d->halo_rank, d->halo_cap, sizeof *d->halo_rank);
