@@ -48,7 +48,7 @@ struct cpl_problem {
   double t_end;
   long n_out;
   double check_window;
-  long checkpoint_every;  /* particle steps between checkpoints (0: none; one-way runs) */
+  long checkpoint_every;  /* particle steps between checkpoints (0: none) */
   double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
   uint64_t deck_hash;     /* of the resolved deck: a restart must use the same one */
   /* fragments, drag, transport */
@@ -321,10 +321,6 @@ consistency_done:
              p->surf_wavelength);
   if (e->n == nerr0 && p->grid_out) /* before build_region allocates the lattice */
     memory_check(p, doc, sec, e);
-  if (e->n == nerr0 && p->drive_mode == DRIVE_TWO_WAY &&
-      (p->checkpoint_every > 0 || p->checkpoint_time > 0))
-    dk_error(e, doc, T, "checkpoints are written by one-way runs (drive.mode velocity or "
-             "transmitting), not by drive.mode two_way (docs/coupling.md)");
   if (e->n != nerr0) {
     cpl_problem_free(p);
     return NULL;
@@ -891,6 +887,23 @@ static void particles_unstable(const ms_ctx *ctx, cd_sim *sim, ms_status st, dou
   free(path);
 }
 
+/* Particle steps between checkpoints: time.checkpoint_every, or checkpoint_time rounded to whole
+ * steps of dt (0: none). */
+static long checkpoint_steps(const cpl_problem *p, double dt) {
+  if (p->checkpoint_every > 0)
+    return p->checkpoint_every;
+  return p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / dt)) : 0;
+}
+
+/* Σ fx over this rank's driven particles (the piston layer's force, this rank's share). */
+static double driven_force_local(const ptl_state *ps) {
+  double f = 0;
+  for (size_t i = 0; i < ps->nlocal; i++)
+    if (ps->flags[i] & PTL_DRIVEN)
+      f += ps->fx[i];
+  return f;
+}
+
 /* Two-way coupling (docs/coupling.md §6): the grid ends at the interface node and runs through
  * the continuum problem's own loop (profiles, histories, x–t data as in a grid-only run); per
  * grid step the node gets the impulse the particles received in the previous step as a
@@ -912,22 +925,47 @@ typedef struct two_way {
   int32_t *ghost_owner; /* MPI: owner rank of each ghost (fragment search) */
   double *fx, *fy, *fz;
   double ta, xa, traction; /* interface node before the current grid step; its load */
-  double p_avg, Jg, Jp, Wg, dtg_last, owed;
-  double f_prev;    /* force on this rank's driven particles after the last particle step */
-  double pw;        /* piston work (all ranks) at the end of the last grid step */
-  double w_before;  /* ... and at the end of the one before */
+  cpl_two_way_acc acc;      /* impulse and work exchanged so far (acc.gsteps unused: gsteps) */
+  double f_prev; /* force on this rank's driven particles after the last particle step */
   long gsteps, psteps, next_out, last_search;
   gas_ctx gas; /* gas.g == NULL: no gas section */
+  /* checkpoints (docs/coupling.md §7b): every ckpt_every particle steps, at the end of a grid
+   * step; ls.gaslog records the tractions and what was done to the gas grid. A restart replays
+   * the log through the grid's own loop until gsteps reaches replay_gsteps, then goes live. */
+  long ckpt_every, next_ckpt, replay_gsteps;
+  size_t replay_pos;
+  cpl_loop_state ls;
+  ms_afile *csv[2];
+  int ncsv;
 } two_way;
+
+/* Restart: the next logged row, which must be of `kind` (else the log does not fit the deck). */
+static const double *replay_row(two_way *w, int kind) {
+  const cpl_gaslog *l = &w->ls.gaslog;
+  if (w->replay_pos >= l->n || l->row[4 * w->replay_pos] != kind)
+    return NULL;
+  return l->row + 4 * w->replay_pos++;
+}
 
 static ms_status two_way_before(void *user, cont_grid *g) {
   two_way *w = user;
+  if (w->gsteps < w->replay_gsteps) { /* restart: the logged traction */
+    const double *r = replay_row(w, CPL_LOG_TRACTION);
+    if (!r) {
+      ms_log(w->ctx, MS_LOG_ERROR, "coupled: the checkpoint's grid log ends early");
+      return MS_ERR_INPUT;
+    }
+    cont_grid_set_node_force(g, w->node, r[1]);
+    return MS_OK;
+  }
   /* the particles push the node towards −x: the traction hands the grid the impulse the
    * particles received and the grid has not yet (`owed`, normally the last step's), spread
    * over the expected step; what a different step size leaves over is carried on, so the
    * exchange conserves momentum exactly up to the impulse in flight */
-  w->traction = w->dtg_last > 0 ? -w->owed / w->dtg_last : 0.0;
+  w->traction = w->acc.dtg_last > 0 ? -w->acc.owed / w->acc.dtg_last : 0.0;
   cont_grid_set_node_force(g, w->node, w->traction);
+  if (w->ls.gaslog.on)
+    cpl_gaslog_traction(&w->ls.gaslog, w->traction);
   w->ta = cont_grid_time(g);
   w->xa = cont_grid_view(g).x[w->node];
   return MS_OK;
@@ -957,8 +995,37 @@ static ms_status two_way_fragments(two_way *w, double t) {
   return st;
 }
 
+/* Restart: what the logged grid step did to the gas grid (velocity, advance, drag sources). */
+static ms_status two_way_replay(two_way *w) {
+  const cpl_gaslog *l = &w->ls.gaslog;
+  ms_status st = MS_OK;
+  while (st == MS_OK && w->replay_pos < l->n && l->row[4 * w->replay_pos] != CPL_LOG_TRACTION)
+    st = w->gas.g ? cpl_gaslog_apply(l->row + 4 * w->replay_pos++, w->gas.g) : MS_ERR_INPUT;
+  if (st == MS_OK && ++w->gsteps == w->replay_gsteps && w->replay_pos != l->n)
+    st = MS_ERR_INPUT;
+  if (st != MS_OK)
+    ms_log(w->ctx, MS_LOG_ERROR, "coupled: replaying the checkpoint's grid log failed at entry "
+           "%zu (grid step %ld)", w->replay_pos, w->gsteps);
+  return st;
+}
+
+/* Checkpoint at the end of a grid step: the particles refreshed (cd_sim_refresh, as the restart
+ * will), the accumulators, the log and the streamed CSV text (cpl_checkpoint_write). */
+static ms_status two_way_checkpoint(two_way *w) {
+  w->ls.step = w->psteps, w->ls.next_out = w->next_out, w->ls.last_search = w->last_search;
+  w->ls.returned_p = w->gas.returned_p, w->ls.returned_e = w->gas.returned_e;
+  w->ls.tw = w->acc;
+  w->ls.tw.gsteps = (double)w->gsteps;
+  ms_status st = cpl_checkpoint_write(w->ctx, w->p->deck_hash, w->reg.sim, &w->ls, w->csv,
+                                      w->ncsv);
+  w->f_prev = driven_force_local(w->reg.ps); /* the refresh recomputed the forces */
+  return st;
+}
+
 static ms_status two_way_after(void *user, cont_grid *g) {
   two_way *w = user;
+  if (w->gsteps < w->replay_gsteps)
+    return two_way_replay(w);
   cpl_problem *p = w->p;
   cd_sim *sim = w->reg.sim;
   ptl_state *ps = w->reg.ps;
@@ -967,9 +1034,9 @@ static ms_status two_way_after(void *user, cont_grid *g) {
   w->gsteps++;
   double tb = cont_grid_time(g), xb = cont_grid_view(g).x[w->node], dtg = tb - w->ta;
   double ubar = (xb - w->xa) / dtg;
-  w->Jg += w->traction * dtg;
-  w->Wg += w->traction * (xb - w->xa);
-  w->owed += w->traction * dtg;
+  w->acc.Jg += w->traction * dtg;
+  w->acc.Wg += w->traction * (xb - w->xa);
+  w->acc.owed += w->traction * dtg;
   /* sub-cycle: whole number of particle steps over the grid step */
   long nsub = (long)ceil(dtg / w->reg.cfg.dt * (1 - 1e-12));
   if (nsub < 1)
@@ -979,14 +1046,10 @@ static ms_status two_way_after(void *user, cont_grid *g) {
   sim->piston.t[1] = sim->t + dtg;
   sim->piston.u[0] = sim->piston.u[1] = ubar;
   double imp = 0;
-  w->w_before = w->pw;
   for (long k = 0; k < nsub && st == MS_OK; k++) {
     st = cd_sim_step(sim); /* MPI: the status is the same on every rank */
     w->psteps++;
-    double f = 0;
-    for (size_t i = 0; i < ps->nlocal; i++)
-      if (ps->flags[i] & PTL_DRIVEN)
-        f += ps->fx[i];
+    const double f = driven_force_local(ps);
     /* impulse on the particles from the piston: velocity Verlet's ½(F_old + F_new) Δt */
     imp += -0.5 * (w->f_prev + f) * sim->cfg.dt;
     w->f_prev = f;
@@ -996,18 +1059,20 @@ static ms_status two_way_after(void *user, cont_grid *g) {
     return st;
   }
   /* MPI: each rank holds the impulse on its own driven particles (linear in their forces, so the
-   * shares add up to the whole even when driven particles migrate between the sub-steps) and its
-   * share of the piston work; one fixed-order sum per grid step gives every rank the same bits,
-   * so the replicated grids stay bitwise equal (docs/mpi.md "The coupled problem on MPI ranks") */
-  double shares[2] = {imp, sim->piston_work};
+   * shares add up to the whole even when driven particles migrate between the sub-steps); one
+   * fixed-order sum per grid step gives every rank the same bits, so the replicated grids stay
+   * bitwise equal (docs/mpi.md "The coupled problem on MPI ranks") */
   if (w->ctx->size > 1)
-    par_sum_doubles_ordered(shares, 2);
-  imp = shares[0];
-  w->pw = shares[1];
-  w->p_avg = imp / (dtg * area);
-  w->Jp += w->p_avg * dtg;
-  w->owed += w->p_avg * dtg;
-  w->dtg_last = dtg;
+    par_sum_doubles_ordered(&imp, 1);
+  /* the piston's work on the particles: velocity Verlet's ½(F_old + F_new)·Δs with Δs = ū Δt
+   * over every sub-step, i.e. ū × impulse (cd_sim's piston_work to round-off; this sum is the
+   * same on every rank and continues bit for bit after a restart) */
+  w->acc.w_before = w->acc.Wp;
+  w->acc.Wp += ubar * imp;
+  w->acc.p_avg = imp / (dtg * area);
+  w->acc.Jp += w->acc.p_avg * dtg;
+  w->acc.owed += w->acc.p_avg * dtg;
+  w->acc.dtg_last = dtg;
   double ufs = cd_free_surface_velocity(sim, 0);
   if (w->ctx->size > 1) /* an all-reduced mean: rank 0's bits drive every rank's gas grid */
     par_bcast_doubles(&ufs, 1, 0);
@@ -1015,12 +1080,16 @@ static ms_status two_way_after(void *user, cont_grid *g) {
     /* the gas ahead is pushed by the particles' free surface */
     cont_grid_set_node_velocity(w->gas.g, 0, ufs);
     st = cont_grid_run_to(w->gas.g, tb);
+    if (w->ls.gaslog.on) {
+      cpl_gaslog_velocity(&w->ls.gaslog, ufs);
+      cpl_gaslog_run_to(&w->ls.gaslog, tb);
+    }
     if (st != MS_OK) {
       ms_log(w->ctx, MS_LOG_ERROR, "coupled: gas grid: %s", cont_grid_error(w->gas.g));
       return st;
     }
   }
-  double row[8] = {tb, ubar, w->p_avg, ufs, w->Jg, w->Jp, w->Wg, w->pw / area};
+  double row[8] = {tb, ubar, w->acc.p_avg, ufs, w->acc.Jg, w->acc.Jp, w->acc.Wg, w->acc.Wp / area};
   if (w->f_if)
     ms_csv_row(w->f_if, 8, row);
   bool out_now = tb >= p->t_end * (double)w->next_out / (double)p->n_out * (1 - 1e-12);
@@ -1042,11 +1111,15 @@ static ms_status two_way_after(void *user, cont_grid *g) {
            "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
            "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
            "particles %.6g (per cm^2); %zu fragments",
-           tb, w->gsteps, w->psteps, ubar, w->p_avg, w->Jg, w->Jp, w->Wg, w->pw / area, w->fr.n);
+           tb, w->gsteps, w->psteps, ubar, w->acc.p_avg, w->acc.Jg, w->acc.Jp, w->acc.Wg, w->acc.Wp / area, w->fr.n);
     w->next_out++;
   }
   p->sum.u_interface = ubar;
   p->sum.u_free_surface = ufs;
+  if (st == MS_OK && w->ckpt_every > 0 && w->psteps >= w->next_ckpt) {
+    st = two_way_checkpoint(w);
+    w->next_ckpt = (w->psteps / w->ckpt_every + 1) * w->ckpt_every;
+  }
   return st;
 }
 
@@ -1072,14 +1145,18 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n; /* owned + ghosts never exceed it */
   distribute_region(ctx, sim);
-  st = cd_sim_init(sim);
+  st = ctx->restart ? MS_OK : cd_sim_init(sim); /* a restart initialises from its checkpoint */
   if (st != MS_OK) {
     cd_sim_free(sim);
     return st;
   }
+  w.ckpt_every = checkpoint_steps(p, w.reg.cfg.dt);
+  w.next_ckpt = w.ckpt_every;
+  w.ls.gaslog.on = w.ckpt_every > 0;
   ms_afile af_if, af_ej;
   w.f_if = open_csv(ctx, &af_if, "interface.csv");
   w.f_ej = p->gas_grid ? open_csv(ctx, &af_ej, "ejecta_mass.csv") : NULL;
+  w.csv[0] = &af_if, w.csv[1] = &af_ej, w.ncsv = p->gas_grid ? 2 : 1;
   st = ctx->rank == 0 && (!w.f_if || (p->gas_grid && !w.f_ej)) ? MS_ERR_IO : MS_OK;
   if (dist)
     st = par_agree_status(st);
@@ -1095,12 +1172,12 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
                                       "J_grid", "J_particles", "W_grid",      "W_particles"};
   static const char *const units[] = {"10us",     "km/s",     "GPa",     "km/s",
                                       "GPa*10us", "GPa*10us", "kJ/cm^2", "kJ/cm^2"};
-  if (w.f_if)
+  if (w.f_if && !ctx->restart) /* a restart writes back the text so far */
     ms_csv_header(w.f_if,
                 "two-way interface: node velocity, particle pressure, impulse and work "
                 "per unit area as the grid and the particles received them",
                 8, names, units);
-  if (w.f_ej) {
+  if (w.f_ej && !ctx->restart) {
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
     ms_csv_header(w.f_ej, "ejected mass (fragments but the largest, ahead of the particles' "
@@ -1119,9 +1196,6 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   w.fx = ms_calloc(nglobal + 1, sizeof(double));
   w.fy = ms_calloc(nglobal + 1, sizeof(double));
   w.fz = ms_calloc(nglobal + 1, sizeof(double));
-  for (size_t i = 0; i < ps->nlocal; i++)
-    if (ps->flags[i] & PTL_DRIVEN)
-      w.f_prev += ps->fx[i];
   if (p->gas_grid) {
     cont_grid *gg = cont_problem_grid(p->gas_grid);
     /* the gas grid's first node sits on the particles' nominal free surface */
@@ -1129,12 +1203,34 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
                       w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL, NULL};
     if (dist && p->gas_return) /* per-cell sources summed over the ranks (gas_return_sum) */
       w.gas.cell_src = ms_calloc(2 * cont_grid_ncells(gg) + 1, sizeof *w.gas.cell_src);
+    w.gas.log = w.ls.gaslog.on ? &w.ls.gaslog : NULL;
   }
+  if (ctx->restart) {
+    st = cpl_checkpoint_restore(ctx, p->deck_hash, sim, &w.ls, NULL, w.csv, w.ncsv);
+    const size_t nckpt = dist ? (size_t)par_sum_long((long)sim->p->nlocal) : sim->p->n;
+    if (st == MS_OK && nckpt != nglobal) {
+      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu",
+             nckpt, nglobal);
+      st = MS_ERR_INPUT;
+    }
+    ps = w.reg.ps = sim->p;
+    w.psteps = w.ls.step, w.next_out = w.ls.next_out, w.last_search = w.ls.last_search;
+    w.acc = w.ls.tw;
+    w.replay_gsteps = (long)w.ls.tw.gsteps;
+    w.gas.returned_p = w.ls.returned_p, w.gas.returned_e = w.ls.returned_e;
+    w.next_ckpt = (w.psteps / w.ckpt_every + 1) * w.ckpt_every;
+  }
+  w.f_prev = driven_force_local(ps);
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
          x_if0, p->depth, w.reg.cfg.dt, p->gas_grid ? ", gas grid beyond the free surface" : "");
   cont_step_hooks hooks = {two_way_before, two_way_after, &w, p->t_end};
-  st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
+  if (st == MS_OK)
+    st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
+  if (st == MS_OK && w.gsteps < w.replay_gsteps) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint is beyond the end of this deck's run");
+    st = MS_ERR_INPUT;
+  }
   ms_status s2 = commit_csv(&af_if);
   if (st == MS_OK)
     st = s2;
@@ -1143,9 +1239,11 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     if (st == MS_OK)
       st = s2;
   }
-  /* the transport runs replicated and deposits its returns directly */
+  /* the transport runs replicated and deposits its returns directly (not checkpointed) */
   free(w.gas.cell_src);
   w.gas.cell_src = NULL;
+  w.gas.log = NULL;
+  cpl_gaslog_free(&w.ls.gaslog);
   if (st == MS_OK)
     st = write_table(ctx, "spectrum.csv", &w.fr, 0, NULL, NULL);
   if (dist) /* rank 0's file errors stop every rank */
@@ -1169,21 +1267,21 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   p->sum.ejected_mass = p->gas_grid ? cpl_ejected_mass(&w.fr, &w.sel) : 0.0;
   /* the particles' last grid step is in flight: the grid receives its counterpart in its next
    * step; compare what both sides have exchanged so far */
-  p->sum.impulse_grid = w.Jg;
-  p->sum.impulse_particles = w.Jp - w.owed;
-  p->sum.work_grid = w.Wg;
-  p->sum.work_particles = w.w_before / w.reg.area;
-  p->sum.piston_work = w.pw;
+  p->sum.impulse_grid = w.acc.Jg;
+  p->sum.impulse_particles = w.acc.Jp - w.acc.owed;
+  p->sum.work_grid = w.acc.Wg;
+  p->sum.work_particles = w.acc.w_before / w.reg.area;
+  p->sum.piston_work = w.acc.Wp;
   if (st == MS_OK)
     st = check_replicated(ctx, g, w.gas.g);
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
          "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
          "%.6g + particles %.6g = %.3g (%.2g of it)",
-         w.Jg, p->sum.impulse_particles, w.Jg + p->sum.impulse_particles,
-         (w.Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), w.Wg,
-         p->sum.work_particles, w.Wg + p->sum.work_particles,
-         (w.Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
+         w.acc.Jg, p->sum.impulse_particles, w.acc.Jg + p->sum.impulse_particles,
+         (w.acc.Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), w.acc.Wg,
+         p->sum.work_particles, w.acc.Wg + p->sum.work_particles,
+         (w.acc.Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
   cpl_fragments_free(&w.fr);
   free(w.skip);
   free(w.ghost_owner);
@@ -1239,10 +1337,6 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
 }
 
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
-  if (p->drive_mode == DRIVE_TWO_WAY && ctx->restart) {
-    ms_log(ctx, MS_LOG_ERROR, "coupled: --restart: drive.mode two_way writes no checkpoints");
-    return MS_ERR_INPUT;
-  }
   if (p->drive_mode == DRIVE_TWO_WAY)
     return run_two_way(ctx, p);
   ms_status st;
@@ -1399,10 +1493,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
          *fs_up = ms_calloc(fs_cap, sizeof(double));
   /* checkpoints (docs/coupling.md): the loop state at the end of a step, with the gas grid's
    * history so that a restart can rebuild it */
-  const long ckpt_every =
-      p->checkpoint_every > 0
-          ? p->checkpoint_every
-          : (p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / cfg.dt)) : 0);
+  const long ckpt_every = checkpoint_steps(p, cfg.dt);
   ms_afile *const csv[2] = {&af_ej, &af_fs};
   ls.fs_cap = fs_cap, ls.fs_t = fs_t, ls.fs_ug = fs_ug, ls.fs_up = fs_up;
   ls.gaslog.on = ckpt_every > 0;

@@ -1,21 +1,24 @@
-/* cpl_checkpoint.c — checkpoint/restart of the one-way `coupled` run (docs/coupling.md).
+/* cpl_checkpoint.c — checkpoint/restart of the `coupled` run (docs/coupling.md §7b).
  *
  * OUTDIR/coupled_checkpoint.h5 (core/checkpoint.c: atomic, deck hash, rank count) holds
  *   /cd/...            the particle region (particles/cd_checkpoint.c);
  *   /loop              attributes step, next_out, last_search, p_particles, returned_p,
- *                      returned_e; datasets e0 (the initial energy terms), fs [n][3] (drive-check
- *                      samples t, u_grid, u_particles), gaslog [n][4] (what was done to the gas
- *                      grid, replayed on restart);
+ *                      returned_e and the two-way accumulators (gsteps, J_grid, J_particles,
+ *                      W_grid, W_particles, owed, dtg_last, p_avg, w_before; 0 in one-way runs);
+ *                      datasets e0 (the initial energy terms), fs [n][3] (drive-check samples t,
+ *                      u_grid, u_particles), gaslog [n][4] (what was done to the grids,
+ *                      replayed on restart);
  *   /outputs/csvK      the text so far of the streamed CSV files.
  * The grid run that makes the drive history (phase 1) is deterministic and repeated by the
  * restart; the transport phase is not checkpointed (it starts after the particle phase and is
- * repeated from the last checkpoint). */
+ * repeated from the last checkpoint). Two-way runs replay the whole log through the grid's
+ * own loop (coupled.c), which rebuilds the grid's outputs too. */
 #include "cpl_checkpoint.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#define CPL_CHECKPOINT_FORMAT "mscale coupled checkpoint 1"
+#define CPL_CHECKPOINT_FORMAT "mscale coupled checkpoint 2"
 
 static void gaslog_add(cpl_gaslog *l, double kind, double a, double b, double c) {
   if (!l->on) return;
@@ -26,18 +29,35 @@ static void gaslog_add(cpl_gaslog *l, double kind, double a, double b, double c)
   double *r = l->row + 4 * l->n++;
   r[0] = kind, r[1] = a, r[2] = b, r[3] = c;
 }
-void cpl_gaslog_run_to(cpl_gaslog *l, double t) { gaslog_add(l, 0, t, 0, 0); }
+void cpl_gaslog_run_to(cpl_gaslog *l, double t) { gaslog_add(l, CPL_LOG_RUN_TO, t, 0, 0); }
 void cpl_gaslog_source(cpl_gaslog *l, size_t cell, double dp, double de) {
-  gaslog_add(l, 1, (double)cell, dp, de);
+  gaslog_add(l, CPL_LOG_SOURCE, (double)cell, dp, de);
+}
+void cpl_gaslog_velocity(cpl_gaslog *l, double u) { gaslog_add(l, CPL_LOG_VELOCITY, u, 0, 0); }
+void cpl_gaslog_traction(cpl_gaslog *l, double f) { gaslog_add(l, CPL_LOG_TRACTION, f, 0, 0); }
+
+ms_status cpl_gaslog_apply(const double *r, cont_grid *gas) {
+  if (r[0] == CPL_LOG_RUN_TO) return cont_grid_run_to(gas, r[1]);
+  if (r[0] == CPL_LOG_SOURCE && r[1] >= 0 && r[1] < (double)cont_grid_ncells(gas))
+    return cont_grid_add_cell_source(gas, (size_t)r[1], r[2], r[3]);
+  if (r[0] == CPL_LOG_VELOCITY) {
+    cont_grid_set_node_velocity(gas, 0, r[1]);
+    return MS_OK;
+  }
+  return MS_ERR_INPUT;
 }
 void cpl_gaslog_free(cpl_gaslog *l) {
   free(l->row);
   memset(l, 0, sizeof *l);
 }
 
-static const char *const loop_attrs[] = {"step",        "next_out",   "last_search",
-                                         "p_particles", "returned_p", "returned_e"};
+static const char *const loop_attrs[] = {
+    "step",   "next_out", "last_search", "p_particles", "returned_p", "returned_e",
+    "gsteps", "J_grid",   "J_particles", "W_grid",      "W_particles", "owed",
+    "dtg_last", "p_avg",  "w_before"};
+enum { N_TW = sizeof(cpl_two_way_acc) / sizeof(double) };
 enum { N_LOOP = sizeof loop_attrs / sizeof *loop_attrs, N_E0 = sizeof(cd_energy) / sizeof(double) };
+_Static_assert(N_LOOP == 6 + N_TW, "loop_attrs: 6 loop values, then cpl_two_way_acc in order");
 
 ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
                                const cpl_loop_state *ls, ms_afile *const *csv, int ncsv) {
@@ -47,8 +67,9 @@ ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *si
   if (!h) return MS_ERR_IO;
   const bool root = ctx->rank == 0; /* replicated data: rank 0 writes it */
   st = cd_checkpoint_write(h, ctx, sim);
-  const double vals[N_LOOP] = {(double)ls->step,  (double)ls->next_out, (double)ls->last_search,
-                               ls->p_particles,   ls->returned_p,       ls->returned_e};
+  double vals[N_LOOP] = {(double)ls->step, (double)ls->next_out, (double)ls->last_search,
+                         ls->p_particles,  ls->returned_p,       ls->returned_e};
+  memcpy(vals + N_LOOP - N_TW, &ls->tw, sizeof ls->tw);
   for (int k = 0; k < N_LOOP && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "/loop", loop_attrs[k], vals[k]);
   double e0[N_E0];
@@ -106,19 +127,16 @@ static ms_status restore(const ms_ctx *ctx, ms_h5r *h, cd_sim *sim, cpl_loop_sta
   if (st == MS_OK) {
     ls->step = (long)vals[0], ls->next_out = (long)vals[1], ls->last_search = (long)vals[2];
     ls->p_particles = vals[3], ls->returned_p = vals[4], ls->returned_e = vals[5];
+    memcpy(&ls->tw, vals + N_LOOP - N_TW, sizeof ls->tw);
     memcpy(&ls->e0, e0, sizeof ls->e0);
     ls->fs_n = nfs;
     for (size_t k = 0; k < nfs; k++)
       ls->fs_t[k] = fs[3 * k], ls->fs_ug[k] = fs[3 * k + 1], ls->fs_up[k] = fs[3 * k + 2];
     /* the gas grid: the same operations in the same order (and logged again, for the next
-     * checkpoint) */
+     * checkpoint); two-way runs replay them themselves */
     for (size_t k = 0; k < nlog && st == MS_OK; k++) {
       const double *r = log + 4 * k;
-      if (r[0] == 0) st = cont_grid_run_to(gas, r[1]);
-      else if (r[0] == 1 && r[1] >= 0 && r[1] < (double)cont_grid_ncells(gas))
-        st = cont_grid_add_cell_source(gas, (size_t)r[1], r[2], r[3]);
-      else st = MS_ERR_INPUT;
-      if (st != MS_OK)
+      if (gas && (st = cpl_gaslog_apply(r, gas)) != MS_OK)
         dk_error_at(e, "checkpoint", 0, 0, "replaying the gas grid failed at entry %zu: %s", k,
                     cont_grid_error(gas));
       gaslog_add(&ls->gaslog, r[0], r[1], r[2], r[3]);
