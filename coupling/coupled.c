@@ -1089,7 +1089,8 @@ static ms_status two_way_after(void *user, cont_grid *g) {
       return st;
     }
   }
-  double row[8] = {tb, ubar, w->acc.p_avg, ufs, w->acc.Jg, w->acc.Jp, w->acc.Wg, w->acc.Wp / area};
+  double row[8] = {tb,        ubar,      w->acc.p_avg, ufs,
+                   w->acc.Jg, w->acc.Jp, w->acc.Wg,    w->acc.Wp / area};
   if (w->f_if)
     ms_csv_row(w->f_if, 8, row);
   bool out_now = tb >= p->t_end * (double)w->next_out / (double)p->n_out * (1 - 1e-12);
@@ -1111,7 +1112,8 @@ static ms_status two_way_after(void *user, cont_grid *g) {
            "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
            "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
            "particles %.6g (per cm^2); %zu fragments",
-           tb, w->gsteps, w->psteps, ubar, w->acc.p_avg, w->acc.Jg, w->acc.Jp, w->acc.Wg, w->acc.Wp / area, w->fr.n);
+           tb, w->gsteps, w->psteps, ubar, w->acc.p_avg, w->acc.Jg, w->acc.Jp, w->acc.Wg,
+           w->acc.Wp / area, w->fr.n);
     w->next_out++;
   }
   p->sum.u_interface = ubar;
@@ -1218,12 +1220,14 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     w.acc = w.ls.tw;
     w.replay_gsteps = (long)w.ls.tw.gsteps;
     w.gas.returned_p = w.ls.returned_p, w.gas.returned_e = w.ls.returned_e;
-    w.next_ckpt = (w.psteps / w.ckpt_every + 1) * w.ckpt_every;
+    if (w.ckpt_every > 0) /* (a deck without checkpoints fails the deck-hash check above) */
+      w.next_ckpt = (w.psteps / w.ckpt_every + 1) * w.ckpt_every;
   }
   w.f_prev = driven_force_local(ps);
   ms_log(ctx, MS_LOG_INFO,
-         "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s", w.node,
-         x_if0, p->depth, w.reg.cfg.dt, p->gas_grid ? ", gas grid beyond the free surface" : "");
+         "coupled: two-way: grid node %zu at x = %g, particle region %g cm, particle dt %g%s",
+         w.node, x_if0, p->depth, w.reg.cfg.dt,
+         p->gas_grid ? ", gas grid beyond the free surface" : "");
   cont_step_hooks hooks = {two_way_before, two_way_after, &w, p->t_end};
   if (st == MS_OK)
     st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
@@ -1274,14 +1278,15 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   p->sum.piston_work = w.acc.Wp;
   if (st == MS_OK)
     st = check_replicated(ctx, g, w.gas.g);
+  const double jsum = w.acc.Jg + p->sum.impulse_particles,
+               wsum = w.acc.Wg + p->sum.work_particles;
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
          "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
          "%.6g + particles %.6g = %.3g (%.2g of it)",
-         w.acc.Jg, p->sum.impulse_particles, w.acc.Jg + p->sum.impulse_particles,
-         (w.acc.Jg + p->sum.impulse_particles) / fmax(fabs(p->sum.impulse_particles), 1e-300), w.acc.Wg,
-         p->sum.work_particles, w.acc.Wg + p->sum.work_particles,
-         (w.acc.Wg + p->sum.work_particles) / fmax(fabs(p->sum.work_particles), 1e-300));
+         w.acc.Jg, p->sum.impulse_particles, jsum,
+         jsum / fmax(fabs(p->sum.impulse_particles), 1e-300), w.acc.Wg, p->sum.work_particles,
+         wsum, wsum / fmax(fabs(p->sum.work_particles), 1e-300));
   cpl_fragments_free(&w.fr);
   free(w.skip);
   free(w.ghost_owner);

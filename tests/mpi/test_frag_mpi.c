@@ -80,7 +80,8 @@ static void make_chains(gset *g) {
   double y = 0;
   for (int run = 0; run < 8; ++run) {
     for (size_t k = 0; k < nrun; ++k, ++i) {
-      g->p.x[i] = (double)(run % 2 ? nrun - 1 - k : k) * step; /* each run starts where the last ended */
+      /* each run starts where the last ended */
+      g->p.x[i] = (double)(run % 2 ? nrun - 1 - k : k) * step;
       g->p.y[i] = y;
       g->p.z[i] = 0;
     }
