@@ -19,7 +19,9 @@
  * Full table (docs/validation.md "Cluster dynamics"):
  *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
  * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
- *   --integrator NAME --dump FILE (binned profiles at every sample, CSV). */
+ *   --integrator NAME --rc RC/r0 --dump FILE (binned profiles at every sample, CSV);
+ *   --poly NGRAINS[,DMIN[,SEED]] --relax TIME[,J[,QUENCH[,PLAIN]]]: a relaxed Voronoi
+ *   polycrystal instead of the crystal (validation.md "Hugoniot of the relaxed polycrystal"). */
 #include <math.h>
 #include <omp.h>
 #include <setjmp.h>
@@ -138,10 +140,12 @@ static cd_config run_config(cd_cutoff_mode mode, cd_integrator integ) {
                      .sort_every = 8, .lattice = CD_LATTICE_FCC, .integrator = integ};
 }
 
+static double opt_rc = 1.2; /* --rc: R_c / r0 (exploration) */
+
 static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
   cd_sim *s = cd_sim_create(p, box, cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, opt_rc * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   return s;
 }
@@ -488,6 +492,8 @@ int main(int argc, char **argv) {
         if (!strcmp(argv[k], cd_integrator_names[q])) opt_integ = (cd_integrator)q;
     } else if (!strcmp(argv[k], "--poly") && k + 1 < argc) {
       sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
+    } else if (!strcmp(argv[k], "--rc") && k + 1 < argc) {
+      opt_rc = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--relax") && k + 1 < argc) {
       sscanf(argv[++k], "%lf,%lf,%d,%d", &opt_relax_time, &opt_relax_j, &opt_quench, &opt_plain);
     } else if (!strcmp(argv[k], "--curve") && k + 1 < argc) {

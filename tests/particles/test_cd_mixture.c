@@ -8,7 +8,10 @@
  * docs/validation.md. CI (u = 2 km/s, 6x6x160 cells) asserts only the bracketing
  * D(h-BN) < D(mixture) < D(B4C): the measured mixture D is 13 % above the Kuropatenko rule
  * (an open finding, validation.md), so agreement is not asserted.
- *   build/tests/particles/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells) */
+ *   build/tests/particles/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells)
+ *   build/tests/particles/test_cd_mixture --lattice-rule   (the rule fed with the lattice's own
+ *     component Hugoniots: pure-component D measured at u = 1, 2, 3 km/s, fitted D = c + s u,
+ *     used as Us–up Mie–Grüneisen EOS in eos_kuropatenko; mixtures at u = 2 km/s, 6x6x160) */
 #include <math.h>
 #include <omp.h>
 #include <setjmp.h>
@@ -24,7 +27,7 @@
 
 #define R0 5.0e-4
 
-static bool full_run = false;
+static bool full_run = false, lattice_rule = false;
 
 static double fit_slope(const double *t, const double *z, int n, double tmin) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -137,12 +140,59 @@ static void test_kuropatenko(void **state) {
   eos_destroy(comp[1]);
 }
 
+/* The rule with the lattice's own component Hugoniots (validation.md): each pure lattice's D
+ * at u = 1, 2, 3 km/s, least-squares line D = c + s u, taken as the component's Hugoniot (an
+ * mg_linear EOS has exactly Us = c0 + s up from P0 = 0); the rule's components sit at equal
+ * pressure with their own u_i, inside that range at u = 2 for these fractions. */
+static void lattice_rule_run(eos_t *const comp[2]) {
+  const double ups[3] = {1.0, 2.0, 3.0}, alphas[2] = {1.0, 0.0};
+  const int nx = 6, nz = 160;
+  eos_t *fit[2];
+  for (int c = 0; c < 2; c++) {
+    double D[3], al, su = 0, sd = 0, suu = 0, sud = 0;
+    for (int k = 0; k < 3; k++) {
+      D[k] = mixture_shock(comp, alphas[c], ups[k], nx, nz, &al);
+      su += ups[k]; sd += D[k]; suu += ups[k] * ups[k]; sud += ups[k] * D[k];
+    }
+    const double sl = (3 * sud - su * sd) / (3 * suu - su * su), c0 = (sd - sl * su) / 3;
+    printf("%s lattice: D = %.3f, %.3f, %.3f km/s at u = 1, 2, 3: D = %.3f + %.3f u (EOS c0 %.3f)\n",
+           c ? "h-BN" : "B4C", D[0], D[1], D[2], c0, sl, eos_c0(comp[c]));
+    fit[c] = eos_create_mg_linear(eos_rho0(comp[c]), c0, sl, 1.0);
+  }
+  printf("| B4C volume fraction (sites) | u km/s | D (CD) km/s | Kuropatenko, lattice Hugoniots | difference | Kuropatenko, EOS Hugoniots | difference |\n|---|---|---|---|---|---|---|\n");
+  const double mix[2] = {0.262, 0.732}, up = 2.0;
+  for (int m = 0; m < 2; m++) {
+    double al, Dl = NAN, De = NAN, pk;
+    const double Dm = mixture_shock(comp, mix[m], up, nx, nz, &al), frac[2] = {al, 1.0 - al};
+    const eos_t *cl[2] = {fit[0], fit[1]}, *ce[2] = {comp[0], comp[1]};
+    assert_int_equal(eos_kuropatenko(2, cl, frac, up, &Dl, &pk), MS_OK);
+    assert_int_equal(eos_kuropatenko(2, ce, frac, up, &De, &pk), MS_OK);
+    printf("| %.3f | %.1f | %.3f | %.3f | %+.1f %% | %.3f | %+.1f %% |\n", al, up, Dm, Dl,
+           100 * (Dm - Dl) / Dl, De, 100 * (Dm - De) / De);
+    fflush(stdout);
+  }
+  eos_destroy(fit[0]);
+  eos_destroy(fit[1]);
+}
+
+static void test_lattice_rule(void **state) {
+  (void)state;
+  eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),    /* B4C */
+                    eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)};  /* h-BN */
+  lattice_rule_run(comp);
+  eos_destroy(comp[0]);
+  eos_destroy(comp[1]);
+}
+
 int main(int argc, char **argv) {
-  for (int k = 1; k < argc; k++)
+  for (int k = 1; k < argc; k++) {
     if (!strcmp(argv[k], "--full")) full_run = true;
+    if (!strcmp(argv[k], "--lattice-rule")) lattice_rule = true;
+  }
   /* one thread: results do not depend on the thread count (test_cd_dynamics), and ctest -j
    * runs several of these at once, where OpenMP barriers of oversubscribed threads stall */
   omp_set_num_threads(1);
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_kuropatenko)};
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  const struct CMUnitTest rule[] = {cmocka_unit_test(test_lattice_rule)};
+  return lattice_rule ? cmocka_run_group_tests(rule, NULL, NULL) : cmocka_run_group_tests(tests, NULL, NULL);
 }
