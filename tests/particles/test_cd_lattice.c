@@ -253,8 +253,7 @@ static void test_relax(void **state) {
  * ρ0 (the boundaries' excess volume, which relaxation cannot remove), and is deterministic (two
  * runs give the same positions bit for bit). Bound |P_aa| < 0.1 GPa after 30 r0/c0: measured
  * 0.06 GPa here (from 5–10 GPa), below 0.05 GPa in the Hugoniot samples (the quench leaves
- * grain-scale vibrations; a
- * 0.1 GPa residual is 0.1 % of the pressures of the Hugoniot runs). */
+ * grain-scale vibrations; a 0.1 GPa residual is 0.1 % of the pressures of the Hugoniot runs). */
 static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_out, double **x_out) {
   const double a = sqrt(2.0) * R0, c0 = eos_c0(eos), lo[3] = {0, 0, 0}, hi[3] = {6 * a, 6 * a, 12 * a};
   const bool per[3] = {true, true, false};
