@@ -184,6 +184,18 @@ static void test_polycrystal(void **state) {
   check_poly(2, true);
 }
 
+/* A bonded fcc run of p in box (Δt = 0.02 r0/c0, R_c = 1.2 r0), initialised. */
+static cd_sim *bonded_sim(const eos_t *eos, ptl_state *p, const cd_box *box) {
+  const cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / eos_c0(eos),
+                         .cutoff = CD_CUTOFF_BONDED, .lattice = CD_LATTICE_FCC};
+  cd_sim *s = cd_sim_create(p, box, &cfg, 1);
+  cd_pair_table *t = calloc(1, sizeof *t);
+  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  cd_sim_set_pair(s, 0, 0, t);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  return s;
+}
+
 /* Relaxation stage (cd_sim_relax): a periodic fcc block strained anisotropically (x, y, z by
  * 0.99, 1.005, 0.98) and given random velocities relaxes to zero mean stress with the box back at
  * the rest lattice: the stress-free state of the first-shell potential is spacing r0 exactly
@@ -207,15 +219,9 @@ static void test_relax(void **state) {
       p->vy[i] = 0.05 * (2 * ptl_splitmix64_uniform(3, 3 * i + 1) - 1);
       p->vz[i] = 0.05 * (2 * ptl_splitmix64_uniform(3, 3 * i + 2) - 1);
     }
-    cd_box box = {.hi = {L, L, L}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
+    const cd_box box = {.hi = {L, L, L}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
     const double c0 = eos_c0(eos);
-    cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / c0, .cutoff = CD_CUTOFF_BONDED,
-                     .lattice = CD_LATTICE_FCC};
-    cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
-    cd_pair_table *t = calloc(1, sizeof *t);
-    assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
-    cd_sim_set_pair(s, 0, 0, t);
-    assert_int_equal(cd_sim_init(s), MS_OK);
+    cd_sim *s = bonded_sim(eos, p, &box);
     const double strain[3] = {0.99, 1.005, 0.98};
     assert_int_equal(cd_sim_affine(s, strain), MS_OK);
     cd_relax_config rc = {.time = 100 * R0 / c0, .damping_gamma = c0 / (5 * R0), .quench = true,
@@ -265,14 +271,8 @@ static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_
   for (size_t i = 0; i < n; i++) ptl_state_add(p, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], m, 0);
   free(xyz);
   free(grain);
-  cd_box box = {.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / c0, .cutoff = CD_CUTOFF_BONDED,
-                   .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
-  cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
-  cd_sim_set_pair(s, 0, 0, t);
-  assert_int_equal(cd_sim_init(s), MS_OK);
+  const cd_box box = {.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  cd_sim *s = bonded_sim(eos, p, &box);
   cd_relax_config rc = {.time = 30 * R0 / c0, .damping_gamma = c0 / (5 * R0), .quench = true,
                         .box = true, .box_every = 10, .tau = 10 * R0 / c0,
                         .modulus = eos_rho0(eos) * c0 * c0, .rebond = true, .plain = true};
