@@ -705,7 +705,7 @@ void cd_sim_refresh_ghosts(cd_sim *s) {
   if (s->dd) cd_dd_refresh(s, CD_REFRESH_X | CD_REFRESH_V);
 }
 
-/* ---- relaxation before the run (docs/particles-cd.md "Relaxation") ---- */
+/* ---- relaxation before the run (particles-cd.md "Polycrystals and the relaxation stage") ---- */
 
 /* Sample lengths for the mean stress and density: the period along a periodic axis, else the
  * particles' extent plus one site spacing (the surface layers count half a spacing each);
@@ -763,7 +763,8 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
   const double gamma_run = s->cfg.damping_gamma;
   s->piston.n = 0;
   s->cfg.damping_gamma = rc->damping_gamma;
-  if (rc->damping_gamma > 0.0 && !s->scratch) s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
+  if (rc->damping_gamma > 0.0 && !s->scratch)
+    s->scratch = ms_aligned_alloc(3 * p->cap, sizeof(double));
   const double diss0 = s->dissipated;
   const long broken0 = s->n_broken_bonds;
   /* plain: every pair inside R_c interacts (grain boundaries attract and close); the partner
@@ -777,7 +778,8 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
     st = rebuild_lists(s, false);
     if (st == MS_OK) step_forces(s);
   }
-  const long nsteps = (long)ceil(rc->time / s->cfg.dt - 1e-9), every = rc->box_every > 0 ? rc->box_every : 10;
+  const long nsteps = (long)ceil(rc->time / s->cfg.dt - 1e-9);
+  const long every = rc->box_every > 0 ? rc->box_every : 10;
   const double max_strain = rc->max_strain > 0.0 ? rc->max_strain : 1e-3;
   for (int a = 0; a < 3; a++) out->lambda[a] = 1.0;
   double quenched = 0.0;
@@ -789,7 +791,8 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
 #pragma omp parallel for schedule(static) reduction(+ : quenched) if (CD_PAR(n))
       for (long i = 0; i < n; i++) {
         if (p->vx[i] * p->fx[i] + p->vy[i] * p->fy[i] + p->vz[i] * p->fz[i] >= 0.0) continue;
-        quenched += 0.5 * p->mass[i] * (p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
+        const double v2 = p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i];
+        quenched += 0.5 * p->mass[i] * v2;
         p->vx[i] = p->vy[i] = p->vz[i] = 0.0;
       }
     }
@@ -809,7 +812,8 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
   }
   out->steps = s->step;
   out->quenched = s->dd ? par_sum_double(quenched) : quenched;
-  out->dissipated = (s->dd ? par_sum_double(s->dissipated - diss0) : s->dissipated - diss0) + out->quenched;
+  const double damped = s->dissipated - diss0;
+  out->dissipated = (s->dd ? par_sum_double(damped) : damped) + out->quenched;
   out->broken_bonds = s->dd ? par_sum_long(s->n_broken_bonds - broken0) : s->n_broken_bonds - broken0;
   s->piston.n = piston_n;
   s->cfg.damping_gamma = gamma_run;

@@ -318,9 +318,10 @@ void cd_sim_free(cd_sim *s);
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
-/* Relaxation before the run (docs/particles-cd.md "Relaxation"), after cd_sim_init: `time` of
- * damped dynamics with the piston at rest (relative-velocity damping with Γ = damping_gamma,
- * and/or a quench that stops each particle moving against its force), and with `box` every
+/* Relaxation before the run (docs/particles-cd.md "Polycrystals and the relaxation stage"),
+ * after cd_sim_init: `time` of damped dynamics with the piston at rest (relative-velocity
+ * damping with Γ = damping_gamma, and/or a quench that stops each particle moving against its
+ * force), and with `box` every
  * box_every steps (0: 10) an affine strain of each non-wall axis by
  * λ_a − 1 = (box_every Δt/τ)·P_aa/modulus, at most max_strain (0: 1e-3) per rescale, toward
  * zero mean normal stress P_aa over the sample (Berendsen-like; a periodic axis's period
