@@ -21,7 +21,8 @@
  * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
  *   --integrator NAME --rc RC/r0 --dump FILE (binned profiles at every sample, CSV);
  *   --poly NGRAINS[,DMIN[,SEED]] --relax TIME[,J[,QUENCH[,PLAIN]]]: a relaxed Voronoi
- *   polycrystal instead of the crystal (validation.md "Hugoniot of the relaxed polycrystal"). */
+ *   polycrystal instead of the crystal (validation.md "Hugoniot of the relaxed polycrystal");
+ *   --poly-ci: the polycrystal's CI case (ctest test_cd_hugoniot_poly, validation). */
 #include <math.h>
 #include <omp.h>
 #include <setjmp.h>
@@ -306,6 +307,7 @@ static cd_integrator opt_integ = CD_INT_VELOCITY_VERLET;
 static int opt_ngrains = 0;
 static double opt_dmin = 0.8, opt_relax_time = 60.0, opt_relax_j = 5.0;
 static int opt_seed = 7, opt_quench = 1, opt_plain = 1;
+static bool poly_ci = false; /* --poly-ci: the CI polycrystal case (test_cd_hugoniot_poly) */
 
 /* Hugoniot of a porous sample (paper 002's porous targets; docs/eos.md): initial density
  * rho00 < ρ0 at P = 0, e = 0 (the pores close without resistance), final state on the
@@ -387,8 +389,15 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
 /* Hugoniot of the relaxed polycrystal (issue #4): the four D estimates against the porous
  * Hugoniots at the measured initial density of the experimental fit (as a Mie–Grüneisen EOS,
  * Us = 5.35 + 1.34 up, Γ0 = 2) and of the cold curve's own EOS. */
-static void run_poly(const eos_t *eos, const char *cname, const double *ups, int nup) {
+static void run_poly(const eos_t *eos, const char *cname, const double *ups, int nup, bool ci) {
   poly_sample ps = relax_poly(eos, opt_nx, opt_nz);
+  /* CI (--poly-ci): the relaxation reached zero mean stress (30 r0/c0: |P_aa| <= 0.024 GPa
+   * measured, 0.1 allowed as in test_cd_lattice) and left the grain boundaries' porosity
+   * (ρ00 = 0.9487 ρ0 measured: between 0.9 and 1 whatever the seed, validation.md) */
+  if (ci) {
+    for (int a = 0; a < 3; a++) assert_true(fabs(ps.rr.stress[a]) < 0.1);
+    assert_true(ps.rho00 > 0.9 * eos_rho0(eos) && ps.rho00 < eos_rho0(eos));
+  }
   eos_t *fit = eos_create_mg_linear(eos_rho0(eos), 5.35, 1.34, 2.0);
   printf("| cold curve | up km/s | rho00/rho0 | D front | D ahead | D momentum | D mass | Us solid | Us porous (fit) | Us porous (cold-curve EOS) | (D-Us porous fit)/Us: front / ahead / momentum / mass | rho/rho0 | P_zz GPa | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
@@ -403,6 +412,14 @@ static void run_poly(const eos_t *eos, const char *cname, const double *ups, int
            100 * (r.D - usp) / usp, 100 * (r.D_ahead - usp) / usp, 100 * (r.D_mom - usp) / usp,
            100 * (d_mass - usp) / usp, r.rho_ratio, r.pzz, r.pxx, r.sigma_u);
     fflush(stdout);
+    /* CI: the momentum estimate — the piston force, P = ρ00 D up: the P–up Hugoniot — of the
+     * plain-cutoff polycrystal against the porous Hugoniot at its measured density. Measured
+     * (validation.md): −3.0, −2.8, −2.1 % at 1.5, 2, 3 km/s (seed 7, asserted here), −3.8,
+     * −2.0, −2.1 % with seed 11, −1.6 % at 1.5 km/s on a 12×12×240 sample; bound 4.5 %: the
+     * seed-to-seed spread (~1 %) above the worst value. The front estimates are not asserted:
+     * an elastic precursor through the stiffest grains makes them scatter by ±9 % between seeds
+     * at this size. */
+    if (ci) assert_true(fabs(r.D_mom - usp) / usp < 0.045);
   }
   eos_destroy(fit);
   ptl_state_free(ps.p);
@@ -419,7 +436,7 @@ static void test_hugoniot(void **state) {
   if (opt_ngrains > 0) {
     const double ups_poly[] = {1.5, 2.0, 3.0};
     const int c = opt_curve > 0 ? 1 : 0;
-    run_poly(curves[c], cname[c], opt_nup ? opt_ups : ups_poly, opt_nup ? opt_nup : 3);
+    run_poly(curves[c], cname[c], opt_nup ? opt_ups : ups_poly, opt_nup ? opt_nup : 3, poly_ci);
     eos_destroy(curves[0]);
     eos_destroy(curves[1]);
     return;
@@ -490,6 +507,13 @@ int main(int argc, char **argv) {
       k++;
       for (int q = 0; cd_integrator_names[q]; q++)
         if (!strcmp(argv[k], cd_integrator_names[q])) opt_integ = (cd_integrator)q;
+    } else if (!strcmp(argv[k], "--poly-ci")) {
+      /* 24 grains (~13 r0) in 8×8×150 cells, min_distance 0.6, seed 7, relaxed 30 r0/c0
+       * (quench, J = 5, plain), plain-cutoff run at up = 1.5, 2, 3 km/s */
+      poly_ci = true;
+      opt_ngrains = 24, opt_dmin = 0.6, opt_seed = 7, opt_nx = 8, opt_nz = 150;
+      opt_relax_time = 30, opt_relax_j = 5, opt_quench = 1, opt_plain = 1;
+      opt_mode = CD_CUTOFF_PLAIN;
     } else if (!strcmp(argv[k], "--poly") && k + 1 < argc) {
       sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
     } else if (!strcmp(argv[k], "--rc") && k + 1 < argc) {
