@@ -6,8 +6,9 @@
  * Two mixtures as in the paper: 28 % (mass) B4C in h-BN (α = 0.262) and 75 % (mass) B4C
  * (α = 0.732), and the pure components against their own EOS Hugoniots. Numbers recorded in
  * docs/validation.md. CI (u = 2 km/s, 6x6x160 cells) asserts only the bracketing
- * D(h-BN) < D(mixture) < D(B4C): the measured mixture D is 13 % above the Kuropatenko rule
- * (an open finding, validation.md), so agreement is not asserted.
+ * D(h-BN) < D(mixture) < D(B4C): the measured mixture D is 13 % above the Kuropatenko rule fed
+ * with the EOS Hugoniots, so agreement is not asserted (fed with the lattices' own component
+ * Hugoniots, --lattice-rule, the rule is within 2–4 %: validation.md).
  *   build/tests/particles/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells)
  *   build/tests/particles/test_cd_mixture --lattice-rule   (the rule fed with the lattice's own
  *     component Hugoniots: pure-component D measured at u = 1, 2, 3 km/s, interpolated;
