@@ -15,7 +15,9 @@
  * CI (default): bonded cutoff (the remedy of the known trap), 6x6x180 cells. Asserted: D within
  * 3 % of Us at up = 2, 3 km/s (Table-1 curve) and 2, 4 (MG curve); at up = 1.5 (Table 1) the
  * ordered lattice is too stiff (paper 002 §2; validation.md), asserted as over-stiff by less
- * than 6 % (momentum and mass D).
+ * than 6 % (momentum and mass D). --poly-ci (ctest test_cd_hugoniot_poly): a relaxed Voronoi
+ * polycrystal with the plain cutoff, momentum D against the porous Hugoniot at its measured
+ * density (run_poly).
  * Full table (docs/validation.md "Cluster dynamics"):
  *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
  * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
