@@ -12,6 +12,9 @@
 
 #include <math.h>
 #include <string.h>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 /* Hot path: one table, plain cutoff, forces only (the benchmark's model). The table has one
  * spare interval at the top for s rounding onto rc²; fma() makes the Horner steps single
@@ -92,6 +95,180 @@ static inline double tab_force(const cd_pair_table *t, double s, double *e) {
   return fr;
 }
 
+/* ---- the fit kernel: full lists, F/r from the fit (cd_potential.c), forces only ----
+ *
+ * Each pair is computed under both of its particles with the same arithmetic (s is the same
+ * bitwise from d and −d), so the two forces are exact opposites and Newton's third law holds
+ * up to the rounding of the sums (momentum is conserved to round-off: test_cd_dynamics). No
+ * particle writes another's force: no colouring phases, no read-modify-write of f_j, every
+ * layer in parallel, results independent of the thread count. With AVX-512 the plain
+ * entries are taken eight at a time (gathers of x_j; segment coefficients by register
+ * permutes); entries with an image shift (particles at a periodic boundary) one at a time. */
+
+/* F/r of one pair inside R_c: the fit, or below its range (r < R_c/2, a rare compression) the
+ * table's value. */
+static inline double fit_force(const cd_pair_table *t, double s) {
+  return s >= t->fit_slo ? cd_fit_eval(t, s) : tab_force(t, s, NULL);
+}
+
+#if defined(__AVX512F__)
+/* F/r at eight s (lanes of `in` inside R_c; others are 0): cd_pair_fit_eval lane by lane. */
+static inline __m512d fit_force8(const cd_pair_table *t, const __m512d (*cf)[2], __m512d s,
+                                 __mmask8 in) {
+  const __m512i bs = _mm512_castpd_si512(s);
+  const __m512i k = _mm512_srli_epi64(bs, CD_FIT_SHIFT);
+  /* centre of the segment: (bits & ~low) | half, one ternary-logic op (A & B) | C */
+  const __m512d c = _mm512_castsi512_pd(_mm512_ternarylogic_epi64(
+      bs, _mm512_set1_epi64((long long)~((UINT64_C(1) << CD_FIT_SHIFT) - 1)),
+      _mm512_set1_epi64((long long)(UINT64_C(1) << (CD_FIT_SHIFT - 1))), 0xEA));
+  const __m512d tt = _mm512_sub_pd(s, c);
+#define CF(q) _mm512_permutex2var_pd(cf[q][0], k, cf[q][1])
+  /* Estrin's scheme (a short dependency chain), the same as cd_pair_fit_eval */
+  const __m512d t2 = _mm512_mul_pd(tt, tt), t4 = _mm512_mul_pd(t2, t2), t8 = _mm512_mul_pd(t4, t4);
+  const __m512d p01 = _mm512_fmadd_pd(CF(1), tt, CF(0)), p23 = _mm512_fmadd_pd(CF(3), tt, CF(2)),
+                p45 = _mm512_fmadd_pd(CF(5), tt, CF(4)), p67 = _mm512_fmadd_pd(CF(7), tt, CF(6)),
+                p89 = _mm512_fmadd_pd(CF(9), tt, CF(8));
+#undef CF
+  const __m512d q03 = _mm512_fmadd_pd(p23, t2, p01), q47 = _mm512_fmadd_pd(p67, t2, p45);
+  __m512d acc = _mm512_fmadd_pd(p89, t8, _mm512_fmadd_pd(q47, t4, q03));
+  const __mmask8 below = _mm512_mask_cmp_pd_mask(in, s, _mm512_set1_pd(t->fit_slo), _CMP_LT_OQ);
+  if (below) { /* rare: lanes under the fit's range take the table */
+    double sv[8], fv[8];
+    _mm512_storeu_pd(sv, s);
+    _mm512_storeu_pd(fv, acc);
+    for (int l = 0; l < 8; l++)
+      if (below & (1u << l)) fv[l] = tab_force(t, sv[l], NULL);
+    acc = _mm512_loadu_pd(fv);
+  }
+  return _mm512_maskz_mov_pd(in, acc);
+}
+#endif
+
+/* Adds to f_i the forces of the image entries of position pos (one at a time). */
+static inline void image_forces(const cd_neigh *nl, const ptl_state *p, const cd_pair_table *t,
+                                int layer, int32_t pos, double *fxi, double *fyi, double *fzi) {
+  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  const int32_t i = nl->sorted[pos];
+  const int32_t *img = cd_image_list(nl, layer, pos);
+  for (int k = 0; k < nl->nimg[pos]; k++) {
+    const int32_t j = img[2 * k];
+    const double *sh = nl->shift[img[2 * k + 1]];
+    const double dx = x[i] - (x[j] + sh[0]), dy = y[i] - (y[j] + sh[1]),
+                 dz = z[i] - (z[j] + sh[2]);
+    const double s = fma(dx, dx, fma(dy, dy, dz * dz));
+    if (s < t->rc2) {
+      const double fr = fit_force(t, s);
+      *fxi = fma(fr, dx, *fxi);
+      *fyi = fma(fr, dy, *fyi);
+      *fzi = fma(fr, dz, *fzi);
+    }
+  }
+}
+
+#if defined(__AVX512F__)
+/* a[j[0..7]] as a vector by scalar loads: faster than vgatherdpd on Zen 4 (docs/benchmarks.md);
+ * padding entries are 0, a valid index */
+static inline __m512d load8(const double *restrict a, const int32_t *restrict j) {
+  const __m128d v01 = _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]);
+  const __m128d v23 = _mm_loadh_pd(_mm_load_sd(a + j[2]), a + j[3]);
+  const __m128d v45 = _mm_loadh_pd(_mm_load_sd(a + j[4]), a + j[5]);
+  const __m128d v67 = _mm_loadh_pd(_mm_load_sd(a + j[6]), a + j[7]);
+  const __m256d lo = _mm256_insertf128_pd(_mm256_castpd128_pd256(v01), v23, 1);
+  const __m256d hi = _mm256_insertf128_pd(_mm256_castpd128_pd256(v45), v67, 1);
+  return _mm512_insertf64x4(_mm512_castpd256_pd512(lo), hi, 1);
+}
+#endif
+
+/* The force on i is final once its list is done (no other particle writes it), so the
+ * velocity-Verlet closing kick v += (Δt/2) f/m can follow at once (hdt > 0; the same arithmetic
+ * as vv_step's kick loop), saving a pass over v, f and m. */
+static inline void add_force(ptl_state *p, int32_t i, double fxi, double fyi, double fzi,
+                             double hdt) {
+  p->fx[i] += fxi;
+  p->fy[i] += fyi;
+  p->fz[i] += fzi;
+  if (hdt > 0.0) {
+    const double c = hdt / p->mass[i];
+    p->vx[i] += c * p->fx[i];
+    p->vy[i] += c * p->fy[i];
+    p->vz[i] += c * p->fz[i];
+  }
+}
+
+static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t,
+                             int layer, double hdt) {
+  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
+#if defined(__AVX512F__)
+  /* the particles of a group of CD_GROUP positions are the lanes; entry k of every lane's
+   * list is one contiguous load (cd_impl.h) */
+  __m512d cf[CD_FIT_MAXDEG + 1][2];
+  for (int q = 0; q <= CD_FIT_MAXDEG; q++) {
+    cf[q][0] = _mm512_loadu_pd(t->fit_coef[q]);
+    cf[q][1] = _mm512_loadu_pd(t->fit_coef[q] + 8);
+  }
+  const __m512d vrc2 = _mm512_set1_pd(t->rc2), zero = _mm512_setzero_pd();
+  for (int32_t g0 = ls; g0 < le; g0 += CD_GROUP) {
+    const int nlane = le - g0 < CD_GROUP ? le - g0 : CD_GROUP;
+    int32_t iv[CD_GROUP] = {0}; /* lanes past the layer's end: particle 0, never used */
+    memcpy(iv, nl->sorted + g0, (size_t)nlane * sizeof *iv);
+    const __m512d xi = load8(x, iv), yi = load8(y, iv), zi = load8(z, iv);
+    int32_t cnt[CD_GROUP] = {0};
+    int kmax = 0;
+    for (int l = 0; l < nlane; l++) {
+      cnt[l] = nl->nplain[g0 + l];
+      kmax = cnt[l] > kmax ? cnt[l] : kmax;
+    }
+    const __m256i vcnt = _mm256_loadu_si256((const __m256i *)(const void *)cnt);
+    const int32_t *blk = nl->buf[layer] + nl->first[g0] - (size_t)CD_GROUP * kmax;
+    __m512d ax = zero, ay = zero, az = zero;
+    for (int k = 0; k < kmax; k++) {
+      const __mmask8 live = _mm256_cmpgt_epi32_mask(vcnt, _mm256_set1_epi32(k));
+      const int32_t *jk = blk + CD_GROUP * k;
+      const __m512d dx = _mm512_sub_pd(xi, load8(x, jk));
+      const __m512d dy = _mm512_sub_pd(yi, load8(y, jk));
+      const __m512d dz = _mm512_sub_pd(zi, load8(z, jk));
+      const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
+      const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
+      const __m512d fr = fit_force8(t, (const __m512d(*)[2])cf, s, in);
+      ax = _mm512_fmadd_pd(fr, dx, ax);
+      ay = _mm512_fmadd_pd(fr, dy, ay);
+      az = _mm512_fmadd_pd(fr, dz, az);
+    }
+    double fxl[CD_GROUP], fyl[CD_GROUP], fzl[CD_GROUP];
+    _mm512_storeu_pd(fxl, ax);
+    _mm512_storeu_pd(fyl, ay);
+    _mm512_storeu_pd(fzl, az);
+    for (int l = 0; l < nlane; l++) {
+      const int32_t i = nl->sorted[g0 + l];
+      if (nl->nimg[g0 + l]) image_forces(nl, p, t, layer, g0 + l, fxl + l, fyl + l, fzl + l);
+      add_force(p, i, fxl[l], fyl[l], fzl[l], hdt);
+    }
+  }
+#else
+  for (int32_t pos = ls; pos < le; pos++) {
+    const int32_t i = nl->sorted[pos];
+    const double xi = x[i], yi = y[i], zi = z[i];
+    double fxi = 0.0, fyi = 0.0, fzi = 0.0;
+    int stride;
+    const int32_t *lst = cd_plain_list(nl, layer, pos, &stride);
+    for (int k = 0; k < nl->nplain[pos]; k++) {
+      const int32_t j = lst[stride * k];
+      const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+      const double s = fma(dx, dx, fma(dy, dy, dz * dz));
+      if (s < t->rc2) {
+        const double fr = fit_force(t, s);
+        fxi = fma(fr, dx, fxi);
+        fyi = fma(fr, dy, fyi);
+        fzi = fma(fr, dz, fzi);
+      }
+    }
+    image_forces(nl, p, t, layer, pos, &fxi, &fyi, &fzi);
+    add_force(p, i, fxi, fyi, fzi, hdt);
+  }
+#endif
+}
+
 /* Bonded mode: drop bond (i, j) from both partner rows. */
 static void break_bond(int32_t *partners, int32_t i, int32_t j) {
   int32_t *pi = partners + (size_t)i * CD_MAX_PARTNERS, *pj = partners + (size_t)j * CD_MAX_PARTNERS;
@@ -118,17 +295,18 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
   double *fx = p->fx, *fy = p->fy, *fz = p->fz;
   const bool bonded = s->cfg.cutoff == CD_CUTOFF_BONDED;
   const double r02 = s->cfg.r0 * s->cfg.r0;
-  int32_t *buf = nl->buf[layer];
   for (int32_t pos = nl->layer_start[layer]; pos < nl->layer_start[layer + 1]; pos++) {
     const int32_t i = nl->sorted[pos];
     const double xi = x[i], yi = y[i], zi = z[i];
     const int mi = p->mat[i];
     double fxi = 0.0, fyi = 0.0, fzi = 0.0;
-    int32_t *lst = buf + nl->first[pos];
+    int stride;
+    int32_t *lst = cd_plain_list(nl, layer, pos, &stride), *img = cd_image_list(nl, layer, pos);
     const int np = nl->nplain[pos], ni = nl->nimg[pos];
     for (int k = 0; k < np + ni; k++) {
-      int32_t *entry = k < np ? lst + k : lst + np + 2 * (k - np);
+      int32_t *entry = k < np ? lst + stride * k : img + 2 * (k - np);
       const int32_t j = *entry & CD_NB_INDEX;
+      if (nl->full && !cd_half_pair(nl, i, j)) continue; /* each pair once (cd_impl.h) */
       const double *sh = k < np ? nl->shift[13] : nl->shift[entry[1]];
       const double dx = xi - (x[j] + sh[0]), dy = yi - (y[j] + sh[1]), dz = zi - (z[j] + sh[2]);
       const double r2 = fma(dx, dx, fma(dy, dy, dz * dz));
@@ -203,6 +381,11 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
   if (sums) memset(sums, 0, (size_t)nl->nlayer * sizeof *sums);
   s->forces_zeroed = false;
   const bool fast = wf && !sums && !pw && s->nmat == 1 && s->cfg.cutoff == CD_CUTOFF_PLAIN;
+  if (fast && nl->full) { /* no writes into other particles: every layer at once */
+#pragma omp parallel for schedule(dynamic, 1) if (CD_PAR(p->n))
+    for (int l = 0; l < nl->nlayer; l++) layer_forces_fit(nl, p, s->pair[0][0], l, s->kick_hdt);
+    return;
+  }
   for (int ph = 0; ph < nl->nphase; ph++) {
     const int a = nl->phase_start[ph], b = nl->phase_start[ph + 1];
     if (nl->colour) {

@@ -23,6 +23,9 @@
 
 #include "ptl.h"
 
+#include <math.h>
+#include <string.h>
+
 /* Loops over fewer particles than this run serially (thread start-up would dominate). */
 #define CD_PAR(n) ((long)(n) >= 8192)
 
@@ -56,8 +59,70 @@ struct cd_neigh {
   long nbuild;
   size_t n;            /* particles when built */
   bool colour;         /* layers are processed in parallel phases */
+  bool full;           /* full lists: every pair under both particles (the fast path's;
+                        * cd_half_pair picks the half list out of them) */
   bool overfull;       /* some particle had more than CD_MAX_CAND candidates */
 };
+
+/* Full lists (nl->full) hold, for the particle at position pos, the entries of its half list
+ * plus those listing it; the half list's pair (i, j) is the one with j in the next layer, or in
+ * the same layer and later in cell order: positions are ordered by (cell, index), the counting
+ * sort being stable. Same entries, same order as the half list the build would make. */
+static inline bool cd_half_pair(const cd_neigh *nl, int32_t i, int32_t j) {
+  const int32_t ci = nl->cell_of[i], cj = nl->cell_of[j];
+  if (nl->colour) {
+    const int32_t per_layer = (int32_t)(nl->ncells / (size_t)nl->nlayer);
+    const int32_t dl = cj / per_layer - ci / per_layer;
+    if (dl != 0) return dl == 1 || dl == 1 - nl->nlayer; /* next layer, cyclically */
+  }
+  return cj > ci || (cj == ci && j > i);
+}
+
+/* F/r of the fit at s (cd_pair_fit_eval; the fast kernel's arithmetic, lane for lane). */
+static inline double cd_fit_eval(const cd_pair_table *t, double s) {
+  uint64_t bs;
+  memcpy(&bs, &s, sizeof bs);
+  const uint64_t k = (bs >> CD_FIT_SHIFT) % CD_FIT_NSEG;
+  /* centre of the segment: s with the bits below the shift replaced by 100…0 */
+  const uint64_t cb =
+      (bs & ~((UINT64_C(1) << CD_FIT_SHIFT) - 1)) | (UINT64_C(1) << (CD_FIT_SHIFT - 1));
+  double centre;
+  memcpy(&centre, &cb, sizeof centre);
+  const double tt = s - centre;
+  /* Estrin's scheme in the fast kernel's order (cd_force.c): coefficients above fit_deg are 0 */
+  const double(*c)[CD_FIT_NSEG] = t->fit_coef;
+  const double t2 = tt * tt, t4 = t2 * t2, t8 = t4 * t4;
+  const double p01 = fma(c[1][k], tt, c[0][k]), p23 = fma(c[3][k], tt, c[2][k]),
+               p45 = fma(c[5][k], tt, c[4][k]), p67 = fma(c[7][k], tt, c[6][k]),
+               p89 = fma(c[9][k], tt, c[8][k]);
+  const double q03 = fma(p23, t2, p01), q47 = fma(p67, t2, p45);
+  return fma(p89, t8, fma(q47, t4, q03));
+}
+
+/* Full lists are stored by groups of CD_GROUP consecutive positions of a layer (the fit kernel
+ * takes a group's particles as the lanes of one vector): entry k of the plain list of lane l
+ * is at block[CD_GROUP k + l], the block starting CD_GROUP·kmax entries before first[g0] (g0
+ * the group's first position, kmax its longest plain list); the image entries of each position
+ * start at first[pos], after the block. Half lists: plain entries from first[pos], stride 1,
+ * then the image entries. */
+enum { CD_GROUP = 8 };
+static inline int32_t *cd_plain_list(const cd_neigh *nl, int layer, int32_t pos, int *stride) {
+  int32_t *buf = nl->buf[layer];
+  if (!nl->full) {
+    *stride = 1;
+    return buf + nl->first[pos];
+  }
+  const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
+  const int32_t g0 = ls + (pos - ls) / CD_GROUP * CD_GROUP;
+  int kmax = 0;
+  for (int32_t q = g0; q < g0 + CD_GROUP && q < le; q++)
+    kmax = nl->nplain[q] > kmax ? nl->nplain[q] : kmax;
+  *stride = CD_GROUP;
+  return buf + nl->first[g0] - (size_t)CD_GROUP * kmax + (pos - g0);
+}
+static inline int32_t *cd_image_list(const cd_neigh *nl, int layer, int32_t pos) {
+  return nl->buf[layer] + nl->first[pos] + (nl->full ? 0 : nl->nplain[pos]);
+}
 
 cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin);
 void cd_neigh_free(cd_neigh *nl);

@@ -16,10 +16,11 @@
  * With the default 4096 intervals on [(0.5 r0)², R_c²] the force agrees with the formula to
  * ~1e-10 of max|f| (tests/particles/test_cd_potential.c).
  */
-#include "ptl.h"
+#include "cd_impl.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 double cd_cluster_volume(cd_lattice lat, double r0, double thickness) {
   if (lat == CD_LATTICE_TRI2D) return 0.5 * sqrt(3.0) * r0 * r0 * thickness;
@@ -72,6 +73,138 @@ static void mixed_e_des(const eos_t *a, const eos_t *b, cd_lattice lat, double r
   *e = ea;
   *des = -fa / (2.0 * r);
 }
+
+/* ---- Fit: F/r as 16 polynomials in s, for the forces-only fast path (cd_force.c) ----
+ *
+ * The table's F/r is a quadratic per 1/4096 of the s range, so a vectorised kernel would have
+ * to gather three coefficients per pair from 128 KB; the fit's coefficients fit in registers.
+ * Segment k is the set of doubles sharing the bits above CD_FIT_SHIFT (exponent and the top
+ * three mantissa bits: 8 segments per octave, each 1/8–1/16 of its s wide), so the index is one
+ * shift and the segment centre c_k one bit operation, and the 16 segments below R_c² (two
+ * octaves: R_c/2 .. R_c) are told apart by k mod 16 (a register permute). On each segment,
+ * Chebyshev interpolation of the exact F/r = −2 dE/ds (mixed_e_des) at deg + 1 nodes, rewritten
+ * as monomials in t = s − c_k; the lowest degree whose error on a dense grid is below
+ * 1e-12 of max|F/r| on the fitted range is kept (degree 9 for the benchmark's aluminium,
+ * error 4e-13). The fit must also agree with the table's F/r to 1e-9 of max|F/r| over
+ * [s_lo, R_c²] (the table's own accuracy: test_cd_potential); otherwise fit_ok stays false. */
+
+static uint64_t dbits(double x) {
+  uint64_t b;
+  memcpy(&b, &x, sizeof b);
+  return b;
+}
+
+static double bitsd(uint64_t b) {
+  double x;
+  memcpy(&x, &b, sizeof x);
+  return x;
+}
+
+/* The table's F/r at s < rc2 (the kernels' arithmetic, cd_force.c). */
+static double table_fr(const cd_pair_table *t, double s) {
+  const double *c = t->fcoef;
+  if (s < t->s_lo) return fma((s - t->s_lo) * t->inv_h, c[1], c[0]);
+  double u = (s - t->s_lo) * t->inv_h;
+  int m = (int)u;
+  double w = u - m;
+  c += 4 * m;
+  return fma(w, fma(w, c[2], c[1]), c[0]);
+}
+
+static double exact_fr(const eos_t *a, const eos_t *b, cd_lattice lat, double r0, double h,
+                       double attraction, double s) {
+  double e, des;
+  mixed_e_des(a, b, lat, r0, h, attraction, s, &e, &des);
+  return -2.0 * des;
+}
+
+/* Interpolate F/r on [lo, hi] at deg + 1 Chebyshev nodes; monomial coefficients in t = s − c
+ * into m[0..deg] (long double: the basis change loses a few digits otherwise). */
+static void fit_segment(const eos_t *a, const eos_t *b, cd_lattice lat, double r0, double h,
+                        double attraction, double lo, double hi, double c, int deg, double *m) {
+  const int nn = deg + 1;
+  long double f[CD_FIT_MAXDEG + 1], ch[CD_FIT_MAXDEG + 1];
+  const long double mid = 0.5L * ((long double)lo + hi), half = 0.5L * ((long double)hi - lo);
+  for (int j = 0; j < nn; j++) {
+    long double u = cosl(3.14159265358979323846264338327950288L * (j + 0.5L) / nn);
+    f[j] = exact_fr(a, b, lat, r0, h, attraction, (double)(mid + half * u));
+  }
+  for (int i = 0; i < nn; i++) { /* ch_i = (2/N) Σ_j f_j T_i(u_j), ch_0 halved */
+    long double acc = 0.0L;
+    for (int j = 0; j < nn; j++)
+      acc += f[j] * cosl(3.14159265358979323846264338327950288L * i * (j + 0.5L) / nn);
+    ch[i] = (i == 0 ? 1.0L : 2.0L) * acc / nn;
+  }
+  /* Σ ch_i T_i(u) with u = α t + β (α = 1/half, β = (c − mid)/half), as a polynomial in t:
+   * T_0 = 1, T_1 = u, T_{i+1} = 2u T_i − T_{i−1} */
+  const long double al = 1.0L / half, be = ((long double)c - mid) / half;
+  long double tm[CD_FIT_MAXDEG + 2] = {1.0L}, tc[CD_FIT_MAXDEG + 2] = {0}, tn[CD_FIT_MAXDEG + 2];
+  long double acc[CD_FIT_MAXDEG + 1] = {0};
+  tc[0] = be; /* T_1 = β + α t */
+  tc[1] = al;
+  acc[0] = ch[0];
+  for (int i = 1; i < nn; i++) {
+    for (int p = 0; p <= i; p++) acc[p] += ch[i] * tc[p];
+    if (i + 1 < nn) { /* tn = 2(β + α t) tc − tm */
+      for (int p = 0; p <= i + 1; p++)
+        tn[p] = 2.0L * (be * (p <= i ? tc[p] : 0.0L) + (p > 0 ? al * tc[p - 1] : 0.0L)) -
+                (p <= i - 1 ? tm[p] : 0.0L);
+      for (int p = 0; p <= i + 1; p++) {
+        tm[p] = p <= i ? tc[p] : 0.0L;
+        tc[p] = tn[p];
+      }
+    }
+  }
+  for (int p = 0; p <= deg; p++) m[p] = (double)acc[p];
+}
+
+static void pair_fit_build(cd_pair_table *t, const eos_t *a, const eos_t *b, cd_lattice lat,
+                           double r0, double h, double attraction) {
+  t->fit_ok = false;
+  const uint64_t sh = CD_FIT_SHIFT;
+  uint64_t khi = dbits(t->rc2) >> sh;
+  if ((dbits(t->rc2) & ((UINT64_C(1) << sh) - 1)) == 0) khi--; /* s < rc2 never reaches it */
+  uint64_t klo = dbits(t->s_lo) >> sh;
+  if (khi - klo >= CD_FIT_NSEG) klo = khi - (CD_FIT_NSEG - 1);
+  const double slo = fmax(bitsd(klo << sh), t->s_lo);
+  /* error scale: max |F/r| over the fitted range and over the table */
+  double fmax_fit = 0.0, fmax_tab = 0.0;
+  for (int k = 0; k <= 4096; k++) {
+    const double s = t->s_lo + (t->rc2 - t->s_lo) * k / 4096.0;
+    const double fr = fabs(table_fr(t, fmin(s, nextafter(t->rc2, 0.0))));
+    fmax_tab = fmax(fmax_tab, fr);
+    if (s >= slo) fmax_fit = fmax(fmax_fit, fabs(exact_fr(a, b, lat, r0, h, attraction, s)));
+  }
+  fmax_fit = fmax(fmax_fit, fabs(exact_fr(a, b, lat, r0, h, attraction, slo)));
+  if (!(fmax_fit > 0.0) || !isfinite(fmax_fit)) return;
+  enum { NCHECK = 256 }; /* dense grid per segment, ends included */
+  for (int deg = 4; deg <= CD_FIT_MAXDEG; deg++) {
+    double worst = 0.0, worst_tab = 0.0;
+    t->fit_deg = deg;
+    for (uint64_t k = klo; k <= khi; k++) {
+      const double lo = fmax(bitsd(k << sh), slo), hi = fmin(bitsd((k + 1) << sh), t->rc2);
+      const double c = bitsd((k << sh) | (UINT64_C(1) << (sh - 1)));
+      double m[CD_FIT_MAXDEG + 1];
+      fit_segment(a, b, lat, r0, h, attraction, lo, hi, c, deg, m);
+      for (int p = 0; p <= CD_FIT_MAXDEG; p++) t->fit_coef[p][k % CD_FIT_NSEG] = p <= deg ? m[p] : 0.0;
+      for (int q = 0; q <= NCHECK; q++) {
+        const double s = q == NCHECK ? nextafter(hi, 0.0) : lo + (hi - lo) * q / NCHECK;
+        const double fit = cd_pair_fit_eval(t, s), ex = exact_fr(a, b, lat, r0, h, attraction, s);
+        const double tab = table_fr(t, s);
+        if (!isfinite(fit)) worst = INFINITY;
+        worst = fmax(worst, fabs(fit - ex));
+        worst_tab = fmax(worst_tab, fabs(fit - tab));
+      }
+    }
+    if (worst <= 1e-12 * fmax_fit) {
+      t->fit_slo = slo;
+      t->fit_ok = worst_tab <= 1e-9 * fmax_tab;
+      return;
+    }
+  }
+}
+
+double cd_pair_fit_eval(const cd_pair_table *t, double s) { return cd_fit_eval(t, s); }
 
 ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, cd_lattice lat,
                               double r0, double thickness, double rc, double r_min,
@@ -157,6 +290,7 @@ ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, 
     F[2] = f[2];
     F[3] = 0.0;
   }
+  pair_fit_build(t, a, b, lat, r0, thickness, attraction);
   return MS_OK;
 }
 
@@ -189,12 +323,5 @@ double cd_pair_table_energy(const cd_pair_table *t, double r) {
 
 double cd_pair_table_force(const cd_pair_table *t, double r) {
   double s = r * r;
-  if (s >= t->rc2) return 0.0;
-  const double *c = t->fcoef;
-  if (s < t->s_lo) return r * fma((s - t->s_lo) * t->inv_h, c[1], c[0]);
-  double u = (s - t->s_lo) * t->inv_h;
-  int m = (int)u;
-  double w = u - m;
-  c += 4 * m;
-  return r * fma(w, fma(w, c[2], c[1]), c[0]);
+  return s >= t->rc2 ? 0.0 : r * table_fr(t, s);
 }

@@ -261,6 +261,19 @@ static ms_status form_partners(cd_sim *s) {
   return rebuild(s); /* the lists take the bonded flags */
 }
 
+/* The fit kernel (cd_force.c) on full lists serves runs whose every force evaluation in a time
+ * step is the forces-only one: one material with a fitted table, plain cutoff, no damping
+ * (its sub-step walks half lists), one rank (ghosts have no lists of their own). It pays only
+ * with AVX-512 (eight pairs per instruction; a scalar full list computes every pair twice). */
+static bool fit_path(const cd_sim *s) {
+#if defined(__AVX512F__)
+  return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
+         !(s->cfg.damping_gamma > 0.0) && !s->dd && !getenv("MSCALE_CD_NO_FIT");
+#else
+  return false;
+#endif
+}
+
 ms_status cd_sim_init(cd_sim *s) {
   ptl_state *p = s->p;
   s->rc_max = 0.0;
@@ -276,6 +289,7 @@ ms_status cd_sim_init(cd_sim *s) {
     if (st != MS_OK) return st;
   }
   s->nl = cd_neigh_create(p->cap, s->rc_max + s->cfg.skin, s->cfg.skin);
+  s->nl->full = fit_path(s);
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;
   if (s->cfg.cutoff == CD_CUTOFF_BONDED && !s->partners) { /* a restart brings its own */
@@ -562,13 +576,19 @@ static ms_status vv_step(cd_sim *s) {
     n = (long)p->nlocal;
   }
   s->forces_zeroed = true;
+  /* the fit kernel does the closing kick itself, particle by particle (cd_force.c) */
+  const bool kicked = s->nl->full;
+  s->kick_hdt = kicked ? hdt : 0.0;
   step_forces(s);
+  s->kick_hdt = 0.0;
+  if (!kicked) {
 #pragma omp parallel for simd schedule(static) if (CD_PAR(n))
-  for (long i = 0; i < n; i++) {
-    const double c = hdt / m[i];
-    vx[i] += c * fx[i];
-    vy[i] += c * fy[i];
-    vz[i] += c * fz[i];
+    for (long i = 0; i < n; i++) {
+      const double c = hdt / m[i];
+      vx[i] += c * fx[i];
+      vy[i] += c * fy[i];
+      vz[i] += c * fz[i];
+    }
   }
   if (piston) {
     s->piston_work -= 0.5 * (fold + driven_force(s)) * ds;

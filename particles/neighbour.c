@@ -70,7 +70,7 @@ size_t cd_neigh_pairs(const cd_neigh *nl) {
   for (int l = 0; l < nl->nlayer; l++)
     for (int32_t q = nl->layer_start[l]; q < nl->layer_start[l + 1]; q++)
       np += (size_t)nl->nplain[q] + nl->nimg[q];
-  return np;
+  return nl->full ? np / 2 : np;
 }
 
 double cd_neigh_limit2(const cd_neigh *nl) {
@@ -178,6 +178,28 @@ static inline void add_range(stencil_range *st, int *nst, int32_t q0, int32_t q1
     st[(*nst)++] = (stencil_range){q0, q1, code, same};
 }
 
+/* Full lists: store the group of `nlane` positions from g0 (their counts already in nplain,
+ * nimg) in the layout of cd_impl.h; returns the new length (entries are written only while
+ * they fit in cap; padding entries of shorter lists are 0, never read). */
+static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, int32_t g0,
+                          int nlane, int32_t gcand[][CD_MAX_CAND + 8],
+                          int32_t gimg[][CD_MAX_CAND + 2]) {
+  int kmax = 0;
+  for (int l = 0; l < nlane; l++) kmax = nl->nplain[g0 + l] > kmax ? nl->nplain[g0 + l] : kmax;
+  if (len + (size_t)CD_GROUP * kmax <= cap)
+    for (int k = 0; k < kmax; k++)
+      for (int l = 0; l < CD_GROUP; l++)
+        buf[len + (size_t)CD_GROUP * k + l] = l < nlane && k < nl->nplain[g0 + l] ? gcand[l][k] : 0;
+  len += (size_t)CD_GROUP * kmax;
+  for (int l = 0; l < nlane; l++) {
+    const size_t m = 2 * (size_t)nl->nimg[g0 + l];
+    if (len + m <= cap) memcpy(buf + len, gimg[l], m * sizeof *buf);
+    nl->first[g0 + l] = (uint32_t)len;
+    len += m;
+  }
+  return len;
+}
+
 static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
                           const int ax[3], const int32_t *partners) {
   const double rl2 = nl->rlist * nl->rlist;
@@ -190,6 +212,9 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   size_t cap = nl->buf_cap[layer], len = 0;
   int32_t cand[CD_MAX_CAND + 8], img[CD_MAX_CAND + 2]; /* one particle's candidates */
   int32_t imgj[CD_MAX_CAND / 2 + 8];
+  /* full lists: the lists of the current group (cd_impl.h) */
+  int32_t gcand[CD_GROUP][CD_MAX_CAND + 8], gimg[CD_GROUP][CD_MAX_CAND + 2];
+  const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
   /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
    * (same layer, or no colouring) keep only q > p (cd_impl.h) */
   stencil_range st[27];
@@ -209,13 +234,13 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         int nxt = k[0] + 1;
         if (nxt == n0) nxt = per[0] ? 0 : -1;
         next_layer = (m0 == nxt) && !same_layer;
-        if (!same_layer && !next_layer) continue;
+        if (!same_layer && !next_layer && !nl->full) continue;
       }
       for (int o1 = -1; o1 <= 1; o1++) {
         int m1 = k[1] + o1, s1 = 0;
         if (m1 < 0) { if (!per[1]) continue; m1 += n1; s1 = -1; }
         if (m1 >= n1) { if (!per[1]) continue; m1 -= n1; s1 = 1; }
-        const bool same = !next_layer;
+        const bool same = !next_layer && !nl->full; /* full lists keep q < p too */
         const int32_t row = (m0 * n1 + m1) * n2;
         if (k[2] >= 1 && k[2] + 1 < n2) { /* the row's three cells are contiguous: one range */
           add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2],
@@ -242,6 +267,10 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         if (st[e].code == 13) {
           /* branchless: store every candidate, advance only for those inside r_list */
           if (q1 - q0 > CD_MAX_CAND - nc) { q1 = q0 + (CD_MAX_CAND - nc); nl->overfull = true; }
+          if (q0 <= pos && pos < q1) { /* full lists: the range around the particle itself */
+            nc += select_range(nl, q0, pos, NULL, xi, yi, zi, rl2, cand + nc);
+            q0 = pos + 1;
+          }
           nc += select_range(nl, q0, q1, NULL, xi, yi, zi, rl2, cand + nc);
         } else {
           const double *sv = nl->shift[st[e].code];
@@ -273,14 +302,22 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         for (int q = 0; q < nimg; q++)
           if (is_partner(partners, i, img[2 * q])) img[2 * q] |= CD_NB_BONDED;
       }
+      nl->nplain[pos] = (uint16_t)nc;
+      nl->nimg[pos] = (uint16_t)nimg;
+      if (nl->full) { /* staged until its group of CD_GROUP positions is complete */
+        const int lane = (pos - ls) % CD_GROUP;
+        memcpy(gcand[lane], cand, (size_t)nc * sizeof *cand);
+        memcpy(gimg[lane], img, 2 * (size_t)nimg * sizeof *img);
+        if (lane == CD_GROUP - 1 || pos == le - 1)
+          len = flush_group(nl, buf, cap, len, pos - lane, lane + 1, gcand, gimg);
+        continue;
+      }
       if (len + (size_t)nc + 2 * (size_t)nimg <= cap) {
         memcpy(buf + len, cand, (size_t)nc * sizeof *cand);
         memcpy(buf + len + nc, img, 2 * (size_t)nimg * sizeof *img);
       }
       len += (size_t)nc + 2 * (size_t)nimg;
       nl->first[pos] = (uint32_t)start;
-      nl->nplain[pos] = (uint16_t)nc;
-      nl->nimg[pos] = (uint16_t)nimg;
     }
   }
   nl->buf_len[layer] = len;
@@ -488,7 +525,7 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
   /* Lists, layer by layer; grow the buffers that were too small and redo those layers. */
   for (int l = 0; l < n0; l++) {
     size_t np = (size_t)(nl->layer_start[l + 1] - nl->layer_start[l]);
-    size_t want = np * 8 + 64;
+    size_t want = np * (nl->full ? 14 : 8) + 64; /* fcc: 6 (12) entries per particle */
     if (nl->buf_cap[l] < want / 2 || nl->buf[l] == NULL) {
       free(nl->buf[l]);
       nl->buf[l] = ms_calloc(want, sizeof(int32_t));

@@ -95,6 +95,10 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
  * Tabulated once as a cubic Hermite interpolant of E in s = r² (values and exact slopes
  * dE/ds = −f/(2r) at the nodes); the force used is F/r = −2 dE/ds of the SAME cubic, so the
  * force is the exact derivative of the energy that is reported. */
+/* The forces-only fast path's fit of F/r (cd_potential.c, docs/particles-cd.md): segments of s
+ * are the values sharing bits(s) >> CD_FIT_SHIFT (8 per octave of s), 16 consecutive ones. */
+enum { CD_FIT_MAXDEG = 9, CD_FIT_SHIFT = 49, CD_FIT_NSEG = 16 };
+
 typedef struct cd_pair_table {
   int nint;          /* intervals in s */
   double s_lo, h, inv_h;
@@ -103,6 +107,13 @@ typedef struct cd_pair_table {
   double e_rc;       /* E(rc): energy a pair takes with it when it leaves the cutoff */
   double *fcoef;     /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
   double *ecoef;     /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
+  /* F/r on fit_slo <= s < rc2 as Σ_p fit_coef[p][k mod 16] (s − c_k)^p, c_k the centre of the
+   * segment k = bits(s) >> CD_FIT_SHIFT; fit_ok when it matches the cold curve to 1e-12 and
+   * the table to 1e-9 of max|F/r| (else the kernels use the table only) */
+  bool fit_ok;
+  int fit_deg;
+  double fit_slo;
+  double fit_coef[CD_FIT_MAXDEG + 1][CD_FIT_NSEG];
 } cd_pair_table;
 
 /* Reference (untabulated) pair energy and force from an EOS cold curve. */
@@ -121,6 +132,9 @@ ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, 
 void cd_pair_table_free(cd_pair_table *t);
 double cd_pair_table_energy(const cd_pair_table *t, double r); /* 0 beyond rc */
 double cd_pair_table_force(const cd_pair_table *t, double r);  /* scalar f, + = repulsive */
+/* F/r of the fit at s (fit_ok tables; meaningful for fit_slo <= s < rc2): the fast kernel's
+ * arithmetic, lane for lane */
+double cd_pair_fit_eval(const cd_pair_table *t, double s);
 
 /* ---- the simulation ---- */
 enum { CD_MAX_MATERIALS = 8 };
@@ -298,6 +312,7 @@ typedef struct cd_sim {
   double stage_force[3];
   int stage;
   double wall_time_force, wall_time_neigh;
+  double kick_hdt;              /* > 0: the fit kernel also kicks v += kick_hdt f/m (cd_sim.c) */
   struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
   cd_mpi_config mpi;
   bool mpi_on;                  /* cd_sim_set_mpi was called */
