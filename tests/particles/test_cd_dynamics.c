@@ -14,7 +14,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd_impl.h" /* cd_compute_forces, the list layout */
 
 #define R0 5.0e-4
 #define C0 5.35
@@ -142,8 +142,10 @@ static void test_lists_vs_brute_force(void **state) {
       if (j == i) continue;
       double d[3] = {p->x[i] - p->x[j], p->y[i] - p->y[j], p->z[i] - p->z[j]};
       for (int c = 0; c < 3; c++) d[c] -= L * round(d[c] / L);
-      double r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      double fr = cd_pair_table_force(t, r) / r;
+      double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], r = sqrt(r2);
+      /* the pair function the kernel uses: the fit on the fast path (cd_impl.h) */
+      double fr = s->nl->full && r2 >= t->fit_slo && r2 < t->rc2 ? cd_pair_fit_eval(t, r2)
+                                                                 : cd_pair_table_force(t, r) / r;
       for (int c = 0; c < 3; c++) f[c] += fr * d[c];
     }
     worst = fmax(worst, fabs(f[0] - p->fx[i]) + fabs(f[1] - p->fy[i]) + fabs(f[2] - p->fz[i]));
@@ -154,27 +156,86 @@ static void test_lists_vs_brute_force(void **state) {
   eos_destroy(eos);
 }
 
+/* The fast path (the fit of F/r on full lists, AVX-512 builds) against the table path (the
+ * half-list kernel of diagnostics, forces written) on a hot periodic lattice with image
+ * entries, after 300 steps of the fast path. Bound: the set-up check puts the fit within 1e-9
+ * of max|F/r| of the table at every s, so a particle's force differs by at most
+ * 12 pairs × 1e-9 max|F/r| × R_c (a pair missed or counted twice would differ by a whole pair
+ * force, ~1e-2 of that scale). Each pair's two forces are exact opposites, so Σ f vanishes
+ * up to the rounding of the per-particle sums, and momentum stays at round-off. */
+static void test_fit_path_vs_table(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  cd_sim *s = hot_block(eos, 5, 1.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
+#if defined(__AVX512F__)
+  assert_true(s->nl->full); /* the fast path is on */
+#endif
+  double p0[3] = {0, 0, 0}, pabs = 0.0;
+  cd_energy e;
+  cd_sim_energy(s, &e);
+  memcpy(p0, e.momentum, sizeof p0);
+  for (size_t i = 0; i < s->p->n; i++) pabs += s->p->mass[i] * fabs(s->p->vx[i]);
+  for (int k = 0; k < 300; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+  cd_sim_energy(s, &e);
+  double dp = 0.0;
+  for (int c = 0; c < 3; c++) dp = fmax(dp, fabs(e.momentum[c] - p0[c]));
+  printf("fit path: momentum change over 300 steps %.3g of sum m|vx|\n", dp / pabs);
+  assert_true(dp < 1e-12 * pabs);
+  const size_t n = s->p->n;
+  const cd_neigh *nl = s->nl;
+  long nimg = 0;
+  for (int32_t q = 0; q < nl->layer_start[nl->nlayer]; q++) nimg += nl->nimg[q];
+  assert_true(nimg > 0); /* periodic images are exercised */
+  ptl_state *p = s->p;
+  double *ff = malloc(3 * n * sizeof *ff);
+  cd_compute_forces(s, NULL, NULL, true); /* fast path */
+  double sum[3] = {0, 0, 0}, fabs_sum = 0.0;
+  for (size_t i = 0; i < n; i++) {
+    ff[3 * i] = p->fx[i], ff[3 * i + 1] = p->fy[i], ff[3 * i + 2] = p->fz[i];
+    sum[0] += p->fx[i], sum[1] += p->fy[i], sum[2] += p->fz[i];
+    fabs_sum += fabs(p->fx[i]) + fabs(p->fy[i]) + fabs(p->fz[i]);
+  }
+  cd_compute_forces(s, s->sums, NULL, true); /* table path */
+  const cd_pair_table *t = s->pair[0][0];
+  double frmax = 0.0, worst = 0.0;
+  for (int k = 0; k <= 1000; k++)
+    frmax = fmax(frmax, fabs(cd_pair_table_force(t, t->rc * (0.5 + 0.5 * k / 1000.0)) /
+                             (t->rc * (0.5 + 0.5 * k / 1000.0))));
+  for (size_t i = 0; i < n; i++)
+    worst = fmax(worst, fmax(fabs(ff[3 * i] - p->fx[i]),
+                             fmax(fabs(ff[3 * i + 1] - p->fy[i]), fabs(ff[3 * i + 2] - p->fz[i]))));
+  printf("fit path vs table: max force difference %.3g of max|F/r| R_c, |sum f| %.3g of sum|f|\n",
+         worst / (frmax * t->rc), fmax(fabs(sum[0]), fmax(fabs(sum[1]), fabs(sum[2]))) / fabs_sum);
+  assert_true(worst <= 12 * 1e-9 * frmax * t->rc);
+  for (int c = 0; c < 3; c++) assert_true(fabs(sum[c]) < 1e-13 * fabs_sum);
+  free(ff);
+  cd_sim_free(s);
+  eos_destroy(eos);
+}
+
 /* The layer colouring makes every force sum's order independent of the thread count:
- * bitwise identical trajectories with 1 and 2 threads (damping on: its loops too). */
+ * bitwise identical trajectories with 1 and 2 threads (damping on: its loops too; damping off:
+ * the fast path, where each particle's force is summed by one thread). */
 static void test_threads_bitwise(void **state) {
   (void)state;
   eos_t *eos = al();
   double *pos[2];
-  for (int run = 0; run < 2; run++) {
-    omp_set_num_threads(run + 1);
+  for (int run = 0; run < 4; run++) {
+    omp_set_num_threads(run % 2 + 1);
     /* 13³ cells = 8788 particles: above the size where loops go parallel */
-    cd_sim *s = hot_block(eos, 13, 1.0, C0 / (50 * R0), 0.02, CD_CUTOFF_PLAIN);
+    cd_sim *s = hot_block(eos, 13, 1.0, run < 2 ? C0 / (50 * R0) : 0.0, 0.02, CD_CUTOFF_PLAIN);
     for (int k = 0; k < 100; k++) assert_int_equal(cd_sim_step(s), MS_OK);
     size_t n = s->p->n;
-    pos[run] = malloc(3 * n * sizeof(double));
+    if (run == 2) free(pos[0]), free(pos[1]);
+    pos[run % 2] = malloc(3 * n * sizeof(double));
     /* particles may be renumbered: index by gid */
     for (size_t i = 0; i < n; i++) {
       size_t g = (size_t)s->p->gid[i];
-      pos[run][3 * g] = s->p->x[i];
-      pos[run][3 * g + 1] = s->p->y[i];
-      pos[run][3 * g + 2] = s->p->z[i];
+      pos[run % 2][3 * g] = s->p->x[i];
+      pos[run % 2][3 * g + 1] = s->p->y[i];
+      pos[run % 2][3 * g + 2] = s->p->z[i];
     }
-    if (run == 1) assert_memory_equal(pos[0], pos[1], 3 * n * sizeof(double));
+    if (run % 2 == 1) assert_memory_equal(pos[0], pos[1], 3 * n * sizeof(double));
     cd_sim_free(s);
   }
   free(pos[0]);
@@ -354,7 +415,8 @@ static void test_integrator_piston(void **state) {
 int main(int argc, char **argv) {
   const struct CMUnitTest core[] = {
       cmocka_unit_test(test_nve), cmocka_unit_test(test_damping_balance),
-      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_fit_path_vs_table),
+      cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_piston_balance)};
   const struct CMUnitTest integrators[] = {cmocka_unit_test(test_integrator_order),
                                            cmocka_unit_test(test_integrator_nve),

@@ -63,6 +63,44 @@ static void test_table_vs_formula_fcc(void **state) {
   eos_destroy(eos);
 }
 
+/* The fast path's fit of F/r (cd_potential.c): within 1e-12 of max|F/r| of the formula on its
+ * range (set-up criterion; measured 4e-13 at degree 9) and reaching down to R_c/2 (16 segments
+ * of 1/8 octave); within the table's own accuracy of the table (set-up criterion: 1e-9 of
+ * max|F/r| over the table, i.e. at 0.5 r0; measured 9e-10 of the max over the fit range, 1e-10
+ * of the table's, the table's own error). A coarse table (64 intervals, errors ~1e-5) fails the comparison: no fit. */
+static void test_fit(void **state) {
+  (void)state;
+  eos_t *eos = al_mg();
+  cd_pair_table t;
+  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_true(t.fit_ok);
+  assert_true(t.fit_deg <= CD_FIT_MAXDEG);
+  assert_true(t.fit_slo <= 0.6 * 0.6 * 1.2 * 1.2 * R0 * R0); /* (R_c/2)² up to a segment */
+  double frmax = 0.0, err = 0.0, err_tab = 0.0;
+  const int n = 200001;
+  for (int k = 0; k < n; k++) {
+    const double s = t.fit_slo + (t.rc2 - t.fit_slo) * k / n, r = sqrt(s);
+    const double ex = cd_pair_force_exact(eos, CD_LATTICE_FCC, R0, 0, r) / r;
+    frmax = fmax(frmax, fabs(ex));
+    const double fit = cd_pair_fit_eval(&t, s);
+    err = fmax(err, fabs(fit - ex));
+    if (r * r < t.rc2) err_tab = fmax(err_tab, fabs(fit - cd_pair_table_force(&t, r) / r));
+  }
+  printf("fit: degree %d from r = %.3f r0, error %.3g (formula), %.3g (table) of max|F/r|\n",
+         t.fit_deg, sqrt(t.fit_slo) / R0, err / frmax, err_tab / frmax);
+  /* the formula evaluated here (cd_pair_force_exact / r) rounds differently from the one fitted
+   * (−2 dE/ds): a few ulp of |F/r|, far below 1e-12 of its maximum */
+  assert_true(err < 1e-12 * frmax);
+  /* set-up criterion: 1e-9 of max|F/r| over the table, which is at its inner end s_lo */
+  const double rlo = sqrt(t.s_lo), ftab = fabs(cd_pair_table_force(&t, rlo) / rlo);
+  assert_true(err_tab < 1e-9 * ftab);
+  cd_pair_table_free(&t);
+  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 64), MS_OK);
+  assert_false(t.fit_ok);
+  cd_pair_table_free(&t);
+  eos_destroy(eos);
+}
+
 /* f = −dE/dr of the tabulated energy (central differences, step 1e-6 r0: truncation error of
  * the cubic ~1e-12 relative, round-off ~1e-10 relative to max|f|) */
 static void test_force_is_energy_derivative(void **state) {
@@ -171,6 +209,6 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_table_vs_formula_fcc), cmocka_unit_test(test_force_is_energy_derivative),
       cmocka_unit_test(test_paper_table1), cmocka_unit_test(test_2d_potential),
-      cmocka_unit_test(test_mixing_rule)};
+      cmocka_unit_test(test_mixing_rule), cmocka_unit_test(test_fit)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
