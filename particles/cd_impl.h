@@ -53,8 +53,8 @@ struct cd_neigh {
   size_t *buf_cap, *buf_len;
   float *xb, *yb, *zb; /* positions at the last build (float: see xb_err) */
   double xb_err;       /* bound on |x − (double)xb| from float rounding, subtracted from skin/2 */
-  double *xs, *ys, *zs; /* positions in cell order at the last build (also the renumbering
-                        * scratch) */
+  float *xs, *ys, *zs; /* positions in cell order at the last build, for the candidate test (one
+                        * block, also the renumbering scratch) */
   double shift[27][3];
   long nbuild;
   size_t n;            /* particles when built */

@@ -188,7 +188,29 @@ static ms_status rebuild_lists(cd_sim *s, bool reorder) {
   return MS_OK;
 }
 
+/* The fit kernel (cd_force.c) on full lists serves runs whose every force evaluation in a time
+ * step is the forces-only one: one material with a fitted table, plain cutoff, no damping
+ * (its sub-step walks half lists), one rank (ghosts have no lists of their own). It pays only
+ * with AVX-512 (eight pairs per instruction; a scalar full list computes every pair twice). */
+static bool fit_path(const cd_sim *s) {
+#if defined(__AVX512F__)
+  return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
+         !(s->cfg.damping_gamma > 0.0) && !s->dd && !getenv("MSCALE_CD_NO_FIT");
+#else
+  return false;
+#endif
+}
+
+/* A full list takes about twice as long to build as a half list (every pair is found from
+ * both sides) and saves ~15 % of a time step (the fit kernel): it pays when the list lives
+ * at least this many steps (measured on the piston problem, rebuilt every ~4 steps: half lists
+ * are faster there; docs/benchmarks.md). */
+enum { CD_FULL_MIN_STEPS = 8 };
+
 static ms_status rebuild(cd_sim *s) {
+  if (s->nl->nbuild > 0) /* by the age of the list being replaced */
+    s->nl->full = fit_path(s) && s->step - s->last_build_step >= CD_FULL_MIN_STEPS;
+  s->last_build_step = s->step;
   int every = s->cfg.sort_every > 0 ? s->cfg.sort_every : 8; /* default: every 8th build */
   return rebuild_lists(s, s->nl->nbuild % every == 0);
 }
@@ -261,19 +283,6 @@ static ms_status form_partners(cd_sim *s) {
   return rebuild(s); /* the lists take the bonded flags */
 }
 
-/* The fit kernel (cd_force.c) on full lists serves runs whose every force evaluation in a time
- * step is the forces-only one: one material with a fitted table, plain cutoff, no damping
- * (its sub-step walks half lists), one rank (ghosts have no lists of their own). It pays only
- * with AVX-512 (eight pairs per instruction; a scalar full list computes every pair twice). */
-static bool fit_path(const cd_sim *s) {
-#if defined(__AVX512F__)
-  return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
-         !(s->cfg.damping_gamma > 0.0) && !s->dd && !getenv("MSCALE_CD_NO_FIT");
-#else
-  return false;
-#endif
-}
-
 ms_status cd_sim_init(cd_sim *s) {
   ptl_state *p = s->p;
   s->rc_max = 0.0;
@@ -331,6 +340,8 @@ ms_status cd_sim_init(cd_sim *s) {
  * and force summation order (docs/mpi.md). The renumbering is a stable sort into cell order,
  * so repeating it on the checkpoint's order leaves that order unchanged. */
 ms_status cd_sim_refresh(cd_sim *s) {
+  s->nl->full = fit_path(s); /* both runs continue from the same list kind */
+  s->last_build_step = s->step;
   ms_status st = rebuild_lists(s, true);
   if (st == MS_OK) step_forces(s);
   return st;

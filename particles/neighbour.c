@@ -27,9 +27,12 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   nl->xb = ms_calloc(cap + 1, sizeof *nl->xb);
   nl->yb = ms_calloc(cap + 1, sizeof *nl->yb);
   nl->zb = ms_calloc(cap + 1, sizeof *nl->zb);
-  nl->xs = ms_aligned_alloc(cap + 1, sizeof *nl->xs);
-  nl->ys = ms_aligned_alloc(cap + 1, sizeof *nl->ys);
-  nl->zs = ms_aligned_alloc(cap + 1, sizeof *nl->zs);
+  /* one block of 3 (cap + 1) floats (+ 16 each so that ys, zs stay 64-byte aligned): also the
+   * renumbering scratch, which needs 8 bytes per particle */
+  const size_t stride = (cap + 1 + 15) / 16 * 16;
+  nl->xs = ms_aligned_alloc(3 * stride, sizeof *nl->xs);
+  nl->ys = nl->xs + stride;
+  nl->zs = nl->ys + stride;
   return nl;
 }
 
@@ -51,15 +54,13 @@ void cd_neigh_free(cd_neigh *nl) {
   free(nl->yb);
   free(nl->zb);
   free(nl->xs);
-  free(nl->ys);
-  free(nl->zs);
   free(nl);
 }
 
 size_t cd_neigh_bytes(const cd_neigh *nl) {
   size_t n = nl->n;
   size_t b = n * (2 * sizeof(int32_t) + sizeof(uint32_t) + 2 * sizeof(uint16_t) +
-                  3 * sizeof(float) + 3 * sizeof(double));
+                  3 * sizeof(float) + 3 * sizeof(float));
   b += (nl->ncells + 1) * sizeof(int32_t);
   for (int l = 0; l < nl->nlayer; l++) b += nl->buf_cap[l] * sizeof(int32_t);
   return b;
@@ -108,43 +109,45 @@ static bool is_partner(const int32_t *partners, int32_t i, int32_t j) {
 
 /* The candidates at sorted positions q0 .. q1 − 1 inside r_list of (xi, yi, zi), with the
  * image shift sv (NULL: none) added to their positions: their indices sorted[q] are appended to
- * out in order; returns how many. out needs 8 spare entries (whole vectors are stored).
- * Positions come from the sorted-order copies xs/ys/zs, so the loads are contiguous; the
- * arithmetic is the per-pair one, d = x_i − (x_j + shift), |d|² = (dx² + dy²) + dz². */
-static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const double *sv, double xi,
-                        double yi, double zi, double rl2, int32_t *restrict out) {
-  const double *restrict xs = nl->xs, *restrict ys = nl->ys, *restrict zs = nl->zs;
+ * out in order; returns how many. out needs 16 spare entries (whole vectors are stored).
+ * Positions come from the sorted-order float copies xs/ys/zs, so the loads are contiguous and
+ * sixteen candidates go in one instruction; rl2 is widened by the float rounding (build_layer),
+ * so every pair inside r_list is taken (and a few just beyond it, which every kernel skips as
+ * beyond R_c). */
+static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float *sv, float xi,
+                        float yi, float zi, float rl2, int32_t *restrict out) {
+  const float *restrict xs = nl->xs, *restrict ys = nl->ys, *restrict zs = nl->zs;
   const int32_t *restrict sorted = nl->sorted;
   int nc = 0;
 #if defined(__AVX512F__) && defined(__AVX512VL__)
-  const __m512d vxi = _mm512_set1_pd(xi), vyi = _mm512_set1_pd(yi), vzi = _mm512_set1_pd(zi),
-                vrl2 = _mm512_set1_pd(rl2);
-  const __m512d sx = _mm512_set1_pd(sv ? sv[0] : 0.0), sy = _mm512_set1_pd(sv ? sv[1] : 0.0),
-                sz = _mm512_set1_pd(sv ? sv[2] : 0.0);
-  for (int32_t q = q0; q < q1; q += 8) {
-    const __mmask8 live = q1 - q >= 8 ? 0xff : (__mmask8)((1u << (q1 - q)) - 1u);
-    __m512d xj = _mm512_maskz_loadu_pd(live, xs + q), yj = _mm512_maskz_loadu_pd(live, ys + q),
-            zj = _mm512_maskz_loadu_pd(live, zs + q);
+  const __m512 vxi = _mm512_set1_ps(xi), vyi = _mm512_set1_ps(yi), vzi = _mm512_set1_ps(zi),
+               vrl2 = _mm512_set1_ps(rl2);
+  const __m512 sx = _mm512_set1_ps(sv ? sv[0] : 0.0f), sy = _mm512_set1_ps(sv ? sv[1] : 0.0f),
+               sz = _mm512_set1_ps(sv ? sv[2] : 0.0f);
+  for (int32_t q = q0; q < q1; q += 16) {
+    const __mmask16 live = q1 - q >= 16 ? 0xffff : (__mmask16)((1u << (q1 - q)) - 1u);
+    __m512 xj = _mm512_maskz_loadu_ps(live, xs + q), yj = _mm512_maskz_loadu_ps(live, ys + q),
+           zj = _mm512_maskz_loadu_ps(live, zs + q);
     if (sv) {
-      xj = _mm512_add_pd(xj, sx);
-      yj = _mm512_add_pd(yj, sy);
-      zj = _mm512_add_pd(zj, sz);
+      xj = _mm512_add_ps(xj, sx);
+      yj = _mm512_add_ps(yj, sy);
+      zj = _mm512_add_ps(zj, sz);
     }
-    const __m512d dx = _mm512_sub_pd(vxi, xj), dy = _mm512_sub_pd(vyi, yj),
-                  dz = _mm512_sub_pd(vzi, zj);
-    /* no fused multiply-add here: -std=c11 turns contraction off, as in the scalar loop */
-    const __m512d d2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                                     _mm512_mul_pd(dz, dz));
-    const __mmask8 take = _mm512_mask_cmp_pd_mask(live, d2, vrl2, _CMP_LT_OQ);
-    /* no branch on `take` (unpredictable); compress in a register and store the whole vector: compress-to-memory is slow on Zen 4 */
-    const __m256i j = _mm256_maskz_loadu_epi32(live, sorted + q);
-    _mm256_storeu_si256((__m256i *)(void *)(out + nc), _mm256_maskz_compress_epi32(take, j));
+    const __m512 dx = _mm512_sub_ps(vxi, xj), dy = _mm512_sub_ps(vyi, yj),
+                 dz = _mm512_sub_ps(vzi, zj);
+    const __m512 d2 =
+        _mm512_fmadd_ps(dx, dx, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dz, dz)));
+    const __mmask16 take = _mm512_mask_cmp_ps_mask(live, d2, vrl2, _CMP_LT_OQ);
+    /* no branch on `take` (unpredictable); compress in a register and store the whole vector:
+     * compress-to-memory is slow on Zen 4 */
+    const __m512i j = _mm512_maskz_loadu_epi32(live, sorted + q);
+    _mm512_storeu_si512((void *)(out + nc), _mm512_maskz_compress_epi32(take, j));
     nc += __builtin_popcount(take);
   }
 #else
   for (int32_t q = q0; q < q1; q++) { /* branchless: store every candidate, advance on a take */
-    const double dx = xi - (sv ? xs[q] + sv[0] : xs[q]), dy = yi - (sv ? ys[q] + sv[1] : ys[q]),
-                 dz = zi - (sv ? zs[q] + sv[2] : zs[q]);
+    const float dx = xi - (sv ? xs[q] + sv[0] : xs[q]), dy = yi - (sv ? ys[q] + sv[1] : ys[q]),
+                dz = zi - (sv ? zs[q] + sv[2] : zs[q]);
     out[nc] = sorted[q];
     nc += dx * dx + dy * dy + dz * dz < rl2;
   }
@@ -182,7 +185,7 @@ static inline void add_range(stencil_range *st, int *nst, int32_t q0, int32_t q1
  * nimg) in the layout of cd_impl.h; returns the new length (entries are written only while
  * they fit in cap; padding entries of shorter lists are 0, never read). */
 static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, int32_t g0,
-                          int nlane, int32_t gcand[][CD_MAX_CAND + 8],
+                          int nlane, int32_t gcand[][CD_MAX_CAND + 16],
                           int32_t gimg[][CD_MAX_CAND + 2]) {
   int kmax = 0;
   for (int l = 0; l < nlane; l++) kmax = nl->nplain[g0 + l] > kmax ? nl->nplain[g0 + l] : kmax;
@@ -201,19 +204,17 @@ static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, in
 }
 
 static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
-                          const int ax[3], const int32_t *partners) {
-  const double rl2 = nl->rlist * nl->rlist;
+                          const int ax[3], const int32_t *partners, float rl2) {
   const int n0 = nl->ncell[ax[0]], n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
   const bool per[3] = {box->bc[ax[0]] == CD_BC_PERIODIC, box->bc[ax[1]] == CD_BC_PERIODIC,
                        box->bc[ax[2]] == CD_BC_PERIODIC};
-  const double *x = p->x, *y = p->y, *z = p->z;
   const int32_t nloc = (int32_t)p->nlocal;
   int32_t *buf = nl->buf[layer];
   size_t cap = nl->buf_cap[layer], len = 0;
-  int32_t cand[CD_MAX_CAND + 8], img[CD_MAX_CAND + 2]; /* one particle's candidates */
-  int32_t imgj[CD_MAX_CAND / 2 + 8];
+  int32_t cand[CD_MAX_CAND + 16], img[CD_MAX_CAND + 2]; /* one particle's candidates */
+  int32_t imgj[CD_MAX_CAND / 2 + 16];
   /* full lists: the lists of the current group (cd_impl.h) */
-  int32_t gcand[CD_GROUP][CD_MAX_CAND + 8], gimg[CD_GROUP][CD_MAX_CAND + 2];
+  int32_t gcand[CD_GROUP][CD_MAX_CAND + 16], gimg[CD_GROUP][CD_MAX_CAND + 2];
   const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
   /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
    * (same layer, or no colouring) keep only q > p (cd_impl.h) */
@@ -258,7 +259,7 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
     }
     for (int32_t pos = nl->cell_start[c]; pos < nl->cell_start[c + 1]; pos++) {
       const int32_t i = nl->sorted[pos];
-      const double xi = x[i], yi = y[i], zi = z[i];
+      const float xi = nl->xs[pos], yi = nl->ys[pos], zi = nl->zs[pos];
       const size_t start = len;
       int nimg = 0, nc = 0;
       for (int e = 0; e < nst; e++) {
@@ -273,7 +274,8 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
           }
           nc += select_range(nl, q0, q1, NULL, xi, yi, zi, rl2, cand + nc);
         } else {
-          const double *sv = nl->shift[st[e].code];
+          const float sv[3] = {(float)nl->shift[st[e].code][0], (float)nl->shift[st[e].code][1],
+                               (float)nl->shift[st[e].code][2]};
           if (q1 - q0 > CD_MAX_CAND / 2 - nimg) { q1 = q0 + (CD_MAX_CAND / 2 - nimg); nl->overfull = true; }
           const int m = select_range(nl, q0, q1, sv, xi, yi, zi, rl2, imgj);
           for (int q = 0; q < m; q++, nimg++) {
@@ -333,7 +335,7 @@ static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int
   for (size_t i = 0; i < n; i++)
     if (nl->cell_of[i] < 0) nl->sorted[k++] = (int32_t)i;
   const int32_t *perm = nl->sorted;
-  double *tmp = nl->xs; /* xs/ys/zs are refilled after the renumbering */
+  double *tmp = (double *)(void *)nl->xs; /* xs/ys/zs are refilled after the renumbering */
   double *arr[] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->fx, p->fy, p->fz, p->mass};
   for (size_t a = 0; a < sizeof arr / sizeof *arr; a++) {
     double *v = arr[a];
@@ -495,9 +497,9 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
 #pragma omp parallel for schedule(static) if (CD_PAR(n))
   for (int32_t q = 0; q < nsorted; q++) {
     const int32_t i = nl->sorted[q];
-    nl->xs[q] = p->x[i];
-    nl->ys[q] = p->y[i];
-    nl->zs[q] = p->z[i];
+    nl->xs[q] = (float)p->x[i];
+    nl->ys[q] = (float)p->y[i];
+    nl->zs[q] = (float)p->z[i];
   }
 
   /* Colouring (cd_impl.h). */
@@ -525,20 +527,31 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
   /* Lists, layer by layer; grow the buffers that were too small and redo those layers. */
   for (int l = 0; l < n0; l++) {
     size_t np = (size_t)(nl->layer_start[l + 1] - nl->layer_start[l]);
-    size_t want = np * (nl->full ? 14 : 8) + 64; /* fcc: 6 (12) entries per particle */
+    size_t want = np * (nl->full ? 13 : 8) + 64; /* fcc: 6 (12) entries per particle */
     if (nl->buf_cap[l] < want / 2 || nl->buf[l] == NULL) {
       free(nl->buf[l]);
       nl->buf[l] = ms_calloc(want, sizeof(int32_t));
       nl->buf_cap[l] = want;
     }
   }
+  /* r_list² for the float candidate test, widened by its rounding: per component of d, the
+   * roundings of x_i, x_j (|x| <= amax), of the shift (<= L) and of the sums and the
+   * difference are each at most 2^-24 of their size; d² has 3 more roundings. */
+  double amax = 0.0, lmax = 0.0;
+  for (int a = 0; a < 3; a++) {
+    amax = fmax(amax, fmax(fabs(lo[a]), fabs(lo[a] + L[a])) + nl->rlist);
+    lmax = fmax(lmax, L[a]);
+  }
+  const double ulp = 0x1.0p-24, derr = 1.7320508075688772 * ulp * (4 * amax + 3 * lmax + 2 * nl->rlist);
+  const float rl2f = nextafterf(
+      (float)((nl->rlist + derr) * (nl->rlist + derr) * (1.0 + 8 * ulp)), INFINITY);
   int again;
   nl->overfull = false;
   do {
     again = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : again) if (CD_PAR(p->n))
     for (int l = 0; l < n0; l++) {
-      size_t need = build_layer(nl, p, box, l, ax, partners);
+      size_t need = build_layer(nl, p, box, l, ax, partners, rl2f);
       if (need > nl->buf_cap[l]) again++;
     }
     if (again)
@@ -551,7 +564,7 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
         }
   } while (again);
 
-  double amax = 0.0;
+  amax = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : amax) if (CD_PAR(n))
   for (long i = 0; i < (long)n; i++) {
     nl->xb[i] = (float)p->x[i];

@@ -312,6 +312,7 @@ typedef struct cd_sim {
   double stage_force[3];
   int stage;
   double wall_time_force, wall_time_neigh;
+  long last_build_step;         /* step of the last list build (full or half lists: cd_sim.c) */
   double kick_hdt;              /* > 0: the fit kernel also kicks v += kick_hdt f/m (cd_sim.c) */
   struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
   cd_mpi_config mpi;
