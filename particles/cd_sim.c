@@ -241,6 +241,17 @@ static void step_forces(cd_sim *s) {
   s->wall_time_force += ms_wall_time() - t0;
 }
 
+/* Full lists are valid only while fit_path holds; cd_sim_relax changes the damping and the
+ * cutoff mode between builds: half lists then, built at once. */
+static ms_status half_lists_unless_fit(cd_sim *s) {
+  if (!s->nl->full || fit_path(s)) return MS_OK;
+  s->nl->full = false;
+  s->last_build_step = s->step;
+  ms_status st = rebuild_lists(s, false);
+  if (st == MS_OK) step_forces(s);
+  return st;
+}
+
 /* Pairs inside R_c at the start, for the broken-pair energy of the plain cutoff. */
 static void count_inside0(cd_sim *s) {
   cd_compute_forces(s, s->sums, NULL, false);
@@ -809,6 +820,7 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
     st = rebuild_lists(s, false);
     if (st == MS_OK) step_forces(s);
   }
+  if (st == MS_OK) st = half_lists_unless_fit(s);
   const long nsteps = (long)ceil(rc->time / s->cfg.dt - 1e-9);
   const long every = rc->box_every > 0 ? rc->box_every : 10;
   const double max_strain = rc->max_strain > 0.0 ? rc->max_strain : 1e-3;
