@@ -6,7 +6,8 @@
  *
  * Loops run over the layers of the neighbour structure (cd_impl.h): the layers of one phase in
  * parallel (each writes only itself and the next layer), the phases one after the other, so
- * every sum has an order independent of the number of threads.
+ * every sum has an order independent of the number of threads. The fast path on full lists
+ * (layer_forces_fit) needs no phases: no particle writes another's force.
  */
 #include "cd_impl.h"
 

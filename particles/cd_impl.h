@@ -17,7 +17,9 @@
  * each rebuild only, so images stay valid between rebuilds. With `reorder`, a build also
  * renumbers the particles into cell order (ptl_state arrays and partner lists permuted; gid
  * keeps each particle's identity).
- * In bonded mode bit 31 of a plain/image j marks a set-up partner (CD_NB_BONDED). */
+ * In bonded mode bit 31 of a plain/image j marks a set-up partner (CD_NB_BONDED).
+ * Full lists (nl->full, the fit kernel's: cd_sim.c decides) hold every pair under both
+ * particles, in groups of CD_GROUP positions (cd_plain_list below). */
 #ifndef MSCALE_CD_IMPL_H
 #define MSCALE_CD_IMPL_H
 
