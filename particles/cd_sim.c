@@ -190,12 +190,16 @@ static ms_status rebuild_lists(cd_sim *s, bool reorder) {
 
 /* The fit kernel (cd_force.c) on full lists serves runs whose every force evaluation in a time
  * step is the forces-only one: one material with a fitted table, plain cutoff, no damping
- * (its sub-step walks half lists), one rank (ghosts have no lists of their own). It pays only
- * with AVX-512 (eight pairs per instruction; a scalar full list computes every pair twice). */
+ * (its sub-step walks half lists). It pays only with AVX-512 (eight pairs per instruction; a
+ * scalar full list computes every pair twice). Under MPI an owned particle's full list holds
+ * its ghost neighbours too, so its force is complete; a ghost's row (owned neighbours only)
+ * gives the ghost a force and kick that nothing reads before the next refresh, and lets the
+ * diagnostics' half-pair rule (cd_half_pair) find every owned–ghost pair once, as with half
+ * lists. */
 static bool fit_path(const cd_sim *s) {
 #if defined(__AVX512F__)
   return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
-         !(s->cfg.damping_gamma > 0.0) && !s->dd && !getenv("MSCALE_CD_NO_FIT");
+         !(s->cfg.damping_gamma > 0.0) && !getenv("MSCALE_CD_NO_FIT");
 #else
   return false;
 #endif
