@@ -296,6 +296,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
   double *fx = p->fx, *fy = p->fy, *fz = p->fz;
   const bool bonded = s->cfg.cutoff == CD_CUTOFF_BONDED;
   const double r02 = s->cfg.r0 * s->cfg.r0;
+  const int32_t nloc = (int32_t)p->nlocal;
   for (int32_t pos = nl->layer_start[layer]; pos < nl->layer_start[layer + 1]; pos++) {
     const int32_t i = nl->sorted[pos];
     const double xi = x[i], yi = y[i], zi = z[i];
@@ -307,7 +308,9 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
     for (int k = 0; k < np + ni; k++) {
       int32_t *entry = k < np ? lst + stride * k : img + 2 * (k - np);
       const int32_t j = *entry & CD_NB_INDEX;
-      if (nl->full && !cd_half_pair(nl, i, j)) continue; /* each pair once (cd_impl.h) */
+      /* each pair once (cd_impl.h); under MPI a ghost's full row is empty, so an owned–ghost
+       * pair is seen only from the owned side */
+      if (nl->full && j < nloc && !cd_half_pair(nl, i, j)) continue;
       const double *sh = k < np ? nl->shift[13] : nl->shift[entry[1]];
       const double dx = xi - (x[j] + sh[0]), dy = yi - (y[j] + sh[1]), dz = zi - (z[j] + sh[2]);
       const double r2 = fma(dx, dx, fma(dy, dy, dz * dz));

@@ -192,10 +192,8 @@ static ms_status rebuild_lists(cd_sim *s, bool reorder) {
  * step is the forces-only one: one material with a fitted table, plain cutoff, no damping
  * (its sub-step walks half lists). It pays only with AVX-512 (eight pairs per instruction; a
  * scalar full list computes every pair twice). Under MPI an owned particle's full list holds
- * its ghost neighbours too, so its force is complete; a ghost's row (owned neighbours only)
- * gives the ghost a force and kick that nothing reads before the next refresh, and lets the
- * diagnostics' half-pair rule (cd_half_pair) find every owned–ghost pair once, as with half
- * lists. */
+ * its ghost neighbours too, so its force is complete, and a ghost's list is empty (its force is
+ * its owner's business; the diagnostics take an owned–ghost pair from the owned side). */
 static bool fit_path(const cd_sim *s) {
 #if defined(__AVX512F__)
   return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&

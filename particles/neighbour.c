@@ -284,7 +284,9 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
           }
         }
       }
-      if (i >= nloc) { /* a ghost lists owned particles only: no ghost-ghost pairs (docs/mpi.md) */
+      if (i >= nloc && nl->full) { /* full lists: an owned particle's row holds its ghosts */
+        nc = nimg = 0;
+      } else if (i >= nloc) { /* a ghost lists owned particles only: no ghost-ghost pairs */
         int m = 0;
         for (int q = 0; q < nc; q++)
           if (cand[q] < nloc) cand[m++] = cand[q];
