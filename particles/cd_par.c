@@ -192,6 +192,7 @@ static void make_grid(cd_sim *s) {
     free(d->weight);
     d->ncells = ncells;
     d->owner = ms_calloc(ncells, sizeof *d->owner);
+    d->map_version++; /* the halo table is sized by the grid */
     d->owner_new = ms_calloc(ncells, sizeof *d->owner_new);
     d->weight = ms_calloc(ncells, sizeof *d->weight);
   }
