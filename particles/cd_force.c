@@ -428,9 +428,9 @@ static void layer_damping(cd_sim *s, int layer, double *dv) {
     const int32_t *lst = buf + nl->first[pos];
     const int np = nl->nplain[pos], ni = nl->nimg[pos];
     for (int k = 0; k < np + ni; k++) {
-      const int32_t *entry = k < np ? lst + k : lst + np + 2 * (k - np);
+      const double *sh;
+      const int32_t *entry = cd_nb_entry(nl, lst, np, k, &sh);
       const int32_t j = *entry & CD_NB_INDEX;
-      const double *sh = k < np ? nl->shift[13] : nl->shift[entry[1]];
       const double dx = x[i] - (x[j] + sh[0]), dy = y[i] - (y[j] + sh[1]),
                    dz = z[i] - (z[j] + sh[2]);
       const double r2 = dx * dx + dy * dy + dz * dz;

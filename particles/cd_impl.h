@@ -66,6 +66,16 @@ struct cd_neigh {
   bool overfull;       /* some particle had more than CD_MAX_CAND candidates */
 };
 
+/* Entry k of a list row that starts at `row` with np plain entries, then its image pairs (see
+ * the top of this file): returns the entry (its word carries j and the flag bits) and sets *shift
+ * to the periodic shift to add to x_j (shift[13] is the zero shift of a plain entry). */
+static inline const int32_t *cd_nb_entry(const cd_neigh *nl, const int32_t *row, int np, int k,
+                                         const double **shift) {
+  const int32_t *entry = k < np ? row + k : row + np + 2 * (k - np);
+  *shift = nl->shift[k < np ? 13 : entry[1]];
+  return entry;
+}
+
 /* Full lists (nl->full) hold, for the particle at position pos, the entries of its half list
  * plus those listing it; the half list's pair (i, j) is the one with j in the next layer, or in
  * the same layer and later in cell order: positions are ordered by (cell, index), the counting

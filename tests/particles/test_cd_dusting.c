@@ -44,9 +44,8 @@ static size_t detached(const cd_sim *s, double *v_surface) {
       const int32_t *lst = nl->buf[l] + nl->first[pos];
       int np = nl->nplain[pos], ni = nl->nimg[pos];
       for (int k = 0; k < np + ni; k++) {
-        const int32_t *en = k < np ? lst + k : lst + np + 2 * (k - np);
-        int32_t j = *en & CD_NB_INDEX;
-        const double *sh = nl->shift[k < np ? 13 : en[1]];
+        const double *sh;
+        int32_t j = *cd_nb_entry(nl, lst, np, k, &sh) & CD_NB_INDEX;
         double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1], dz = p->z[i] - p->z[j] - sh[2];
         if (dx * dx + dy * dy + dz * dz < b2) {
           int32_t a = find(par, i), c = find(par, j);
