@@ -49,6 +49,14 @@ static cd_problem *read_deck(const char *text, dk_errors *e, dk_doc **docp, eos_
   return p;
 }
 
+/* Frees what read_deck made (p may be NULL: a deck with errors). */
+static void free_deck(cd_problem *p, eos_materials *m, dk_doc *doc, dk_errors *e) {
+  cd_problem_free(p);
+  eos_materials_free(m);
+  dk_free(doc);
+  dk_errors_free(e);
+}
+
 static char *deck(const char *rc, const char *lx, const char *mat2, const char *z2, const char *piston) {
   char *buf = malloc(8192);
   int n = snprintf(buf, 8192, "%s", mats);
@@ -110,10 +118,7 @@ static void test_good_deck_runs(void **state) {
   snprintf(path, sizeof path, "%s/cd_snap_000000.xmf", dir);
   assert_int_equal(access(path, R_OK), 0);
   remove_run_dir(dir);
-  cd_problem_free(p);
-  eos_materials_free(m);
-  dk_free(doc);
-  dk_errors_free(&e);
+  free_deck(p, m, doc, &e);
   free(text);
 }
 
@@ -126,9 +131,7 @@ static void expect_error(const char *text, const char *needle) {
   dk_errors_print(&e, stdout);
   assert_null(p);
   assert_true(has_error(&e, needle));
-  eos_materials_free(m);
-  dk_free(doc);
-  dk_errors_free(&e);
+  free_deck(NULL, m, doc, &e);
 }
 
 static void test_bad_input(void **state) {
@@ -224,10 +227,7 @@ static void test_polycrystal_profiled(void **state) {
   assert_true(nsample > 0.8 * dense && nsample < dense);
   free(x);
   remove_run_dir(dir);
-  cd_problem_free(p);
-  eos_materials_free(m);
-  dk_free(doc);
-  dk_errors_free(&e);
+  free_deck(p, m, doc, &e);
   free(text);
 }
 
@@ -255,10 +255,7 @@ static void test_example_decks(void **state) {
     dk_errors_print(&e, stdout);
     assert_int_equal(e.n, 0);
     assert_non_null(p);
-    cd_problem_free(p);
-    eos_materials_free(m);
-    dk_free(doc);
-    dk_errors_free(&e);
+    free_deck(p, m, doc, &e);
   }
 }
 
