@@ -2,6 +2,8 @@
 # Time mscale's cluster dynamics against LAMMPS on problems A and B of
 # /work/shared/bench/cd_lammps.md, alternating the two codes in one session (docs/benchmarks.md).
 #   bench/cd_lammps/run_compare.sh BUILD_DIR LAMMPS_DIR [REPS] [CASES] [THREADS]
+# THREADS: a list of N (mscale with N OpenMP threads against LAMMPS on N ranks) and Nr (mscale
+# on N MPI ranks, bench/cd_mpi's cd_mpi_bench with its default partition, against LAMMPS on N).
 # LAMMPS_DIR: a writable copy of /work/shared/bench/lammps where gen/ was made by
 # `/usr/bin/python3 gen_inputs.py gen` (run.sh does it). Prints one markdown row per run pair:
 # loop times, particle-steps/s and the ratio, with the 1-minute load average before each pair;
@@ -10,6 +12,7 @@
 # other processes share the cores.
 set -u
 BENCH=$1/bench/cd_lammps/cd_lammps_bench
+MPIBENCH=$1/bench/cd_mpi/cd_mpi_bench
 LMPDIR=$2
 REPS=${3:-2}
 CASES=${4:-"A B"}
@@ -22,19 +25,27 @@ for rep in $(seq 1 "$REPS"); do
   for c in $CASES; do
     for nt in $THREADS; do
       load=$(cut -d' ' -f1 /proc/loadavg)
+      np=${nt%r}
       log=$(mktemp)
-      (cd "$LMPDIR/gen" && OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np "$nt" \
+      (cd "$LMPDIR/gen" && OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np "$np" \
          lmp -in "${INP[$c]}" -log "$log" -screen none > /dev/null 2>&1)
       tl=$(awk '/^Loop time of/{print $4}' "$log")
-      cl=$(awk -v nt="$nt" -v tl="$tl" '/% CPU use with/{sub("%", "", $1); print tl * $1 / 100 * nt}' "$log")
+      cl=$(awk -v nt="$np" -v tl="$tl" '/% CPU use with/{sub("%", "", $1); print tl * $1 / 100 * nt}' "$log")
       rm -f "$log"
-      out=$(OMP_NUM_THREADS=$nt OMP_PROC_BIND=true "$BENCH" "$c")
-      tm=$(echo "$out" | awk '/^loop time/{print $3}')
-      cm=$(echo "$out" | awk '/^process CPU time/{print $7}')
+      if [[ $nt == *r ]]; then
+        out=$(OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -x OMP_NUM_THREADS -np "$np" \
+                "$MPIBENCH" "$c" --steps "${STEPS[$c]}")
+        tm=$(echo "$out" | awk '/^SCALING/{print $5}')
+        cm=$(echo "$out" | awk '/^SCALING/{print $9}')
+      else
+        out=$(OMP_NUM_THREADS=$nt OMP_PROC_BIND=true "$BENCH" "$c")
+        tm=$(echo "$out" | awk '/^loop time/{print $3}')
+        cm=$(echo "$out" | awk '/^process CPU time/{print $7}')
+      fi
       n=${NP[$c]}; s=${STEPS[$c]}
       awk -v r="$rep" -v c="$c" -v nt="$nt" -v ld="$load" -v tl="$tl" -v tm="$tm" -v n="$n" -v s="$s" \
         -v cl="$cl" -v cm="$cm" \
-        'BEGIN{pl=n*s/tl; pm=n*s/tm; printf "| %d | %s | %d | %s | %.2f | %.2f | %.3g | %.3g | %.2f | %.2f | %.2f | %.2f |\n", r, c, nt, ld, tl, tm, pl, pm, pm/pl, cl, cm, cl/cm}'
+        'BEGIN{pl=n*s/tl; pm=n*s/tm; printf "| %d | %s | %s | %s | %.2f | %.2f | %.3g | %.3g | %.2f | %.2f | %.2f | %.2f |\n", r, c, nt, ld, tl, tm, pl, pm, pm/pl, cl, cm, cl/cm}'
     done
   done
 done
