@@ -236,14 +236,40 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
       ay = _mm512_fmadd_pd(fr, dy, ay);
       az = _mm512_fmadd_pd(fr, dz, az);
     }
-    /* a whole group of consecutive particles (the usual case after a renumbering build)
-     * without image entries: the closing in vector form, the same arithmetic as add_force */
+    /* the image entries (particles near a periodic face), entry m of every lane's image list
+     * as one vector: per lane the same operations, in the same order, as image_forces */
+    int mmax = 0;
+    for (int l = 0; l < nlane; l++) mmax = nl->nimg[g0 + l] > mmax ? nl->nimg[g0 + l] : mmax;
+    for (int m = 0; m < mmax; m++) {
+      int32_t jl[CD_GROUP] = {0};
+      double sxl[CD_GROUP] = {0}, syl[CD_GROUP] = {0}, szl[CD_GROUP] = {0};
+      __mmask8 live = 0;
+      for (int l = 0; l < nlane; l++) {
+        if (m >= nl->nimg[g0 + l]) continue;
+        const int32_t *img = cd_image_list(nl, layer, g0 + l) + 2 * m;
+        const double *sh = nl->shift[img[1]];
+        jl[l] = img[0];
+        sxl[l] = sh[0];
+        syl[l] = sh[1];
+        szl[l] = sh[2];
+        live |= (__mmask8)(1u << l);
+      }
+      const __m512d dx = _mm512_sub_pd(xi, _mm512_add_pd(load8(x, jl), _mm512_loadu_pd(sxl)));
+      const __m512d dy = _mm512_sub_pd(yi, _mm512_add_pd(load8(y, jl), _mm512_loadu_pd(syl)));
+      const __m512d dz = _mm512_sub_pd(zi, _mm512_add_pd(load8(z, jl), _mm512_loadu_pd(szl)));
+      const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
+      const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
+      const __m512d fr = fit_force8(t, (const __m512d(*)[2])cf, s, in);
+      ax = _mm512_fmadd_pd(fr, dx, ax);
+      ay = _mm512_fmadd_pd(fr, dy, ay);
+      az = _mm512_fmadd_pd(fr, dz, az);
+    }
+    /* a whole group of consecutive particles (the usual case after a renumbering build): the
+     * closing in vector form, the same arithmetic as add_force */
     const int32_t i0 = iv[0];
     const __m256i ivv = _mm256_loadu_si256((const __m256i *)(const void *)iv);
     const __m256i seq = _mm256_add_epi32(_mm256_set1_epi32(i0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    if (nlane == CD_GROUP && _mm256_cmpeq_epi32_mask(ivv, seq) == 0xff &&
-        _mm_testz_si128(_mm_loadu_si128((const __m128i *)(const void *)(nl->nimg + g0)),
-                        _mm_set1_epi16(-1))) {
+    if (nlane == CD_GROUP && _mm256_cmpeq_epi32_mask(ivv, seq) == 0xff) {
       const __m512d fxv = _mm512_add_pd(_mm512_loadu_pd(p->fx + i0), ax),
                     fyv = _mm512_add_pd(_mm512_loadu_pd(p->fy + i0), ay),
                     fzv = _mm512_add_pd(_mm512_loadu_pd(p->fz + i0), az);
@@ -262,11 +288,7 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     _mm512_storeu_pd(fxl, ax);
     _mm512_storeu_pd(fyl, ay);
     _mm512_storeu_pd(fzl, az);
-    for (int l = 0; l < nlane; l++) {
-      const int32_t i = nl->sorted[g0 + l];
-      if (nl->nimg[g0 + l]) image_forces(nl, p, t, layer, g0 + l, fxl + l, fyl + l, fzl + l);
-      add_force(p, i, fxl[l], fyl[l], fzl[l], hdt);
-    }
+    for (int l = 0; l < nlane; l++) add_force(p, nl->sorted[g0 + l], fxl[l], fyl[l], fzl[l], hdt);
   }
 #else
   for (int32_t pos = ls; pos < le; pos++) {
