@@ -271,7 +271,8 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
      * closing in vector form, the same arithmetic as add_force */
     const int32_t i0 = iv[0];
     const __m256i ivv = _mm256_loadu_si256((const __m256i *)(const void *)iv);
-    const __m256i seq = _mm256_add_epi32(_mm256_set1_epi32(i0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256i seq =
+        _mm256_add_epi32(_mm256_set1_epi32(i0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
     if (nlane == CD_GROUP && _mm256_cmpeq_epi32_mask(ivv, seq) == 0xff) {
       const __m512d fxv = _mm512_add_pd(_mm512_loadu_pd(p->fx + i0), ax),
                     fyv = _mm512_add_pd(_mm512_loadu_pd(p->fy + i0), ay),
@@ -281,9 +282,10 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
       _mm512_storeu_pd(p->fz + i0, fzv);
       if (hdt > 0.0) {
         const __m512d c = _mm512_div_pd(_mm512_set1_pd(hdt), _mm512_loadu_pd(p->mass + i0));
-        _mm512_storeu_pd(p->vx + i0, _mm512_add_pd(_mm512_loadu_pd(p->vx + i0), _mm512_mul_pd(c, fxv)));
-        _mm512_storeu_pd(p->vy + i0, _mm512_add_pd(_mm512_loadu_pd(p->vy + i0), _mm512_mul_pd(c, fyv)));
-        _mm512_storeu_pd(p->vz + i0, _mm512_add_pd(_mm512_loadu_pd(p->vz + i0), _mm512_mul_pd(c, fzv)));
+        double *v[3] = {p->vx + i0, p->vy + i0, p->vz + i0};
+        const __m512d fv[3] = {fxv, fyv, fzv};
+        for (int a = 0; a < 3; a++)
+          _mm512_storeu_pd(v[a], _mm512_add_pd(_mm512_loadu_pd(v[a]), _mm512_mul_pd(c, fv[a])));
       }
       continue;
     }
