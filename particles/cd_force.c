@@ -183,6 +183,20 @@ static inline __m512d load8(const double *restrict a, const int32_t *restrict j)
 }
 #endif
 
+#if defined(__AVX512F__)
+/* Eight pairs at separations d (lanes of `live`): the lanes inside R_c add F/r·d to a. */
+static inline void add_pairs8(const cd_pair_table *t, const __m512d (*cf)[2], __m512d vrc2,
+                              __m512d dx, __m512d dy, __m512d dz, __mmask8 live, __m512d *ax,
+                              __m512d *ay, __m512d *az) {
+  const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
+  const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
+  const __m512d fr = fit_force8(t, cf, s, in);
+  *ax = _mm512_fmadd_pd(fr, dx, *ax);
+  *ay = _mm512_fmadd_pd(fr, dy, *ay);
+  *az = _mm512_fmadd_pd(fr, dz, *az);
+}
+#endif
+
 /* The force on i is final once its list is done (no other particle writes it), so the
  * velocity-Verlet closing kick v += (Δt/2) f/m can follow at once (hdt > 0; the same arithmetic
  * as vv_step's kick loop), saving a pass over v, f and m. */
@@ -211,6 +225,7 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     cf[q][0] = _mm512_loadu_pd(t->fit_coef[q]);
     cf[q][1] = _mm512_loadu_pd(t->fit_coef[q] + 8);
   }
+  const __m512d(*ccf)[2] = (const __m512d(*)[2])cf;
   const __m512d vrc2 = _mm512_set1_pd(t->rc2), zero = _mm512_setzero_pd();
   for (int32_t g0 = ls; g0 < le; g0 += CD_GROUP) {
     const int nlane = le - g0 < CD_GROUP ? le - g0 : CD_GROUP;
@@ -229,15 +244,8 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     for (int k = 0; k < kmax; k++) {
       const __mmask8 live = _mm256_cmpgt_epi32_mask(vcnt, _mm256_set1_epi32(k));
       const int32_t *jk = blk + CD_GROUP * k;
-      const __m512d dx = _mm512_sub_pd(xi, load8(x, jk));
-      const __m512d dy = _mm512_sub_pd(yi, load8(y, jk));
-      const __m512d dz = _mm512_sub_pd(zi, load8(z, jk));
-      const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
-      const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
-      const __m512d fr = fit_force8(t, (const __m512d(*)[2])cf, s, in);
-      ax = _mm512_fmadd_pd(fr, dx, ax);
-      ay = _mm512_fmadd_pd(fr, dy, ay);
-      az = _mm512_fmadd_pd(fr, dz, az);
+      add_pairs8(t, ccf, vrc2, _mm512_sub_pd(xi, load8(x, jk)), _mm512_sub_pd(yi, load8(y, jk)),
+                 _mm512_sub_pd(zi, load8(z, jk)), live, &ax, &ay, &az);
     }
     /* the image entries (particles near a periodic face), entry m of every lane's image list
      * as one vector: per lane the same operations, in the same order, as image_forces */
@@ -257,15 +265,11 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
         szl[l] = sh[2];
         live |= (__mmask8)(1u << l);
       }
-      const __m512d dx = _mm512_sub_pd(xi, _mm512_add_pd(load8(x, jl), _mm512_loadu_pd(sxl)));
-      const __m512d dy = _mm512_sub_pd(yi, _mm512_add_pd(load8(y, jl), _mm512_loadu_pd(syl)));
-      const __m512d dz = _mm512_sub_pd(zi, _mm512_add_pd(load8(z, jl), _mm512_loadu_pd(szl)));
-      const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
-      const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
-      const __m512d fr = fit_force8(t, (const __m512d(*)[2])cf, s, in);
-      ax = _mm512_fmadd_pd(fr, dx, ax);
-      ay = _mm512_fmadd_pd(fr, dy, ay);
-      az = _mm512_fmadd_pd(fr, dz, az);
+      const __m512d xj = _mm512_add_pd(load8(x, jl), _mm512_loadu_pd(sxl)),
+                    yj = _mm512_add_pd(load8(y, jl), _mm512_loadu_pd(syl)),
+                    zj = _mm512_add_pd(load8(z, jl), _mm512_loadu_pd(szl));
+      add_pairs8(t, ccf, vrc2, _mm512_sub_pd(xi, xj), _mm512_sub_pd(yi, yj), _mm512_sub_pd(zi, zj),
+                 live, &ax, &ay, &az);
     }
     /* a whole group of consecutive particles (the usual case after a renumbering build): the
      * closing in vector form, the same arithmetic as add_force */
