@@ -453,7 +453,6 @@ static void thread_layers(const cd_neigh *nl, const int *list, int a, int b, int
     before += nl->layer_start[l + 1] - nl->layer_start[l];
   }
   if (tid == nth - 1) *kb = b;
-  if (*ka > *kb) *ka = *kb;
 }
 
 void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
@@ -480,10 +479,10 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
   }
   for (int ph = 0; ph < nl->nphase; ph++) {
     const int a = nl->phase_start[ph], b = nl->phase_start[ph + 1];
-#pragma omp parallel if (nl->colour && CD_PAR(p->n))
+#pragma omp parallel if (nl->colour && CD_PAR(p->n)) /* without colouring: one thread, a..b */
     {
-      int ka = a, kb = b;
-      if (nl->colour) thread_layers(nl, nl->phase_layer, a, b, &ka, &kb);
+      int ka, kb;
+      thread_layers(nl, nl->phase_layer, a, b, &ka, &kb);
       for (int k = ka; k < kb; k++) {
         const int l = nl->phase_layer[k];
         if (fast)
