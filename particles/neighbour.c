@@ -13,13 +13,27 @@
 #include <string.h>
 #if defined(__AVX512F__) && defined(__AVX512VL__)
 #include <immintrin.h>
+#elif defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#define CD_SELECT_AVX2 1
+/* compress_lut[m]: the positions of the set bits of the 8-bit mask m, in order (the lanes an
+ * AVX2 compress keeps, by a permute); filled once by cd_neigh_create */
+static uint8_t compress_lut[256][8];
+static void fill_compress_lut(void) {
+  for (int m = 0; m < 256; m++) {
+    int k = 0;
+    for (int l = 0; l < 8; l++)
+      if (m & (1 << l)) compress_lut[m][k++] = (uint8_t)l;
+    while (k < 8) compress_lut[m][k++] = 0;
+  }
+}
 #endif
 
 cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   cd_neigh *nl = ms_calloc(1, sizeof *nl);
   nl->rlist = rlist;
   nl->skin = skin;
-  nl->sorted = ms_calloc(cap + 1, sizeof *nl->sorted);
+  nl->sorted = ms_calloc(cap + 8, sizeof *nl->sorted); /* + 7: the same */
   nl->cell_of = ms_calloc(cap + 1, sizeof *nl->cell_of);
   nl->first = ms_calloc(cap + 1, sizeof *nl->first);
   nl->nplain = ms_calloc(cap + 1, sizeof *nl->nplain);
@@ -30,9 +44,12 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   /* one block of 3 (cap + 1) floats (+ 16 each so that ys, zs stay 64-byte aligned): also the
    * renumbering scratch, which needs 8 bytes per particle */
   const size_t stride = (cap + 1 + 15) / 16 * 16;
-  nl->xs = ms_aligned_alloc(3 * stride, sizeof *nl->xs);
+  nl->xs = ms_aligned_alloc(3 * stride + 8, sizeof *nl->xs); /* + 8: AVX2 select_range reads 8 */
   nl->ys = nl->xs + stride;
   nl->zs = nl->ys + stride;
+#if defined(CD_SELECT_AVX2)
+  if (!compress_lut[255][7]) fill_compress_lut();
+#endif
   return nl;
 }
 
@@ -143,6 +160,31 @@ static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float 
     const __m512i j = _mm512_maskz_loadu_epi32(live, sorted + q);
     _mm512_storeu_si512((void *)(out + nc), _mm512_maskz_compress_epi32(take, j));
     nc += __builtin_popcount(take);
+  }
+#elif defined(CD_SELECT_AVX2)
+  /* eight candidates per instruction; the taken indices are compressed by a permute from
+   * compress_lut and stored as a whole vector (out has the spare entries) */
+  const __m256 vxi = _mm256_set1_ps(xi), vyi = _mm256_set1_ps(yi), vzi = _mm256_set1_ps(zi),
+               vrl2 = _mm256_set1_ps(rl2);
+  const __m256 sx = _mm256_set1_ps(sv ? sv[0] : 0.0f), sy = _mm256_set1_ps(sv ? sv[1] : 0.0f),
+               sz = _mm256_set1_ps(sv ? sv[2] : 0.0f);
+  for (int32_t q = q0; q < q1; q += 8) { /* lanes past q1 are read (padding) and dropped */
+    __m256 xj = _mm256_loadu_ps(xs + q), yj = _mm256_loadu_ps(ys + q), zj = _mm256_loadu_ps(zs + q);
+    if (sv) {
+      xj = _mm256_add_ps(xj, sx);
+      yj = _mm256_add_ps(yj, sy);
+      zj = _mm256_add_ps(zj, sz);
+    }
+    const __m256 dx = _mm256_sub_ps(vxi, xj), dy = _mm256_sub_ps(vyi, yj),
+                 dz = _mm256_sub_ps(vzi, zj);
+    const __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
+    int take = _mm256_movemask_ps(_mm256_cmp_ps(d2, vrl2, _CMP_LT_OQ));
+    if (q1 - q < 8) take &= (1 << (q1 - q)) - 1;
+    const __m256i perm =
+        _mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)compress_lut[take]));
+    const __m256i j = _mm256_loadu_si256((const __m256i *)(const void *)(sorted + q));
+    _mm256_storeu_si256((__m256i *)(void *)(out + nc), _mm256_permutevar8x32_epi32(j, perm));
+    nc += __builtin_popcount((unsigned)take);
   }
 #else
   for (int32_t q = q0; q < q1; q++) { /* branchless: store every candidate, advance on a take */
