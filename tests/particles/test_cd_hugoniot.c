@@ -144,6 +144,7 @@ static cd_config run_config(cd_cutoff_mode mode, cd_integrator integ) {
 }
 
 static double opt_rc = 1.2; /* --rc: R_c / r0 (exploration) */
+static double opt_thermal = 0.01; /* --thermal: initial velocity amplitude, km/s (exploration) */
 
 static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
   cd_sim *s = cd_sim_create(p, box, cfg, 1);
@@ -193,7 +194,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   for (size_t i = 0; i < p->n; i++) {
     if (p->flags[i] & PTL_DRIVEN) continue;
     for (int c = 0; c < 3; c++) {
-      v[c][i] = 0.01 * (2.0 * ptl_splitmix64_uniform(12345, 3 * i + c) - 1.0);
+      v[c][i] = opt_thermal * (2.0 * ptl_splitmix64_uniform(12345, 3 * i + c) - 1.0);
       mean[c] += v[c][i] / (double)nfree;
     }
   }
@@ -487,7 +488,8 @@ static void test_hugoniot(void **state) {
   eos_destroy(curves[1]);
 }
 
-/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain */
+/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V (and the
+ * exploration options below) */
 int main(int argc, char **argv) {
   for (int k = 1; k < argc; k++) {
     if (!strcmp(argv[k], "--full")) {
@@ -518,6 +520,8 @@ int main(int argc, char **argv) {
       opt_mode = CD_CUTOFF_PLAIN;
     } else if (!strcmp(argv[k], "--poly") && k + 1 < argc) {
       sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
+    } else if (!strcmp(argv[k], "--thermal") && k + 1 < argc) {
+      opt_thermal = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--rc") && k + 1 < argc) {
       opt_rc = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--relax") && k + 1 < argc) {
