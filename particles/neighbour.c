@@ -33,7 +33,7 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   cd_neigh *nl = ms_calloc(1, sizeof *nl);
   nl->rlist = rlist;
   nl->skin = skin;
-  nl->sorted = ms_calloc(cap + 8, sizeof *nl->sorted); /* + 7: the same */
+  nl->sorted = ms_calloc(cap + 8, sizeof *nl->sorted); /* + 7: AVX2 select_range reads 8 */
   nl->cell_of = ms_calloc(cap + 1, sizeof *nl->cell_of);
   nl->first = ms_calloc(cap + 1, sizeof *nl->first);
   nl->nplain = ms_calloc(cap + 1, sizeof *nl->nplain);
@@ -44,7 +44,7 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   /* one block of 3 (cap + 1) floats (+ 16 each so that ys, zs stay 64-byte aligned): also the
    * renumbering scratch, which needs 8 bytes per particle */
   const size_t stride = (cap + 1 + 15) / 16 * 16;
-  nl->xs = ms_aligned_alloc(3 * stride + 8, sizeof *nl->xs); /* + 8: AVX2 select_range reads 8 */
+  nl->xs = ms_aligned_alloc(3 * stride + 8, sizeof *nl->xs); /* + 8: the same, past zs */
   nl->ys = nl->xs + stride;
   nl->zs = nl->ys + stride;
 #if defined(CD_SELECT_AVX2)
