@@ -827,7 +827,8 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   box.bc[0] = CD_BC_FREE;
   box.hi[1] = width;
   box.bc[1] = CD_BC_PERIODIC;
-  box.hi[2] = fcc ? width_z : 1.0;
+  box.hi[2] = fcc ? width_z : 0.0; /* 2D: no extent (as cd_problem.c); a z extent made the MPI
+                                     * partition grid ~2000 empty cells deep */
   box.bc[2] = fcc ? CD_BC_PERIODIC : CD_BC_FREE;
   cd_config cfg;
   memset(&cfg, 0, sizeof cfg);
