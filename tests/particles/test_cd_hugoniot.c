@@ -488,8 +488,8 @@ static void test_hugoniot(void **state) {
   eos_destroy(curves[1]);
 }
 
-/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V (and the
- * exploration options below) */
+/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V
+ * (and the exploration options below) */
 int main(int argc, char **argv) {
   for (int k = 1; k < argc; k++) {
     if (!strcmp(argv[k], "--full")) {
