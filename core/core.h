@@ -350,6 +350,8 @@ void par_bcast_doubles(double *v, size_t n, int root);
 void par_bcast_ints(int32_t *v, size_t n, int root);
 /* In-place element-wise sum over ranks of v[0..n). */
 void par_sum_doubles(double *v, size_t n);
+/* In-place element-wise maximum over ranks of v[0..n). */
+void par_max_doubles(double *v, size_t n);
 /* The same sum in a fixed order (rank order, on rank 0, then broadcast): identical bits on every
  * rank, reproducible for a given rank count whatever the MPI library's algorithm. For values
  * that enter state every rank keeps a copy of (the coupled problem's replicated grid). */

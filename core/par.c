@@ -125,6 +125,10 @@ void par_sum_doubles(double *v, size_t n) {
   if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
 }
 
+void par_max_doubles(double *v, size_t n) {
+  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+}
+
 /* Fixed-order sum: rank 0 gathers every rank's v and adds them in rank order
  * ((v_0 + v_1) + v_2 ...), then broadcasts the sums. Every rank gets the same bits, and they
  * depend only on the operands and the rank count, not on the MPI library's reduction algorithm:

@@ -6,8 +6,8 @@
  * cell belongs to one rank (cd_partition_cells on the all-reduced particle counts: every rank
  * computes the same owner map). At every list build the particles move to the owner of their
  * cell (migration), and each owned particle in a cell adjacent to another rank's cell is sent
- * there as a ghost. Between builds a particle moves less than skin/2, so the ghosts of the build
- * cover every pair that can come within R_c before the next one; their positions and velocities
+ * there as a ghost. Between builds no pair closes in by more than the skin (the rebuild test of
+ * neighbour.c), so the ghosts of the build cover every pair that can come within R_c before the next one; their positions and velocities
  * are refreshed before every force evaluation. Ghosts keep their wrapped coordinates: the local
  * list builder finds periodic images exactly as in a serial run.
  *

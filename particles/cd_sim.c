@@ -5,7 +5,8 @@
  *   1. v ← v + (Δt/2) f/m, x ← x + Δt v for integrated particles (fused, with the largest
  *      displacement since the last list build); driven (piston) particles move by ∫u dt;
  *   2. walls reflect particles specularly;
- *   3. the lists are rebuilt if some particle moved more than skin/2;
+ *   3. the lists are rebuilt unless the rebuild test of neighbour.c passes (every particle
+ *      within skin/2 of its build position, or of it plus one common displacement);
  *   4. forces f(x^{n+1});
  *   5. v ← v + (Δt/2) f/m;
  *   6. if Γ > 0: relative-velocity damping v_i −= Δt Γ Σ_k (μ_ik/m_i)(v_i − v_k), its exact
@@ -174,7 +175,10 @@ static ms_status rebuild_lists(cd_sim *s, bool reorder) {
     reorder = false;
   }
   if (st == MS_OK) st = cd_neigh_build(s->nl, s->p, &s->box, s->partners, reorder);
-  if (s->dd) st = par_agree_status(st);
+  if (s->dd) { /* the serial run's float-rounding margin (rebuild test, neighbour.c) */
+    st = par_agree_status(st);
+    s->nl->xb_err = par_max_double(s->nl->xb_err);
+  }
   s->wall_time_neigh += ms_wall_time() - t0;
   s->disp_bound = 0.0;
   if (st != MS_OK) return st;
@@ -205,9 +209,10 @@ static bool fit_path(const cd_sim *s) {
 
 /* A full list takes about twice as long to build as a half list (every pair is found from
  * both sides) and saves 6 % (quiet core) to 15 % (loaded) of a time step: it pays when the
- * list lives at least this many steps (measured on the piston problem, rebuilt every ~4
- * steps: half lists are faster there; docs/benchmarks.md). */
-enum { CD_FULL_MIN_STEPS = 8 };
+ * list lives at least this many steps. Measured on the piston problem (docs/benchmarks.md,
+ * round 8): a full build costs ~37 ms more than a half one and saves ~2.3 ms per step, even
+ * at 16 steps; its lists live 6–10 steps, where half lists are faster. */
+enum { CD_FULL_MIN_STEPS = 16 };
 
 static ms_status rebuild(cd_sim *s) {
   if (s->nl->nbuild > 0) /* by the age of the list being replaced */
@@ -459,39 +464,30 @@ static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
   return MS_OK;
 }
 
-/* One RKN step. The lists are valid while every position stays within skin/2 of its build
- * position; the stage positions reach at most Δt c0 max|v| + Δt² c1 max|a| from x^n (rkn_reach;
- * max|a| from the last forces, doubled for its change within the step), so the lists are
- * rebuilt before the step when that reach plus the displacement so far exceeds skin/2. */
+/* One RKN step. The stage positions reach at most Δt c0 max|v| + Δt² c1 max|a| from x^n
+ * (rkn_reach; max|a| from the last forces, doubled for its change within the step), so the
+ * lists are rebuilt before the step unless the rebuild test (neighbour.c) passes with that
+ * reach added to the displacements so far. */
 static ms_status rkn_step_cd(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt;
   const long n = (long)p->nlocal;
-  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   const double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
   const double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
   const double *restrict m = p->mass;
   const uint8_t *restrict fl = p->flags;
-  const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
-  double dmax2 = 0.0, vmax2 = 0.0, amax2 = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : dmax2, vmax2, amax2) if (CD_PAR(n))
+  double vmax2 = 0.0, amax2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : vmax2, amax2) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
-    const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-    const double d2 = dx * dx + dy * dy + dz * dz;
     const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
     const double a2 = fl[i] & (PTL_DRIVEN | PTL_REMOVED)
                           ? 0.0
                           : (fx[i] * fx[i] + fy[i] * fy[i] + fz[i] * fz[i]) / (m[i] * m[i]);
-    dmax2 = d2 > dmax2 ? d2 : dmax2;
     vmax2 = v2 > vmax2 ? v2 : vmax2;
     amax2 = a2 > amax2 ? a2 : amax2;
   }
-  const double reach =
-      dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
-  const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
-  bool build = !(sqrt(dmax2) + reach <= half); /* NaN also rebuilds */
-  if (s->dd) build = par_max_int(build);       /* every rank builds when one must */
-  if (build) {
+  const double reach = dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
+  if (!cd_neigh_holds(s->nl, p, n, INFINITY, reach, s->dd)) { /* MPI: all ranks agree */
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
   }
@@ -525,7 +521,6 @@ static ms_status vv_step(cd_sim *s) {
   double *restrict vx = p->vx, *restrict vy = p->vy, *restrict vz = p->vz;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
   const double *restrict m = p->mass;
-  const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
 
   /* Driven particles: prescribed velocity for this step, zero force so the uniform loop below
    * moves them by Δt·(∫u dt/Δt). Removed particles have f = v = 0 and stay put. */
@@ -544,56 +539,28 @@ static ms_status vv_step(cd_sim *s) {
       vz[i] = vp[2];
     }
   }
-  /* kick + drift + zero the forces, fused. The rebuild criterion (largest displacement since
-   * the list build > skin/2) needs the build positions only once the cheap bound
-   * Σ Δt·max|v| has reached skin/2; before that the loop just tracks max|v|. */
-  const double half = 0.5 * s->cfg.skin - s->nl->xb_err;
-  bool exact = s->disp_bound >= half;
-  double dmax2 = 0.0, vmax2 = 0.0;
-  if (exact) {
-#pragma omp parallel for simd schedule(static) reduction(max : dmax2) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) {
-      const double c = hdt / m[i];
-      vx[i] += c * fx[i];
-      vy[i] += c * fy[i];
-      vz[i] += c * fz[i];
-      fx[i] = fy[i] = fz[i] = 0.0;
-      x[i] += dt * vx[i];
-      y[i] += dt * vy[i];
-      z[i] += dt * vz[i];
-      const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-      const double d2 = dx * dx + dy * dy + dz * dz;
-      dmax2 = d2 > dmax2 ? d2 : dmax2;
-    }
-  } else {
+  /* kick + drift + zero the forces, fused. The rebuild test (neighbour.c) needs the build
+   * positions only once the cheap bound Σ Δt·max|v| on every displacement has reached skin/2;
+   * before that the loop just tracks max|v|. */
+  double vmax2 = 0.0;
 #pragma omp parallel for simd schedule(static) reduction(max : vmax2) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) {
-      const double c = hdt / m[i];
-      vx[i] += c * fx[i];
-      vy[i] += c * fy[i];
-      vz[i] += c * fz[i];
-      fx[i] = fy[i] = fz[i] = 0.0;
-      x[i] += dt * vx[i];
-      y[i] += dt * vy[i];
-      z[i] += dt * vz[i];
-      const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-      vmax2 = v2 > vmax2 ? v2 : vmax2;
-    }
-    s->disp_bound += dt * sqrt(vmax2);
-    if (s->disp_bound >= half || !isfinite(vmax2)) {
-      exact = true;
-#pragma omp parallel for simd schedule(static) reduction(max : dmax2) if (CD_PAR(n))
-      for (long i = 0; i < n; i++) {
-        const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-        const double d2 = dx * dx + dy * dy + dz * dz;
-        dmax2 = d2 > dmax2 ? d2 : dmax2;
-      }
-    }
+  for (long i = 0; i < n; i++) {
+    const double c = hdt / m[i];
+    vx[i] += c * fx[i];
+    vy[i] += c * fy[i];
+    vz[i] += c * fz[i];
+    fx[i] = fy[i] = fz[i] = 0.0;
+    x[i] += dt * vx[i];
+    y[i] += dt * vy[i];
+    z[i] += dt * vz[i];
+    const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+    vmax2 = v2 > vmax2 ? v2 : vmax2;
   }
+  if (!(vmax2 < INFINITY)) vmax2 = INFINITY; /* NaN: the exact test, which rebuilds */
+  if (s->dd) vmax2 = par_max_double(vmax2); /* the serial run's bound on every rank */
+  s->disp_bound += dt * sqrt(vmax2);
   reflect_walls(s);
-  bool build = exact && !(dmax2 <= half * half); /* NaN positions also trigger a rebuild */
-  if (s->dd) build = par_max_int(build); /* every rank builds when one must */
-  if (build) {
+  if (!cd_neigh_holds(s->nl, p, n, s->disp_bound, 0.0, s->dd)) { /* MPI: all ranks agree */
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
     n = (long)p->nlocal;

@@ -1,10 +1,12 @@
 /* neighbour.c — link cells and Verlet half lists with a skin (layout in cd_impl.h).
  *
  * A list built at time t_b holds every pair closer than r_list = R_c + skin. It stays valid
- * while no pair that was farther than r_list at t_b can have come within R_c, which is
- * guaranteed as long as every particle has moved less than skin/2 since t_b (two particles
- * approach by at most the sum of their displacements). cd_neigh_needs_rebuild checks exactly
- * that; cd_sim_step fuses the same check into its drift loop.
+ * while no pair that was farther than r_list at t_b can have come within R_c: a pair closes
+ * in by |Δ_i − Δ_j| at most (Δ the displacements since t_b), so the list holds while that is
+ * below the skin for every pair. cd_neigh_holds tests it (cd_impl.h): every |Δ| within skin/2
+ * (the usual test), or every Δ within skin/2 of one common vector, the centre of their
+ * bounding box — a slab moving as a whole (a shocked region, a flying fragment) costs no
+ * rebuild until its particles move relative to the rest.
  */
 #include "cd_impl.h"
 
@@ -91,24 +93,71 @@ size_t cd_neigh_pairs(const cd_neigh *nl) {
   return nl->full ? np / 2 : np;
 }
 
-double cd_neigh_limit2(const cd_neigh *nl) {
-  double h = 0.5 * nl->skin - nl->xb_err;
-  return h * h;
+void cd_neigh_extent(const cd_neigh *nl, const ptl_state *p, long n, double ext[7]) {
+  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  const float *restrict xb = nl->xb, *restrict yb = nl->yb, *restrict zb = nl->zb;
+  double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
+  double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all seven are maxima */
+  int nan_seen = 0; /* the maxima skip NaN */
+#pragma omp parallel for simd schedule(static) \
+    reduction(max : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
+  for (long i = 0; i < n; i++) {
+    const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    nan_seen = d2 == d2 ? nan_seen : 1;
+    d2max = d2 > d2max ? d2 : d2max;
+    hx = dx > hx ? dx : hx;
+    hy = dy > hy ? dy : hy;
+    hz = dz > hz ? dz : hz;
+    lx = -dx > lx ? -dx : lx;
+    ly = -dy > ly ? -dy : ly;
+    lz = -dz > lz ? -dz : lz;
+  }
+  const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};
+  bool finite = !nan_seen;
+  for (int k = 0; k < 7; k++) finite = finite && !isnan(e[k]) && e[k] < INFINITY;
+  for (int k = 0; k < 7; k++) ext[k] = finite ? e[k] : INFINITY; /* NaN: rebuild */
 }
 
-bool cd_neigh_needs_rebuild(const cd_neigh *nl, const ptl_state *p) {
-  double lim2 = cd_neigh_limit2(nl);
-  double dmax2 = 0.0;
-  const double *x = p->x, *y = p->y, *z = p->z;
-  const float *xb = nl->xb, *yb = nl->yb, *zb = nl->zb;
-  long n = (long)p->n;
-#pragma omp parallel for schedule(static) reduction(max : dmax2) if (CD_PAR(n))
+/* max |Δ − c|² over particles [0, n), c fixed */
+static double spread2(const cd_neigh *nl, const ptl_state *p, long n, const double c[3]) {
+  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
+  const float *restrict xb = nl->xb, *restrict yb = nl->yb, *restrict zb = nl->zb;
+  const double cx = c[0], cy = c[1], cz = c[2];
+  double m2 = 0.0;
+#pragma omp parallel for simd schedule(static) reduction(max : m2) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
-    double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-    double d2 = dx * dx + dy * dy + dz * dz;
-    if (d2 > dmax2) dmax2 = d2;
+    const double dx = x[i] - xb[i] - cx, dy = y[i] - yb[i] - cy, dz = z[i] - zb[i] - cz;
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    m2 = d2 > m2 ? d2 : m2;
   }
-  return dmax2 > lim2 || p->n != nl->n;
+  return m2;
+}
+
+bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
+                    bool dd) {
+  const double margin = nl->xb_err + reach; /* NaN reach: no margin is left */
+  if (bound < 0.5 * nl->skin - margin) return true;
+  double ext[8];
+  cd_neigh_extent(nl, p, n, ext);
+  ext[7] = margin < INFINITY ? margin : INFINITY;
+  if (dd) par_max_doubles(ext, 8); /* the RKN reach differs between ranks */
+  const double half = 0.5 * nl->skin - ext[7];
+  if (!(half > 0.0)) return false;
+  const double h2 = half * half;
+  if (ext[0] <= h2) return true; /* every |Δ| within skin/2 */
+  double c[3], box2 = 0.0, wmax = 0.0;
+  for (int a = 0; a < 3; a++) {
+    const double w = 0.5 * (ext[1 + a] + ext[4 + a]);
+    c[a] = 0.5 * (ext[1 + a] - ext[4 + a]);
+    box2 += w * w;
+    wmax = w > wmax ? w : wmax;
+  }
+  if (box2 <= h2) return true; /* the whole bounding box within skin/2 of its centre */
+  if (!(wmax <= half)) return false; /* some |Δ − c| > skin/2 for every c */
+  double m2 = spread2(nl, p, n, c); /* the distance to the centre itself: a second pass */
+  if (dd) m2 = par_max_double(m2);
+  return m2 <= h2;
 }
 
 static bool is_partner(const int32_t *partners, int32_t i, int32_t j) {

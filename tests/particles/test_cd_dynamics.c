@@ -124,14 +124,9 @@ static void test_damping_balance(void **state) {
   eos_destroy(eos);
 }
 
-/* Forces from the Verlet lists after many rebuilds equal a brute-force sum over all pairs
- * (minimum image) to round-off. Hot lattice (1.5 km/s) so that the lists are rebuilt often. */
-static void test_lists_vs_brute_force(void **state) {
-  (void)state;
-  eos_t *eos = al();
-  cd_sim *s = hot_block(eos, 4, 1.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
-  for (int k = 0; k < 1500; k++) assert_int_equal(cd_sim_step(s), MS_OK);
-  assert_true(cd_sim_rebuilds(s) > 3);
+/* The largest difference between the forces in s (from its lists) and a brute-force sum over
+ * all pairs (minimum image), relative to a typical pair force. */
+static double forces_vs_brute_force(const cd_sim *s) {
   const ptl_state *p = s->p;
   const double L = s->box.hi[0];
   const cd_pair_table *t = s->pair[0][0];
@@ -150,10 +145,83 @@ static void test_lists_vs_brute_force(void **state) {
     }
     worst = fmax(worst, fabs(f[0] - p->fx[i]) + fabs(f[1] - p->fy[i]) + fabs(f[2] - p->fz[i]));
   }
-  printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n", cd_sim_rebuilds(s), worst / fscale);
-  assert_true(worst < 1e-9 * fscale); /* only summation order differs */
+  return worst / fscale;
+}
+
+/* Forces from the Verlet lists after many rebuilds equal a brute-force sum over all pairs
+ * (minimum image) to round-off. Hot lattice (1.5 km/s) so that the lists are rebuilt often. */
+static void test_lists_vs_brute_force(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  cd_sim *s = hot_block(eos, 4, 1.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
+  for (int k = 0; k < 1500; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+  assert_true(cd_sim_rebuilds(s) > 3);
+  const double worst = forces_vs_brute_force(s);
+  printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n", cd_sim_rebuilds(s), worst);
+  assert_true(worst < 1e-9); /* only summation order differs */
   cd_sim_free(s);
   eos_destroy(eos);
+}
+
+/* The rebuild test ignores a common translation (neighbour.c): the same hot block, once at
+ * rest and once drifting at (4, 3, 2) km/s — 30 r0 in 1500 steps, 600 times skin/2, which the
+ * plain "every |Δ| < skin/2" test would answer with ~600 rebuilds. The two runs are the same
+ * relative motion up to round-off; the drifting one measures displacements from the centre of
+ * their bounding box instead of from zero, which may cost a few more rebuilds (allowed: 10 %
+ * + 2), and its lists still give the brute-force forces. Then the test on constructed
+ * displacements: a common part costs nothing, a spread beyond the skin fails. */
+static void test_lists_moving_block(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  long rebuilds[2];
+  for (int drift = 0; drift < 2; drift++) {
+    cd_sim *s = hot_block(eos, 4, 1.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
+    for (size_t i = 0; drift && i < s->p->n; i++) {
+      s->p->vx[i] += 4.0;
+      s->p->vy[i] += 3.0;
+      s->p->vz[i] += 2.0;
+    }
+    for (int k = 0; k < 1500; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+    rebuilds[drift] = cd_sim_rebuilds(s);
+    if (drift) {
+      const double worst = forces_vs_brute_force(s);
+      printf("drifting block: %ld rebuilds (at rest %ld), lists vs brute force %.3g\n",
+             rebuilds[1], rebuilds[0], worst);
+      assert_true(worst < 1e-9);
+    }
+    cd_sim_free(s);
+  }
+  assert_true(rebuilds[0] > 3 && rebuilds[1] <= rebuilds[0] + rebuilds[0] / 10 + 2);
+  eos_destroy(eos);
+
+  /* four particles displaced from build positions at 0 (skin 0.1: skin/2 = 0.05; xb_err 0) */
+  cd_neigh *nl = cd_neigh_create(4, 1.1, 0.1);
+  ptl_state *p = ptl_state_create(4, 3);
+  p->n = 4;
+  const double dx[4] = {9.97, 10.03, 10.0, 10.0}; /* |Δ| ≈ 10, all within 0.03 of (10, 0, 0) */
+  for (int i = 0; i < 4; i++) p->x[i] = dx[i];
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.03, false)); /* 0.03 + 0.03 > 0.05 */
+  p->y[2] = 0.035;
+  p->y[3] = -0.035; /* box half-diagonal 0.046 */
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  const double sq[4][2] = {{9.96, 0}, {10.04, 0}, {10, 0.04}, {10, -0.04}};
+  for (int i = 0; i < 4; i++) p->x[i] = sq[i][0], p->y[i] = sq[i][1];
+  /* half-diagonal 0.057, but each particle 0.04 from the centre: the second pass */
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  p->x[2] = 10.03;
+  p->y[2] = 0.045; /* now 0.052 from the box's centre (10, 0.0025) */
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  for (int i = 0; i < 4; i++) p->x[i] = p->y[i] = 0.04; /* |Δ| = 0.057 but no spread */
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  p->x[0] = -0.02; /* particles 0 and 1 end up 0.117 apart: no vector is within 0.05 of both */
+  p->z[1] = 0.1;
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_true(cd_neigh_holds(nl, p, 4, 0.049, 0.0, false)); /* a bound below 0.05 is trusted */
+  p->x[0] = NAN;
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  ptl_state_free(p);
+  cd_neigh_free(nl);
 }
 
 /* The fast path (the fit of F/r on full lists, AVX-512 builds) against the table path (the
@@ -417,7 +485,8 @@ static void test_integrator_piston(void **state) {
 int main(int argc, char **argv) {
   const struct CMUnitTest core[] = {
       cmocka_unit_test(test_nve), cmocka_unit_test(test_damping_balance),
-      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_fit_path_vs_table),
+      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_lists_moving_block),
+      cmocka_unit_test(test_fit_path_vs_table),
       cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_piston_balance)};
   const struct CMUnitTest integrators[] = {cmocka_unit_test(test_integrator_order),
