@@ -142,16 +142,12 @@ void cd_neigh_free(cd_neigh *nl);
  * `partners` when non-NULL). MS_ERR_INPUT if a periodic period is below 2 r_list. */
 ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
                          bool reorder);
-/* The rebuild test (neighbour.c's header). cd_neigh_extent: of particles [0, n), the largest
- * squared displacement since the last build, the largest displacement per axis and the
- * largest negated one: {max|Δ|², max Δx, max Δy, max Δz, −min Δx, −min Δy, −min Δz} (all
- * INFINITY if some position is not finite).
- * cd_neigh_holds: true while the lists hold every pair within R_c of positions that reach up to
- * `reach` beyond the displacements (RKN stages; 0 for Verlet); `bound`: a known bound on every
- * |Δ| (Σ Δt·max|v|), which spares the pass over the positions while below skin/2 − reach.
+/* The rebuild test (neighbour.c's header) on particles [0, n): true while the lists hold every
+ * pair within R_c of positions that reach up to `reach` beyond the displacements (RKN stages;
+ * 0 for Verlet); `bound`: a known bound on every |Δ| (Σ Δt·max|v|), which spares the pass
+ * over the positions while below skin/2 − reach.
  * With `dd` (MPI) every rank calls it with the same bound (a max over ranks) and the same
  * xb_err (max-reduced at the build) and gets the same answer, the serial run's. */
-void cd_neigh_extent(const cd_neigh *nl, const ptl_state *p, long n, double ext[7]);
 bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
                     bool dd);
 size_t cd_neigh_bytes(const cd_neigh *nl);

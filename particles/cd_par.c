@@ -7,9 +7,10 @@
  * computes the same owner map). At every list build the particles move to the owner of their
  * cell (migration), and each owned particle in a cell adjacent to another rank's cell is sent
  * there as a ghost. Between builds no pair closes in by more than the skin (the rebuild test of
- * neighbour.c), so the ghosts of the build cover every pair that can come within R_c before the next one; their positions and velocities
- * are refreshed before every force evaluation. Ghosts keep their wrapped coordinates: the local
- * list builder finds periodic images exactly as in a serial run.
+ * neighbour.c), so the ghosts of the build cover every pair that can come within R_c before the
+ * next one; their positions and velocities are refreshed before every force evaluation. Ghosts
+ * keep their wrapped coordinates: the local list builder finds periodic images exactly as in a
+ * serial run.
  *
  * Message layout: a full particle record is CD_REC doubles (x, y, z, vx, vy, vz, mass, gid, mat,
  * flags; + CD_MAX_PARTNERS partner gids in bonded mode); gids are exact in a double below 2^53.

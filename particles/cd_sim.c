@@ -486,7 +486,8 @@ static ms_status rkn_step_cd(cd_sim *s) {
     vmax2 = v2 > vmax2 ? v2 : vmax2;
     amax2 = a2 > amax2 ? a2 : amax2;
   }
-  const double reach = dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
+  const double reach =
+      dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
   if (!cd_neigh_holds(s->nl, p, n, INFINITY, reach, s->dd)) { /* MPI: all ranks agree */
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;

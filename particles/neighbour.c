@@ -93,7 +93,9 @@ size_t cd_neigh_pairs(const cd_neigh *nl) {
   return nl->full ? np / 2 : np;
 }
 
-void cd_neigh_extent(const cd_neigh *nl, const ptl_state *p, long n, double ext[7]) {
+/* Of particles [0, n): {max|Δ|², max Δx, max Δy, max Δz, −min Δx, −min Δy, −min Δz}, Δ the
+ * displacement since the last build; all INFINITY if some position is not finite. */
+static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, double ext[7]) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   const float *restrict xb = nl->xb, *restrict yb = nl->yb, *restrict zb = nl->zb;
   double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
@@ -139,7 +141,7 @@ bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound
   const double margin = nl->xb_err + reach; /* NaN reach: no margin is left */
   if (bound < 0.5 * nl->skin - margin) return true;
   double ext[8];
-  cd_neigh_extent(nl, p, n, ext);
+  displacement_extent(nl, p, n, ext);
   ext[7] = margin < INFINITY ? margin : INFINITY;
   if (dd) par_max_doubles(ext, 8); /* the RKN reach differs between ranks */
   const double half = 0.5 * nl->skin - ext[7];
