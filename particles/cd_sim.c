@@ -3,7 +3,8 @@
  * Every force evaluation of a run goes through step_forces (the one place for per-evaluation
  * hooks). One velocity-Verlet step (the default; then the damping sub-step; particles-cd.md):
  *   1. v ← v + (Δt/2) f/m, x ← x + Δt v for integrated particles (fused, with the largest
- *      displacement since the last list build); driven (piston) particles move by ∫u dt;
+ *      speed, which bounds the displacements since the last list build); driven (piston)
+ *      particles move by ∫u dt;
  *   2. walls reflect particles specularly;
  *   3. the lists are rebuilt unless the rebuild test of neighbour.c passes (every particle
  *      within skin/2 of its build position, or of it plus one common displacement);

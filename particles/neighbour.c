@@ -116,8 +116,7 @@ static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, 
     lz = -dz > lz ? -dz : lz;
   }
   const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};
-  bool finite = !nan_seen;
-  for (int k = 0; k < 7; k++) finite = finite && !isnan(e[k]) && e[k] < INFINITY;
+  const bool finite = !nan_seen && d2max < INFINITY; /* an infinite component makes d2 infinite */
   for (int k = 0; k < 7; k++) ext[k] = finite ? e[k] : INFINITY; /* NaN: rebuild */
 }
 
