@@ -41,6 +41,7 @@
 #define R0 5.0e-4
 
 static bool full_run = false;
+static double opt_vacancies = 0.0; /* --vacancies: fraction of sample sites left empty (exploration) */
 static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
@@ -114,8 +115,10 @@ static void orient_cell(orientation o, double cell[3], int *nb, double basis[6][
 }
 
 /* The single-crystal slab of nx × nx × nz [001] cubic cells in whole cells of `orient`, the
- * piston flagged (the sites below 2a, two [001] cells: thicker than R_c + skin). */
-static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_box *box) {
+ * piston flagged (the sites below 2a, two [001] cells: thicker than R_c + skin). *fill: the
+ * fraction of the sample's sites (above the piston) that hold a particle (--vacancies). */
+static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_box *box,
+                               double *fill) {
   const double a = sqrt(2.0) * R0;
   double cell[3], basis[6][3];
   int nb, nc[3];
@@ -125,14 +128,25 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
     nc[c] = (int)lround((c < 2 ? nx : nz) * a / cell[c]);
   }
   ptl_state *p = ptl_state_create((size_t)nb * nc[0] * nc[1] * nc[2], 3);
+  size_t sample_sites = 0, sample_kept = 0;
   for (int iz = 0; iz < nc[2]; iz++)
     for (int iy = 0; iy < nc[1]; iy++)
       for (int ix = 0; ix < nc[0]; ix++)
-        for (int b = 0; b < nb; b++)
-          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0], (iy + basis[b][1] + 0.25) * cell[1],
-                        (iz + basis[b][2]) * cell[2], m, 0);
+        for (int b = 0; b < nb; b++) {
+          const double zs = (iz + basis[b][2]) * cell[2];
+          const uint64_t site = (((uint64_t)iz * nc[1] + iy) * nc[0] + ix) * nb + b;
+          const bool in_sample = zs >= 2.0 * a - 1e-3 * R0;
+          sample_sites += in_sample;
+          /* --vacancies: random empty sites above the piston (splitmix64, seed 777) */
+          if (in_sample && opt_vacancies > 0 && ptl_splitmix64_uniform(777, site) < opt_vacancies)
+            continue;
+          sample_kept += in_sample;
+          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0], (iy + basis[b][1] + 0.25) * cell[1], zs,
+                        m, 0);
+        }
   for (size_t i = 0; i < p->n; i++)
     if (p->z[i] < 2.0 * a - 1e-3 * R0) p->flags[i] = PTL_DRIVEN;
+  *fill = (double)sample_kept / (double)sample_sites;
   *box = (cd_box){.hi = {nc[0] * cell[0], nc[1] * cell[1], nc[2] * cell[2]},
                   .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
   return p;
@@ -173,6 +187,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
   cd_box box;
   ptl_state *p;
+  double fill = 1.0;
   if (poly) { /* a copy of the relaxed sample */
     box = poly->box;
     p = ptl_state_create(poly->p->n, 3);
@@ -181,7 +196,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
       p->flags[k] = poly->p->flags[i];
     }
   } else {
-    p = crystal_slab(m, nx, nz, orient, &box);
+    p = crystal_slab(m, nx, nz, orient, &box, &fill);
   }
   /* the piston's top: its highest site (single crystal: 2a, as the CI numbers were taken) */
   double zpist = poly ? -INFINITY : 2.0 * a;
@@ -222,7 +237,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   double *prof = calloc((size_t)nbin * CD_PROFILE_NCOL, sizeof *prof);
   double tf[64], zf[64], zb[64], pm[64];
   int nf = 0;
-  shock_result r = {.rho00 = eos_rho0(eos)};
+  shock_result r = {.rho00 = fill * eos_rho0(eos)};
   if (poly) r.rho00 = poly->rho00;
   for (long k = 1; k <= nsteps; k++) {
     assert_int_equal(cd_sim_step(s), MS_OK);
@@ -446,6 +461,7 @@ static void test_hugoniot(void **state) {
   }
   printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  eos_t *fit = eos_create_mg_linear(eos_rho0(curves[0]), 5.35, 1.34, 2.0);
   for (int c = 0; c < 2; c++) {
     if (opt_curve >= 0 && c != opt_curve) continue;
     for (int mode = CD_CUTOFF_BONDED; mode >= CD_CUTOFF_PLAIN; mode--) {
@@ -459,7 +475,11 @@ static void test_hugoniot(void **state) {
         eos_hugoniot_point hp;
         double upl[1] = {up};
         double eos_us = eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
-        const double d_mass = up * r.rho_ratio / (r.rho_ratio - 1.0);
+        const double compression = r.rho_ratio * eos_rho0(curves[c]) / r.rho00; /* ρ/ρ00 */
+        const double d_mass = up * compression / (compression - 1.0);
+        if (opt_vacancies > 0)
+          printf("vacancies: rho00/rho0 %.5f, porous Us (fit) %.3f km/s\n",
+                 r.rho00 / eos_rho0(curves[c]), porous_us(fit, r.rho00, up));
         const double rho = r.rho_ratio * eos_rho0(curves[c]);
         printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | "
                "%.1f | %.1f | %.1f | %.1f | %.2f |\n",
@@ -484,6 +504,7 @@ static void test_hugoniot(void **state) {
       }
     }
   }
+  eos_destroy(fit);
   eos_destroy(curves[0]);
   eos_destroy(curves[1]);
 }
@@ -520,6 +541,8 @@ int main(int argc, char **argv) {
       opt_mode = CD_CUTOFF_PLAIN;
     } else if (!strcmp(argv[k], "--poly") && k + 1 < argc) {
       sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
+    } else if (!strcmp(argv[k], "--vacancies") && k + 1 < argc) {
+      opt_vacancies = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--thermal") && k + 1 < argc) {
       opt_thermal = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--rc") && k + 1 < argc) {
