@@ -101,7 +101,18 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
   if (S && dk_expect_map(e, doc, S, "particles.surface")) {
     dk_read_enum(e, doc, S, "type", false, 0, surface_names, &p->surface);
     bool need = p->surface != SURF_FLAT;
-    dk_read_double(e, doc, S, "depth", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY, &p->surf_depth);
+    /* the height as peak-to-valley `depth` (Rz) or as `amplitude` a0 = depth/2 (paper 002 §4.2,
+     * DESIGN.md §6), one of the two */
+    if (dk_get(S, "amplitude")) {
+      if (dk_get(S, "depth"))
+        dk_error(e, doc, dk_get(S, "amplitude"),
+                 "particles.surface: give depth (peak to valley) or amplitude (half of it), not both");
+      double amplitude = 0.0;
+      dk_read_double(e, doc, S, "amplitude", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY, &amplitude);
+      p->surf_depth = 2.0 * amplitude;
+    } else {
+      dk_read_double(e, doc, S, "depth", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY, &p->surf_depth);
+    }
     dk_read_double(e, doc, S, "wavelength", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY,
                    &p->surf_wavelength);
     dk_read_int(e, doc, S, "seed", false, 1, 0, 1L << 40, &p->seed);
