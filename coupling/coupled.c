@@ -106,7 +106,8 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
     if (dk_get(S, "amplitude")) {
       if (dk_get(S, "depth"))
         dk_error(e, doc, dk_get(S, "amplitude"),
-                 "particles.surface: give depth (peak to valley) or amplitude (half of it), not both");
+                 "particles.surface: give depth (peak to valley) or amplitude (half of it), "
+                 "not both");
       double amplitude = 0.0;
       dk_read_double(e, doc, S, "amplitude", MS_DIM_LENGTH, need, 0.0, 0.0, INFINITY, &amplitude);
       p->surf_depth = 2.0 * amplitude;

@@ -22,6 +22,8 @@
  *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
  * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
  *   --integrator NAME --rc RC/r0 --dump FILE (binned profiles at every sample, CSV);
+ *   --vacancies FRAC: that fraction of the crystal's sample sites left empty at random (the
+ *   density ρ00 < ρ0 enters the momentum and mass D; the porous Hugoniot at ρ00 is printed);
  *   --poly NGRAINS[,DMIN[,SEED]] --relax TIME[,J[,QUENCH[,PLAIN]]]: a relaxed Voronoi
  *   polycrystal instead of the crystal (validation.md "Hugoniot of the relaxed polycrystal");
  *   --poly-ci: the polycrystal's CI case (ctest test_cd_hugoniot_poly, validation). */
@@ -41,7 +43,7 @@
 #define R0 5.0e-4
 
 static bool full_run = false;
-static double opt_vacancies = 0.0; /* --vacancies: fraction of sample sites left empty (exploration) */
+static double opt_vacancies = 0.0; /* --vacancies: fraction of sample sites left empty */
 static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
@@ -141,8 +143,8 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
           if (in_sample && opt_vacancies > 0 && ptl_splitmix64_uniform(777, site) < opt_vacancies)
             continue;
           sample_kept += in_sample;
-          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0], (iy + basis[b][1] + 0.25) * cell[1], zs,
-                        m, 0);
+          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0],
+                        (iy + basis[b][1] + 0.25) * cell[1], zs, m, 0);
         }
   for (size_t i = 0; i < p->n; i++)
     if (p->z[i] < 2.0 * a - 1e-3 * R0) p->flags[i] = PTL_DRIVEN;
