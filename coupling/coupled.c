@@ -103,9 +103,10 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
     bool need = p->surface != SURF_FLAT;
     /* the height as peak-to-valley `depth` (Rz) or as `amplitude` a0 = depth/2 (paper 002 §4.2,
      * DESIGN.md §6), one of the two */
-    if (dk_get(S, "amplitude")) {
+    const dk_node *amplitude_node = dk_get(S, "amplitude");
+    if (amplitude_node) {
       if (dk_get(S, "depth"))
-        dk_error(e, doc, dk_get(S, "amplitude"),
+        dk_error(e, doc, amplitude_node,
                  "particles.surface: give depth (peak to valley) or amplitude (half of it), "
                  "not both");
       double amplitude = 0.0;

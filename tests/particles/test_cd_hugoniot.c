@@ -130,6 +130,7 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
     nc[c] = (int)lround((c < 2 ? nx : nz) * a / cell[c]);
   }
   ptl_state *p = ptl_state_create((size_t)nb * nc[0] * nc[1] * nc[2], 3);
+  const double piston_top = 2.0 * a - 1e-3 * R0;
   size_t sample_sites = 0, sample_kept = 0;
   for (int iz = 0; iz < nc[2]; iz++)
     for (int iy = 0; iy < nc[1]; iy++)
@@ -137,17 +138,16 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
         for (int b = 0; b < nb; b++) {
           const double zs = (iz + basis[b][2]) * cell[2];
           const uint64_t site = (((uint64_t)iz * nc[1] + iy) * nc[0] + ix) * nb + b;
-          const bool in_sample = zs >= 2.0 * a - 1e-3 * R0;
+          const bool in_sample = zs >= piston_top;
           sample_sites += in_sample;
           /* --vacancies: random empty sites above the piston (splitmix64, seed 777) */
           if (in_sample && opt_vacancies > 0 && ptl_splitmix64_uniform(777, site) < opt_vacancies)
             continue;
           sample_kept += in_sample;
-          ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0],
-                        (iy + basis[b][1] + 0.25) * cell[1], zs, m, 0);
+          const size_t k = ptl_state_add(p, (ix + basis[b][0] + 0.25) * cell[0],
+                                         (iy + basis[b][1] + 0.25) * cell[1], zs, m, 0);
+          if (!in_sample) p->flags[k] = PTL_DRIVEN;
         }
-  for (size_t i = 0; i < p->n; i++)
-    if (p->z[i] < 2.0 * a - 1e-3 * R0) p->flags[i] = PTL_DRIVEN;
   *fill = (double)sample_kept / (double)sample_sites;
   *box = (cd_box){.hi = {nc[0] * cell[0], nc[1] * cell[1], nc[2] * cell[2]},
                   .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
