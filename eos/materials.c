@@ -213,29 +213,40 @@ static int name_line(const dk_node *list, size_t upto, const char *name) {
   return 0;
 }
 
+/* Entry i of a list of named entries (materials, mixtures): a mapping with only the `keys`,
+ * whose `name` no earlier entry has. Sets `what` to "LIST[i]" and *name (NULL if missing);
+ * returns the entry, or NULL if it is not a mapping. */
+static const dk_node *named_item(dk_errors *e, dk_doc *doc, const dk_node *list, size_t i,
+                                 const char *list_name, const char *noun,
+                                 const char *const *keys, char what[64], const char **name) {
+  const dk_node *item = dk_seq_at(list, i);
+  snprintf(what, 64, "%s[%zu]", list_name, i);
+  *name = NULL;
+  if (!dk_expect_map(e, doc, item, what)) return NULL;
+  check_keys(e, doc, item, what, keys);
+  dk_read_string(e, doc, item, "name", true, NULL, name);
+  const int first = *name ? name_line(list, i, *name) : 0;
+  if (first)
+    dk_error(e, doc, dk_get(item, "name"),
+             "%s.name: duplicate %s name '%s' (first defined on line %d)", what, noun, *name,
+             first);
+  return item;
+}
+
 static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_materials *mats) {
   if (!dk_expect_seq(e, doc, list, "mixtures")) return;
   size_t n = dk_seq_len(list);
   mats->mix = ms_calloc(n ? n : 1, sizeof *mats->mix);
   for (size_t i = 0; i < n; ++i) {
-    const dk_node *item = dk_seq_at(list, i);
     char what[64];
-    snprintf(what, sizeof what, "mixtures[%zu]", i);
-    if (!dk_expect_map(e, doc, item, what)) continue;
+    const char *name;
     size_t nerr0 = e->n;
-    check_keys(e, doc, item, what, mixture_keys);
-    const char *name = NULL;
-    dk_read_string(e, doc, item, "name", true, NULL, &name);
-    if (name) {
-      int first = name_line(list, i, name);
-      if (first)
-        dk_error(e, doc, dk_get(item, "name"),
-                 "%s.name: duplicate mixture name '%s' (first defined on line %d)", what, name,
-                 first);
-      else if (find_material(mats, name) || is_broken(mats, name))
-        dk_error(e, doc, dk_get(item, "name"),
-                 "%s.name: '%s' is already the name of a material", what, name);
-    }
+    const dk_node *item = named_item(e, doc, list, i, "mixtures", "mixture", mixture_keys, what,
+                                     &name);
+    if (!item) continue;
+    if (name && !name_line(list, i, name) && (find_material(mats, name) || is_broken(mats, name)))
+      dk_error(e, doc, dk_get(item, "name"), "%s.name: '%s' is already the name of a material",
+               what, name);
     const dk_node *comps = dk_get(item, "components");
     if (!comps) {
       dk_error(e, doc, item, "%s: missing required key 'components' (a list of {material: NAME, "
@@ -313,21 +324,12 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
   mats->m = ms_calloc(n ? n : 1, sizeof *mats->m);
   if (n == 0) dk_error(e, doc, list, "materials: the list is empty (define at least one material)");
   for (size_t i = 0; i < n; ++i) {
-    const dk_node *item = dk_seq_at(list, i);
     char what[64];
-    snprintf(what, sizeof what, "materials[%zu]", i);
-    if (!dk_expect_map(e, doc, item, what)) continue;
+    const char *name;
     size_t nerr0 = e->n;
-    check_keys(e, doc, item, what, material_keys);
-    const char *name = NULL;
-    dk_read_string(e, doc, item, "name", true, NULL, &name);
-    if (name) {
-      int first = name_line(list, i, name);
-      if (first)
-        dk_error(e, doc, dk_get(item, "name"),
-                 "materials[%zu].name: duplicate material name '%s' (first defined on line %d)", i,
-                 name, first);
-    }
+    const dk_node *item = named_item(e, doc, list, i, "materials", "material", material_keys, what,
+                                     &name);
+    if (!item) continue;
     double shear = 0.0, visc = 0.0;
     if (dk_get(item, "shear_modulus"))
       dk_read_double(e, doc, item, "shear_modulus", MS_DIM_PRESSURE, true, 0, 0.0, INFINITY,

@@ -20,8 +20,10 @@ static inline void assert_close_at(double a, double b, double tol, const char *w
   }
 }
 
-/* A `coupled` deck read from text and run in a temporary directory, which must then hold
- * `files` and is removed; the problem stays for its summary. */
+/* A `coupled` deck read from text (cpl_test_read: p is NULL and e holds the errors of a bad
+ * deck), run in a temporary directory that must then hold `files` and is removed
+ * (cpl_test_run_tmp), or both with no error allowed (cpl_test_run_deck); the problem stays for
+ * its summary until cpl_test_run_free. */
 typedef struct cpl_test_run {
   dk_errors e;
   dk_doc *doc;
@@ -29,18 +31,20 @@ typedef struct cpl_test_run {
   cpl_problem *p;
 } cpl_test_run;
 
-static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const char *name,
-                                     const char *const *files, size_t nfiles) {
+static inline void cpl_test_read(cpl_test_run *r, const char *text, const char *name) {
   dk_errors_init(&r->e);
   r->doc = dk_load_string(text, name, &r->e);
   assert_non_null(r->doc);
   dk_read_units(r->doc, &r->e);
   r->mats = eos_materials_read(r->doc, &r->e);
+  assert_non_null(r->mats);
   dk_get(dk_root(r->doc), "problem");
   r->p = cpl_problem_read(r->doc, dk_get(dk_root(r->doc), "coupled"), r->mats, &r->e);
   dk_report_unused(&r->e, r->doc);
-  dk_errors_print(&r->e, stderr);
-  assert_int_equal(r->e.n, 0);
+}
+
+static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *files,
+                                         size_t nfiles) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ctx.quiet = true;
@@ -48,8 +52,8 @@ static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const ch
   char dir[] = "/tmp/mscale_test_cpl_XXXXXX";
   assert_non_null(mkdtemp(dir));
   assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, r->p), MS_OK);
-  for (size_t k = 0; k < nfiles; k++) {
+  const ms_status st = cpl_problem_run(&ctx, r->p);
+  for (size_t k = 0; k < nfiles && st == MS_OK; k++) {
     char *path = ms_out_path(&ctx, files[k]);
     if (access(path, R_OK))
       fail_msg("missing output %s", path);
@@ -59,6 +63,15 @@ static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const ch
   char cmd[128];
   snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
   assert_int_equal(system(cmd), 0);
+  return st;
+}
+
+static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const char *name,
+                                     const char *const *files, size_t nfiles) {
+  cpl_test_read(r, text, name);
+  dk_errors_print(&r->e, stderr);
+  assert_int_equal(r->e.n, 0);
+  assert_int_equal(cpl_test_run_tmp(r, files, nfiles), MS_OK);
 }
 
 static inline void cpl_test_run_free(cpl_test_run *r) {

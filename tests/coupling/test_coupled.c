@@ -49,46 +49,12 @@ static const char *const GRID =
     "      - {name: free_surface, layer: sample, side: right}\n"
     "  drive: {tag: %s, free_surface_tag: free_surface}\n";
 
-/* Read and run a deck; returns the problem (caller frees) or NULL with errors in *e. */
-static cpl_problem *run_deck(const char *text, dk_errors *e, dk_doc **doc_out,
-                             eos_materials **mats_out, bool run, ms_status *status) {
-  dk_doc *doc = dk_load_string(text, "test.yaml", e);
-  assert_non_null(doc);
-  dk_read_units(doc, e);
-  eos_materials *mats = eos_materials_read(doc, e);
-  assert_non_null(mats);
-  const dk_node *root = dk_root(doc);
-  dk_get(root, "problem");
-  cpl_problem *p = cpl_problem_read(doc, dk_get(root, "coupled"), mats, e);
-  dk_report_unused(e, doc);
-  *doc_out = doc;
-  *mats_out = mats;
-  if (!p || e->n || !run)
-    return p;
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_coupled_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  *status = cpl_problem_run(&ctx, p);
-  /* a few outputs must exist */
-  const char *files[] = {"spectrum.csv",     "fragments.csv",     "ejecta_mass.csv",
-                         "free_surface.csv", "particles_0001.h5", "particles_0001.xmf",
-                         "history_drive.csv"};
-  for (size_t k = 0; k < sizeof files / sizeof *files && *status == MS_OK; k++) {
-    char *path = ms_out_path(&ctx, files[k]);
-    if (access(path, R_OK))
-      fail_msg("missing output %s", path);
-    free(path);
-  }
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
-  return p;
-}
+/* Outputs every one-way run must write. */
+static const char *const RUN_FILES[] = {"spectrum.csv",      "fragments.csv",
+                                        "ejecta_mass.csv",   "free_surface.csv",
+                                        "particles_0001.h5", "particles_0001.xmf",
+                                        "history_drive.csv"};
+#define RUN_NFILES (sizeof RUN_FILES / sizeof *RUN_FILES)
 
 static char *deck(const char *viscosity, const char *drive_x, const char *drive_tag,
                   const char *rest) {
@@ -103,11 +69,6 @@ static char *deck(const char *viscosity, const char *drive_x, const char *drive_
 
 /* Runs the symmetric flat-surface case with the given piston mode; returns its summary. */
 static cpl_run_summary run_flat(const char *mode) {
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc;
-  eos_materials *mats;
-  ms_status st = MS_ERR_INTERNAL;
   char rest[512];
   snprintf(rest, sizeof rest,
            "  particles: {lattice: tri2d, spacing: 2.0e-4, width: 0.004, cutoff: 1.2,"
@@ -120,21 +81,16 @@ static cpl_run_summary run_flat(const char *mode) {
   assert_non_null(d);
   snprintf(full, sizeof full, "%.*sfree_surface_tag: free_surface, mode: %s}%s", (int)(d - text),
            text, mode, d + strlen("free_surface_tag: free_surface}"));
-  cpl_problem *p = run_deck(full, &e, &doc, &mats, true, &st);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  assert_int_equal(st, MS_OK);
-  cpl_run_summary s = *cpl_problem_summary(p);
+  cpl_test_run r;
+  cpl_test_run_deck(&r, full, "test.yaml", RUN_FILES, RUN_NFILES);
+  cpl_run_summary s = *cpl_problem_summary(r.p);
   printf("symmetric impact, %s piston: %zu particles, %ld steps; free surface plateau %.5f "
          "(particles) vs %.5f (grid) km/s: %.3f %%; half-rise %.5g vs %.5g; smallest velocity "
          "after the window %.4g; energy balance %.3g of the piston work; %zu fragments\n",
          mode, s.particles, s.steps, s.check.plateau_particles, s.check.plateau_grid,
          100 * s.check.rel_diff, s.check.t_half_particles, s.check.t_half_grid, s.check.min_after,
          s.energy_balance, s.fragments);
-  cpl_problem_free(p);
-  eos_materials_free(mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  cpl_test_run_free(&r);
   return s;
 }
 
@@ -178,11 +134,6 @@ static void test_symmetric_flat(void **state) {
 
 static void test_grooved_ejecta(void **state) {
   (void)state;
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc;
-  eos_materials *mats;
-  ms_status st = MS_ERR_INTERNAL;
   /* Pb on Pb at 1.5 km/s; one groove 40 µm deep, 40 µm period; a = 2 µm; 0.5 µs after
    * breakout; detector 0.2 cm beyond the free surface */
   const char *rest =
@@ -192,11 +143,10 @@ static void test_grooved_ejecta(void **state) {
       "  time: {end: 0.085, outputs: 2}\n"
       "  fragments: {every: 100}\n"
       "  transport: {detector: 0.2, end: 1.0, windows: 20}\n";
-  cpl_problem *p = run_deck(deck("1.8e-9", "0.18", "drive", rest), &e, &doc, &mats, true, &st);
-  dk_errors_print(&e, stderr);
-  assert_int_equal(e.n, 0);
-  assert_int_equal(st, MS_OK);
-  const cpl_run_summary *s = cpl_problem_summary(p);
+  cpl_test_run r;
+  cpl_test_run_deck(&r, deck("1.8e-9", "0.18", "drive", rest), "test.yaml", RUN_FILES,
+                    RUN_NFILES);
+  const cpl_run_summary *s = cpl_problem_summary(r.p);
   printf("grooved surface: %zu particles, %zu fragments, ejected %.4g g, %zu of %zu transported "
          "fragments at the detector\n",
          s->particles, s->fragments, s->ejected_mass, s->arrived, s->transported);
@@ -217,24 +167,12 @@ static void test_grooved_ejecta(void **state) {
       "    {lattice: tri2d, spacing: 2.0e-4, width: 0.004, cutoff: 1.2, cutoff_mode: bonded,"
       " damping_j: 50, surface: {type: grooves, amplitude: 20.0e-4, wavelength: 40.0e-4}}\n"
       "  time: {end: 0.065, outputs: 1}\n";
-  dk_errors ea;
-  dk_errors_init(&ea);
-  dk_doc *doc_a;
-  eos_materials *mats_a;
-  cpl_problem *pa =
-      run_deck(deck("1.8e-9", "0.18", "drive", rest_amp), &ea, &doc_a, &mats_a, true, &st);
-  dk_errors_print(&ea, stderr);
-  assert_int_equal(ea.n, 0);
-  assert_int_equal(st, MS_OK);
-  assert_int_equal(cpl_problem_summary(pa)->particles, s->particles);
-  cpl_problem_free(pa);
-  eos_materials_free(mats_a);
-  dk_free(doc_a);
-  dk_errors_free(&ea);
-  cpl_problem_free(p);
-  eos_materials_free(mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  cpl_test_run ra;
+  cpl_test_run_deck(&ra, deck("1.8e-9", "0.18", "drive", rest_amp), "test.yaml", RUN_FILES,
+                    RUN_NFILES);
+  assert_int_equal(cpl_problem_summary(ra.p)->particles, s->particles);
+  cpl_test_run_free(&ra);
+  cpl_test_run_free(&r);
 }
 
 static void test_deck_errors(void **state) {
@@ -249,21 +187,14 @@ static void test_deck_errors(void **state) {
       {"0", "0.18", "drive", "drag needs the gas viscosity: give material 'air'"},
   };
   for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
-    dk_errors e;
-    dk_errors_init(&e);
-    dk_doc *doc;
-    eos_materials *mats;
-    ms_status st;
-    cpl_problem *p =
-        run_deck(deck(cases[c].visc, cases[c].x, cases[c].tag, rest), &e, &doc, &mats, false, &st);
-    assert_null(p);
-    if (!has_error(&e, cases[c].needle)) {
-      dk_errors_print(&e, stderr);
+    cpl_test_run r;
+    cpl_test_read(&r, deck(cases[c].visc, cases[c].x, cases[c].tag, rest), "test.yaml");
+    assert_null(r.p);
+    if (!has_error(&r.e, cases[c].needle)) {
+      dk_errors_print(&r.e, stderr);
       fail_msg("case %zu: expected an error containing '%s'", c, cases[c].needle);
     }
-    eos_materials_free(mats);
-    dk_free(doc);
-    dk_errors_free(&e);
+    cpl_test_run_free(&r);
   }
 }
 
