@@ -44,6 +44,38 @@ static inline void pair_fast(double s, double dx, double dy, double dz, double s
   *fzj = fma(-fr, dz, *fzj);
 }
 
+/* The plain entries from k0 on and the image entries of the particle at position pos, one at a
+ * time, into its force (*fxi, ...) and its partners'. */
+static inline void particle_entries(const cd_neigh *nl, const int32_t *restrict lst, int k0,
+                                    int32_t pos, double xi, double yi, double zi,
+                                    const double *restrict x, const double *restrict y,
+                                    const double *restrict z, double *restrict fx,
+                                    double *restrict fy, double *restrict fz, double slo,
+                                    double ih, double rc2, const double *restrict fc, double *fxi,
+                                    double *fyi, double *fzi) {
+  const int np = nl->nplain[pos], ni = nl->nimg[pos];
+  for (int k = k0; k < np; k++) {
+    const int32_t j = lst[k];
+    const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+    const double s = fma(dx, dx, fma(dy, dy, dz * dz));
+    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, fxi, fyi, fzi, fx + j, fy + j, fz + j);
+  }
+  lst += np;
+  for (int k = 0; k < ni; k++) {
+    const int32_t j = lst[2 * k];
+    const double *sh = nl->shift[lst[2 * k + 1]];
+    const double dx = xi - (x[j] + sh[0]), dy = yi - (y[j] + sh[1]), dz = zi - (z[j] + sh[2]);
+    const double s = fma(dx, dx, fma(dy, dy, dz * dz));
+    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, fxi, fyi, fzi, fx + j, fy + j, fz + j);
+  }
+}
+
+/* Two consecutive particles at a time, their plain entries interleaved (entry k of each, then
+ * entry k + 1), so that two independent chains s → table → F/r → f_j are in flight: one
+ * particle's chain is latency-bound (docs/benchmarks.md, round 10: problem B's force loop
+ * ~12 % faster on one core; three or four lanes were no better). Each particle's remaining
+ * entries follow one at a time. The order of the f_j updates is fixed by the layout alone, so
+ * results stay independent of the thread count. */
 static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t,
                               int layer) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
@@ -51,26 +83,43 @@ static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_ta
   const double slo = t->s_lo, ih = t->inv_h, rc2 = t->rc2;
   const double *restrict fc = t->fcoef;
   const int32_t *restrict buf = nl->buf[layer];
-  for (int32_t i = nl->layer_start[layer]; i < nl->layer_start[layer + 1]; i++) {
-    const int32_t pi = nl->sorted[i];
+  const int32_t end = nl->layer_start[layer + 1];
+  int32_t pos = nl->layer_start[layer];
+  for (; pos + 1 < end; pos += 2) {
+    const int32_t pa = nl->sorted[pos], pb = nl->sorted[pos + 1];
+    const double xa = x[pa], ya = y[pa], za = z[pa], xb = x[pb], yb = y[pb], zb = z[pb];
+    double fxa = 0.0, fya = 0.0, fza = 0.0, fxb = 0.0, fyb = 0.0, fzb = 0.0;
+    const int32_t *restrict la = buf + nl->first[pos], *restrict lb = buf + nl->first[pos + 1];
+    const int na = nl->nplain[pos], nb = nl->nplain[pos + 1];
+    const int nboth = na < nb ? na : nb;
+    for (int k = 0; k < nboth; k++) {
+      const int32_t ja = la[k], jb = lb[k];
+      const double dxa = xa - x[ja], dya = ya - y[ja], dza = za - z[ja];
+      const double dxb = xb - x[jb], dyb = yb - y[jb], dzb = zb - z[jb];
+      const double sa = fma(dxa, dxa, fma(dya, dya, dza * dza));
+      const double sb = fma(dxb, dxb, fma(dyb, dyb, dzb * dzb));
+      if (sa < rc2)
+        pair_fast(sa, dxa, dya, dza, slo, ih, fc, &fxa, &fya, &fza, fx + ja, fy + ja, fz + ja);
+      if (sb < rc2)
+        pair_fast(sb, dxb, dyb, dzb, slo, ih, fc, &fxb, &fyb, &fzb, fx + jb, fy + jb, fz + jb);
+    }
+    particle_entries(nl, la, nboth, pos, xa, ya, za, x, y, z, fx, fy, fz, slo, ih, rc2, fc, &fxa,
+                     &fya, &fza);
+    fx[pa] += fxa;
+    fy[pa] += fya;
+    fz[pa] += fza;
+    particle_entries(nl, lb, nboth, pos + 1, xb, yb, zb, x, y, z, fx, fy, fz, slo, ih, rc2, fc,
+                     &fxb, &fyb, &fzb);
+    fx[pb] += fxb;
+    fy[pb] += fyb;
+    fz[pb] += fzb;
+  }
+  for (; pos < end; pos++) {
+    const int32_t pi = nl->sorted[pos];
     const double xi = x[pi], yi = y[pi], zi = z[pi];
     double fxi = 0.0, fyi = 0.0, fzi = 0.0;
-    const int32_t *restrict lst = buf + nl->first[i];
-    const int np = nl->nplain[i], ni = nl->nimg[i];
-    for (int k = 0; k < np; k++) {
-      const int32_t j = lst[k];
-      const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-      const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-      if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, &fxi, &fyi, &fzi, fx + j, fy + j, fz + j);
-    }
-    lst += np;
-    for (int k = 0; k < ni; k++) {
-      const int32_t j = lst[2 * k];
-      const double *sh = nl->shift[lst[2 * k + 1]];
-      const double dx = xi - (x[j] + sh[0]), dy = yi - (y[j] + sh[1]), dz = zi - (z[j] + sh[2]);
-      const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-      if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, &fxi, &fyi, &fzi, fx + j, fy + j, fz + j);
-    }
+    particle_entries(nl, buf + nl->first[pos], 0, pos, xi, yi, zi, x, y, z, fx, fy, fz, slo, ih,
+                     rc2, fc, &fxi, &fyi, &fzi);
     fx[pi] += fxi;
     fy[pi] += fyi;
     fz[pi] += fzi;
