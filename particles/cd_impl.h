@@ -147,9 +147,12 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
  * 0 for Verlet); `bound`: a known bound on every |Δ| (Σ Δt·max|v|), which spares the pass
  * over the positions while below skin/2 − reach.
  * With `dd` (MPI) every rank calls it with the same bound (a max over ranks) and the same
- * xb_err (max-reduced at the build) and gets the same answer, the serial run's. */
+ * xb_err (max-reduced at the build) and gets the same answer, the serial run's.
+ * `known_ext` (or NULL): the displacement extents of particles [0, n), already taken by the
+ * caller — {max|Δ|², max Δx, max Δy, max Δz, −min Δx, −min Δy, −min Δz}, all INFINITY if some
+ * position is not finite — which spares the test its own pass. */
 bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
-                    bool dd);
+                    bool dd, const double *known_ext);
 size_t cd_neigh_bytes(const cd_neigh *nl);
 size_t cd_neigh_pairs(const cd_neigh *nl);
 

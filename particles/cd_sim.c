@@ -489,7 +489,7 @@ static ms_status rkn_step_cd(cd_sim *s) {
   }
   const double reach =
       dt * s->rkn_reach[0] * sqrt(vmax2) + 2.0 * dt * dt * s->rkn_reach[1] * sqrt(amax2);
-  if (!cd_neigh_holds(s->nl, p, n, INFINITY, reach, s->dd)) { /* MPI: all ranks agree */
+  if (!cd_neigh_holds(s->nl, p, n, INFINITY, reach, s->dd, NULL)) { /* MPI: all ranks agree */
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
   }
@@ -545,24 +545,59 @@ static ms_status vv_step(cd_sim *s) {
    * positions only once the cheap bound Σ Δt·max|v| on every displacement has reached skin/2;
    * before that the loop just tracks max|v|. */
   double vmax2 = 0.0;
+  /* Once the cheap bound is halfway there, the loop also takes the displacement extents the
+   * exact test needs, saving it a pass over x and the build positions (not with walls, which
+   * move particles after the loop). Two loops: a test inside one keeps it from vectorising. */
+  const bool walls = s->box.bc[0] == CD_BC_WALL || s->box.bc[1] == CD_BC_WALL ||
+                     s->box.bc[2] == CD_BC_WALL;
+  const bool track = !walls && s->disp_bound >= 0.25 * s->cfg.skin;
+  double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
+  double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all are maxima */
+  int nan_seen = 0;
+#define KICK_DRIFT_ZERO(i)                                                                      \
+  const double c = hdt / m[i];                                                                  \
+  vx[i] += c * fx[i];                                                                           \
+  vy[i] += c * fy[i];                                                                           \
+  vz[i] += c * fz[i];                                                                           \
+  fx[i] = fy[i] = fz[i] = 0.0;                                                                  \
+  x[i] += dt * vx[i];                                                                           \
+  y[i] += dt * vy[i];                                                                           \
+  z[i] += dt * vz[i];                                                                           \
+  const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];                              \
+  vmax2 = v2 > vmax2 ? v2 : vmax2;
+  if (!track) {
 #pragma omp parallel for simd schedule(static) reduction(max : vmax2) if (CD_PAR(n))
-  for (long i = 0; i < n; i++) {
-    const double c = hdt / m[i];
-    vx[i] += c * fx[i];
-    vy[i] += c * fy[i];
-    vz[i] += c * fz[i];
-    fx[i] = fy[i] = fz[i] = 0.0;
-    x[i] += dt * vx[i];
-    y[i] += dt * vy[i];
-    z[i] += dt * vz[i];
-    const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-    vmax2 = v2 > vmax2 ? v2 : vmax2;
+    for (long i = 0; i < n; i++) {
+      KICK_DRIFT_ZERO(i)
+    }
+  } else {
+    const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
+#pragma omp parallel for simd schedule(static) if (CD_PAR(n)) \
+    reduction(max : vmax2, d2max, hx, hy, hz, lx, ly, lz, nan_seen)
+    for (long i = 0; i < n; i++) {
+      KICK_DRIFT_ZERO(i)
+      /* as displacement_extent (neighbour.c) */
+      const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      nan_seen = d2 == d2 ? nan_seen : 1;
+      d2max = d2 > d2max ? d2 : d2max;
+      hx = dx > hx ? dx : hx;
+      hy = dy > hy ? dy : hy;
+      hz = dz > hz ? dz : hz;
+      lx = -dx > lx ? -dx : lx;
+      ly = -dy > ly ? -dy : ly;
+      lz = -dz > lz ? -dz : lz;
+    }
   }
+#undef KICK_DRIFT_ZERO
   if (!(vmax2 < INFINITY)) vmax2 = INFINITY; /* NaN: the exact test, which rebuilds */
   if (s->dd) vmax2 = par_max_double(vmax2); /* the serial run's bound on every rank */
   s->disp_bound += dt * sqrt(vmax2);
   reflect_walls(s);
-  if (!cd_neigh_holds(s->nl, p, n, s->disp_bound, 0.0, s->dd)) { /* MPI: all ranks agree */
+  double ext[7] = {d2max, hx, hy, hz, lx, ly, lz};
+  if (nan_seen || !(d2max < INFINITY))
+    for (int k = 0; k < 7; k++) ext[k] = INFINITY; /* NaN: rebuild */
+  if (!cd_neigh_holds(s->nl, p, n, s->disp_bound, 0.0, s->dd, track ? ext : NULL)) {
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;
     n = (long)p->nlocal;

@@ -136,11 +136,14 @@ static double spread2(const cd_neigh *nl, const ptl_state *p, long n, const doub
 }
 
 bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
-                    bool dd) {
+                    bool dd, const double *known_ext) {
   const double margin = nl->xb_err + reach; /* NaN reach: no margin is left */
   if (bound < 0.5 * nl->skin - margin) return true;
   double ext[8];
-  displacement_extent(nl, p, n, ext);
+  if (known_ext)
+    memcpy(ext, known_ext, 7 * sizeof *ext);
+  else
+    displacement_extent(nl, p, n, ext);
   ext[7] = margin < INFINITY ? margin : INFINITY;
   if (dd) par_max_doubles(ext, 8); /* the RKN reach differs between ranks */
   const double half = 0.5 * nl->skin - ext[7];

@@ -200,26 +200,29 @@ static void test_lists_moving_block(void **state) {
   p->n = 4;
   const double dx[4] = {9.97, 10.03, 10.0, 10.0}; /* |Δ| ≈ 10, all within 0.03 of (10, 0, 0) */
   for (int i = 0; i < 4; i++) p->x[i] = dx[i];
-  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
-  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.03, false)); /* 0.03 + 0.03 > 0.05 */
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.03, false, NULL)); /* 0.03 + 0.03 > 0.05 */
   p->y[2] = 0.035;
   p->y[3] = -0.035; /* box half-diagonal 0.046 */
-  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
   const double sq[4][2] = {{9.96, 0}, {10.04, 0}, {10, 0.04}, {10, -0.04}};
   for (int i = 0; i < 4; i++) p->x[i] = sq[i][0], p->y[i] = sq[i][1];
   /* half-diagonal 0.057, but each particle 0.04 from the centre: the second pass */
-  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
   p->x[2] = 10.03;
   p->y[2] = 0.045; /* now 0.052 from the box's centre (10, 0.0025) */
-  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
   for (int i = 0; i < 4; i++) p->x[i] = p->y[i] = 0.04; /* |Δ| = 0.057 but no spread */
-  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_true(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
+  /* extents the caller took (vv_step's loop) stand for the positions: a spread of 0.2 along x */
+  const double wide[7] = {0.01, 0.1, 0.0, 0.0, 0.1, 0.0, 0.0};
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, wide));
   p->x[0] = -0.02; /* particles 0 and 1 end up 0.117 apart: no vector is within 0.05 of both */
   p->z[1] = 0.1;
-  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
-  assert_true(cd_neigh_holds(nl, p, 4, 0.049, 0.0, false)); /* a bound below 0.05 is trusted */
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
+  assert_true(cd_neigh_holds(nl, p, 4, 0.049, 0.0, false, NULL)); /* a bound < 0.05 is trusted */
   p->x[0] = NAN;
-  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false));
+  assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
   ptl_state_free(p);
   cd_neigh_free(nl);
 }
