@@ -545,12 +545,14 @@ static ms_status vv_step(cd_sim *s) {
    * positions only once the cheap bound Σ Δt·max|v| on every displacement has reached skin/2;
    * before that the loop just tracks max|v|. */
   double vmax2 = 0.0;
-  /* Once the cheap bound is halfway there, the loop also takes the displacement extents the
-   * exact test needs, saving it a pass over x and the build positions (not with walls, which
-   * move particles after the loop). Two loops: a test inside one keeps it from vectorising. */
+  /* When this step may take the cheap bound past skin/2 (at up to twice the last step's
+   * max|v|), the loop also takes the displacement extents the exact test then needs, saving it
+   * a pass over x and the build positions (not with walls, which move particles after the
+   * loop). Two loops: a test inside one keeps it from vectorising. */
   const bool walls = s->box.bc[0] == CD_BC_WALL || s->box.bc[1] == CD_BC_WALL ||
                      s->box.bc[2] == CD_BC_WALL;
-  const bool track = !walls && s->disp_bound >= 0.25 * s->cfg.skin;
+  const bool track = !walls && s->disp_bound + 2.0 * dt * s->vmax_last >=
+                                   0.5 * s->cfg.skin - s->nl->xb_err;
   double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
   double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all are maxima */
   int nan_seen = 0;
@@ -592,7 +594,8 @@ static ms_status vv_step(cd_sim *s) {
 #undef KICK_DRIFT_ZERO
   if (!(vmax2 < INFINITY)) vmax2 = INFINITY; /* NaN: the exact test, which rebuilds */
   if (s->dd) vmax2 = par_max_double(vmax2); /* the serial run's bound on every rank */
-  s->disp_bound += dt * sqrt(vmax2);
+  s->vmax_last = sqrt(vmax2);
+  s->disp_bound += dt * s->vmax_last;
   reflect_walls(s);
   double ext[7] = {d2max, hx, hy, hz, lx, ly, lz};
   if (nan_seen || !(d2max < INFINITY))

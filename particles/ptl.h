@@ -301,6 +301,7 @@ typedef struct cd_sim {
   long n_broken_bonds;
   bool forces_zeroed;           /* the step zeroed f in its drift loop */
   double disp_bound;            /* Σ Δt·max|v| since the last build (cheap rebuild pre-check) */
+  double vmax_last;             /* max|v| of the last Verlet step (when to take the extents) */
   struct cd_layer_sums *sums;   /* per-layer accumulators of the kernels */
   int sums_cap;
   double *pw;                   /* [N][6] per-particle virials (allocated by diagnostics) */
