@@ -161,6 +161,8 @@ static cd_config run_config(cd_cutoff_mode mode, cd_integrator integ) {
 
 static double opt_rc = 1.2; /* --rc: R_c / r0 (exploration) */
 static double opt_thermal = 0.01; /* --thermal: initial velocity amplitude, km/s (exploration) */
+static double opt_damping_j = 0.0; /* --damping J: relative-velocity damping Γ = c0/(J r0) in the
+                                    * shock run (paper 002 eq. 6; exploration), 0: off */
 
 static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
   cd_sim *s = cd_sim_create(p, box, cfg, 1);
@@ -218,7 +220,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   for (size_t i = 0; i < p->n; i++)
     if (!(p->flags[i] & PTL_DRIVEN))
       for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
-  const cd_config cfg = run_config(mode, integ);
+  cd_config cfg = run_config(mode, integ);
+  if (opt_damping_j > 0) cfg.damping_gamma = 5.35 / (opt_damping_j * R0);
   cd_sim *s = make_sim(eos, p, &box, &cfg);
   double th[1] = {0}, uh[1] = {up}, dir[3] = {0, 0, 1};
   cd_history h = {1, th, uh};
@@ -511,7 +514,8 @@ static void test_hugoniot(void **state) {
   eos_destroy(curves[1]);
 }
 
-/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V
+/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V |
+ * --damping J
  * (and the exploration options below) */
 int main(int argc, char **argv) {
   for (int k = 1; k < argc; k++) {
@@ -545,6 +549,8 @@ int main(int argc, char **argv) {
       sscanf(argv[++k], "%d,%lf,%d", &opt_ngrains, &opt_dmin, &opt_seed);
     } else if (!strcmp(argv[k], "--vacancies") && k + 1 < argc) {
       opt_vacancies = atof(argv[++k]);
+    } else if (!strcmp(argv[k], "--damping") && k + 1 < argc) {
+      opt_damping_j = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--thermal") && k + 1 < argc) {
       opt_thermal = atof(argv[++k]);
     } else if (!strcmp(argv[k], "--rc") && k + 1 < argc) {
