@@ -153,6 +153,28 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
  * position is not finite — which spares the test its own pass. */
 bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
                     bool dd, const double *known_ext);
+/* The displacement extents of cd_neigh_holds, taken in a loop over particles: one displacement
+ * (dx, dy, dz) into the locals d2max, hx, hy, hz, lx, ly, lz (−min, so that all are maxima)
+ * and nan_seen of an OpenMP max-reduction over them (a macro: the loops stay vectorised); then
+ * cd_extents_finish. */
+#define CD_EXTENT_UPDATE(dx, dy, dz)                                                             \
+  do {                                                                                           \
+    const double d2_ = (dx) * (dx) + (dy) * (dy) + (dz) * (dz);                                  \
+    nan_seen = d2_ == d2_ ? nan_seen : 1;                                                        \
+    d2max = d2_ > d2max ? d2_ : d2max;                                                           \
+    hx = (dx) > hx ? (dx) : hx;                                                                  \
+    hy = (dy) > hy ? (dy) : hy;                                                                  \
+    hz = (dz) > hz ? (dz) : hz;                                                                  \
+    lx = -(dx) > lx ? -(dx) : lx;                                                                \
+    ly = -(dy) > ly ? -(dy) : ly;                                                                \
+    lz = -(dz) > lz ? -(dz) : lz;                                                                \
+  } while (0)
+static inline void cd_extents_finish(double ext[7], double d2max, double hx, double hy,
+                                     double hz, double lx, double ly, double lz, int nan_seen) {
+  const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};
+  const bool finite = !nan_seen && d2max < INFINITY; /* an infinite component makes d2 infinite */
+  for (int k = 0; k < 7; k++) ext[k] = finite ? e[k] : INFINITY; /* NaN: rebuild */
+}
 size_t cd_neigh_bytes(const cd_neigh *nl);
 size_t cd_neigh_pairs(const cd_neigh *nl);
 

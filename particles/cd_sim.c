@@ -578,17 +578,8 @@ static ms_status vv_step(cd_sim *s) {
     reduction(max : vmax2, d2max, hx, hy, hz, lx, ly, lz, nan_seen)
     for (long i = 0; i < n; i++) {
       KICK_DRIFT_ZERO(i)
-      /* as displacement_extent (neighbour.c) */
       const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-      const double d2 = dx * dx + dy * dy + dz * dz;
-      nan_seen = d2 == d2 ? nan_seen : 1;
-      d2max = d2 > d2max ? d2 : d2max;
-      hx = dx > hx ? dx : hx;
-      hy = dy > hy ? dy : hy;
-      hz = dz > hz ? dz : hz;
-      lx = -dx > lx ? -dx : lx;
-      ly = -dy > ly ? -dy : ly;
-      lz = -dz > lz ? -dz : lz;
+      CD_EXTENT_UPDATE(dx, dy, dz);
     }
   }
 #undef KICK_DRIFT_ZERO
@@ -597,9 +588,8 @@ static ms_status vv_step(cd_sim *s) {
   s->vmax_last = sqrt(vmax2);
   s->disp_bound += dt * s->vmax_last;
   reflect_walls(s);
-  double ext[7] = {d2max, hx, hy, hz, lx, ly, lz};
-  if (nan_seen || !(d2max < INFINITY))
-    for (int k = 0; k < 7; k++) ext[k] = INFINITY; /* NaN: rebuild */
+  double ext[7];
+  cd_extents_finish(ext, d2max, hx, hy, hz, lx, ly, lz, nan_seen);
   if (!cd_neigh_holds(s->nl, p, n, s->disp_bound, 0.0, s->dd, track ? ext : NULL)) {
     ms_status st = rebuild(s);
     if (st != MS_OK) return st;

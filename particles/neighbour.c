@@ -105,19 +105,9 @@ static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, 
     reduction(max : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
     const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    nan_seen = d2 == d2 ? nan_seen : 1;
-    d2max = d2 > d2max ? d2 : d2max;
-    hx = dx > hx ? dx : hx;
-    hy = dy > hy ? dy : hy;
-    hz = dz > hz ? dz : hz;
-    lx = -dx > lx ? -dx : lx;
-    ly = -dy > ly ? -dy : ly;
-    lz = -dz > lz ? -dz : lz;
+    CD_EXTENT_UPDATE(dx, dy, dz);
   }
-  const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};
-  const bool finite = !nan_seen && d2max < INFINITY; /* an infinite component makes d2 infinite */
-  for (int k = 0; k < 7; k++) ext[k] = finite ? e[k] : INFINITY; /* NaN: rebuild */
+  cd_extents_finish(ext, d2max, hx, hy, hz, lx, ly, lz, nan_seen);
 }
 
 /* max |Δ − c|² over particles [0, n), c fixed */
