@@ -233,6 +233,26 @@ static inline __m512d load8(const double *restrict a, const int32_t *restrict j)
 #endif
 
 #if defined(__AVX512F__)
+/* counts[0 .. 7] of the lanes in `lanes` as int32 lanes, 0 elsewhere (nothing read there). */
+static inline __m256i load_counts8(const uint16_t *counts, __mmask8 lanes) {
+#if defined(__AVX512BW__) && defined(__AVX512VL__)
+  return _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(lanes, counts));
+#else
+  int32_t c[8] = {0};
+  for (int l = 0; l < 8; l++)
+    if (lanes & (1u << l)) c[l] = counts[l];
+  return _mm256_loadu_si256((const __m256i *)(const void *)c);
+#endif
+}
+
+/* The largest of eight int32 lanes. */
+static inline int hmax8(__m256i v) {
+  v = _mm256_max_epi32(v, _mm256_permute2x128_si256(v, v, 1));
+  v = _mm256_max_epi32(v, _mm256_shuffle_epi32(v, 0x4E));
+  v = _mm256_max_epi32(v, _mm256_shuffle_epi32(v, 0xB1));
+  return _mm256_cvtsi256_si32(v);
+}
+
 /* Eight pairs at separations d (lanes of `live`): the lanes inside R_c add F/r·d to a. */
 static inline void add_pairs8(const cd_pair_table *t, const __m512d (*cf)[2], __m512d vrc2,
                               __m512d dx, __m512d dy, __m512d dz, __mmask8 live, __m512d *ax,
@@ -276,18 +296,25 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
   }
   const __m512d(*ccf)[2] = (const __m512d(*)[2])cf;
   const __m512d vrc2 = _mm512_set1_pd(t->rc2), zero = _mm512_setzero_pd();
+  const __m256i lane_no = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   for (int32_t g0 = ls; g0 < le; g0 += CD_GROUP) {
     const int nlane = le - g0 < CD_GROUP ? le - g0 : CD_GROUP;
-    int32_t iv[CD_GROUP] = {0}; /* lanes past the layer's end: particle 0, never used */
-    memcpy(iv, nl->sorted + g0, (size_t)nlane * sizeof *iv);
-    const __m512d xi = load8(x, iv), yi = load8(y, iv), zi = load8(z, iv);
-    int32_t cnt[CD_GROUP] = {0};
-    int kmax = 0;
-    for (int l = 0; l < nlane; l++) {
-      cnt[l] = nl->nplain[g0 + l];
-      kmax = cnt[l] > kmax ? cnt[l] : kmax;
-    }
-    const __m256i vcnt = _mm256_loadu_si256((const __m256i *)(const void *)cnt);
+    const __mmask8 lanes = (__mmask8)((1u << nlane) - 1u);
+    /* lanes past the layer's end: particle 0, never used */
+    const __m256i ivv = _mm256_maskz_loadu_epi32(lanes, nl->sorted + g0);
+    int32_t iv[CD_GROUP];
+    _mm256_storeu_si256((__m256i *)(void *)iv, ivv);
+    const int32_t i0 = iv[0];
+    /* a whole group of consecutive particles (the usual case after a renumbering build):
+     * vector loads and, below, the closing in vector form */
+    const bool run = nlane == CD_GROUP &&
+                     _mm256_cmpeq_epi32_mask(ivv, _mm256_add_epi32(_mm256_set1_epi32(i0), lane_no))
+                         == 0xff;
+    const __m512d xi = run ? _mm512_loadu_pd(x + i0) : load8(x, iv),
+                  yi = run ? _mm512_loadu_pd(y + i0) : load8(y, iv),
+                  zi = run ? _mm512_loadu_pd(z + i0) : load8(z, iv);
+    const __m256i vcnt = load_counts8(nl->nplain + g0, lanes);
+    const int kmax = hmax8(vcnt);
     const int32_t *blk = nl->buf[layer] + nl->first[g0] - (size_t)CD_GROUP * kmax;
     __m512d ax = zero, ay = zero, az = zero;
     for (int k = 0; k < kmax; k++) {
@@ -298,8 +325,7 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     }
     /* the image entries (particles near a periodic face), entry m of every lane's image list
      * as one vector: per lane the same operations, in the same order, as image_forces */
-    int mmax = 0;
-    for (int l = 0; l < nlane; l++) mmax = nl->nimg[g0 + l] > mmax ? nl->nimg[g0 + l] : mmax;
+    const int mmax = hmax8(load_counts8(nl->nimg + g0, lanes));
     for (int m = 0; m < mmax; m++) {
       int32_t jl[CD_GROUP] = {0};
       double sxl[CD_GROUP] = {0}, syl[CD_GROUP] = {0}, szl[CD_GROUP] = {0};
@@ -320,13 +346,7 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
       add_pairs8(t, ccf, vrc2, _mm512_sub_pd(xi, xj), _mm512_sub_pd(yi, yj), _mm512_sub_pd(zi, zj),
                  live, &ax, &ay, &az);
     }
-    /* a whole group of consecutive particles (the usual case after a renumbering build): the
-     * closing in vector form, the same arithmetic as add_force */
-    const int32_t i0 = iv[0];
-    const __m256i ivv = _mm256_loadu_si256((const __m256i *)(const void *)iv);
-    const __m256i seq =
-        _mm256_add_epi32(_mm256_set1_epi32(i0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    if (nlane == CD_GROUP && _mm256_cmpeq_epi32_mask(ivv, seq) == 0xff) {
+    if (run) { /* the closing in vector form, the same arithmetic as add_force */
       const __m512d fxv = _mm512_add_pd(_mm512_loadu_pd(p->fx + i0), ax),
                     fyv = _mm512_add_pd(_mm512_loadu_pd(p->fy + i0), ay),
                     fzv = _mm512_add_pd(_mm512_loadu_pd(p->fz + i0), az);
