@@ -325,14 +325,21 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     }
     /* the image entries (particles near a periodic face), entry m of every lane's image list
      * as one vector: per lane the same operations, in the same order, as image_forces */
-    const int mmax = hmax8(load_counts8(nl->nimg + g0, lanes));
+    const __m256i vnimg = load_counts8(nl->nimg + g0, lanes);
+    const int mmax = hmax8(vnimg);
+    const int32_t *imgrow[CD_GROUP];
+    int32_t nimg[CD_GROUP];
+    if (mmax > 0) {
+      _mm256_storeu_si256((__m256i *)(void *)nimg, vnimg);
+      for (int l = 0; l < nlane; l++) imgrow[l] = cd_image_list(nl, layer, g0 + l);
+    }
     for (int m = 0; m < mmax; m++) {
       int32_t jl[CD_GROUP] = {0};
       double sxl[CD_GROUP] = {0}, syl[CD_GROUP] = {0}, szl[CD_GROUP] = {0};
       __mmask8 live = 0;
       for (int l = 0; l < nlane; l++) {
-        if (m >= nl->nimg[g0 + l]) continue;
-        const int32_t *img = cd_image_list(nl, layer, g0 + l) + 2 * m;
+        if (m >= nimg[l]) continue;
+        const int32_t *img = imgrow[l] + 2 * m;
         const double *sh = nl->shift[img[1]];
         jl[l] = img[0];
         sxl[l] = sh[0];
