@@ -44,21 +44,22 @@ static inline void pair_fast(double s, double dx, double dy, double dz, double s
   *fzj = fma(-fr, dz, *fzj);
 }
 
-/* The plain entries from k0 on and the image entries of the particle at position pos, one at a
- * time, into its force (*fxi, ...) and its partners'. */
-static inline void particle_entries(const cd_neigh *nl, const int32_t *restrict lst, int k0,
-                                    int32_t pos, double xi, double yi, double zi,
-                                    const double *restrict x, const double *restrict y,
-                                    const double *restrict z, double *restrict fx,
-                                    double *restrict fy, double *restrict fz, double slo,
-                                    double ih, double rc2, const double *restrict fc, double *fxi,
-                                    double *fyi, double *fzi) {
+/* The rest of the particle at position pos (index i, at xi, yi, zi): its plain entries from k0
+ * on and its image entries, one at a time, into its partners' forces and into the force it has
+ * so far (fxi, ...), which is then added to f_i. */
+static inline void finish_particle(const cd_neigh *nl, const int32_t *restrict lst, int k0,
+                                   int32_t pos, int32_t i, double xi, double yi, double zi,
+                                   const double *restrict x, const double *restrict y,
+                                   const double *restrict z, double *restrict fx,
+                                   double *restrict fy, double *restrict fz, double slo,
+                                   double ih, double rc2, const double *restrict fc, double fxi,
+                                   double fyi, double fzi) {
   const int np = nl->nplain[pos], ni = nl->nimg[pos];
   for (int k = k0; k < np; k++) {
     const int32_t j = lst[k];
     const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
     const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, fxi, fyi, fzi, fx + j, fy + j, fz + j);
+    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, &fxi, &fyi, &fzi, fx + j, fy + j, fz + j);
   }
   lst += np;
   for (int k = 0; k < ni; k++) {
@@ -66,8 +67,11 @@ static inline void particle_entries(const cd_neigh *nl, const int32_t *restrict 
     const double *sh = nl->shift[lst[2 * k + 1]];
     const double dx = xi - (x[j] + sh[0]), dy = yi - (y[j] + sh[1]), dz = zi - (z[j] + sh[2]);
     const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, fxi, fyi, fzi, fx + j, fy + j, fz + j);
+    if (s < rc2) pair_fast(s, dx, dy, dz, slo, ih, fc, &fxi, &fyi, &fzi, fx + j, fy + j, fz + j);
   }
+  fx[i] += fxi;
+  fy[i] += fyi;
+  fz[i] += fzi;
 }
 
 /* Two consecutive particles at a time, their plain entries interleaved (entry k of each, then
@@ -103,26 +107,15 @@ static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_ta
       if (sb < rc2)
         pair_fast(sb, dxb, dyb, dzb, slo, ih, fc, &fxb, &fyb, &fzb, fx + jb, fy + jb, fz + jb);
     }
-    particle_entries(nl, la, nboth, pos, xa, ya, za, x, y, z, fx, fy, fz, slo, ih, rc2, fc, &fxa,
-                     &fya, &fza);
-    fx[pa] += fxa;
-    fy[pa] += fya;
-    fz[pa] += fza;
-    particle_entries(nl, lb, nboth, pos + 1, xb, yb, zb, x, y, z, fx, fy, fz, slo, ih, rc2, fc,
-                     &fxb, &fyb, &fzb);
-    fx[pb] += fxb;
-    fy[pb] += fyb;
-    fz[pb] += fzb;
+    finish_particle(nl, la, nboth, pos, pa, xa, ya, za, x, y, z, fx, fy, fz, slo, ih, rc2, fc, fxa,
+                    fya, fza);
+    finish_particle(nl, lb, nboth, pos + 1, pb, xb, yb, zb, x, y, z, fx, fy, fz, slo, ih, rc2, fc,
+                    fxb, fyb, fzb);
   }
-  for (; pos < end; pos++) {
+  if (pos < end) { /* an odd particle at the layer's end */
     const int32_t pi = nl->sorted[pos];
-    const double xi = x[pi], yi = y[pi], zi = z[pi];
-    double fxi = 0.0, fyi = 0.0, fzi = 0.0;
-    particle_entries(nl, buf + nl->first[pos], 0, pos, xi, yi, zi, x, y, z, fx, fy, fz, slo, ih,
-                     rc2, fc, &fxi, &fyi, &fzi);
-    fx[pi] += fxi;
-    fy[pi] += fyi;
-    fz[pi] += fzi;
+    finish_particle(nl, buf + nl->first[pos], 0, pos, pi, x[pi], y[pi], z[pi], x, y, z, fx, fy,
+                    fz, slo, ih, rc2, fc, 0.0, 0.0, 0.0);
   }
 }
 
