@@ -9,7 +9,8 @@
 #include "cont.h"
 #endif
 #if defined(MSCALE_HAVE_PARTICLES_CD) || defined(MSCALE_HAVE_PARTICLES_DM)
-#include "ptl.h"
+#include "cd.h"
+#include "dm.h"
 #endif
 #ifdef MSCALE_HAVE_COUPLING
 #include "cpl.h"

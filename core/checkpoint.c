@@ -35,7 +35,7 @@ ms_h5 *ms_ckpt_create(const ms_ctx *ctx, const char *name, const char *format, u
 ms_status ms_ckpt_commit(const ms_ctx *ctx, ms_h5 *h, ms_status st, const char *name, long step) {
   if (!h) return MS_ERR_IO;
   /* MSCALE_CHECKPOINT_DELAY (seconds): hold the complete .part file open before the rename, so
-   * that tests can kill the run inside a checkpoint write (tests/particles/cd_restart.sh). */
+   * that tests can kill the run inside a checkpoint write (tests/restart_check.sh). */
   const char *delay = getenv("MSCALE_CHECKPOINT_DELAY");
   double d = delay ? atof(delay) : 0.0;
   st = par_agree_status(st);

@@ -17,7 +17,7 @@
 
 #include "cont.h"
 #include "cont_run.h"
-#include "ptl.h"
+#include "cd.h"
 
 enum { SURF_FLAT = 0, SURF_GROOVES, SURF_RANDOM };
 static const char *const surface_names[] = {"flat", "grooves", "random", NULL};

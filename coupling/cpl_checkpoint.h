@@ -5,7 +5,7 @@
 
 #include "cont.h"
 #include "cpl_impl.h"
-#include "ptl.h"
+#include "cd.h"
 
 /* What the particle phase did to the grids, in order: advance the gas grid to time t, a cell
  * source (drag.gas_return), and in two-way runs the gas grid's first-node velocity and the

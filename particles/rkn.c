@@ -3,7 +3,7 @@
  * Coefficients: Verlet α = ½, γ = 1. SIA4 (Candy & Rozmus 1991) as printed in paper 000.
  * RKN4 and its conjugate: the printed coefficients are garbled; DESIGN.md §5.2 gives
  * α = ((3±√3)/6, (3∓√3)/6, (3±√3)/6), γ = ((3∓2√3)/12, ½, (3±2√3)/12), which satisfy every
- * 4th-order RKN condition (checked numerically in tests/particles/test_rkn_order.c).
+ * 4th-order RKN condition (checked numerically in tests/ptl/test_rkn_order.c).
  */
 #include "ptl.h"
 

@@ -3,7 +3,7 @@
 #ifndef CD_LAMMPS_SETUP_H
 #define CD_LAMMPS_SETUP_H
 
-#include "ptl.h"
+#include "cd.h"
 
 /* constants of gen_inputs.py */
 #define RHO0 2.71

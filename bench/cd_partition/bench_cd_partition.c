@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 typedef struct row {
   cd_partition_stats st;

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ptl.h"
+#include "dm.h"
 
 int main(int argc, char **argv) {
   const char *deck = MSCALE_DM_PERI_DECK;

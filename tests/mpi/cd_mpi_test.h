@@ -8,7 +8,7 @@
 #include <stdlib.h>
 
 #include "mpi_check.h"
-#include "ptl.h"
+#include "cd.h"
 
 /* The simulation of p (this rank's block of it if distributed) in box with cfg, one material:
  * eos's fcc pair table with R_c = 1.2 r0. Set the piston, if any, then call cd_test_init. */

@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ptl.h"
+#include "dm.h"
 
 static int failures = 0;
 static int my_rank = 0;

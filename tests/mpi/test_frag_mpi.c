@@ -15,7 +15,7 @@
 #include <string.h>
 
 #include "cpl.h"
-#include "ptl.h"
+#include "cd.h"
 #include "frag_points.h"
 #include "mpi_check.h"
 

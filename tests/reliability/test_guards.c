@@ -12,7 +12,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 #define R0 5.0e-4
 #define C0 5.35

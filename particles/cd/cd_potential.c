@@ -14,7 +14,7 @@
  * F/r = −2 dE/ds of the same cubic (a quadratic in t), so energy and force are exactly
  * consistent and no square root is needed. r0² is a node, where E = F = 0 exactly.
  * With the default 4096 intervals on [(0.5 r0)², R_c²] the force agrees with the formula to
- * ~1e-10 of max|f| (tests/particles/test_cd_potential.c).
+ * ~1e-10 of max|f| (tests/cd/test_cd_potential.c).
  */
 #include "cd_impl.h"
 

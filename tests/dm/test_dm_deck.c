@@ -10,7 +10,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "dm.h"
 #include "test_util.h"
 
 static const char *materials =

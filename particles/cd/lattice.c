@@ -1,5 +1,5 @@
 /* lattice.c — perfect close-packed lattices (fcc in 3D, triangular in 2D). */
-#include "ptl.h"
+#include "cd.h"
 
 #include <math.h>
 

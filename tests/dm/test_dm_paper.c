@@ -15,7 +15,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "dm.h"
 
 /* Load a deck (a file under MSCALE_SOURCE_DIR/inputs, with `edits` = pairs of literal text
  * replacements applied first), run it, return its summary. */

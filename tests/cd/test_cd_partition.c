@@ -11,7 +11,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 static int64_t ncells(const int n[3]) { return (int64_t)n[0] * n[1] * n[2]; }
 

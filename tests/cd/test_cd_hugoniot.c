@@ -19,7 +19,7 @@
  * polycrystal with the plain cutoff, momentum D against the porous Hugoniot at its measured
  * density (run_poly).
  * Full table (docs/validation.md "Cluster dynamics"):
- *   build/tests/particles/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
+ *   build/tests/cd/test_cd_hugoniot --full      (6 up x 2 curves x {bonded, plain})
  * Exploration: --up LIST --size NX,NZ --curve table|mg --cutoff bonded|plain --orient 001|110|111
  *   --integrator NAME --rc RC/r0 --dump FILE (binned profiles at every sample, CSV);
  *   --vacancies FRAC: that fraction of the crystal's sample sites left empty at random (the
@@ -38,7 +38,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 #define R0 5.0e-4
 

@@ -19,7 +19,7 @@
  * All are pure functions of their input, so every rank computes the same map without a
  * broadcast (METIS is deterministic for a fixed seed and input on one build).
  */
-#include "ptl.h"
+#include "cd.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -9,8 +9,8 @@
  * D(h-BN) < D(mixture) < D(B4C): the measured mixture D is 13 % above the Kuropatenko rule fed
  * with the EOS Hugoniots, so agreement is not asserted (fed with the lattices' own component
  * Hugoniots, --lattice-rule, the rule is within 2–4 %: validation.md).
- *   build/tests/particles/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells)
- *   build/tests/particles/test_cd_mixture --lattice-rule   (the rule fed with the lattice's own
+ *   build/tests/cd/test_cd_mixture --full    (u = 1, 2, 3, 4 km/s, 8x8x240 cells)
+ *   build/tests/cd/test_cd_mixture --lattice-rule   (the rule fed with the lattice's own
  *     component Hugoniots: pure-component D measured at u = 1, 2, 3 km/s, interpolated;
  *     mixtures at u = 2 km/s, 6x6x160) */
 #include <math.h>
@@ -24,7 +24,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 #define R0 5.0e-4
 

@@ -15,7 +15,7 @@
 #include <dirent.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 static const char *mats =
     "materials:\n"

@@ -23,7 +23,7 @@
 #ifndef MSCALE_CD_IMPL_H
 #define MSCALE_CD_IMPL_H
 
-#include "ptl.h"
+#include "cd.h"
 
 #include <math.h>
 #include <string.h>

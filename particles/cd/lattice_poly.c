@@ -16,7 +16,7 @@
  * meets its own image there: such a seam is a grain boundary too (pairs of one grain count as
  * lattice pairs only when their unwrapped separation is their minimum-image one).
  */
-#include "ptl.h"
+#include "cd.h"
 
 #include <math.h>
 #include <stdlib.h>

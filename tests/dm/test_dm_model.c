@@ -11,7 +11,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "dm.h"
 
 static uint64_t rng_state = 12345;
 static double urand(void) { /* splitmix64 → [0, 1) */

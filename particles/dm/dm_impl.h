@@ -2,7 +2,7 @@
 #ifndef MSCALE_DM_IMPL_H
 #define MSCALE_DM_IMPL_H
 
-#include "ptl.h"
+#include "dm.h"
 
 ms_status dm_build_families(dm_model *m, const ms_ctx *ctx);
 ms_status dm_build_shape(dm_model *m, const ms_ctx *ctx, size_t *first_bad);

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <cmocka.h>
 
-#include "ptl.h"
+#include "cd.h"
 
 #define R0 5.0e-4
 

@@ -1,5 +1,5 @@
 /* dm_exact.c — exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
-#include "ptl.h"
+#include "dm.h"
 
 #include <math.h>
 

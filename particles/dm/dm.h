@@ -1,0 +1,212 @@
+/* dm.h — the public header of the discrete-model library (particles/dm/). */
+#ifndef MSCALE_DM_H
+#define MSCALE_DM_H
+
+#include "ptl.h"
+
+/* The least-squares deformation-gradient particle model of paper 000 §1 with the exact pairwise
+ * Hamiltonian force (DESIGN.md §5.2; docs/particles-dm.md). Small-strain linear elasticity:
+ *   A_i = Σ_k ξ_ik⊗ξ_ik,  C_i = Σ_k (w_k − w_i)⊗(A_i⁻¹ξ_ik),  E_i = sym C_i,
+ *   σ_i = λ_i tr(E_i) I + 2G_i E_i,  H = Σ m_i|u_i|²/2 + Σ V_i σ_i:E_i/2,
+ *   F_i = −∂H/∂w_i = Σ_{k∈N_i} (P_i + P_k) ξ_ik,  P_i = V_i σ_i A_i⁻¹   (families are symmetric).
+ * dim = 1: a chain along x (σ_xx = (K + 4G/3) E_xx, = E for ν = 0); dim = 2: plane strain in x–y;
+ * dim = 3: full 3D. Vectors are always stored with 3 components (unused ones stay 0). */
+
+typedef enum dm_bc {
+  DM_FREE = 0,      /* moves under the model's forces */
+  DM_FIXED = 1,     /* u = 0, w held at its initial value (fixed particle layers) */
+  DM_PRESCRIBED = 2, /* w(t) given by the model's prescribed-displacement callback */
+  DM_MIRROR = 3      /* ghost: w = S w_partner (S = diag(msign)), a mirror image across a wall
+                      * (S = −I: clamped wall, u = 0 on it) or a symmetry plane (S flips the
+                      * normal component only); excluded from energies and momenta */
+} dm_bc;
+
+/* Particle data (structure of arrays; X, w, u are [n][3]). Units: cm, km/s, g, cm³, GPa. */
+typedef struct dm_state {
+  size_t n;
+  int dim;
+  double *X;       /* reference positions */
+  double *w;       /* displacements */
+  double *u;       /* velocities (momentum p = m u) */
+  double *mass;    /* m_i */
+  double *vol;     /* V_i = m_i / ρ_i⁰ */
+  double *K, *G;   /* bulk and shear moduli per particle (material interfaces) */
+  uint8_t *bc;     /* dm_bc */
+  uint32_t *partner; /* DM_MIRROR: the real particle mirrored */
+  int8_t *msign;     /* DM_MIRROR: [n][3] sign per component */
+} dm_state;
+
+void dm_state_alloc(dm_state *s, size_t n, int dim); /* zeroed arrays */
+void dm_state_free(dm_state *s);
+
+typedef struct dm_options {
+  double horizon;  /* δ_r (cm): N_i = {k ≠ i : |X_k − X_i| < δ_r} (periodic images included) */
+  double box[3];   /* periodic length per axis, 0 = not periodic (X must lie in [0, box)) */
+  double cond_max; /* largest accepted condition number of A_i (0 → default 1e8) */
+  double hourglass; /* stabilisation coefficient c_s (0 = off; docs/particles-dm.md) */
+} dm_options;
+
+/* Prescribed displacement: fill w (3 components) of particle i at time t. */
+typedef void (*dm_prescribe_fn)(void *user, size_t i, const double X[3], double t, double w[3]);
+
+typedef struct dm_model {
+  dm_state *s; /* not owned */
+  dm_options opt;
+  /* Families in CSR form: the bonds of i are nbr[start[i] .. start[i+1]), sorted by index;
+   * img[b] codes the periodic image of the neighbour (13 = same image). */
+  size_t *start;
+  uint32_t *nbr;
+  uint8_t *img;
+  double shift[27][3];
+  size_t nbonds;
+  double *Ainv;  /* [n][9] A_i⁻¹ (zero outside the dim×dim block) */
+  double *cond;  /* [n] condition number of A_i */
+  double *kappa; /* [n] hourglass stiffness c_s G_i V_i / tr A_i (0 when off) */
+  /* Work and output arrays, filled by dm_forces: */
+  double *C;     /* [n][9] displacement gradient C_i (row a: ∂w_a, column b: ∂/∂X_b) */
+  double *sigma; /* [n][9] stress σ_i (symmetric; GPa) */
+  double *Q;     /* [n][9] V_i σ_i A_i⁻¹ − κ_i C_i */
+  double *energy; /* [n] V_i U_i (+ hourglass energy), kJ */
+  dm_prescribe_fn prescribe;
+  void *prescribe_user;
+} dm_model;
+
+/* Builds the families with a cell list and precomputes A_i⁻¹. Singular or ill-conditioned A_i
+ * (too few or coplanar/collinear neighbours) are reported through ctx (each with the particle's
+ * position, up to 20) and make this return NULL with *status = MS_ERR_INPUT; *first_bad (if
+ * not NULL) is the first such particle. Other errors: bad options (MS_ERR_INPUT). */
+dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *status,
+                    size_t *first_bad);
+void dm_destroy(dm_model *m);
+
+/* Forces F = −∂H/∂w at displacement w (both [n][3]); fills m->C, sigma, Q, energy.
+ * OpenMP-parallel over particles; each particle sums its own bonds in a fixed order, so the
+ * result is independent of the thread count. */
+void dm_forces(dm_model *m, const double *w, double *F);
+/* Elastic (+ hourglass) energy Σ V_i U_i of displacement w (kJ) over all particles except
+ * mirror ghosts; also fills m->C, sigma. Without ghosts this is exactly the H whose gradient
+ * dm_forces returns. */
+double dm_potential_energy(dm_model *m, const double *w);
+double dm_kinetic_energy(const dm_state *s); /* Σ m|u|²/2 (mirror ghosts excluded) */
+/* Total linear momentum Σ m u and the reference angular momentum J = Σ X × m u, which the
+ * small-strain Hamiltonian conserves exactly (docs/particles-dm.md). */
+void dm_momenta(const dm_state *s, double P[3], double J[3]);
+/* Cauchy stress Σ_i = σ_i (I + C_iᵀ) / det(I + C_i) (paper 000 §1), [n][9], from the last
+ * dm_forces / dm_potential_energy call. */
+void dm_cauchy_stress(const dm_model *m, double *S);
+/* Zero-energy-mode measure: returns sqrt(Σ_i Σ_k |z_ik|²) with z_ik the least-squares residual
+ * w_k − w_i − C_i ξ_ik (0 for any linear field; = sqrt(Σ|w_k − w_i|²) for a pure hourglass
+ * pattern) and sets *dw_norm = sqrt(Σ_i Σ_k |w_k − w_i|²). Sums over free particles only. Uses m->C of the
+ * last force/energy call. */
+double dm_hourglass_norm(const dm_model *m, const double *w, double *dw_norm);
+
+/* The RKN acceleration callback over the flat array q = w[n][3] (user = dm_model *):
+ * a = F/m for free particles, 0 for fixed/prescribed ones and for components ≥ dim. */
+ms_status dm_accel(void *user, double t, const double *q, double *acc);
+/* The RKN constraint callback: sets prescribed particles' w (and u by central difference when
+ * u != NULL) from m->prescribe, then mirror ghosts from their partners. A mirror ghost layer
+ * must be two horizons thick so that the ghosts next to the wall have complete families. */
+void dm_constrain(void *user, double t, double *q, double *u);
+
+/* ---- the discrete model on MPI ranks (particles/dm_par.c, docs/mpi.md) ----
+ * Set-up is replicated (every rank builds the global model); the bond graph is partitioned with
+ * METIS (mirror ghosts stay with their partners), each rank integrates its owned particles plus
+ * ghost copies of the off-rank family members, whose w and Q arrive before every force pass.
+ * Owned values are bitwise independent of the rank count. */
+typedef struct dm_dist dm_dist;
+typedef struct dm_dist_stats {
+  long edge_cut, edge_cut_slab;         /* cut bonds: METIS, plain x slabs (comparison) */
+  double imbalance, imbalance_slab;     /* max rank weight / mean (weight = bonds + 1) */
+  size_t owned, ghosts;                 /* this rank */
+  size_t max_owned, max_ghosts, total_ghosts, bonds;
+  double partition_s;
+  double exchange_s, exchanged_doubles; /* this rank: wall time in ghost exchanges, doubles received */
+} dm_dist_stats;
+typedef struct dm_dist_diag {
+  double kinetic, potential; /* kJ, non-mirror particles */
+  double hourglass, dw_norm; /* as dm_hourglass_norm (sums per particle, then in global order) */
+} dm_dist_diag;
+/* The global model's prescribe callback must be set before this (it is copied). Collective. */
+dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status);
+void dm_dist_free(dm_dist *d);
+dm_state *dm_dist_state(dm_dist *d); /* local particles: owned [0, owned), then ghosts */
+dm_model *dm_dist_model(dm_dist *d);
+size_t dm_dist_owned(const dm_dist *d);
+const dm_dist_stats *dm_dist_get_stats(const dm_dist *d);
+long dm_dist_local_index(const dm_dist *d, size_t global); /* owned here: local index, else -1 */
+/* RKN callbacks over the local arrays (user = dm_dist *); the constraint hook also brings the
+ * ghosts' w up to date, which the acceleration relies on (rkn_step calls it first). */
+ms_status dm_dist_accel(void *user, double t, const double *q, double *acc);
+void dm_dist_constrain(void *user, double t, double *q, double *u);
+/* Energies and the hourglass indicator of the local state, summed in global particle order
+ * (the same bits on every rank and for every rank count). Collective. */
+void dm_dist_diagnostics(dm_dist *d, dm_dist_diag *out);
+/* Σ m_i x_i·y_i over free particles of two local [n_local][3] arrays, in global particle order
+ * (as dm_dist_diagnostics). Collective. */
+double dm_dist_mass_dot(dm_dist *d, const double *x, const double *y);
+/* C and σ of every particle into the global model's m->C, m->sigma (every rank), from the local
+ * state: what dm_potential_energy(global, w) would give, bit for bit. Collective. */
+void dm_dist_global_stress(dm_dist *d);
+/* Frees the global model's families and work arrays once the local model exists (the run
+ * then keeps only its state and C, σ for outputs): O(N/P) bonds per rank in the time loop. */
+void dm_dist_release_global(dm_dist *d);
+/* Owned rows of a local [n_local][width] array into the global [n][width] array, on every
+ * rank (collective); and global → local (owned and ghosts). */
+void dm_dist_gather(dm_dist *d, const double *local, int width, double *global);
+void dm_dist_scatter(dm_dist *d, const double *global, int width, double *local);
+
+/* Exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
+/* §5.1 rod 0<x<2L, fixed ends, triangle initial displacement (series, nterms terms). */
+double dm_exact_rod_triangle(double x, double t, double L, double eps, double c, int nterms);
+/* §5.1 smooth data: w = εL sin(πx/2L) cos(πct/2L). */
+double dm_exact_rod_sine(double x, double t, double L, double eps, double c);
+/* §5.2 harmonic wave ε sin(8πx/L) in 0<x<L (medium 1) hitting the contact x = L with medium 2;
+ * normal stress σ(x,t) = E ∂w/∂x from d'Alembert's solution (the printed formulas miss a
+ * factor ω and a sign; docs/particles-dm.md). Valid while no wave reaches x = 2L. */
+double dm_exact_contact_stress(double x, double t, double L, double eps, double rho1, double E1,
+                               double rho2, double E2);
+/* §5.3 spherical wave from a source w(r0, t) = w0(1 − cos ωt): radial displacement w(r,t),
+ * radial velocity u(r,t). cl = longitudinal wave speed. */
+void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl,
+                     double *w, double *u);
+
+/* Deck problem type `discrete_model` (docs/input-dm.md). */
+typedef struct dm_problem dm_problem;
+dm_problem *dm_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                            dk_errors *e);
+ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p);
+void dm_problem_free(dm_problem *p);
+
+/* What a run measured (also written to the log and to OUTDIR/dm_summary.csv). Fields that do
+ * not apply to the deck's problem are NaN. */
+typedef struct dm_run_summary {
+  size_t particles, bonds; /* all particles incl. ghosts / fixed layers; bonds = Σ|N_i| */
+  size_t real_particles;   /* the lattice inside the domain (the ones that are timed) */
+  long steps;
+  double dt, t_end;
+  double omega_dt;        /* ω_max Δt (power iteration) vs the scheme's stability limit */
+  double wall_s, particle_steps_per_s; /* time-stepping loop only (real particles) */
+  double cpu_s;           /* process CPU time of that loop, all threads (load-independent) */
+  double energy_err_max;  /* max |H(t) − H(0)| / H(0) over the energy samples */
+  /* zero-energy-mode indicator |z|(t) / max_t |Δw|(t) (dm_hourglass_norm) at the energy
+   * samples: first, largest and last value */
+  double hourglass_first, hourglass_max, hourglass_last;
+  double amp_err, phase_err;  /* rod, over the last 10 L/c of w(x_probe, t): A − 1 and s (units
+                               * of L/c) of the least-squares fit w ≈ A·w_exact(t − s) */
+  double peak_err;            /* rod: (max|w| − max|w_exact|)/max|w_exact| (includes ringing) */
+  double rms_err;             /* rod: rms(w − w_exact)/max|w_exact| over that window, no fit */
+  double err_l1, err_l2, err_max; /* contact: σ_xx at t_end; sphere: radial w at t_end; all
+                                   * relative to the exact solution's maximum */
+  double err_u_l2;            /* sphere: radial velocity, L2, relative to u0 = w0 ω */
+  double kinetic_end, potential_end; /* energies at t_end (kJ) */
+  int ranks;                  /* MPI ranks of the run; partition quality (dm_dist_stats): */
+  long edge_cut, edge_cut_slab;
+  double imbalance, imbalance_slab;
+  long restart_step;          /* step the run continued from (0: a fresh start) */
+} dm_run_summary;
+const dm_run_summary *dm_problem_summary(const dm_problem *p);
+/* Global displacements and velocities ([n][3], particle order) at the end of the last run
+ * (the same on every rank); returns n (0 before a run). */
+size_t dm_problem_final_state(const dm_problem *p, const double **w, const double **u);
+
+#endif /* MSCALE_DM_H */
