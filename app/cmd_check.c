@@ -25,10 +25,8 @@ int cmd_check(int argc, char **argv) {
   app_deck d;
   ms_status s = app_deck_read(argv[1], &d, &e);
   dk_errors_print(&e, stderr);
-  if (s == MS_OK)
-    printf("%s: ok\n", argv[1]);
-  else
-    fprintf(stderr, "%s: %zu error%s\n", argv[1], e.n, e.n == 1 ? "" : "s");
+  if (s == MS_OK) printf("%s: ok\n", argv[1]);
+  else fprintf(stderr, "%s: %zu error%s\n", argv[1], e.n, e.n == 1 ? "" : "s");
   app_deck_free(&d);
   dk_errors_free(&e);
   return s == MS_OK ? 0 : 2;

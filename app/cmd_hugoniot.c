@@ -1,5 +1,5 @@
 /* mscale hugoniot DECK --material NAME --up LIST: shock Hugoniot of a deck material as CSV on
- * stdout (DESIGN.md §8); --mixture for the Kuropatenko rule (docs/eos.md). Only the deck's
+ * stdout (docs/design.md §8); --mixture for the Kuropatenko rule (docs/eos.md). Only the deck's
  * `units:`, `materials:` and `mixtures:` are read; other sections are left alone. */
 #include "commands.h"
 
@@ -9,27 +9,26 @@
 #include <string.h>
 
 static void hugoniot_usage(FILE *f) {
-  fprintf(f,
-          "Usage: mscale hugoniot DECK --material NAME --up LIST [--rho0 X] [--e0 Y]\n"
-          "       mscale hugoniot DECK --mixture MIX --up LIST\n\n"
-          "Solves the Rankine-Hugoniot jump conditions for the EOS of material NAME of DECK\n"
-          "and prints CSV on stdout: '#' comment lines with the title and units, then the\n"
-          "header up,Us,P,rho,e (km/s, km/s, GPa, g/cm^3, kJ/g) and one row per up.\n\n"
-          "Options:\n"
-          "  --material NAME   a material of the deck's materials: list\n"
-          "  --up LIST         particle velocities in km/s (> 0): '0.5,1,2' or a range\n"
-          "                    'FIRST:LAST:COUNT' (COUNT evenly spaced values)\n"
-          "  --rho0 X          initial density, g/cm^3 (default: the EOS's rho0)\n"
-          "  --e0 Y            initial specific internal energy, kJ/g (default: the EOS's\n"
-          "                    reference e0: 0 for condensed matter, p0/((gamma-1) rho0)\n"
-          "                    for an ideal gas)\n"
-          "  --mixture MIX     Kuropatenko mixture: the name of an entry of the deck's\n"
-          "                    mixtures: list, or 'NAME:ALPHA,NAME:ALPHA,...' with volume\n"
-          "                    fractions ALPHA (sum 1) of deck materials. Components start\n"
-          "                    from their reference states (rho0_i, e0_i).\n"
-          "  -h, --help        this text\n\n"
-          "Exit codes: 0 success, 1 a point has no solution (e.g. outside a table),\n"
-          "2 bad usage or bad deck (messages DECK:LINE:COL: ...).\n");
+  fprintf(f, "Usage: mscale hugoniot DECK --material NAME --up LIST [--rho0 X] [--e0 Y]\n"
+             "       mscale hugoniot DECK --mixture MIX --up LIST\n\n"
+             "Solves the Rankine-Hugoniot jump conditions for the EOS of material NAME of DECK\n"
+             "and prints CSV on stdout: '#' comment lines with the title and units, then the\n"
+             "header up,Us,P,rho,e (km/s, km/s, GPa, g/cm^3, kJ/g) and one row per up.\n\n"
+             "Options:\n"
+             "  --material NAME   a material of the deck's materials: list\n"
+             "  --up LIST         particle velocities in km/s (> 0): '0.5,1,2' or a range\n"
+             "                    'FIRST:LAST:COUNT' (COUNT evenly spaced values)\n"
+             "  --rho0 X          initial density, g/cm^3 (default: the EOS's rho0)\n"
+             "  --e0 Y            initial specific internal energy, kJ/g (default: the EOS's\n"
+             "                    reference e0: 0 for condensed matter, p0/((gamma-1) rho0)\n"
+             "                    for an ideal gas)\n"
+             "  --mixture MIX     Kuropatenko mixture: the name of an entry of the deck's\n"
+             "                    mixtures: list, or 'NAME:ALPHA,NAME:ALPHA,...' with volume\n"
+             "                    fractions ALPHA (sum 1) of deck materials. Components start\n"
+             "                    from their reference states (rho0_i, e0_i).\n"
+             "  -h, --help        this text\n\n"
+             "Exit codes: 0 success, 1 a point has no solution (e.g. outside a table),\n"
+             "2 bad usage or bad deck (messages DECK:LINE:COL: ...).\n");
 }
 
 static bool parse_number(const char *s, double *out) {
@@ -52,10 +51,12 @@ static double *parse_up_list(const char *s, size_t *n) {
     *b++ = '\0';
     if ((c = strchr(b, ':')) != NULL) *c++ = '\0';
     double first, last, count;
-    if (!c || !parse_number(a, &first) || !parse_number(b, &last) ||
-        !parse_number(c, &count) || count < 1 || count != floor(count) || count > 1e6) {
-      fprintf(stderr, "mscale hugoniot: --up '%s': expected FIRST:LAST:COUNT with an integer "
-                      "COUNT >= 1\n", s);
+    if (!c || !parse_number(a, &first) || !parse_number(b, &last) || !parse_number(c, &count) ||
+        count < 1 || count != floor(count) || count > 1e6) {
+      fprintf(stderr,
+              "mscale hugoniot: --up '%s': expected FIRST:LAST:COUNT with an integer "
+              "COUNT >= 1\n",
+              s);
       free(copy);
       return NULL;
     }
@@ -112,8 +113,10 @@ static bool parse_inline_mixture(const char *spec, const eos_materials *mats, si
     char *colon = strrchr(tok, ':');
     double a;
     if (!colon || !parse_number(colon + 1, &a) || !(a >= 0.0 && a <= 1.0)) {
-      fprintf(stderr, "mscale hugoniot: --mixture: expected NAME:ALPHA with 0 <= ALPHA <= 1, "
-                      "found '%s'\n", tok);
+      fprintf(stderr,
+              "mscale hugoniot: --mixture: expected NAME:ALPHA with 0 <= ALPHA <= 1, "
+              "found '%s'\n",
+              tok);
       ok = false;
       break;
     }
@@ -248,8 +251,10 @@ int cmd_hugoniot(int argc, char **argv) {
     double e0 = isnan(e0_opt) ? eos_e0(m->eos) : e0_opt;
     double p0 = eos_pressure(m->eos, rho0, e0);
     if (!isfinite(p0)) {
-      fprintf(stderr, "mscale hugoniot: the initial state rho0 = %g g/cm^3, e0 = %g kJ/g is "
-                      "outside the domain of the EOS of '%s'\n", rho0, e0, material);
+      fprintf(stderr,
+              "mscale hugoniot: the initial state rho0 = %g g/cm^3, e0 = %g kJ/g is "
+              "outside the domain of the EOS of '%s'\n",
+              rho0, e0, material);
       free(pts);
       rc = 2;
       goto done;
@@ -277,8 +282,10 @@ int cmd_hugoniot(int argc, char **argv) {
     } else if (strchr(mixture, ':')) {
       ok = parse_inline_mixture(mixture, mats, &ncomp, &comp, &alpha);
     } else {
-      fprintf(stderr, "mscale hugoniot: %s has no mixture '%s' (give a mixtures: entry or "
-                      "NAME:ALPHA,NAME:ALPHA)\n", deck, mixture);
+      fprintf(stderr,
+              "mscale hugoniot: %s has no mixture '%s' (give a mixtures: entry or "
+              "NAME:ALPHA,NAME:ALPHA)\n",
+              deck, mixture);
       ok = false;
     }
     if (!ok) {
@@ -303,8 +310,10 @@ int cmd_hugoniot(int argc, char **argv) {
   ms_csv_header(stdout, title, 5, names, units);
   for (size_t i = 0; i < nup; ++i) {
     if (!isfinite(pts[i].us) || !isfinite(pts[i].p)) {
-      fprintf(stderr, "mscale hugoniot: no shock state found for up = %g km/s (outside the "
-                      "EOS's domain or table?)\n", up[i]);
+      fprintf(stderr,
+              "mscale hugoniot: no shock state found for up = %g km/s (outside the "
+              "EOS's domain or table?)\n",
+              up[i]);
       continue;
     }
     double row[5] = {pts[i].up, pts[i].us, pts[i].p, pts[i].rho, pts[i].e};

@@ -70,18 +70,12 @@ int cmd_run(int argc, char **argv) {
   const char *deck = NULL, *outdir_arg = NULL, *restart = NULL;
   bool force = false, quiet = false, verbose = false;
   for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-o") && i + 1 < argc)
-      outdir_arg = argv[++i];
-    else if (!strcmp(argv[i], "--restart") && i + 1 < argc)
-      restart = argv[++i];
-    else if (!strcmp(argv[i], "--force"))
-      force = true;
-    else if (!strcmp(argv[i], "--quiet"))
-      quiet = true;
-    else if (!strcmp(argv[i], "--verbose"))
-      verbose = true;
-    else if (argv[i][0] != '-' && !deck)
-      deck = argv[i];
+    if (!strcmp(argv[i], "-o") && i + 1 < argc) outdir_arg = argv[++i];
+    else if (!strcmp(argv[i], "--restart") && i + 1 < argc) restart = argv[++i];
+    else if (!strcmp(argv[i], "--force")) force = true;
+    else if (!strcmp(argv[i], "--quiet")) quiet = true;
+    else if (!strcmp(argv[i], "--verbose")) verbose = true;
+    else if (argv[i][0] != '-' && !deck) deck = argv[i];
     else {
       fprintf(stderr, "mscale run: unexpected argument '%s'\n", argv[i]);
       run_usage(stderr);
@@ -130,15 +124,14 @@ int cmd_run(int argc, char **argv) {
       s = par_agree_status(s);
     }
     if (!s) {
-      ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s",
-             MSCALE_VERSION_STRING, deck, ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
+      ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s", MSCALE_VERSION_STRING,
+             deck, ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
       if (s)
         ms_log(&ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
                ctx.outdir);
-      else
-        ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
+      else ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
       if (ctx.rank == 0) write_run_info(&ctx, argc, argv, deck, started, s, wall);
     }
   }

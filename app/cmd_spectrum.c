@@ -1,5 +1,5 @@
 /* mscale spectrum SNAPSHOT.h5 [--bond B]: the fragment spectrum N(g) of a particle snapshot as
- * CSV on stdout (header `g,count,mass`), DESIGN.md §8. Snapshot layout: docs/coupling.md. */
+ * CSV on stdout (header `g,count,mass`), docs/design.md §8. Snapshot layout: docs/coupling.md. */
 #include "commands.h"
 
 #include <math.h>
@@ -12,7 +12,7 @@
 int cmd_spectrum(int argc, char **argv);
 
 /* Default bond factor b: the cluster-dynamics cutoff R_c = 1.2 a of the benchmark
- * (DESIGN.md §5.1), so fragments are the components of the interacting-pair graph. */
+ * (docs/design.md §5.1), so fragments are the components of the interacting-pair graph. */
 #define SPECTRUM_DEFAULT_BOND 1.2
 
 static void spectrum_usage(FILE *f) {
@@ -45,8 +45,7 @@ static void spectrum_usage(FILE *f) {
 static bool parse_positive(const char *s, double *out) {
   char *end;
   double v = strtod(s, &end);
-  if (end == s || *end || !isfinite(v) || !(v > 0))
-    return false;
+  if (end == s || *end || !isfinite(v) || !(v > 0)) return false;
   *out = v;
   return true;
 }
@@ -55,11 +54,9 @@ static bool parse_triple(const char *s, double out[3]) {
   char *end;
   for (int k = 0; k < 3; k++) {
     out[k] = strtod(s, &end);
-    if (end == s || !isfinite(out[k]) || out[k] < 0)
-      return false;
+    if (end == s || !isfinite(out[k]) || out[k] < 0) return false;
     if (k < 2) {
-      if (*end != ',')
-        return false;
+      if (*end != ',') return false;
       s = end + 1;
     }
   }
@@ -96,8 +93,7 @@ static bool gid_read(ms_h5r *h, const char *path, snapshot *s, dk_errors *e) {
   if (ms_h5_read_ints_rows(h, "/particles/gid", 0, SIZE_MAX, &s->gid, &ng, &ncol, e) != MS_OK)
     return false;
   const char *bad = NULL;
-  if (ng != s->n || ncol != 1)
-    bad = "must have one integer per particle";
+  if (ng != s->n || ncol != 1) bad = "must have one integer per particle";
   int64_t *sorted = ms_calloc(ng + 1, sizeof *sorted);
   memcpy(sorted, s->gid, ng * sizeof *sorted);
   qsort(sorted, ng, sizeof *sorted, cmp_gid);
@@ -105,8 +101,7 @@ static bool gid_read(ms_h5r *h, const char *path, snapshot *s, dk_errors *e) {
     if (sorted[i] < 0 || (i > 0 && sorted[i] == sorted[i - 1]))
       bad = "must hold distinct integers >= 0";
   free(sorted);
-  if (bad)
-    dk_error_at(e, path, 0, 0, "dataset '/particles/gid' (%zu x %zu) %s", ng, ncol, bad);
+  if (bad) dk_error_at(e, path, 0, 0, "dataset '/particles/gid' (%zu x %zu) %s", ng, ncol, bad);
   return bad == NULL;
 }
 
@@ -157,22 +152,19 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
       s->y[i] = xyz[i * cx + 1];
       s->z[i] = cx == 3 ? xyz[i * cx + 2] : 0.0;
       if (!isfinite(s->x[i]) || !isfinite(s->y[i]) || !isfinite(s->z[i])) {
-        if (!bad_x++)
-          first_x = i;
+        if (!bad_x++) first_x = i;
       }
       if (vel) {
         s->vx[i] = vel[i * cv];
         s->vy[i] = vel[i * cv + 1];
         s->vz[i] = cv == 3 ? vel[i * cv + 2] : 0.0;
         if (!isfinite(s->vx[i]) || !isfinite(s->vy[i]) || !isfinite(s->vz[i])) {
-          if (!bad_v++)
-            first_v = i;
+          if (!bad_v++) first_v = i;
         }
       }
       s->mass[i] = m[i];
       if (!isfinite(m[i]) || !(m[i] > 0)) {
-        if (!bad_m++)
-          first_m = i;
+        if (!bad_m++) first_m = i;
       }
     }
     if (bad_x) {
@@ -200,8 +192,7 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
   free(xyz);
   free(vel);
   free(m);
-  if (ok && ms_h5_exists(h, "/particles/gid") && !gid_read(h, path, s, e))
-    ok = false;
+  if (ok && ms_h5_exists(h, "/particles/gid") && !gid_read(h, path, s, e)) ok = false;
   return ok ? MS_OK : MS_ERR_INPUT;
 }
 
@@ -284,8 +275,7 @@ int cmd_spectrum(int argc, char **argv) {
     }
     if (isnan(rho0)) {
       double v;
-      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0)
-        rho0 = v;
+      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0) rho0 = v;
     }
     static const char *const pnames[3] = {"period_x", "period_y", "period_z"};
     static const char *const lnames[3] = {"lo_x", "lo_y", "lo_z"};
@@ -293,8 +283,7 @@ int cmd_spectrum(int argc, char **argv) {
       double v = 0;
       if (isnan(period[k]))
         period[k] = ms_h5_read_attr_double(h, "/particles", pnames[k], &v, NULL) == MS_OK ? v : 0;
-      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK)
-        o.box.lo[k] = v;
+      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK) o.box.lo[k] = v;
       if (!(period[k] >= 0) || !isfinite(period[k])) {
         dk_error_at(&e, path, 0, 0, "attribute %s must be >= 0 (0 = open axis)", pnames[k]);
         st = MS_ERR_INPUT;
@@ -304,8 +293,7 @@ int cmd_spectrum(int argc, char **argv) {
   o.bond = bond;
   o.spacing = spacing;
   o.rho0 = isnan(rho0) ? 0.0 : rho0;
-  for (int k = 0; k < 3; k++)
-    o.box.period[k] = period[k] > 0 ? period[k] : 0.0;
+  for (int k = 0; k < 3; k++) o.box.period[k] = period[k] > 0 ? period[k] : 0.0;
   if (st == MS_OK)
     for (int k = 0; k < 3; k++)
       if (o.box.period[k] > 0 && !(2 * bond * spacing < o.box.period[k])) {
@@ -314,8 +302,7 @@ int cmd_spectrum(int argc, char **argv) {
                     bond * spacing, o.box.period[k], "xyz"[k]);
         st = MS_ERR_INPUT;
       }
-  if (h)
-    ms_h5_close_read(h);
+  if (h) ms_h5_close_read(h);
 
   int rc = 0;
   if (st != MS_OK) {
@@ -336,8 +323,7 @@ int cmd_spectrum(int argc, char **argv) {
                "fragment spectrum N(g) of %s: %zu particles, %zu fragments, bond b*a = %g*%g cm",
                path, s.n, f.n, bond, spacing);
       cpl_write_spectrum(stdout, &f, title);
-      if (fflush(stdout) != 0)
-        rc = 1;
+      if (fflush(stdout) != 0) rc = 1;
       if (table_path) {
         ms_afile af;
         if (ms_afile_open(&af, table_path) != MS_OK) {

@@ -1,4 +1,4 @@
-/* Subcommands of the mscale front end (DESIGN.md §8). Each returns the process exit code:
+/* Subcommands of the mscale front end (docs/design.md §8). Each returns the process exit code:
  * 0 success, 1 the run failed, 2 bad usage or bad input. */
 #ifndef MSCALE_APP_COMMANDS_H
 #define MSCALE_APP_COMMANDS_H
@@ -15,8 +15,8 @@ int cmd_spectrum(int argc, char **argv);
 typedef struct app_deck {
   dk_doc *doc;
   eos_materials *mats;
-  int problem_kind;  /* index into the problem table (app/problems.c) */
-  void *problem;     /* the module's problem object */
+  int problem_kind; /* index into the problem table (app/problems.c) */
+  void *problem;    /* the module's problem object */
 } app_deck;
 
 /* Load, read and validate a deck; every error goes to *e. Returns MS_OK only if *e is empty. */

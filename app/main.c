@@ -1,4 +1,4 @@
-/* mscale — command-line front end (DESIGN.md §8). */
+/* mscale — command-line front end (docs/design.md §8). */
 #include "commands.h"
 
 #include <stdio.h>

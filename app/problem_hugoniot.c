@@ -25,10 +25,8 @@ void *hugoniot_problem_read(dk_doc *doc, const dk_node *section, const eos_mater
     for (size_t i = 0; i < p->nmat; i++) {
       const dk_node *item = dk_seq_at(list, i);
       const char *name = dk_scalar(item);
-      if (!name)
-        dk_error(e, doc, item, "hugoniot.materials[%zu]: expected a material name", i);
-      else
-        p->mat[i] = eos_materials_find(mats, name, e, doc, item);
+      if (!name) dk_error(e, doc, item, "hugoniot.materials[%zu]: expected a material name", i);
+      else p->mat[i] = eos_materials_find(mats, name, e, doc, item);
     }
   }
   if (dk_read_double_list(e, doc, section, "up", MS_DIM_VELOCITY, true, &p->up, &p->nup)) {
@@ -64,9 +62,9 @@ ms_status hugoniot_problem_run(ms_ctx *ctx, void *vp) {
     s = ms_afile_open(&af, path);
     if (!s) {
       char title[400];
-      snprintf(title, sizeof title, "Shock Hugoniot of %s (%s EOS) from rho0 = %g g/cm^3, e0 = %g kJ/g",
-               mat->name, eos_kind_name(eos_get_kind(mat->eos)), eos_rho0(mat->eos),
-               eos_e0(mat->eos));
+      snprintf(title, sizeof title,
+               "Shock Hugoniot of %s (%s EOS) from rho0 = %g g/cm^3, e0 = %g kJ/g", mat->name,
+               eos_kind_name(eos_get_kind(mat->eos)), eos_rho0(mat->eos), eos_e0(mat->eos));
       ms_csv_header(af.f, title, 5, names, units);
       for (size_t i = 0; i < p->nup; i++) {
         double row[5] = {pts[i].up, pts[i].us, pts[i].p, pts[i].rho, pts[i].e};

@@ -34,12 +34,12 @@ ms_status hugoniot_problem_run(ms_ctx *, void *);
 void hugoniot_problem_free(void *);
 
 static const problem_type problem_types[] = {
-    {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", false, hugoniot_problem_read,
-     hugoniot_problem_run, hugoniot_problem_free},
+    {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", false,
+     hugoniot_problem_read, hugoniot_problem_run, hugoniot_problem_free},
 #ifdef MSCALE_HAVE_CONTINUUM
     {"continuum", "1D Lagrangian gas dynamics (cross scheme)", false,
-     (problem_read_fn)cont_problem_read,
-     (problem_run_fn)cont_problem_run, (problem_free_fn)cont_problem_free},
+     (problem_read_fn)cont_problem_read, (problem_run_fn)cont_problem_run,
+     (problem_free_fn)cont_problem_free},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_CD
     {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", true,
@@ -83,8 +83,7 @@ ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e) {
     const problem_type *pt = &problem_types[kind];
     const dk_node *section = dk_get(root, pt->name);
     if (!section)
-      dk_error(e, d->doc, root, "problem '%s' needs a top-level '%s:' section", pt->name,
-               pt->name);
+      dk_error(e, d->doc, root, "problem '%s' needs a top-level '%s:' section", pt->name, pt->name);
     else if (dk_expect_map(e, d->doc, section, pt->name)) {
       d->problem = pt->read(d->doc, section, d->mats, e);
       d->problem_kind = kind;

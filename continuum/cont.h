@@ -1,5 +1,5 @@
 /* cont.h — the one public header of the continuum library: the 1D Lagrangian "cross" scheme
- * (DESIGN.md §4) in planar, cylindrical and spherical geometry.
+ * (docs/design.md §4) in planar, cylindrical and spherical geometry.
  *
  * Two levels of API:
  *   - the deck problem (`problem: continuum`): cont_problem_read / _run / _free, used by the
@@ -35,10 +35,10 @@ typedef enum cont_fn_kind {
 
 typedef struct cont_fn {
   cont_fn_kind kind;
-  double value;                       /* constant or pulse amplitude */
-  double t0, rise, hold, fall, tau;   /* pulse start and shape */
-  size_t n;                           /* table length */
-  double *t, *v;                      /* table (owned by the cont_fn; cont_fn_free) */
+  double value;                     /* constant or pulse amplitude */
+  double t0, rise, hold, fall, tau; /* pulse start and shape */
+  size_t n;                         /* table length */
+  double *t, *v;                    /* table (owned by the cont_fn; cont_fn_free) */
 } cont_fn;
 
 double cont_fn_eval(const cont_fn *f, double t);
@@ -49,7 +49,11 @@ void cont_fn_copy(cont_fn *dst, const cont_fn *src);
 /* ------------------------------------------------------------------------------------------ */
 /* Grid set-up                                                                                 */
 
-typedef enum cont_geometry { CONT_PLANAR = 0, CONT_CYLINDRICAL = 1, CONT_SPHERICAL = 2 } cont_geometry;
+typedef enum cont_geometry {
+  CONT_PLANAR = 0,
+  CONT_CYLINDRICAL = 1,
+  CONT_SPHERICAL = 2
+} cont_geometry;
 
 typedef enum cont_bc_kind {
   CONT_BC_WALL = 0, /* u = 0 */
@@ -64,15 +68,20 @@ typedef struct cont_bc {
 } cont_bc;
 
 /* Grading: cell sizes form a geometric series, smallest at the named end(s) of the layer. */
-typedef enum cont_grade_side { CONT_GRADE_NONE = 0, CONT_GRADE_LEFT, CONT_GRADE_RIGHT, CONT_GRADE_BOTH } cont_grade_side;
+typedef enum cont_grade_side {
+  CONT_GRADE_NONE = 0,
+  CONT_GRADE_LEFT,
+  CONT_GRADE_RIGHT,
+  CONT_GRADE_BOTH
+} cont_grade_side;
 
 typedef struct cont_layer_spec {
-  const char *name;   /* label for messages and outputs (not owned) */
-  const eos_t *eos;   /* not owned */
-  int material;       /* index in the materials list (written to outputs) */
-  double thickness;   /* cm (> 0) */
-  double rho, u, e;   /* initial density, velocity, specific internal energy */
-  bool e_from_p;      /* if true, e is solved from the initial pressure p below */
+  const char *name; /* label for messages and outputs (not owned) */
+  const eos_t *eos; /* not owned */
+  int material;     /* index in the materials list (written to outputs) */
+  double thickness; /* cm (> 0) */
+  double rho, u, e; /* initial density, velocity, specific internal energy */
+  bool e_from_p;    /* if true, e is solved from the initial pressure p below */
   double p;
   long ncells;        /* > 0 */
   double grade_ratio; /* ratio of neighbouring cell sizes (≥ 1), 1 = uniform */
@@ -89,12 +98,12 @@ typedef struct cont_setup {
   double x_left; /* position of node 0 (≥ 0 for curvilinear geometry; 0 means the axis/centre) */
   size_t nlayers;
   const cont_layer_spec *layers;
-  cont_bc left, right;          /* copied (tables duplicated) by cont_grid_create */
-  double q_quad, q_lin;         /* viscosity q = ρ|Δu|(q_quad|Δu| + q_lin c) for Δu < 0 */
-  double cfl;                   /* safety factor, 0 < cfl < 1 */
-  double dt_initial;            /* first step (0: cfl-based × 0.1) */
-  double dt_max, dt_min;        /* dt_min: below it the run is declared unstable */
-  double dt_growth;             /* max ratio of consecutive steps (> 1) */
+  cont_bc left, right;   /* copied (tables duplicated) by cont_grid_create */
+  double q_quad, q_lin;  /* viscosity q = ρ|Δu|(q_quad|Δu| + q_lin c) for Δu < 0 */
+  double cfl;            /* safety factor, 0 < cfl < 1 */
+  double dt_initial;     /* first step (0: cfl-based × 0.1) */
+  double dt_max, dt_min; /* dt_min: below it the run is declared unstable */
+  double dt_growth;      /* max ratio of consecutive steps (> 1) */
   size_t ntags;
   const cont_tag_spec *tags;
 } cont_setup;
@@ -135,10 +144,10 @@ cont_geometry cont_grid_geometry(const cont_grid *g);
 /* Current state (arrays owned by the grid, valid until the next step). */
 typedef struct cont_view {
   size_t ncells, nnodes;
-  const double *x, *u;                        /* nodes */
-  const double *rho, *e, *p, *q, *c, *mass;   /* cells */
-  const int *material;                        /* cells: material index */
-  const int *layer;                           /* cells: layer index */
+  const double *x, *u;                      /* nodes */
+  const double *rho, *e, *p, *q, *c, *mass; /* cells */
+  const int *material;                      /* cells: material index */
+  const int *layer;                         /* cells: layer index */
 } cont_view;
 cont_view cont_grid_view(const cont_grid *g);
 

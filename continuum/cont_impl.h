@@ -55,7 +55,7 @@ struct cont_grid {
   double t, dt_last, dt_next; /* dt_next: stability constraint from the end of the last step */
   double land_time;           /* if a step is clipped to reach this time, t becomes it exactly */
   long step;
-  bool any_ext;               /* some node has an external force/velocity: take the slow path */
+  bool any_ext; /* some node has an external force/velocity: take the slow path */
 
   /* Energy and momentum budget. */
   double work, impulse;
@@ -68,8 +68,8 @@ struct cont_grid {
 };
 
 /* Phase functions used outside the step too (step.c; grid set-up); ranges are half-open. */
-void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *rho,
-                             const double *e, double *p, double *c, size_t *bad, ms_status *st);
+void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *rho, const double *e,
+                             double *p, double *c, size_t *bad, ms_status *st);
 void cont_calc_q_for_cells(const cont_grid *g, size_t lo, size_t hi, const double *rho,
                            const double *u, const double *c, double *q);
 double cont_calc_time_constraint(const cont_grid *g, size_t lo, size_t hi);

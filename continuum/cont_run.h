@@ -10,12 +10,12 @@ struct cont_problem {
   cont_tag_spec *tags;
   cont_grid *grid;
   double t_end;
-  long max_steps;       /* 0: no limit */
-  double *out_times;    /* profile times */
+  long max_steps;    /* 0: no limit */
+  double *out_times; /* profile times */
   size_t n_out;
-  long history_stride;  /* history files keep every k-th step (memory keeps all) */
-  long xt_frames;       /* x–t diagram frames over [0, t_end] */
-  int xt_quantity;      /* 0 density, 1 pressure (what tools/plot_xt.py shows by default) */
+  long history_stride; /* history files keep every k-th step (memory keeps all) */
+  long xt_frames;      /* x–t diagram frames over [0, t_end] */
+  int xt_quantity;     /* 0 density, 1 pressure (what tools/plot_xt.py shows by default) */
 };
 
 /* Output writers (output.c). */

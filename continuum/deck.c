@@ -43,8 +43,8 @@ static bool read_history_table(dk_errors *e, dk_doc *doc, const dk_node *bcmap, 
       ok = dk_node_double(e, doc, dk_seq_at(row, 0), "table time", MS_DIM_TIME, &fn->t[k]) && ok;
       ok = dk_node_double(e, doc, dk_seq_at(row, 1), "table value", vdim, &fn->v[k]) && ok;
       if (ok && k > 0 && !(fn->t[k] > fn->t[k - 1])) {
-        dk_error(e, doc, row, "table row %zu: time %g does not increase (previous %g)", k,
-                 fn->t[k], fn->t[k - 1]);
+        dk_error(e, doc, row, "table row %zu: time %g does not increase (previous %g)", k, fn->t[k],
+                 fn->t[k - 1]);
         ok = false;
       }
     }
@@ -162,8 +162,7 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
   } else {
     if (to_n) th = to - from;
     if (!(th > 0.0))
-      dk_error(e, doc, th_n ? th_n : to_n, "layer %zu (%s): thickness %g must be > 0", k, name,
-               th);
+      dk_error(e, doc, th_n ? th_n : to_n, "layer %zu (%s): thickness %g must be > 0", k, name, th);
   }
   if (from_n && *x_known) {
     double tol = 1e-9 * (fabs(*x_end) + fabs(th > 0 ? th : 0) + 1e-30);
@@ -171,8 +170,9 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
       dk_error(e, doc, from_n, "layer %zu (%s) overlaps the previous layer: from = %g < %g", k,
                name, from, *x_end);
     else if (from > *x_end + tol)
-      dk_error(e, doc, from_n, "layer %zu (%s) leaves a gap after the previous layer: from = %g > %g",
-               k, name, from, *x_end);
+      dk_error(e, doc, from_n,
+               "layer %zu (%s) leaves a gap after the previous layer: from = %g > %g", k, name,
+               from, *x_end);
   }
   if (from_n && !*x_known) *x_end = from; /* first layer sets x_left */
   *x_known = true;
@@ -187,8 +187,8 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
     long nc = 0;
     if (dk_read_int(e, doc, L, "cells", true, 0, 0, 100000000, &nc)) {
       if (nc < 1)
-        dk_error(e, doc, cells_n, "layer %zu (%s): cells = %ld, a layer needs at least one cell",
-                 k, name, nc);
+        dk_error(e, doc, cells_n, "layer %zu (%s): cells = %ld, a layer needs at least one cell", k,
+                 name, nc);
       spec->ncells = nc;
     }
   } else if (size_n) {
@@ -196,10 +196,11 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
     if (dk_read_positive(e, doc, L, "cell_size", MS_DIM_LENGTH, true, 0, &h) && th > 0.0) {
       double n = floor(th / h + 0.5);
       if (!(n <= 1e8)) /* the same limit as `cells:` */
-        dk_error(e, doc, size_n, "layer %zu (%s): cell_size %g cm gives %.3g cells in %g cm; at "
-                 "most 1e8 cells per layer", k, name, h, n, th);
-      else
-        spec->ncells = n < 1 ? 1 : (long)n;
+        dk_error(e, doc, size_n,
+                 "layer %zu (%s): cell_size %g cm gives %.3g cells in %g cm; at "
+                 "most 1e8 cells per layer",
+                 k, name, h, n, th);
+      else spec->ncells = n < 1 ? 1 : (long)n;
     }
   } else {
     dk_error(e, doc, L, "layer %zu (%s): missing 'cells' (count) or 'cell_size' (cm)", k, name);
@@ -207,14 +208,12 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
 
   double rho0 = spec->eos ? eos_rho0(spec->eos) : 1.0;
   dk_read_positive(e, doc, L, "density", MS_DIM_DENSITY, false, rho0, &spec->rho);
-  dk_read_double(e, doc, L, "velocity", MS_DIM_VELOCITY, false, 0.0, -INFINITY, INFINITY,
-                 &spec->u);
+  dk_read_double(e, doc, L, "velocity", MS_DIM_VELOCITY, false, 0.0, -INFINITY, INFINITY, &spec->u);
   if (dk_get(L, "pressure") && dk_get(L, "energy")) {
     dk_error(e, doc, L, "layer %zu (%s): give energy or pressure, not both", k, name);
   } else if (dk_get(L, "pressure")) {
     spec->e_from_p = true;
-    dk_read_double(e, doc, L, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY,
-                   &spec->p);
+    dk_read_double(e, doc, L, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &spec->p);
   } else {
     dk_read_double(e, doc, L, "energy", MS_DIM_SPEC_ENERGY, false, 0.0, -INFINITY, INFINITY,
                    &spec->e);
@@ -229,8 +228,8 @@ static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,
 }
 
 /* A tag: {name, node} | {name, x} | {name, layer, side}. */
-static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, size_t index,
-                     const cont_setup *s, cont_tag_spec *tag) {
+static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, size_t index, const cont_setup *s,
+                     cont_tag_spec *tag) {
   char what[48];
   snprintf(what, sizeof what, "tags[%zu]", index);
   if (!dk_expect_map(e, doc, T, what)) return;
@@ -262,7 +261,10 @@ static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, size_t index,
       for (size_t i = 0; i <= n; ++i) {
         if (i > 0) xl += dx[i - 1];
         double d = fabs(xl - x);
-        if (d < best) { best = d; node = j + i; }
+        if (d < best) {
+          best = d;
+          node = j + i;
+        }
       }
       j += n;
       free(dx);
@@ -276,7 +278,10 @@ static void read_tag(dk_errors *e, dk_doc *doc, const dk_node *T, size_t index,
     const char *lname = dk_scalar(layer_n);
     size_t found = s->nlayers;
     for (size_t k = 0; k < s->nlayers && lname; ++k)
-      if (s->layers[k].name && !strcmp(s->layers[k].name, lname)) { found = k; break; }
+      if (s->layers[k].name && !strcmp(s->layers[k].name, lname)) {
+        found = k;
+        break;
+      }
     if (found == s->nlayers) {
       dk_error(e, doc, layer_n, "tag '%s': unknown layer '%s'", tag->name, lname ? lname : "?");
       return;
@@ -367,8 +372,7 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
     dk_read_double(e, doc, tm, "dt_max", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &dtmax);
     s->dt_max = dtmax > 0.0 ? dtmax : INFINITY;
     dk_read_positive(e, doc, tm, "dt_min", MS_DIM_TIME, false, s->dt_min, &s->dt_min);
-    dk_read_double(e, doc, tm, "growth", MS_DIM_NONE, false, s->dt_growth, 1.0, 2.0,
-                   &s->dt_growth);
+    dk_read_double(e, doc, tm, "growth", MS_DIM_NONE, false, s->dt_growth, 1.0, 2.0, &s->dt_growth);
     long ms = 0;
     dk_read_int(e, doc, tm, "max_steps", false, 0, 0, (long)1e15, &ms);
     p->max_steps = ms;
@@ -382,9 +386,8 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
     dk_read_double_list(e, doc, out, "times", MS_DIM_TIME, false, &p->out_times, &p->n_out);
     for (size_t k = 0; k < p->n_out; ++k) {
       if (p->t_end > 0.0 && p->out_times[k] > p->t_end) {
-        dk_error(e, doc, dk_get(out, "times"),
-                 "output.times entry %zu = %g is after time.end = %g", k, p->out_times[k],
-                 p->t_end);
+        dk_error(e, doc, dk_get(out, "times"), "output.times entry %zu = %g is after time.end = %g",
+                 k, p->out_times[k], p->t_end);
         break;
       }
       if (p->out_times[k] < 0.0 || (k > 0 && !(p->out_times[k] > p->out_times[k - 1]))) {

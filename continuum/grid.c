@@ -31,7 +31,8 @@ size_t cont_setup_layer_first_node(const cont_setup *s, size_t layer) {
 
 double cont_fn_eval(const cont_fn *f, double t) {
   switch (f->kind) {
-  case CONT_FN_CONST: return f->value;
+  case CONT_FN_CONST:
+    return f->value;
   case CONT_FN_TABLE: {
     if (f->n == 0) return 0.0;
     if (t <= f->t[0]) return f->v[0];
@@ -39,7 +40,8 @@ double cont_fn_eval(const cont_fn *f, double t) {
     size_t lo = 0, hi = f->n - 1; /* t[lo] <= t < t[hi] */
     while (hi - lo > 1) {
       size_t mid = (lo + hi) / 2;
-      if (f->t[mid] <= t) lo = mid; else hi = mid;
+      if (f->t[mid] <= t) lo = mid;
+      else hi = mid;
     }
     double w = (t - f->t[lo]) / (f->t[hi] - f->t[lo]);
     return f->v[lo] + w * (f->v[hi] - f->v[lo]);
@@ -116,7 +118,8 @@ bool cont_energy_from_pressure(const eos_t *eos, double rho, double p, double *e
   for (int it = 0; it < 200; ++it) {
     double mid = 0.5 * (lo + hi);
     if (mid == lo || mid == hi) break;
-    if (eos_pressure(eos, rho, mid) - p < 0.0) lo = mid; else hi = mid;
+    if (eos_pressure(eos, rho, mid) - p < 0.0) lo = mid;
+    else hi = mid;
   }
   *e = 0.5 * (lo + hi);
   return true;
@@ -143,8 +146,12 @@ void cont_layer_sizes(const cont_layer_spec *L, double *dx) {
   for (size_t k = 0; k < n; ++k) {
     double from_end;
     switch (L->grade_side) {
-    case CONT_GRADE_LEFT: from_end = (double)k; break;
-    case CONT_GRADE_RIGHT: from_end = (double)(n - 1 - k); break;
+    case CONT_GRADE_LEFT:
+      from_end = (double)k;
+      break;
+    case CONT_GRADE_RIGHT:
+      from_end = (double)(n - 1 - k);
+      break;
     default: { /* both ends fine, coarsest in the middle */
       double a = (double)k, b = (double)(n - 1 - k);
       from_end = a < b ? a : b;
@@ -175,8 +182,8 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   for (size_t k = 0; k < s->nlayers; ++k) {
     const cont_layer_spec *L = &s->layers[k];
     if (L->ncells <= 0 || !(L->thickness > 0.0) || !(L->rho > 0.0) || !L->eos) {
-      set_err(err, errlen, "layer %zu (%s): needs cells > 0, thickness > 0, density > 0, an EOS",
-              k, L->name ? L->name : "?");
+      set_err(err, errlen, "layer %zu (%s): needs cells > 0, thickness > 0, density > 0, an EOS", k,
+              L->name ? L->name : "?");
       return NULL;
     }
     ncells += (size_t)L->ncells;
@@ -297,8 +304,9 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   size_t bad = 0;
   cont_eval_eos_for_cells(g, 0, N, g->rho, g->e, g->p, g->c, &bad, &st);
   if (st != MS_OK) {
-    set_err(err, errlen, "initial state of cell %zu (layer %d: rho = %g, e = %g) is outside its EOS",
-            bad, g->layer[bad], g->rho[bad], g->e[bad]);
+    set_err(err, errlen,
+            "initial state of cell %zu (layer %d: rho = %g, e = %g) is outside its EOS", bad,
+            g->layer[bad], g->rho[bad], g->e[bad]);
     cont_grid_destroy(g);
     return NULL;
   }
@@ -325,11 +333,27 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
 
 void cont_grid_destroy(cont_grid *g) {
   if (!g) return;
-  double **arrays[] = {&g->x, &g->u, &g->inv_mass, &g->u_pred_mean, &g->area_mid, &g->u_mean,
-                       &g->ext_traction, &g->ext_velocity, &g->reaction, &g->force, &g->mass,
+  double **arrays[] = {&g->x,
+                       &g->u,
+                       &g->inv_mass,
+                       &g->u_pred_mean,
+                       &g->area_mid,
+                       &g->u_mean,
+                       &g->ext_traction,
+                       &g->ext_velocity,
+                       &g->reaction,
+                       &g->force,
+                       &g->mass,
                        &g->inv_cell_mass,
-                       &g->rho, &g->e, &g->p, &g->q, &g->c, &g->rho_half, &g->e_half,
-                       &g->p_half, &g->q_half};
+                       &g->rho,
+                       &g->e,
+                       &g->p,
+                       &g->q,
+                       &g->c,
+                       &g->rho_half,
+                       &g->e_half,
+                       &g->p_half,
+                       &g->q_half};
   for (size_t k = 0; k < sizeof arrays / sizeof arrays[0]; ++k) free(*arrays[k]);
   free(g->material);
   free(g->layer);
@@ -362,9 +386,18 @@ size_t cont_grid_ncells(const cont_grid *g) { return g->ncells; }
 cont_geometry cont_grid_geometry(const cont_grid *g) { return g->geometry; }
 
 cont_view cont_grid_view(const cont_grid *g) {
-  return (cont_view){.ncells = g->ncells, .nnodes = g->nnodes, .x = g->x, .u = g->u,
-                     .rho = g->rho, .e = g->e, .p = g->p, .q = g->q, .c = g->c,
-                     .mass = g->mass, .material = g->material, .layer = g->layer};
+  return (cont_view){.ncells = g->ncells,
+                     .nnodes = g->nnodes,
+                     .x = g->x,
+                     .u = g->u,
+                     .rho = g->rho,
+                     .e = g->e,
+                     .p = g->p,
+                     .q = g->q,
+                     .c = g->c,
+                     .mass = g->mass,
+                     .material = g->material,
+                     .layer = g->layer};
 }
 
 cont_balance cont_grid_balance(const cont_grid *g) {
@@ -395,13 +428,15 @@ static void update_any_ext(cont_grid *g) {
 void cont_grid_set_node_force(cont_grid *g, size_t node, double traction) {
   if (node >= g->nnodes) return;
   g->ext_traction[node] = traction;
-  if (traction != 0.0) g->any_ext = true; else update_any_ext(g);
+  if (traction != 0.0) g->any_ext = true;
+  else update_any_ext(g);
 }
 
 void cont_grid_set_node_velocity(cont_grid *g, size_t node, double u) {
   if (node >= g->nnodes) return;
   g->ext_velocity[node] = u;
-  if (!isnan(u)) g->any_ext = true; else update_any_ext(g);
+  if (!isnan(u)) g->any_ext = true;
+  else update_any_ext(g);
 }
 
 double cont_grid_node_reaction(const cont_grid *g, size_t node) {
@@ -456,7 +491,8 @@ size_t cont_grid_nearest_node(const cont_grid *g, double x) {
   if (x >= g->x[hi]) return hi;
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
-    if (g->x[mid] <= x) lo = mid; else hi = mid;
+    if (g->x[mid] <= x) lo = mid;
+    else hi = mid;
   }
   return (x - g->x[lo] <= g->x[hi] - x) ? lo : hi;
 }
@@ -467,7 +503,8 @@ bool cont_grid_sample(const cont_grid *g, double x, cont_sample *out) {
   size_t lo = 0, hi = N; /* x[lo] <= x <= x[hi] */
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
-    if (g->x[mid] <= x) lo = mid; else hi = mid;
+    if (g->x[mid] <= x) lo = mid;
+    else hi = mid;
   }
   size_t i = lo;
   double w = (x - g->x[i]) / (g->x[i + 1] - g->x[i]);

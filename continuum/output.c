@@ -39,13 +39,22 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
     const char *L = ms_unit_label(MS_DIM_LENGTH), *V = ms_unit_label(MS_DIM_VELOCITY),
                *D = ms_unit_label(MS_DIM_DENSITY), *E = ms_unit_label(MS_DIM_SPEC_ENERGY),
                *P = ms_unit_label(MS_DIM_PRESSURE);
-    struct { const char *name; size_t n0, n1; const double *d; const char *u; } ds[] = {
-        {"nodes/xyz", Nn, 3, xyz, L},      {"nodes/x", Nn, 1, g->x, L},
-        {"nodes/u", Nn, 1, g->u, V},       {"cells/x", N, 1, xc, L},
-        {"cells/rho", N, 1, g->rho, D},    {"cells/e", N, 1, g->e, E},
-        {"cells/p", N, 1, g->p, P},        {"cells/q", N, 1, g->q, P},
-        {"cells/c", N, 1, g->c, V},        {"cells/mass", N, 1, g->mass, ms_unit_label(MS_DIM_MASS)},
-        {"cells/material", N, 1, mat, "1"}};
+    struct {
+      const char *name;
+      size_t n0, n1;
+      const double *d;
+      const char *u;
+    } ds[] = {{"nodes/xyz", Nn, 3, xyz, L},
+              {"nodes/x", Nn, 1, g->x, L},
+              {"nodes/u", Nn, 1, g->u, V},
+              {"cells/x", N, 1, xc, L},
+              {"cells/rho", N, 1, g->rho, D},
+              {"cells/e", N, 1, g->e, E},
+              {"cells/p", N, 1, g->p, P},
+              {"cells/q", N, 1, g->q, P},
+              {"cells/c", N, 1, g->c, V},
+              {"cells/mass", N, 1, g->mass, ms_unit_label(MS_DIM_MASS)},
+              {"cells/material", N, 1, mat, "1"}};
     for (size_t k = 0; k < sizeof ds / sizeof ds[0] && s == MS_OK; ++k)
       s = ms_h5_write_doubles(h, ds[k].name, ds[k].n0, ds[k].n1, ds[k].d, ds[k].u);
     if (s == MS_OK) s = ms_h5_attr_double(h, "/", "time", g->t);
@@ -55,12 +64,16 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
       static const char *const geo[] = {"planar", "cylindrical", "spherical"};
       s = ms_h5_attr_string(h, "/", "geometry", geo[g->geometry]);
     }
-    if (s == MS_OK) s = ms_h5_close(h); else ms_h5_abort(h);
+    if (s == MS_OK) s = ms_h5_close(h);
+    else ms_h5_abort(h);
   }
   if (s == MS_OK) {
-    const ms_xdmf_attr attr[] = {{"u", "nodes/u", 1, false},      {"rho", "cells/rho", 1, true},
-                                 {"e", "cells/e", 1, true},        {"p", "cells/p", 1, true},
-                                 {"q", "cells/q", 1, true},        {"c", "cells/c", 1, true},
+    const ms_xdmf_attr attr[] = {{"u", "nodes/u", 1, false},
+                                 {"rho", "cells/rho", 1, true},
+                                 {"e", "cells/e", 1, true},
+                                 {"p", "cells/p", 1, true},
+                                 {"q", "cells/q", 1, true},
+                                 {"c", "cells/c", 1, true},
                                  {"material", "cells/material", 1, true}};
     s = ms_xdmf_write_points(xmf_path, h5_name, "nodes/xyz", Nn, 3, g->t,
                              sizeof attr / sizeof attr[0], attr);
@@ -84,8 +97,8 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
                ms_unit_label(MS_DIM_TIME));
       ms_csv_header(af.f, title, 9, names, units);
       for (size_t i = 0; i < N; ++i) {
-        double row[9] = {(double)i, xc[i], g->rho[i], uc[i], g->e[i], g->p[i], g->q[i], g->c[i],
-                         mat[i]};
+        double row[9] = {(double)i, xc[i],   g->rho[i], uc[i], g->e[i],
+                         g->p[i],   g->q[i], g->c[i],   mat[i]};
         ms_csv_row(af.f, 9, row);
       }
       s = ms_afile_commit(&af);
@@ -161,6 +174,7 @@ ms_status cont_write_histories(const ms_ctx *ctx, const cont_grid *g, long strid
       s = ms_afile_commit(&af);
     }
   }
-  if (s == MS_OK) s = ms_h5_close(h); else ms_h5_abort(h);
+  if (s == MS_OK) s = ms_h5_close(h);
+  else ms_h5_abort(h);
   return s;
 }

@@ -135,10 +135,11 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   const file_writer fw = {ctx, h != NULL && ctx->size > 1};
   cont_balance b0 = cont_grid_balance(g);
   double e0 = b0.internal + b0.kinetic, mom0 = b0.momentum;
-  ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g",
-         g->ncells, g->nregions,
-         g->geometry == CONT_PLANAR ? "planar" : g->geometry == CONT_CYLINDRICAL ? "cylindrical"
-                                                                                 : "spherical",
+  ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g", g->ncells,
+         g->nregions,
+         g->geometry == CONT_PLANAR        ? "planar"
+         : g->geometry == CONT_CYLINDRICAL ? "cylindrical"
+                                           : "spherical",
          p->t_end);
 
   xt_data xt;

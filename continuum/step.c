@@ -1,4 +1,4 @@
-/* step.c — one time step of the 1D Lagrangian cross scheme (DESIGN.md §4), as phase functions
+/* step.c — one time step of the 1D Lagrangian cross scheme (docs/design.md §4), as phase functions
  * named verb + quantity + where (LULESH style): cont_calc_predicted_velocity_for_nodes,
  * cont_calc_half_step_for_cells, cont_calc_velocity_and_position_for_nodes,
  * cont_calc_energy_and_density_for_cells, cont_eval_eos_for_cells,
@@ -39,26 +39,35 @@
 
 static inline double face_area(double x, int k) {
   switch (k) {
-  case 0: return 1.0;
-  case 1: return x;
-  default: return x * x;
+  case 0:
+    return 1.0;
+  case 1:
+    return x;
+  default:
+    return x * x;
   }
 }
 
 /* Mean-value area between positions a and b: (b^{k+1} − a^{k+1}) / ((k+1)(b − a)). */
 static inline double mean_area(double a, double b, int k) {
   switch (k) {
-  case 0: return 1.0;
-  case 1: return 0.5 * (a + b);
-  default: return (a * a + a * b + b * b) * (1.0 / 3.0);
+  case 0:
+    return 1.0;
+  case 1:
+    return 0.5 * (a + b);
+  default:
+    return (a * a + a * b + b * b) * (1.0 / 3.0);
   }
 }
 
 static inline double volume_between(double xl, double xr, int k) {
   switch (k) {
-  case 0: return xr - xl;
-  case 1: return 0.5 * (xr - xl) * (xr + xl);
-  default: return (xr - xl) * (xr * xr + xr * xl + xl * xl) * (1.0 / 3.0);
+  case 0:
+    return xr - xl;
+  case 1:
+    return 0.5 * (xr - xl) * (xr + xl);
+  default:
+    return (xr - xl) * (xr * xr + xr * xl + xl * xl) * (1.0 / 3.0);
   }
 }
 
@@ -75,9 +84,12 @@ static double boundary_pressure(const cont_bc *bc, double t) {
 /* Prescribed velocity of a boundary node at time t, or NAN if the node moves freely. */
 static double boundary_velocity(const cont_bc *bc, double t) {
   switch (bc->kind) {
-  case CONT_BC_WALL: return 0.0;
-  case CONT_BC_PISTON: return cont_fn_eval(&bc->fn, t);
-  default: return NAN;
+  case CONT_BC_WALL:
+    return 0.0;
+  case CONT_BC_PISTON:
+    return cont_fn_eval(&bc->fn, t);
+  default:
+    return NAN;
   }
 }
 
@@ -93,8 +105,8 @@ void cont_calc_q_for_cells(const cont_grid *g, size_t lo, size_t hi, const doubl
 }
 
 /* Pressure (and sound speed if c != NULL) of cells [lo, hi), region by region. */
-void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *rho,
-                             const double *e, double *p, double *c, size_t *bad, ms_status *st) {
+void cont_eval_eos_for_cells(cont_grid *g, size_t lo, size_t hi, const double *rho, const double *e,
+                             double *p, double *c, size_t *bad, ms_status *st) {
   for (size_t r = 0; r < g->nregions; ++r) {
     const cont_region *reg = &g->regions[r];
     size_t a = reg->first > lo ? reg->first : lo;
@@ -201,10 +213,10 @@ static inline double special_force(const cont_grid *g, size_t j, double pq_left,
 /* State shared by the phases of one step. */
 typedef struct step_ctx {
   cont_grid *g;
-  double dt, t1;            /* step and new time */
+  double dt, t1;             /* step and new time */
   double pL0, pR0, pLh, pRh; /* outside pressures at tⁿ and t^{n+½} */
-  size_t o;                 /* window index = global index + o (mod 2^64; cont_impl.h) */
-  double work, impulse;     /* delivered by the outside during this step */
+  size_t o;                  /* window index = global index + o (mod 2^64; cont_impl.h) */
+  double work, impulse;      /* delivered by the outside during this step */
 } step_ctx;
 
 /* N1 — predictor for nodes [lo, hi): F = A(xⁿ)[(p+q)ⁿ_{j−1} − (p+q)ⁿ_j], û = uⁿ + ½Δt F/M,
@@ -275,8 +287,8 @@ cont_calc_half_step_for_cells(step_ctx *sc, size_t lo, size_t hi, const int k) {
   }
   if (neg) {
     for (size_t i = lo; i < hi; ++i) {
-      double vh = volume_between(x[i] + 0.5 * dt * upm[i + o],
-                                 x[i + 1] + 0.5 * dt * upm[i + 1 + o], k);
+      double vh =
+          volume_between(x[i] + 0.5 * dt * upm[i + o], x[i + 1] + 0.5 * dt * upm[i + 1 + o], k);
       if (!(vh > 0.0)) return fail(g, i, "volume (predictor)", vh);
     }
   }
@@ -351,8 +363,7 @@ cont_calc_energy_and_density_for_cells(step_ctx *sc, size_t lo, size_t hi, const
 #pragma omp simd reduction(| : bad)
   for (size_t i = lo; i < hi; ++i) {
     double ul = ubar[i + o], ur = ubar[i + 1 + o];
-    double wrk = k == 0 ? qh[i + o] * (ur - ul)
-                        : qh[i + o] * (am[i + 1 + o] * ur - am[i + o] * ul);
+    double wrk = k == 0 ? qh[i + o] * (ur - ul) : qh[i + o] * (am[i + 1 + o] * ur - am[i + o] * ul);
     e[i] -= dt * wrk * im_c[i];
     double v = volume_between(x[i], x[i + 1], k);
     rho[i] = m[i] / v;
@@ -376,8 +387,8 @@ cont_calc_q_and_time_constraint_for_cells(step_ctx *sc, size_t lo, size_t hi,
                                           double *dt_constraint) {
   cont_grid *g = sc->g;
   const double cq = g->q_quad, cl = g->q_lin, cq2 = 2.0 * g->q_quad;
-  const double *restrict x = g->x, *restrict u = g->u, *restrict rho = g->rho,
-                         *restrict p = g->p, *restrict c = g->c;
+  const double *restrict x = g->x, *restrict u = g->u, *restrict rho = g->rho, *restrict p = g->p,
+                         *restrict c = g->c;
   double *restrict q = g->q;
   int bad = 0;
   double inv_dt_max = 0.0; /* max of 1/Δt: one division per cell, no reciprocal of the result */
@@ -424,7 +435,9 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
   }
   const size_t N = g->ncells, Nn = g->nnodes;
   const double t0 = g->t;
-  step_ctx sc = {.g = g, .dt = dt, .t1 = t0 + dt,
+  step_ctx sc = {.g = g,
+                 .dt = dt,
+                 .t1 = t0 + dt,
                  .pL0 = boundary_pressure(&g->left, t0),
                  .pR0 = boundary_pressure(&g->right, t0),
                  .pLh = boundary_pressure(&g->left, t0 + 0.5 * dt),
@@ -486,9 +499,15 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
 ms_status cont_grid_step(cont_grid *g, double dt_limit) {
   ms_status s;
   switch (g->area_power) {
-  case 0: s = step_impl(g, dt_limit, 0); break;
-  case 1: s = step_impl(g, dt_limit, 1); break;
-  default: s = step_impl(g, dt_limit, 2); break;
+  case 0:
+    s = step_impl(g, dt_limit, 0);
+    break;
+  case 1:
+    s = step_impl(g, dt_limit, 1);
+    break;
+  default:
+    s = step_impl(g, dt_limit, 2);
+    break;
   }
   g->land_time = NAN; /* a landing target applies to one step only, failed or not */
   return s;

@@ -15,8 +15,8 @@ static void tag_reserve(cont_tag *tg, size_t need) {
   if (need <= tg->cap) return;
   size_t cap = tg->cap ? tg->cap : 1024;
   while (cap < need) cap *= 2;
-  double **cols[] = {&tg->t, &tg->x, &tg->u, &tg->p_left, &tg->rho_left, &tg->p_right,
-                     &tg->rho_right};
+  double **cols[] = {&tg->t,        &tg->x,       &tg->u,        &tg->p_left,
+                     &tg->rho_left, &tg->p_right, &tg->rho_right};
   for (size_t k = 0; k < sizeof cols / sizeof cols[0]; ++k)
     *cols[k] = ms_realloc(*cols[k], cap, sizeof(double));
   tg->cap = cap;
@@ -89,7 +89,8 @@ void cont_history_at(const cont_history *h, double t, double *x, double *u) {
   size_t lo = 0, hi = h->n - 1; /* t[lo] <= t < t[hi] */
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
-    if (h->t[mid] <= t) lo = mid; else hi = mid;
+    if (h->t[mid] <= t) lo = mid;
+    else hi = mid;
   }
   double dt = t - h->t[lo], w = dt / (h->t[hi] - h->t[lo]);
   double ut = h->u[lo] + w * (h->u[hi] - h->u[lo]);

@@ -49,10 +49,8 @@ ms_status ms_ckpt_commit(const ms_ctx *ctx, ms_h5 *h, ms_status st, const char *
     ms_h5_abort(h);
   }
   char *path = ms_out_path(ctx, name);
-  if (st == MS_OK)
-    ms_log(ctx, MS_LOG_INFO, "checkpoint at step %ld written to %s", step, path);
-  else
-    ms_log(ctx, MS_LOG_ERROR, "cannot write the checkpoint %s (the previous one is kept)", path);
+  if (st == MS_OK) ms_log(ctx, MS_LOG_INFO, "checkpoint at step %ld written to %s", step, path);
+  else ms_log(ctx, MS_LOG_ERROR, "cannot write the checkpoint %s (the previous one is kept)", path);
   free(path);
   return st;
 }
@@ -69,7 +67,8 @@ ms_h5r *ms_ckpt_open(const char *path, const char *format, uint64_t deck_hash, d
                 fmt, format);
     ok = false;
   } else if (ok && strcmp(hash, hex) != 0) {
-    dk_error_at(e, path, 0, 0, "the checkpoint was written by a different deck (deck hash %s, "
+    dk_error_at(e, path, 0, 0,
+                "the checkpoint was written by a different deck (deck hash %s, "
                 "this deck's is %s): a restart must use the deck that wrote the checkpoint",
                 hash, hex);
     ok = false;

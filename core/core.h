@@ -1,9 +1,9 @@
 /* core.h — the one public header of mscale's core library.
  *
  * The core is what every physics folder stands on and nothing physical lives here:
- *   - status codes (one list, with messages) and the exit-code mapping of DESIGN.md §8;
+ *   - status codes (one list, with messages) and the exit-code mapping of docs/design.md §8;
  *   - the run context (communicator wrapper, rank, logger, output directory);
- *   - units (DESIGN.md §2: internal g, cm, 10 µs; decks may say `units: si`);
+ *   - units (docs/design.md §2: internal g, cm, 10 µs; decks may say `units: si`);
  *   - the deck reader (libyaml → a tree that remembers FILE:LINE:COL, typed readers that
  *     collect every error, unknown-key detection, defaults written back for the resolved deck);
  *   - output writers that never leave a truncated file under a final name (CSV with a units
@@ -35,7 +35,7 @@ typedef enum ms_status {
 } ms_status;
 
 const char *ms_status_str(ms_status s);
-/* Process exit code for a status: 0 success, 2 bad input, 1 anything else (DESIGN.md §8). */
+/* Process exit code for a status: 0 success, 2 bad input, 1 anything else (docs/design.md §8). */
 int ms_exit_code(ms_status s);
 
 /* ------------------------------------------------------------------------------------------ */
@@ -91,20 +91,20 @@ void ms_progress_update(ms_progress *p, double t, long step);
 void ms_progress_finish(ms_progress *p, double t, long step);
 
 /* ------------------------------------------------------------------------------------------ */
-/* Units (DESIGN.md §2). Internal system: g, cm, 10 µs -> g/cm³, km/s, GPa, kJ/g.               */
+/* Units (docs/design.md §2). Internal system: g, cm, 10 µs -> g/cm³, km/s, GPa, kJ/g.               */
 
 typedef enum ms_dim {
-  MS_DIM_NONE = 0,     /* dimensionless */
-  MS_DIM_LENGTH,       /* cm */
-  MS_DIM_TIME,         /* 10 µs */
-  MS_DIM_MASS,         /* g */
-  MS_DIM_DENSITY,      /* g/cm³ */
-  MS_DIM_VELOCITY,     /* km/s = cm/10µs */
-  MS_DIM_PRESSURE,     /* GPa */
-  MS_DIM_SPEC_ENERGY,  /* kJ/g = (km/s)² */
-  MS_DIM_ENERGY,       /* g·cm²/(10µs)² = kJ */
-  MS_DIM_VISCOSITY,    /* g/(cm·10µs) */
-  MS_DIM_TEMPERATURE,  /* K */
+  MS_DIM_NONE = 0,    /* dimensionless */
+  MS_DIM_LENGTH,      /* cm */
+  MS_DIM_TIME,        /* 10 µs */
+  MS_DIM_MASS,        /* g */
+  MS_DIM_DENSITY,     /* g/cm³ */
+  MS_DIM_VELOCITY,    /* km/s = cm/10µs */
+  MS_DIM_PRESSURE,    /* GPa */
+  MS_DIM_SPEC_ENERGY, /* kJ/g = (km/s)² */
+  MS_DIM_ENERGY,      /* g·cm²/(10µs)² = kJ */
+  MS_DIM_VISCOSITY,   /* g/(cm·10µs) */
+  MS_DIM_TEMPERATURE, /* K */
   MS_DIM_COUNT
 } ms_dim;
 
@@ -200,11 +200,11 @@ bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key
 void dk_read_checkpoint_interval(dk_errors *e, dk_doc *doc, const dk_node *map, const char *where,
                                  const char *steps, long *every, double *time);
 /* A sequence of numbers (or a single number); *out is malloc'd, *n its length. */
-bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
-                         ms_dim dim, bool required, double **out, size_t *n);
+bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim,
+                         bool required, double **out, size_t *n);
 /* Convert a scalar node to a double (with units); records an error if it is not a number. */
-bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what,
-                    ms_dim dim, double *out);
+bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what, ms_dim dim,
+                    double *out);
 
 /* Mark `key` of `map` and everything below it as read, without reading it (a section that
  * could not be read because of earlier errors must not be reported as unknown keys). */

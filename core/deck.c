@@ -43,10 +43,8 @@ static void verror_at(dk_errors *e, const char *file, int line, int col, const c
   char body[1536];
   vsnprintf(body, sizeof body, fmt, ap);
   char *msg = ms_calloc(strlen(body) + strlen(file) + 48, 1);
-  if (line > 0)
-    sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
-  else
-    sprintf(msg, "%s: %s", file, body);
+  if (line > 0) sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
+  else sprintf(msg, "%s: %s", file, body);
   errors_push(e, msg);
 }
 
@@ -142,8 +140,7 @@ static dk_node *build(build_state *st, int index, const char *path, int depth, b
     st->seen[index - 1] = 1;
   }
   if (in_alias) st->alias_nodes++;
-  if (depth > DK_MAX_DEPTH || ++st->nnodes > DK_MAX_NODES ||
-      st->alias_nodes > DK_MAX_ALIAS_NODES) {
+  if (depth > DK_MAX_DEPTH || ++st->nnodes > DK_MAX_NODES || st->alias_nodes > DK_MAX_ALIAS_NODES) {
     dk_error_at(st->e, st->doc->file, line, col,
                 "the deck nests deeper than %d levels, expands to more than %d nodes, or "
                 "copies more than %d nodes through aliases (recursive or exploding aliases?)",
@@ -234,8 +231,8 @@ static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const c
   if (!yaml_parser_load(parser, &ydoc)) {
     int line = (int)parser->problem_mark.line + 1, col = (int)parser->problem_mark.column + 1;
     dk_error_at(e, name, line, col, "YAML syntax error: %s%s%s",
-                parser->problem ? parser->problem : "cannot parse",
-                parser->context ? " " : "", parser->context ? parser->context : "");
+                parser->problem ? parser->problem : "cannot parse", parser->context ? " " : "",
+                parser->context ? parser->context : "");
     dk_free(doc);
     return NULL;
   }
@@ -254,8 +251,9 @@ static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const c
       return NULL;
     }
     if (doc->root->kind != DK_MAP) {
-      dk_error(e, doc, doc->root, "a deck must be a mapping of keys (e.g. 'materials:'), "
-                                  "found a %s",
+      dk_error(e, doc, doc->root,
+               "a deck must be a mapping of keys (e.g. 'materials:'), "
+               "found a %s",
                doc->root->kind == DK_SEQ ? "list" : "single value");
       free(st.seen);
       yaml_document_delete(&ydoc);
@@ -269,8 +267,9 @@ static dk_doc *load_from_parser(yaml_parser_t *parser, const char *name, const c
   yaml_document_t extra;
   if (yaml_parser_load(parser, &extra)) {
     yaml_node_t *r = yaml_document_get_root_node(&extra);
-    if (r) dk_error_at(e, name, (int)r->start_mark.line + 1, (int)r->start_mark.column + 1,
-                       "a deck holds one YAML document; found a second one ('---')");
+    if (r)
+      dk_error_at(e, name, (int)r->start_mark.line + 1, (int)r->start_mark.column + 1,
+                  "a deck holds one YAML document; found a second one ('---')");
     yaml_document_delete(&extra);
   } else {
     int line = (int)parser->problem_mark.line + 1, col = (int)parser->problem_mark.column + 1;
@@ -371,8 +370,7 @@ static const char *kind_word(dk_kind k) {
 
 bool dk_expect_map(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what) {
   if (n && n->kind == DK_MAP) return true;
-  if (n)
-    dk_error(e, doc, n, "%s: expected a mapping of keys, found %s", what, kind_word(n->kind));
+  if (n) dk_error(e, doc, n, "%s: expected a mapping of keys, found %s", what, kind_word(n->kind));
   return false;
 }
 
@@ -428,11 +426,11 @@ static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
     }
     const char *where = n->path[0] ? n->path : "top level";
     if (best)
-      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (did you mean '%s'?)", where,
-               n->keys[i], best);
+      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (did you mean '%s'?)", where, n->keys[i],
+               best);
     else if (n->nasked)
-      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (expected one of: %s)", where,
-               n->keys[i], expected);
+      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (expected one of: %s)", where, n->keys[i],
+               expected);
     else
       dk_error(e, doc, n->items[i], "%s: unknown key '%s' (not used by this problem)", where,
                n->keys[i]);
@@ -465,8 +463,11 @@ void dk_report_unused(dk_errors *e, const dk_doc *doc) {
 /* Decode one UTF-8 sequence at s (libyaml hands out valid UTF-8); returns its length and the
  * code point in *cp, or 1 and the raw byte for an invalid sequence. */
 static int utf8_decode(const unsigned char *s, unsigned long *cp) {
-  int len = s[0] < 0x80 ? 1 : (s[0] & 0xE0) == 0xC0 ? 2 : (s[0] & 0xF0) == 0xE0 ? 3
-                                                   : (s[0] & 0xF8) == 0xF0 ? 4 : 0;
+  int len = s[0] < 0x80             ? 1
+            : (s[0] & 0xE0) == 0xC0 ? 2
+            : (s[0] & 0xF0) == 0xE0 ? 3
+            : (s[0] & 0xF8) == 0xF0 ? 4
+                                    : 0;
   if (len == 0) {
     *cp = s[0];
     return 1;
@@ -518,18 +519,12 @@ static void emit_text(FILE *f, const char *s, bool force_quotes) {
   for (const unsigned char *c = (const unsigned char *)s; *c;) {
     unsigned long cp;
     int len = utf8_decode(c, &cp);
-    if (cp == '"' || cp == '\\')
-      fprintf(f, "\\%c", (int)cp);
-    else if (cp == '\n')
-      fputs("\\n", f);
-    else if (yaml_printable(cp))
-      fwrite(c, 1, (size_t)len, f);
-    else if (cp <= 0xFF)
-      fprintf(f, "\\x%02lx", cp);
-    else if (cp <= 0xFFFF)
-      fprintf(f, "\\u%04lx", cp);
-    else
-      fprintf(f, "\\U%08lx", cp);
+    if (cp == '"' || cp == '\\') fprintf(f, "\\%c", (int)cp);
+    else if (cp == '\n') fputs("\\n", f);
+    else if (yaml_printable(cp)) fwrite(c, 1, (size_t)len, f);
+    else if (cp <= 0xFF) fprintf(f, "\\x%02lx", cp);
+    else if (cp <= 0xFFFF) fprintf(f, "\\u%04lx", cp);
+    else fprintf(f, "\\U%08lx", cp);
     c += len;
   }
   fputc('"', f);
@@ -570,8 +565,7 @@ ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
   ms_afile af;
   ms_status s = ms_afile_open(&af, path);
   if (s) return s;
-  fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING,
-          doc->file);
+  fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING, doc->file);
   fprintf(af.f, "# Every key the run used, with defaults filled in (marked '# default').\n");
   emit(af.f, doc->root, 0, 0);
   return ms_afile_commit(&af);
@@ -592,7 +586,8 @@ static uint64_t hash_node(uint64_t h, const dk_node *n, const char *const *skip)
     if (n->path && !strcmp(n->path, *s)) return fnv1a(h, "~", 1);
   char kind = n->kind == DK_SCALAR ? 's' : (n->kind == DK_MAP ? 'm' : 'q');
   h = fnv1a(h, &kind, 1);
-  if (n->kind == DK_SCALAR) return fnv1a(h, n->value ? n->value : "", n->value ? strlen(n->value) + 1 : 1);
+  if (n->kind == DK_SCALAR)
+    return fnv1a(h, n->value ? n->value : "", n->value ? strlen(n->value) + 1 : 1);
   for (size_t i = 0; i < n->n; i++) {
     if (n->kind == DK_MAP) h = fnv1a(h, n->keys[i], strlen(n->keys[i]) + 1);
     h = hash_node(h, n->items[i], skip);

@@ -6,17 +6,17 @@
 
 struct dk_node {
   dk_kind kind;
-  int line, col;   /* 1-based position in the deck */
+  int line, col;         /* 1-based position in the deck */
   int key_line, key_col; /* position of the key naming this node in its parent map (0: none) */
-  char *path;      /* e.g. "materials[0].eos.rho0", for messages */
-  char *value;     /* scalar text */
-  bool quoted;     /* scalar was quoted in the deck */
-  size_t n, cap;   /* children */
-  dk_node **items; /* map values or list items */
-  char **keys;     /* map keys */
-  bool *used;      /* map: a reader asked for this key */
-  bool *is_default;/* map: the value was filled in by a reader's default */
-  char **asked;    /* map: every key a reader asked for (for "did you mean") */
+  char *path;            /* e.g. "materials[0].eos.rho0", for messages */
+  char *value;           /* scalar text */
+  bool quoted;           /* scalar was quoted in the deck */
+  size_t n, cap;         /* children */
+  dk_node **items;       /* map values or list items */
+  char **keys;           /* map keys */
+  bool *used;            /* map: a reader asked for this key */
+  bool *is_default;      /* map: the value was filled in by a reader's default */
+  char **asked;          /* map: every key a reader asked for (for "did you mean") */
   size_t nasked;
 };
 

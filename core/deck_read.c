@@ -10,10 +10,8 @@
 #include <strings.h>
 
 static const char *where(const dk_node *map, const char *key, char *buf, size_t n) {
-  if (map && map->path[0])
-    snprintf(buf, n, "%s.%s", map->path, key);
-  else
-    snprintf(buf, n, "%s", key);
+  if (map && map->path[0]) snprintf(buf, n, "%s.%s", map->path, key);
+  else snprintf(buf, n, "%s", key);
   return buf;
 }
 
@@ -24,8 +22,7 @@ static void missing(dk_errors *e, const dk_doc *doc, const dk_node *map, const c
                 map->path, key, expected);
   else if (map && map->path[0])
     dk_error(e, doc, map, "%s: missing required key '%s' (%s)", map->path, key, expected);
-  else
-    dk_error(e, doc, map, "missing required top-level key '%s' (%s)", key, expected);
+  else dk_error(e, doc, map, "missing required top-level key '%s' (%s)", key, expected);
 }
 
 /* Insert a default value into the tree so the resolved deck shows it. */
@@ -55,8 +52,8 @@ static int parse_double(const char *s, double *out) {
   return 1;
 }
 
-bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what,
-                    ms_dim dim, double *out) {
+bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const char *what, ms_dim dim,
+                    double *out) {
   double v;
   int parsed = n && n->kind == DK_SCALAR && !n->quoted ? parse_double(n->value, &v) : 0;
   if (parsed < 0) {
@@ -65,10 +62,13 @@ bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const cha
     return false;
   }
   if (parsed == 0) {
-    dk_error(e, doc, n, "%s: expected a number%s%s, found %s%s%s", what,
-             dim ? " in " : "", dim ? (doc->units == MS_UNITS_SI ? "SI units" : ms_unit_label(dim)) : "",
+    dk_error(e, doc, n, "%s: expected a number%s%s, found %s%s%s", what, dim ? " in " : "",
+             dim ? (doc->units == MS_UNITS_SI ? "SI units" : ms_unit_label(dim)) : "",
              n && n->kind == DK_SCALAR ? "'" : "",
-             n ? (n->kind == DK_SCALAR ? n->value : n->kind == DK_MAP ? "a mapping" : "a list") : "nothing",
+             n ? (n->kind == DK_SCALAR ? n->value
+                  : n->kind == DK_MAP  ? "a mapping"
+                                       : "a list")
+               : "nothing",
              n && n->kind == DK_SCALAR ? "'" : "");
     return false;
   }
@@ -78,8 +78,10 @@ bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const cha
   }
   double internal = v * ms_unit_to_internal(doc->units, dim);
   if (!isfinite(internal)) { /* e.g. 1e305 s in an SI deck: 1e310 in units of 10 us */
-    dk_error(e, doc, n, "%s: '%s' is outside the range of a double-precision number once "
-             "converted to internal units (%s)", what, n->value, ms_unit_label(dim));
+    dk_error(e, doc, n,
+             "%s: '%s' is outside the range of a double-precision number once "
+             "converted to internal units (%s)",
+             what, n->value, ms_unit_label(dim));
     return false;
   }
   *out = internal;
@@ -87,14 +89,10 @@ bool dk_node_double(dk_errors *e, const dk_doc *doc, const dk_node *n, const cha
 }
 
 static void format_bound(char *buf, size_t n, double lo, double hi, bool lo_open) {
-  if (isinf(lo) && isinf(hi))
-    snprintf(buf, n, "a number");
-  else if (isinf(hi))
-    snprintf(buf, n, "a number %s %g", lo_open ? ">" : ">=", lo);
-  else if (isinf(lo))
-    snprintf(buf, n, "a number <= %g", hi);
-  else
-    snprintf(buf, n, "a number in %s%g, %g]", lo_open ? "(" : "[", lo, hi);
+  if (isinf(lo) && isinf(hi)) snprintf(buf, n, "a number");
+  else if (isinf(hi)) snprintf(buf, n, "a number %s %g", lo_open ? ">" : ">=", lo);
+  else if (isinf(lo)) snprintf(buf, n, "a number <= %g", hi);
+  else snprintf(buf, n, "a number in %s%g, %g]", lo_open ? "(" : "[", lo, hi);
 }
 
 static bool read_double_impl(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
@@ -163,8 +161,10 @@ bool dk_read_int(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
   long v = 0;
   if (n->kind == DK_SCALAR && !n->quoted) v = strtol(n->value, &end, 10);
   if (n->kind != DK_SCALAR || n->quoted || !n->value[0] || *end || errno == ERANGE) {
-    dk_error(e, doc, n, "%s: expected an integer, found %s%s%s", w,
-             n->kind == DK_SCALAR ? "'" : "", n->kind == DK_SCALAR ? n->value : n->kind == DK_MAP ? "a mapping" : "a list",
+    dk_error(e, doc, n, "%s: expected an integer, found %s%s%s", w, n->kind == DK_SCALAR ? "'" : "",
+             n->kind == DK_SCALAR ? n->value
+             : n->kind == DK_MAP  ? "a mapping"
+                                  : "a list",
              n->kind == DK_SCALAR ? "'" : "");
     return false;
   }
@@ -193,8 +193,14 @@ bool dk_read_bool(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key
   static const char *yes[] = {"true", "yes", "on"}, *no[] = {"false", "no", "off"};
   if (n->kind == DK_SCALAR) {
     for (int i = 0; i < 3; i++) {
-      if (!strcasecmp(n->value, yes[i])) { *out = true; return true; }
-      if (!strcasecmp(n->value, no[i])) { *out = false; return true; }
+      if (!strcasecmp(n->value, yes[i])) {
+        *out = true;
+        return true;
+      }
+      if (!strcasecmp(n->value, no[i])) {
+        *out = false;
+        return true;
+      }
     }
   }
   dk_error(e, doc, n, "%s: expected true or false, found %s%s%s", w,
@@ -219,7 +225,9 @@ bool dk_read_string(dk_errors *e, dk_doc *doc, const dk_node *map, const char *k
   }
   if (n->kind != DK_SCALAR || !n->value[0]) {
     dk_error(e, doc, n, "%s: expected a non-empty text value, found %s", w,
-             n->kind == DK_MAP ? "a mapping" : n->kind == DK_SEQ ? "a list" : "an empty value");
+             n->kind == DK_MAP   ? "a mapping"
+             : n->kind == DK_SEQ ? "a list"
+                                 : "an empty value");
     return false;
   }
   *out = n->value;
@@ -259,8 +267,8 @@ bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key
   return false;
 }
 
-bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
-                         ms_dim dim, bool required, double **out, size_t *count) {
+bool dk_read_double_list(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim,
+                         bool required, double **out, size_t *count) {
   char w[512];
   where(map, key, w, sizeof w);
   *out = NULL;

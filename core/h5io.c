@@ -154,7 +154,8 @@ static ms_status write_rows_dist(ms_h5 *h, const char *name, size_t n_local, siz
   int bad = rc < 0, any = 0;
   MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
   if (any) {
-    if (rank == 0) fprintf(stderr, "mscale: cannot write dataset '%s' to '%s'\n", name, h->tmp_path);
+    if (rank == 0)
+      fprintf(stderr, "mscale: cannot write dataset '%s' to '%s'\n", name, h->tmp_path);
     return MS_ERR_IO;
   }
   return MS_OK;
@@ -331,9 +332,10 @@ static ms_status read_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow
                   name, (unsigned long long)dims[0], (unsigned long long)dims[1],
                   (unsigned long long)stored, (unsigned long long)(count * tsize));
     } else if (ram > 0 && (double)count * (double)elem > 0.5 * ram) {
-      dk_error_at(e, h->path, 0, 0, "dataset '%s' needs %.3g GiB, more than half of this "
-                  "machine's memory (%.3g GiB)", name,
-                  (double)count * (double)elem / 1073741824.0, ram / 1073741824.0);
+      dk_error_at(e, h->path, 0, 0,
+                  "dataset '%s' needs %.3g GiB, more than half of this "
+                  "machine's memory (%.3g GiB)",
+                  name, (double)count * (double)elem / 1073741824.0, ram / 1073741824.0);
     } else if (row0 > dims[0] || nrow > dims[0] - row0) {
       dk_error_at(e, h->path, 0, 0, "dataset '%s' has %llu rows, rows %zu..%zu were asked for",
                   name, (unsigned long long)dims[0], row0, row0 + nrow);
@@ -369,8 +371,8 @@ ms_status ms_h5_read_doubles(ms_h5r *h, const char *name, double **data, size_t 
 
 ms_status ms_h5_read_doubles_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
                                   double **data, size_t *nread, size_t *ncol, dk_errors *e) {
-  return read_rows(h, name, row0, nrow, H5T_FLOAT, H5T_NATIVE_DOUBLE, sizeof(double),
-                   (void **)data, nread, ncol, e);
+  return read_rows(h, name, row0, nrow, H5T_FLOAT, H5T_NATIVE_DOUBLE, sizeof(double), (void **)data,
+                   nread, ncol, e);
 }
 
 ms_status ms_h5_read_ints_rows(ms_h5r *h, const char *name, size_t row0, size_t nrow,
@@ -381,8 +383,8 @@ ms_status ms_h5_read_ints_rows(ms_h5r *h, const char *name, size_t row0, size_t 
 
 ms_status ms_h5_read_bytes(ms_h5r *h, const char *name, char **data, size_t *n, dk_errors *e) {
   size_t ncol = 0;
-  ms_status s = read_rows(h, name, 0, SIZE_MAX, H5T_INTEGER, H5T_NATIVE_UINT8, 1,
-                          (void **)data, n, &ncol, e);
+  ms_status s =
+      read_rows(h, name, 0, SIZE_MAX, H5T_INTEGER, H5T_NATIVE_UINT8, 1, (void **)data, n, &ncol, e);
   if (s == MS_OK && ncol != 1) {
     dk_error_at(e, h->path, 0, 0, "dataset '%s' must be 1D bytes", name);
     free(*data);
@@ -421,7 +423,8 @@ ms_status ms_h5_read_attr_string(ms_h5r *h, const char *obj, const char *attr, c
     H5Tclose(type);
     H5Aclose(a);
   }
-  if (s != MS_OK && e) dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is not a string", attr, o);
+  if (s != MS_OK && e)
+    dk_error_at(e, h->path, 0, 0, "attribute '%s' of '%s' is not a string", attr, o);
   return s;
 }
 
@@ -429,7 +432,8 @@ ms_status ms_h5_read_attr_double(ms_h5r *h, const char *obj, const char *attr, d
                                  dk_errors *e) {
   const char *o = obj && obj[0] ? obj : "/";
   if (strcmp(o, "/") && !ms_h5_exists(h, o)) {
-    if (e) dk_error_at(e, h->path, 0, 0, "'%s' is missing (looking for its attribute '%s')", o, attr);
+    if (e)
+      dk_error_at(e, h->path, 0, 0, "'%s' is missing (looking for its attribute '%s')", o, attr);
     return MS_ERR_INPUT;
   }
   if (H5Aexists_by_name(h->file, o, attr, H5P_DEFAULT) <= 0) {

@@ -43,10 +43,8 @@ void ms_log(const ms_ctx *ctx, ms_log_level level, const char *fmt, ...) {
   va_end(ap);
   double t = ms_wall_time() - ctx->wall_start;
   if (ctx->rank == 0 || level == MS_LOG_ERROR) {
-    if (level <= MS_LOG_WARN)
-      fprintf(stderr, "mscale: %s: %s\n", level_name[level], msg);
-    else
-      fprintf(stderr, "[%8.2fs] %s\n", t, msg);
+    if (level <= MS_LOG_WARN) fprintf(stderr, "mscale: %s: %s\n", level_name[level], msg);
+    else fprintf(stderr, "[%8.2fs] %s\n", t, msg);
   }
   if (ctx->log_file) {
     fprintf(ctx->log_file, "[%8.2fs] %s%s%s\n", t, level <= MS_LOG_WARN ? level_name[level] : "",
@@ -59,10 +57,8 @@ char *ms_out_path(const ms_ctx *ctx, const char *name) {
   const char *dir = ctx->outdir ? ctx->outdir : "";
   size_t n = strlen(dir) + strlen(name) + 2;
   char *p = ms_calloc(n, 1);
-  if (dir[0])
-    snprintf(p, n, "%s/%s", dir, name);
-  else
-    snprintf(p, n, "%s", name);
+  if (dir[0]) snprintf(p, n, "%s/%s", dir, name);
+  else snprintf(p, n, "%s", name);
   return p;
 }
 

@@ -120,8 +120,8 @@ bool ms_mem_check(const ms_mem_estimate *m, double limit, int nranks, int ranks_
   const ms_mem_item *big = ntop ? &m->item[top[0]] : NULL;
   char where[96] = "";
   if (nranks > 1)
-    snprintf(where, sizeof where, " (%d ranks, %d per node: %s per node)", nranks,
-             ranks_per_node, node);
+    snprintf(where, sizeof where, " (%d ranks, %d per node: %s per node)", nranks, ranks_per_node,
+             node);
   dk_error_at(e, dk_file(doc), big ? big->line : 0, big ? big->col : 0,
               "the run would need about %s of memory%s, but %s is available (largest: %s); "
               "reduce the problem, or set MSCALE_MEMORY_LIMIT if the limit is wrong",

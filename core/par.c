@@ -14,7 +14,9 @@ static bool mpi_started_here = false;
  * included): on a shared machine a rank spins there while its peer is descheduled, so speed
  * figures subtract it from the process CPU time (bench/cd_mpi). */
 static double comm_wall, comm_cpu;
-typedef struct comm_clock { double wall, cpu; } comm_clock;
+typedef struct comm_clock {
+  double wall, cpu;
+} comm_clock;
 static double cpu_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -122,11 +124,13 @@ void par_bcast_ints(int32_t *v, size_t n, int root) {
 }
 
 void par_sum_doubles(double *v, size_t n) {
-  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  if (active() && n > 0)
+    MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
 }
 
 void par_max_doubles(double *v, size_t n) {
-  if (active() && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  if (active() && n > 0)
+    MPI_Allreduce(MPI_IN_PLACE, v, (int)n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
 }
 
 /* Fixed-order sum: rank 0 gathers every rank's v and adds them in rank order

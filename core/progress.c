@@ -18,7 +18,8 @@ void ms_progress_start(ms_progress *p, const ms_ctx *ctx, const char *what, doub
 static void format_seconds(char *buf, size_t n, double s) {
   if (s < 0 || s != s) snprintf(buf, n, "--");
   else if (s < 120) snprintf(buf, n, "%.0fs", s);
-  else if (s < 7200) snprintf(buf, n, "%.0fm%02.0fs", (double)(long)(s / 60), s - 60 * (double)(long)(s / 60));
+  else if (s < 7200)
+    snprintf(buf, n, "%.0fm%02.0fs", (double)(long)(s / 60), s - 60 * (double)(long)(s / 60));
   else snprintf(buf, n, "%.1fh", s / 3600);
 }
 

@@ -1,4 +1,4 @@
-/* Status codes (one list) and the exit-code mapping of DESIGN.md §8; checked allocation. */
+/* Status codes (one list) and the exit-code mapping of docs/design.md §8; checked allocation. */
 #include "core.h"
 
 #include <stdlib.h>
@@ -6,13 +6,20 @@
 
 const char *ms_status_str(ms_status s) {
   switch (s) {
-  case MS_OK: return "success";
-  case MS_ERR_INPUT: return "bad input";
-  case MS_ERR_IO: return "input/output error";
-  case MS_ERR_NOMEM: return "out of memory";
-  case MS_ERR_UNSTABLE: return "the run went unstable";
-  case MS_ERR_SOLVER: return "a solver did not converge";
-  case MS_ERR_INTERNAL: return "internal error";
+  case MS_OK:
+    return "success";
+  case MS_ERR_INPUT:
+    return "bad input";
+  case MS_ERR_IO:
+    return "input/output error";
+  case MS_ERR_NOMEM:
+    return "out of memory";
+  case MS_ERR_UNSTABLE:
+    return "the run went unstable";
+  case MS_ERR_SOLVER:
+    return "a solver did not converge";
+  case MS_ERR_INTERNAL:
+    return "internal error";
   }
   return "unknown status";
 }

@@ -124,8 +124,10 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
         break;
       }
     } else if (n != cols) {
-      dk_error_at(e, path, lineno, 1, "expected %d columns like the first data row, found %d "
-                  "(truncated or damaged table?)", cols, n);
+      dk_error_at(e, path, lineno, 1,
+                  "expected %d columns like the first data row, found %d "
+                  "(truncated or damaged table?)",
+                  cols, n);
       s = MS_ERR_INPUT;
       break;
     }

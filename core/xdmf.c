@@ -17,33 +17,43 @@ ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const 
   for (size_t i = 0; i < nattr; i++) has_cells = has_cells || attr[i].cell_centred;
   if (has_cells && npoints > 1) {
     /* A 1D grid: segments between consecutive nodes, so cell data has cells to live on. */
-    fprintf(f, "   <Topology TopologyType=\"Polyline\" NumberOfElements=\"%zu\" "
-               "NodesPerElement=\"2\">\n    <DataItem Dimensions=\"%zu 2\" NumberType=\"Int\" "
-               "Format=\"XML\">", npoints - 1, npoints - 1);
+    fprintf(f,
+            "   <Topology TopologyType=\"Polyline\" NumberOfElements=\"%zu\" "
+            "NodesPerElement=\"2\">\n    <DataItem Dimensions=\"%zu 2\" NumberType=\"Int\" "
+            "Format=\"XML\">",
+            npoints - 1, npoints - 1);
     for (size_t i = 0; i + 1 < npoints; i++) fprintf(f, "%s%zu %zu", i % 8 ? " " : "\n", i, i + 1);
     fprintf(f, "\n    </DataItem>\n   </Topology>\n");
   } else {
-    fprintf(f, "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
-               "NodesPerElement=\"1\"/>\n", npoints);
+    fprintf(f,
+            "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+            "NodesPerElement=\"1\"/>\n",
+            npoints);
   }
   if (dim != 2 && dim != 3) {
     ms_afile_abort(&af);
     return MS_ERR_INTERNAL;
   }
   fprintf(f, "   <Geometry GeometryType=\"%s\">\n", dim == 2 ? "XY" : "XYZ");
-  fprintf(f, "    <DataItem Dimensions=\"%zu %d\" NumberType=\"Float\" Precision=\"8\" "
-               "Format=\"HDF\">%s:%s</DataItem>\n", npoints, dim, h5_name, coords);
+  fprintf(f,
+          "    <DataItem Dimensions=\"%zu %d\" NumberType=\"Float\" Precision=\"8\" "
+          "Format=\"HDF\">%s:%s</DataItem>\n",
+          npoints, dim, h5_name, coords);
   fprintf(f, "   </Geometry>\n");
   for (size_t i = 0; i < nattr; i++) {
     size_t n = attr[i].cell_centred && npoints > 0 ? npoints - 1 : npoints;
     fprintf(f, "   <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"%s\">\n", attr[i].name,
             attr[i].ncomp == 3 ? "Vector" : "Scalar", attr[i].cell_centred ? "Cell" : "Node");
     if (attr[i].ncomp > 1)
-      fprintf(f, "    <DataItem Dimensions=\"%zu %d\" NumberType=\"Float\" Precision=\"8\" "
-                 "Format=\"HDF\">%s:%s</DataItem>\n", n, attr[i].ncomp, h5_name, attr[i].dataset);
+      fprintf(f,
+              "    <DataItem Dimensions=\"%zu %d\" NumberType=\"Float\" Precision=\"8\" "
+              "Format=\"HDF\">%s:%s</DataItem>\n",
+              n, attr[i].ncomp, h5_name, attr[i].dataset);
     else
-      fprintf(f, "    <DataItem Dimensions=\"%zu\" NumberType=\"Float\" Precision=\"8\" "
-                 "Format=\"HDF\">%s:%s</DataItem>\n", n, h5_name, attr[i].dataset);
+      fprintf(f,
+              "    <DataItem Dimensions=\"%zu\" NumberType=\"Float\" Precision=\"8\" "
+              "Format=\"HDF\">%s:%s</DataItem>\n",
+              n, h5_name, attr[i].dataset);
     fprintf(f, "   </Attribute>\n");
   }
   fprintf(f, "  </Grid>\n </Domain>\n</Xdmf>\n");

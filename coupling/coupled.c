@@ -1,5 +1,5 @@
 /* The `coupled` problem (docs/input-coupled.md, docs/coupling.md §6): the one-way drive of
- * DESIGN.md §6. The Lagrangian grid computes the loading; the velocity history U(t) of a tagged
+ * docs/design.md §6. The Lagrangian grid computes the loading; the velocity history U(t) of a tagged
  * node inside the sample drives the piston of a cluster-dynamics region that represents the
  * sample between that node and its (flat, grooved or rough) free surface; fragments are found
  * during and after the particle phase, feel Schiller–Naumann drag from the grid's gas layer, and
@@ -29,7 +29,7 @@ enum { DRIVE_VELOCITY = 0, DRIVE_TRANSMITTING, DRIVE_TWO_WAY };
 struct cpl_problem {
   const eos_materials *mats;
   cont_problem *grid_out, *grid_live;
-  cont_problem *gas_grid; /* two-way: the gas beyond the particles' free surface (`gas:`) */
+  cont_problem *gas_grid;   /* two-way: the gas beyond the particles' free surface (`gas:`) */
   size_t tag_drive, tag_fs; /* tag indices in both grids */
   int drive_mode;           /* 0 velocity history, 1 transmitting (characteristic) piston */
   double impedance;         /* Z for the transmitting piston (0: √1.5 ρ0 c0) */
@@ -68,8 +68,7 @@ const cpl_run_summary *cpl_problem_summary(const cpl_problem *p) { return &p->su
 
 static size_t find_tag(const cont_grid *g, const char *name) {
   for (size_t i = 0; i < cont_grid_ntags(g); i++)
-    if (!strcmp(cont_grid_history(g, i).name, name))
-      return i;
+    if (!strcmp(cont_grid_history(g, i).name, name)) return i;
   return (size_t)-1;
 }
 
@@ -79,8 +78,7 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
     dk_error(e, doc, sec, "coupled: a 'particles:' section is required");
     return;
   }
-  if (!dk_expect_map(e, doc, P, "particles"))
-    return;
+  if (!dk_expect_map(e, doc, P, "particles")) return;
   dk_read_enum(e, doc, P, "lattice", false, 0, lattice_names, &p->lattice);
   dk_read_positive(e, doc, P, "spacing", MS_DIM_LENGTH, true, 0, &p->spacing);
   dk_read_double(e, doc, P, "thickness", MS_DIM_LENGTH, false, 0.0, 0.0, INFINITY, &p->thickness);
@@ -101,8 +99,8 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
   if (S && dk_expect_map(e, doc, S, "particles.surface")) {
     dk_read_enum(e, doc, S, "type", false, 0, surface_names, &p->surface);
     bool need = p->surface != SURF_FLAT;
-    /* the height as peak-to-valley `depth` (Rz) or as `amplitude` a0 = depth/2 (paper 002 §4.2,
-     * DESIGN.md §6), one of the two */
+    /* the height as peak-to-valley `depth` (Rz) or as `amplitude` a0 = depth/2 ([Davydov] §4.2,
+     * docs/design.md §6), one of the two */
     const dk_node *amplitude_node = dk_get(S, "amplitude");
     if (amplitude_node) {
       if (dk_get(S, "depth"))
@@ -132,10 +130,9 @@ static void read_particles(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_e
 static void memory_check(const cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
   const cont_grid *g = cont_problem_grid(p->grid_out);
   cont_view v = cont_grid_view(g);
-  double depth = p->drive_mode == DRIVE_TWO_WAY
-                     ? p->depth
-                     : v.x[cont_grid_history(g, p->tag_fs).node] -
-                           v.x[cont_grid_history(g, p->tag_drive).node];
+  double depth = p->drive_mode == DRIVE_TWO_WAY ? p->depth
+                                                : v.x[cont_grid_history(g, p->tag_fs).node] -
+                                                      v.x[cont_grid_history(g, p->tag_drive).node];
   const bool fcc = p->lattice == 1;
   const double a = p->spacing, cell_x = fcc ? sqrt(2.0) * a : sqrt(3.0) * a,
                cell_y = fcc ? sqrt(2.0) * a : a;
@@ -188,8 +185,7 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   }
   /* two-way only: the gas beyond the particles' free surface, a grid of its own */
   const dk_node *Gs = dk_get(sec, "gas");
-  if (Gs)
-    p->gas_grid = cont_problem_read(doc, Gs, mats, e);
+  if (Gs) p->gas_grid = cont_problem_read(doc, Gs, mats, e);
   const dk_node *D = dk_get(sec, "drive");
   const char *drive_tag = NULL, *fs_tag = NULL;
   if (!D)
@@ -323,10 +319,8 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     }
   }
 consistency_done:
-  if (p->lattice == 0 && p->thickness == 0)
-    p->thickness = p->spacing;
-  if (p->lattice == 1 && !(p->width_z > 0))
-    p->width_z = 4 * sqrt(2.0) * p->spacing;
+  if (p->lattice == 0 && p->thickness == 0) p->thickness = p->spacing;
+  if (p->lattice == 1 && !(p->width_z > 0)) p->width_z = 4 * sqrt(2.0) * p->spacing;
   if (p->surface != SURF_FLAT && p->surf_wavelength > 0 && p->width > 0 &&
       p->surf_wavelength > p->width * (1 + 1e-9))
     dk_error(e, doc, dk_get(dk_get(sec, "particles"), "width"),
@@ -343,8 +337,7 @@ consistency_done:
 }
 
 void cpl_problem_free(cpl_problem *p) {
-  if (!p)
-    return;
+  if (!p) return;
   cont_problem_free(p->grid_out);
   cont_problem_free(p->grid_live);
   cont_problem_free(p->gas_grid);
@@ -362,15 +355,13 @@ typedef struct surface_modes {
 
 /* Height below the nominal surface (0 at the peaks, depth at the valleys). */
 static double surface_drop(const cpl_problem *p, const surface_modes *m, double y, double z) {
-  if (p->surface == SURF_FLAT || !(p->surf_depth > 0))
-    return 0.0;
+  if (p->surface == SURF_FLAT || !(p->surf_depth > 0)) return 0.0;
   if (p->surface == SURF_GROOVES) {
     double lam = p->width / fmax(1.0, nearbyint(p->width / p->surf_wavelength));
     return 0.5 * p->surf_depth * (1 - cos(2 * CPL_PI * y / lam));
   }
   double s = 0;
-  for (int k = 0; k < m->n; k++)
-    s += m->amp[k] * cos(m->ky[k] * y + m->kz[k] * z + m->phase[k]);
+  for (int k = 0; k < m->n; k++) s += m->amp[k] * cos(m->ky[k] * y + m->kz[k] * z + m->phase[k]);
   return p->surf_depth * (m->hi - s) / (m->hi - m->lo);
 }
 
@@ -379,15 +370,13 @@ static double surface_drop(const cpl_problem *p, const surface_modes *m, double 
  * self-affine-like profile), scaled to the peak-to-valley depth Rz. */
 static void surface_setup(const cpl_problem *p, surface_modes *m, bool three_d) {
   memset(m, 0, sizeof *m);
-  if (p->surface != SURF_RANDOM)
-    return;
+  if (p->surface != SURF_RANDOM) return;
   int my = (int)fmax(1.0, floor(p->width / p->surf_wavelength));
   int mz = three_d ? (int)fmax(1.0, floor(p->width_z / p->surf_wavelength)) : 0;
   uint64_t k = 0;
   for (int iy = 0; iy <= my && m->n < 64; iy++)
     for (int iz = 0; iz <= mz && m->n < 64; iz++) {
-      if (!iy && !iz)
-        continue;
+      if (!iy && !iz) continue;
       double ky = 2 * CPL_PI * iy / p->width, kz = three_d ? 2 * CPL_PI * iz / p->width_z : 0;
       double kk = sqrt(ky * ky + kz * kz);
       m->ky[m->n] = ky;
@@ -405,13 +394,10 @@ static void surface_setup(const cpl_problem *p, surface_modes *m, bool three_d) 
       double y = p->width * a / ny, z = three_d ? p->width_z * b / nz : 0, s = 0;
       for (int j = 0; j < m->n; j++)
         s += m->amp[j] * cos(m->ky[j] * y + m->kz[j] * z + m->phase[j]);
-      if (s < m->lo)
-        m->lo = s;
-      if (s > m->hi)
-        m->hi = s;
+      if (s < m->lo) m->lo = s;
+      if (s > m->hi) m->hi = s;
     }
-  if (!(m->hi > m->lo))
-    m->hi = m->lo + 1;
+  if (!(m->hi > m->lo)) m->hi = m->lo + 1;
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -419,19 +405,14 @@ static void surface_setup(const cpl_problem *p, surface_modes *m, bool three_d) 
 
 /* Linear interpolation in a sampled history (constant beyond the ends). */
 static double interp(size_t n, const double *t, const double *v, double x) {
-  if (!n)
-    return 0.0;
-  if (x <= t[0])
-    return v[0];
-  if (x >= t[n - 1])
-    return v[n - 1];
+  if (!n) return 0.0;
+  if (x <= t[0]) return v[0];
+  if (x >= t[n - 1]) return v[n - 1];
   size_t lo = 0, hi = n - 1;
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
-    if (t[mid] <= x)
-      lo = mid;
-    else
-      hi = mid;
+    if (t[mid] <= x) lo = mid;
+    else hi = mid;
   }
   return v[lo] + (v[hi] - v[lo]) * (x - t[lo]) / (t[hi] - t[lo]);
 }
@@ -463,8 +444,7 @@ static void gas_deposit(void *user, const double x[3], double t0, double t1, con
   (void)t1;
   gas_ctx *c = user;
   cont_sample s;
-  if (c->st != MS_OK || !cont_grid_sample(c->g, x[0] - c->offset, &s) ||
-      s.layer != c->gas_layer)
+  if (c->st != MS_OK || !cont_grid_sample(c->g, x[0] - c->offset, &s) || s.layer != c->gas_layer)
     return;
   if (c->cell_src) {
     c->cell_src[2 * s.cell] -= dp[0] / c->area;
@@ -485,8 +465,7 @@ static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
   (void)t;
   const gas_ctx *c = user;
   cont_sample s;
-  if (!cont_grid_sample(c->g, x[0] - c->offset, &s) || s.layer != c->gas_layer)
-    return false;
+  if (!cont_grid_sample(c->g, x[0] - c->offset, &s) || s.layer != c->gas_layer) return false;
   out->rho = s.rho;
   out->u[0] = s.u;
   out->u[1] = out->u[2] = 0;
@@ -499,8 +478,7 @@ static bool grid_gas(void *user, const double x[3], double t, cpl_gas *out) {
  * get NULL and write nothing. */
 static FILE *open_csv(const ms_ctx *ctx, ms_afile *af, const char *name) {
   memset(af, 0, sizeof *af);
-  if (ctx->rank != 0)
-    return NULL;
+  if (ctx->rank != 0) return NULL;
   char *path = ms_out_path(ctx, name);
   ms_status s = ms_afile_open(af, path);
   free(path);
@@ -511,12 +489,10 @@ static ms_status commit_csv(ms_afile *af) { return af->f ? ms_afile_commit(af) :
 
 static ms_status write_table(const ms_ctx *ctx, const char *name, const cpl_fragments *fr, int kind,
                              const cpl_ejecta_sel *sel, const char *title) {
-  if (ctx->rank != 0)
-    return MS_OK;
+  if (ctx->rank != 0) return MS_OK;
   ms_afile af;
   FILE *f = open_csv(ctx, &af, name);
-  if (!f)
-    return MS_ERR_IO;
+  if (!f) return MS_ERR_IO;
   switch (kind) {
   case 0:
     cpl_write_spectrum(f, fr, title);
@@ -542,8 +518,7 @@ static ms_status write_table(const ms_ctx *ctx, const char *name, const cpl_frag
 
 /* View of the CD particles for the fragment search: piston and removed particles excluded. */
 static cpl_particles particle_view(const ptl_state *ps, uint8_t *skip) {
-  for (size_t i = 0; i < ps->n; i++)
-    skip[i] = (ps->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) != 0;
+  for (size_t i = 0; i < ps->n; i++) skip[i] = (ps->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) != 0;
   cpl_particles v = {ps->n,
                      ps->x,
                      ps->y,
@@ -585,8 +560,7 @@ static void gas_return_sum(gas_ctx *c) {
   par_sum_doubles_ordered(src, 2 * ncell);
   c->cell_src = NULL;
   for (size_t k = 0; k < ncell && c->st == MS_OK; k++) {
-    if (src[2 * k] == 0 && src[2 * k + 1] == 0)
-      continue;
+    if (src[2 * k] == 0 && src[2 * k + 1] == 0) continue;
     c->st = cont_grid_add_cell_source(c->g, k, src[2 * k], src[2 * k + 1]);
     if (c->st == MS_OK) {
       c->returned_p += src[2 * k] * c->area;
@@ -605,7 +579,7 @@ static void gas_return_sum(gas_ctx *c) {
 static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_particles *view,
                            const cpl_ejecta_sel *sel, gas_ctx *gas, double t, double span,
                            ptl_state *ps, const uint8_t *skip, double *fx, double *fy, double *fz) {
-  const size_t n = view->n; /* owned particles: each rank kicks its own */
+  const size_t n = view->n;         /* owned particles: each rank kicks its own */
   double *cell_src = gas->cell_src; /* MPI: gas_deposit collects per cell */
   const bool three_d = ps->dim == 3;
   memset(fx, 0, n * sizeof *fx);
@@ -613,13 +587,11 @@ static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_pa
   memset(fz, 0, n * sizeof *fz);
   cpl_drag_fragments(p->drag_law, fr, view, sel, grid_gas, gas, t, fx, fy, fz);
   for (size_t i = 0; i < n; i++) {
-    if (skip[i] || (fx[i] == 0 && fy[i] == 0 && fz[i] == 0))
-      continue;
+    if (skip[i] || (fx[i] == 0 && fy[i] == 0 && fz[i] == 0)) continue;
     double v0[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
     ps->vx[i] += fx[i] / ps->mass[i] * span;
     ps->vy[i] += fy[i] / ps->mass[i] * span;
-    if (three_d)
-      ps->vz[i] += fz[i] / ps->mass[i] * span;
+    if (three_d) ps->vz[i] += fz[i] / ps->mass[i] * span;
     if (p->gas_return) {
       double v1[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
       double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], three_d ? ps->z[i] : 0.0};
@@ -630,8 +602,7 @@ static ms_status drag_kick(const cpl_problem *p, cpl_fragments *fr, const cpl_pa
       gas_deposit(gas, xi, t, t, dp, de);
     }
   }
-  if (cell_src)
-    gas_return_sum(gas);
+  if (cell_src) gas_return_sum(gas);
   return gas->st;
 }
 
@@ -648,14 +619,12 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
   to.rho_p = rho0;
   to.det_x = det_x;
   cpl_transport *tr = cpl_transport_create(&to, grid_gas, gas);
-  if (p->gas_return)
-    cpl_transport_set_return(tr, gas_deposit, gas);
+  if (p->gas_return) cpl_transport_set_return(tr, gas_deposit, gas);
   /* keep each flight's fragment size g for the detector spectrum */
   int64_t *gcount = ms_calloc(fr->n + 1, sizeof *gcount);
   size_t nfl = 0, big = cpl_largest_fragment(fr);
   for (size_t k = 0; k < fr->n; k++) {
-    if (!cpl_is_ejecta_with(fr, k, sel, big))
-      continue;
+    if (!cpl_is_ejecta_with(fr, k, sel, big)) continue;
     double x[3] = {fr->cx[k], fr->cy[k], fr->cz[k]}, v[3] = {fr->vx[k], fr->vy[k], fr->vz[k]};
     cpl_transport_add(tr, fr->mass[k], x, v, t0);
     gcount[nfl++] = fr->count[k];
@@ -701,8 +670,7 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
     double marr = 0;
     for (size_t i = 0; i < nfl; i++) {
       cpl_flight fl = cpl_transport_get(tr, i);
-      if (fl.state != CPL_ARRIVED)
-        continue;
+      if (fl.state != CPL_ARRIVED) continue;
       det.count[det.n] = gcount[i];
       det.mass[det.n] = fl.mass;
       det.n++;
@@ -744,13 +712,11 @@ static ms_status transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragment
  * copy's node and cell arrays, compared over the ranks at the end of the run; a difference is an
  * internal error (MS_ERR_INTERNAL on every rank). Serial: nothing to compare. */
 static ms_status check_replicated(const ms_ctx *ctx, const cont_grid *g1, const cont_grid *g2) {
-  if (ctx->size < 2)
-    return MS_OK;
+  if (ctx->size < 2) return MS_OK;
   uint64_t h = 0xcbf29ce484222325ull; /* FNV-1a offset basis */
   const cont_grid *grids[2] = {g1, g2};
   for (int k = 0; k < 2; k++) {
-    if (!grids[k])
-      continue;
+    if (!grids[k]) continue;
     cont_view v = cont_grid_view(grids[k]);
     h = dk_hash_doubles(h, v.x, v.nnodes);
     h = dk_hash_doubles(h, v.u, v.nnodes);
@@ -818,13 +784,10 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
   for (size_t i = 0; i < tmp->n; i++) {
     double drop = surface_drop(p, &modes, tmp->y[i], tmp->z[i]);
     double top = x_top - drop;
-    if (tmp->x[i] > top)
-      continue;
+    if (tmp->x[i] > top) continue;
     size_t j = ptl_state_add(ps, tmp->x[i], tmp->y[i], tmp->z[i], mass, 0);
-    if (tmp->x[i] < x_drive + p->piston_rows * row)
-      ps->flags[j] |= PTL_DRIVEN;
-    else if (tmp->x[i] > top - row)
-      ps->flags[j] |= PTL_SURFACE;
+    if (tmp->x[i] < x_drive + p->piston_rows * row) ps->flags[j] |= PTL_DRIVEN;
+    else if (tmp->x[i] > top - row) ps->flags[j] |= PTL_SURFACE;
   }
   ptl_state_free(tmp);
   ms_log(ctx, MS_LOG_INFO,
@@ -883,10 +846,11 @@ static ms_status build_region(const ms_ctx *ctx, const cpl_problem *p, double x_
  * (the cluster_dynamics defaults: auto partition, rebalance above 1.2 checked every 10 list
  * builds). Serial: nothing to do. */
 static void distribute_region(const ms_ctx *ctx, cd_sim *sim) {
-  if (ctx->size < 2)
-    return;
-  const cd_mpi_config mc = {.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
-                            .rebalance_interval = 10, .replicated = true};
+  if (ctx->size < 2) return;
+  const cd_mpi_config mc = {.partition = CD_PART_AUTO,
+                            .rebalance_threshold = 1.2,
+                            .rebalance_interval = 10,
+                            .replicated = true};
   cd_sim_set_mpi(sim, &mc);
 }
 
@@ -904,8 +868,7 @@ static void particles_unstable(const ms_ctx *ctx, cd_sim *sim, ms_status st, dou
 /* Particle steps between checkpoints: time.checkpoint_every, or checkpoint_time rounded to whole
  * steps of dt (0: none). */
 static long checkpoint_steps(const cpl_problem *p, double dt) {
-  if (p->checkpoint_every > 0)
-    return p->checkpoint_every;
+  if (p->checkpoint_every > 0) return p->checkpoint_every;
   return p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / dt)) : 0;
 }
 
@@ -913,8 +876,7 @@ static long checkpoint_steps(const cpl_problem *p, double dt) {
 static double driven_force_local(const ptl_state *ps) {
   double f = 0;
   for (size_t i = 0; i < ps->nlocal; i++)
-    if (ps->flags[i] & PTL_DRIVEN)
-      f += ps->fx[i];
+    if (ps->flags[i] & PTL_DRIVEN) f += ps->fx[i];
   return f;
 }
 
@@ -939,8 +901,8 @@ typedef struct two_way {
   int32_t *ghost_owner; /* MPI: owner rank of each ghost (fragment search) */
   double *fx, *fy, *fz;
   double ta, xa, traction; /* interface node before the current grid step; its load */
-  cpl_two_way_acc acc;      /* impulse and work exchanged so far (acc.gsteps unused: gsteps) */
-  double f_prev; /* force on this rank's driven particles after the last particle step */
+  cpl_two_way_acc acc;     /* impulse and work exchanged so far (acc.gsteps unused: gsteps) */
+  double f_prev;           /* force on this rank's driven particles after the last particle step */
   long gsteps, psteps, next_out, last_search;
   gas_ctx gas; /* gas.g == NULL: no gas section */
   /* checkpoints (docs/coupling.md §7b): every ckpt_every particle steps, at the end of a grid
@@ -956,8 +918,7 @@ typedef struct two_way {
 /* Restart: the next logged row, which must be of `kind` (else the log does not fit the deck). */
 static const double *replay_row(two_way *w, int kind) {
   const cpl_gaslog *l = &w->ls.gaslog;
-  if (w->replay_pos >= l->n || l->row[4 * w->replay_pos] != kind)
-    return NULL;
+  if (w->replay_pos >= l->n || l->row[4 * w->replay_pos] != kind) return NULL;
   return l->row + 4 * w->replay_pos++;
 }
 
@@ -978,8 +939,7 @@ static ms_status two_way_before(void *user, cont_grid *g) {
    * exchange conserves momentum exactly up to the impulse in flight */
   w->traction = w->acc.dtg_last > 0 ? -w->acc.owed / w->acc.dtg_last : 0.0;
   cont_grid_set_node_force(g, w->node, w->traction);
-  if (w->ls.gaslog.on)
-    cpl_gaslog_traction(&w->ls.gaslog, w->traction);
+  if (w->ls.gaslog.on) cpl_gaslog_traction(&w->ls.gaslog, w->traction);
   w->ta = cont_grid_time(g);
   w->xa = cont_grid_view(g).x[w->node];
   return MS_OK;
@@ -991,14 +951,12 @@ static ms_status two_way_fragments(two_way *w, double t) {
   ptl_state *ps = w->reg.ps;
   cpl_particles view;
   ms_status st = find_fragments(w->ctx, w->reg.sim, &w->fr, &w->fo, w->skip, w->ghost_owner, &view);
-  if (st != MS_OK || !w->gas.g)
-    return st;
+  if (st != MS_OK || !w->gas.g) return st;
   /* ejecta: detached fragments ahead of the gas grid's first node (the particles' free surface
    * as the gas sees it) */
   w->sel.plane = cont_grid_view(w->gas.g).x[0] + w->gas.offset;
   double row[3] = {t, cpl_ejected_mass(&w->fr, &w->sel), (double)w->fr.n};
-  if (w->f_ej)
-    ms_csv_row(w->f_ej, 3, row);
+  if (w->f_ej) ms_csv_row(w->f_ej, 3, row);
   if (p->drag_law != CPL_DRAG_NONE) {
     double span = (double)(w->psteps - w->last_search) * w->reg.sim->cfg.dt;
     st = drag_kick(p, &w->fr, &view, &w->sel, &w->gas, t, span, ps, w->skip, w->fx, w->fy, w->fz);
@@ -1015,11 +973,12 @@ static ms_status two_way_replay(two_way *w) {
   ms_status st = MS_OK;
   while (st == MS_OK && w->replay_pos < l->n && l->row[4 * w->replay_pos] != CPL_LOG_TRACTION)
     st = w->gas.g ? cpl_gaslog_apply(l->row + 4 * w->replay_pos++, w->gas.g) : MS_ERR_INPUT;
-  if (st == MS_OK && ++w->gsteps == w->replay_gsteps && w->replay_pos != l->n)
-    st = MS_ERR_INPUT;
+  if (st == MS_OK && ++w->gsteps == w->replay_gsteps && w->replay_pos != l->n) st = MS_ERR_INPUT;
   if (st != MS_OK)
-    ms_log(w->ctx, MS_LOG_ERROR, "coupled: replaying the checkpoint's grid log failed at entry "
-           "%zu (grid step %ld)", w->replay_pos, w->gsteps);
+    ms_log(w->ctx, MS_LOG_ERROR,
+           "coupled: replaying the checkpoint's grid log failed at entry "
+           "%zu (grid step %ld)",
+           w->replay_pos, w->gsteps);
   return st;
 }
 
@@ -1030,16 +989,14 @@ static ms_status two_way_checkpoint(two_way *w) {
   w->ls.returned_p = w->gas.returned_p, w->ls.returned_e = w->gas.returned_e;
   w->ls.tw = w->acc;
   w->ls.tw.gsteps = (double)w->gsteps;
-  ms_status st = cpl_checkpoint_write(w->ctx, w->p->deck_hash, w->reg.sim, &w->ls, w->csv,
-                                      w->ncsv);
+  ms_status st = cpl_checkpoint_write(w->ctx, w->p->deck_hash, w->reg.sim, &w->ls, w->csv, w->ncsv);
   w->f_prev = driven_force_local(w->reg.ps); /* the refresh recomputed the forces */
   return st;
 }
 
 static ms_status two_way_after(void *user, cont_grid *g) {
   two_way *w = user;
-  if (w->gsteps < w->replay_gsteps)
-    return two_way_replay(w);
+  if (w->gsteps < w->replay_gsteps) return two_way_replay(w);
   cpl_problem *p = w->p;
   cd_sim *sim = w->reg.sim;
   ptl_state *ps = w->reg.ps;
@@ -1053,8 +1010,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
   w->acc.owed += w->traction * dtg;
   /* sub-cycle: whole number of particle steps over the grid step */
   long nsub = (long)ceil(dtg / w->reg.cfg.dt * (1 - 1e-12));
-  if (nsub < 1)
-    nsub = 1;
+  if (nsub < 1) nsub = 1;
   sim->cfg.dt = dtg / (double)nsub;
   sim->piston.t[0] = sim->t;
   sim->piston.t[1] = sim->t + dtg;
@@ -1076,8 +1032,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
    * shares add up to the whole even when driven particles migrate between the sub-steps); one
    * fixed-order sum per grid step gives every rank the same bits, so the replicated grids stay
    * bitwise equal (docs/mpi.md "The coupled problem on MPI ranks") */
-  if (w->ctx->size > 1)
-    par_sum_doubles_ordered(&imp, 1);
+  if (w->ctx->size > 1) par_sum_doubles_ordered(&imp, 1);
   /* the piston's work on the particles: velocity Verlet's ½(F_old + F_new)·Δs with Δs = ū Δt
    * over every sub-step, i.e. ū × impulse (cd_sim's piston_work to round-off; this sum is the
    * same on every rank and continues bit for bit after a restart) */
@@ -1103,15 +1058,12 @@ static ms_status two_way_after(void *user, cont_grid *g) {
       return st;
     }
   }
-  double row[8] = {tb,        ubar,      w->acc.p_avg, ufs,
-                   w->acc.Jg, w->acc.Jp, w->acc.Wg,    w->acc.Wp / area};
-  if (w->f_if)
-    ms_csv_row(w->f_if, 8, row);
+  double row[8] = {tb, ubar, w->acc.p_avg, ufs, w->acc.Jg, w->acc.Jp, w->acc.Wg, w->acc.Wp / area};
+  if (w->f_if) ms_csv_row(w->f_if, 8, row);
   bool out_now = tb >= p->t_end * (double)w->next_out / (double)p->n_out * (1 - 1e-12);
   if (out_now || (w->gas.g && w->psteps - w->last_search >= p->frag_every)) {
     st = two_way_fragments(w, tb);
-    if (st != MS_OK)
-      return st;
+    if (st != MS_OK) return st;
   }
   if (out_now) {
     char name[64];
@@ -1149,8 +1101,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   w.node = cont_grid_history(g, p->tag_drive).node;
   const double x_if0 = cont_grid_view(g).x[w.node];
   ms_status st = build_region(ctx, p, x_if0, p->depth, &w.reg);
-  if (st != MS_OK)
-    return st;
+  if (st != MS_OK) return st;
   cd_sim *sim = w.reg.sim;
   ptl_state *ps = w.reg.ps;
   double th[2] = {0, 1}, uh[2] = {0, 0}, dir[3] = {1, 0, 0};
@@ -1174,13 +1125,10 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   w.f_ej = p->gas_grid ? open_csv(ctx, &af_ej, "ejecta_mass.csv") : NULL;
   w.csv[0] = &af_if, w.csv[1] = &af_ej, w.ncsv = p->gas_grid ? 2 : 1;
   st = ctx->rank == 0 && (!w.f_if || (p->gas_grid && !w.f_ej)) ? MS_ERR_IO : MS_OK;
-  if (dist)
-    st = par_agree_status(st);
+  if (dist) st = par_agree_status(st);
   if (st != MS_OK) {
-    if (w.f_if)
-      ms_afile_abort(&af_if);
-    if (w.f_ej)
-      ms_afile_abort(&af_ej);
+    if (w.f_if) ms_afile_abort(&af_if);
+    if (w.f_ej) ms_afile_abort(&af_ej);
     cd_sim_free(sim);
     return st;
   }
@@ -1190,22 +1138,23 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
                                       "GPa*10us", "GPa*10us", "kJ/cm^2", "kJ/cm^2"};
   if (w.f_if && !ctx->restart) /* a restart writes back the text so far */
     ms_csv_header(w.f_if,
-                "two-way interface: node velocity, particle pressure, impulse and work "
-                "per unit area as the grid and the particles received them",
-                8, names, units);
+                  "two-way interface: node velocity, particle pressure, impulse and work "
+                  "per unit area as the grid and the particles received them",
+                  8, names, units);
   if (w.f_ej && !ctx->restart) {
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
-    ms_csv_header(w.f_ej, "ejected mass (fragments but the largest, ahead of the particles' "
-                          "free surface) vs time", 3, ejn, eju);
+    ms_csv_header(w.f_ej,
+                  "ejected mass (fragments but the largest, ahead of the particles' "
+                  "free surface) vs time",
+                  3, ejn, eju);
   }
   cpl_fragments_init(&w.fr);
   w.fo.bond = p->bond;
   w.fo.spacing = w.reg.a;
   w.fo.rho0 = w.reg.rho0;
   w.fo.box.period[1] = w.reg.width;
-  if (w.reg.fcc)
-    w.fo.box.period[2] = w.reg.width_z;
+  if (w.reg.fcc) w.fo.box.period[2] = w.reg.width_z;
   cpl_ejecta_sel_default(&w.sel);
   w.skip = ms_calloc(nglobal + 1, 1);
   w.ghost_owner = dist ? ms_calloc(nglobal + 1, sizeof *w.ghost_owner) : NULL;
@@ -1215,8 +1164,16 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   if (p->gas_grid) {
     cont_grid *gg = cont_problem_grid(p->gas_grid);
     /* the gas grid's first node sits on the particles' nominal free surface */
-    w.gas = (gas_ctx){gg, p->gas_layer, p->mats->m[p->gas_mat].viscosity,
-                      w.reg.x_top - cont_grid_view(gg).x[0], w.reg.area, MS_OK, 0, 0, NULL, NULL};
+    w.gas = (gas_ctx){gg,
+                      p->gas_layer,
+                      p->mats->m[p->gas_mat].viscosity,
+                      w.reg.x_top - cont_grid_view(gg).x[0],
+                      w.reg.area,
+                      MS_OK,
+                      0,
+                      0,
+                      NULL,
+                      NULL};
     if (dist && p->gas_return) /* per-cell sources summed over the ranks (gas_return_sum) */
       w.gas.cell_src = ms_calloc(2 * cont_grid_ncells(gg) + 1, sizeof *w.gas.cell_src);
     w.gas.log = w.ls.gaslog.on ? &w.ls.gaslog : NULL;
@@ -1225,8 +1182,8 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
     st = cpl_checkpoint_restore(ctx, p->deck_hash, sim, &w.ls, NULL, w.csv, w.ncsv);
     const size_t nckpt = dist ? (size_t)par_sum_long((long)sim->p->nlocal) : sim->p->n;
     if (st == MS_OK && nckpt != nglobal) {
-      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu",
-             nckpt, nglobal);
+      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu", nckpt,
+             nglobal);
       st = MS_ERR_INPUT;
     }
     ps = w.reg.ps = sim->p;
@@ -1243,38 +1200,33 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
          w.node, x_if0, p->depth, w.reg.cfg.dt,
          p->gas_grid ? ", gas grid beyond the free surface" : "");
   cont_step_hooks hooks = {two_way_before, two_way_after, &w, p->t_end};
-  if (st == MS_OK)
-    st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
+  if (st == MS_OK) st = cont_problem_run_hooked(ctx, p->grid_live, &hooks);
   if (st == MS_OK && w.gsteps < w.replay_gsteps) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint is beyond the end of this deck's run");
     st = MS_ERR_INPUT;
   }
   ms_status s2 = commit_csv(&af_if);
-  if (st == MS_OK)
-    st = s2;
+  if (st == MS_OK) st = s2;
   if (w.f_ej) {
     s2 = commit_csv(&af_ej);
-    if (st == MS_OK)
-      st = s2;
+    if (st == MS_OK) st = s2;
   }
   /* the transport runs replicated and deposits its returns directly (not checkpointed) */
   free(w.gas.cell_src);
   w.gas.cell_src = NULL;
   w.gas.log = NULL;
   cpl_gaslog_free(&w.ls.gaslog);
-  if (st == MS_OK)
-    st = write_table(ctx, "spectrum.csv", &w.fr, 0, NULL, NULL);
+  if (st == MS_OK) st = write_table(ctx, "spectrum.csv", &w.fr, 0, NULL, NULL);
   if (dist) /* rank 0's file errors stop every rank */
     st = par_agree_status(st);
   if (p->gas_grid) /* at the end of the particle phase (the transport moves it on) */
     p->sum.gas_shift = cont_grid_view(w.gas.g).x[0] + w.gas.offset - w.reg.x_top;
   if (st == MS_OK && p->gas_grid) {
-    const char *tables[] = {"fragments.csv", "cumulative.csv", "mass_hist.csv",
-                            "diameter_hist.csv", "ejecta_velocity.csv"};
+    const char *tables[] = {"fragments.csv", "cumulative.csv", "mass_hist.csv", "diameter_hist.csv",
+                            "ejecta_velocity.csv"};
     for (int k = 0; k < 5 && st == MS_OK; k++)
       st = write_table(ctx, tables[k], &w.fr, k + 1, &w.sel, NULL);
-    if (dist)
-      st = par_agree_status(st);
+    if (dist) st = par_agree_status(st);
     if (st == MS_OK && p->det_distance > 0 && p->transport_end > cont_grid_time(g))
       st = transport_phase(ctx, p, &w.fr, &w.sel, &w.gas, cont_grid_time(g),
                            w.reg.x_top + p->det_distance, w.reg.rho0);
@@ -1290,17 +1242,15 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
   p->sum.work_grid = w.acc.Wg;
   p->sum.work_particles = w.acc.w_before / w.reg.area;
   p->sum.piston_work = w.acc.Wp;
-  if (st == MS_OK)
-    st = check_replicated(ctx, g, w.gas.g);
-  const double jsum = w.acc.Jg + p->sum.impulse_particles,
-               wsum = w.acc.Wg + p->sum.work_particles;
+  if (st == MS_OK) st = check_replicated(ctx, g, w.gas.g);
+  const double jsum = w.acc.Jg + p->sum.impulse_particles, wsum = w.acc.Wg + p->sum.work_particles;
   ms_log(ctx, MS_LOG_INFO,
          "coupled: two-way interface balance (per cm^2, the last grid step's exchange in "
          "flight excluded): impulse grid %.6g + particles %.6g = %.3g (%.2g of it); work grid "
          "%.6g + particles %.6g = %.3g (%.2g of it)",
          w.acc.Jg, p->sum.impulse_particles, jsum,
-         jsum / fmax(fabs(p->sum.impulse_particles), 1e-300), w.acc.Wg, p->sum.work_particles,
-         wsum, wsum / fmax(fabs(p->sum.work_particles), 1e-300));
+         jsum / fmax(fabs(p->sum.impulse_particles), 1e-300), w.acc.Wg, p->sum.work_particles, wsum,
+         wsum / fmax(fabs(p->sum.work_particles), 1e-300));
   cpl_fragments_free(&w.fr);
   free(w.skip);
   free(w.ghost_owner);
@@ -1315,8 +1265,7 @@ static ms_status run_two_way(ms_ctx *ctx, cpl_problem *p) {
  * every rank, into *buf (the caller frees it). Serial: nothing to do. */
 static void share_history(const ms_ctx *ctx, cont_history *h, double **buf) {
   *buf = NULL;
-  if (ctx->size < 2)
-    return;
+  if (ctx->size < 2) return;
   double nd = (double)h->n;
   par_bcast_doubles(&nd, 1, 0);
   const size_t n = (size_t)nd;
@@ -1338,13 +1287,11 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
                           double margin, cpl_ejecta_classes *out) {
   double deepest = INFINITY;
   for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
-    if (fr->id[i] >= 0 && view->x[i] < deepest)
-      deepest = view->x[i];
+    if (fr->id[i] >= 0 && view->x[i] < deepest) deepest = view->x[i];
   const double dmin = par_min_double(deepest);
   int64_t bulk = -1;
   for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
-    if (fr->id[i] >= 0 && view->x[i] == dmin)
-      bulk = fr->id[i] > bulk ? fr->id[i] : bulk;
+    if (fr->id[i] >= 0 && view->x[i] == dmin) bulk = fr->id[i] > bulk ? fr->id[i] : bulk;
   bulk = par_max_int64(bulk);
   double zero = 0;
   cpl_particles one = {.n = bulk >= 0 ? 1 : 0, .x = &dmin, .y = &zero};
@@ -1356,14 +1303,12 @@ static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, do
 }
 
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
-  if (p->drive_mode == DRIVE_TWO_WAY)
-    return run_two_way(ctx, p);
+  if (p->drive_mode == DRIVE_TWO_WAY) return run_two_way(ctx, p);
   ms_status st;
   /* 1. the grid alone, with its own outputs */
   ms_log(ctx, MS_LOG_INFO, "coupled: 1/3 grid run (U(t) of the drive node)");
   st = cont_problem_run(ctx, p->grid_out);
-  if (st != MS_OK)
-    return st;
+  if (st != MS_OK) return st;
   const cont_grid *gout = cont_problem_grid(p->grid_out);
   cont_history hd = cont_grid_history(gout, p->tag_drive);
   cont_history hf = cont_grid_history(gout, p->tag_fs);
@@ -1387,11 +1332,9 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
 
   /* particle phase starts a little before the drive node moves (saves steps) */
   double umax = 0;
-  for (size_t k = 0; k < hd.n; k++)
-    umax = fmax(umax, fabs(hd.u[k]));
+  for (size_t k = 0; k < hd.n; k++) umax = fmax(umax, fabs(hd.u[k]));
   size_t k0 = 0;
-  while (k0 + 1 < hd.n && fabs(hd.u[k0 + 1]) <= 1e-3 * umax)
-    k0++;
+  while (k0 + 1 < hd.n && fabs(hd.u[k0 + 1]) <= 1e-3 * umax) k0++;
   double t_start = hd.t[k0];
   if (!(p->t_end > t_start)) {
     ms_log(ctx, MS_LOG_ERROR, "coupled: time.end = %g is before the drive node moves (t = %g)",
@@ -1434,8 +1377,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     ph.u[k] = hd.u[k0 + k];
   }
   double dir[3] = {1, 0, 0};
-  if (p->drive_mode == 1)
-    ph.n = 2; /* rewritten in place every step (transmitting piston) */
+  if (p->drive_mode == 1) ph.n = 2; /* rewritten in place every step (transmitting piston) */
   cd_sim_set_piston(sim, &ph, dir);
   free(ph.t);
   free(ph.u);
@@ -1463,7 +1405,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   /* 3. the particle phase, with the live grid supplying the gas */
   cont_grid *glive = cont_problem_grid(p->grid_live);
   gas_ctx gas = {glive, p->gas_layer, p->mats->m[p->gas_mat].viscosity, 0.0, reg.area, MS_OK, 0, 0,
-                 NULL, NULL};
+                 NULL,  NULL};
   if (dist && p->gas_return) /* the transport phase runs replicated: it deposits directly */
     gas.cell_src = ms_calloc(2 * cont_grid_ncells(glive) + 1, sizeof *gas.cell_src);
   cpl_loop_state ls = {0}; /* checkpoints (set up below) */
@@ -1475,8 +1417,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   fo.spacing = a;
   fo.rho0 = rho0;
   fo.box.period[1] = width;
-  if (fcc)
-    fo.box.period[2] = width_z;
+  if (fcc) fo.box.period[2] = width_z;
   cpl_ejecta_sel sel;
   cpl_ejecta_sel_default(&sel);
   size_t n = nglobal; /* owned + ghosts never exceed the global count */
@@ -1488,10 +1429,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
   FILE *f_ej = open_csv(ctx, &af_ej, "ejecta_mass.csv");
   FILE *f_fs = open_csv(ctx, &af_fs, "free_surface.csv");
   st = ctx->rank == 0 && (!f_ej || !f_fs) ? MS_ERR_IO : MS_OK;
-  if (dist)
-    st = par_agree_status(st);
-  if (st != MS_OK)
-    goto particle_done;
+  if (dist) st = par_agree_status(st);
+  if (st != MS_OK) goto particle_done;
   if (!ctx->restart && f_ej) { /* a restart writes back the text so far */
     static const char *const ejn[] = {"t", "M_ej", "fragments"};
     static const char *const eju[] = {"10us", "g", "1"};
@@ -1523,8 +1462,8 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     st = cpl_checkpoint_restore(ctx, p->deck_hash, sim, &ls, glive, csv, 2);
     const size_t nckpt = dist ? (size_t)par_sum_long((long)sim->p->nlocal) : sim->p->n;
     if (st == MS_OK && nckpt != n) {
-      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu",
-             nckpt, n);
+      ms_log(ctx, MS_LOG_ERROR, "coupled: the checkpoint holds %zu particles, this deck %zu", nckpt,
+             n);
       st = MS_ERR_INPUT;
     }
     ps = reg.ps = sim->p;
@@ -1544,8 +1483,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       ls.p_particles = p_particles, ls.e0 = e0, ls.fs_n = fs_n;
       ls.returned_p = gas.returned_p, ls.returned_e = gas.returned_e;
       st = cpl_checkpoint_write(ctx, p->deck_hash, sim, &ls, csv, 2);
-      if (st != MS_OK)
-        break;
+      if (st != MS_OK) break;
     }
     if (p->drive_mode == 1) {
       /* grid state over the step: mean velocity (exact displacement) and sample-side
@@ -1563,8 +1501,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     if (p->drive_mode == 1) {
       double fsum = 0;
       for (size_t i = 0; i < ps->nlocal; i++)
-        if (ps->flags[i] & PTL_DRIVEN)
-          fsum += ps->fx[i];
+        if (ps->flags[i] & PTL_DRIVEN) fsum += ps->fx[i];
       if (dist) /* rank order: every rank's piston gets the same bits */
         par_sum_doubles_ordered(&fsum, 1);
       p_particles = -fsum / area; /* compression pushes the piston towards −x */
@@ -1574,8 +1511,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       break;
     }
     bool out_now = step * p->n_out >= next_out * nsteps;
-    if (step % p->frag_every && !out_now && step != nsteps)
-      continue;
+    if (step % p->frag_every && !out_now && step != nsteps) continue;
     double t_abs = t_start + sim->t;
     /* fragments, ejected mass, drag kick over the interval since the last search */
     cpl_particles view;
@@ -1590,8 +1526,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     /* ejecta: detached fragments ahead of the grid's free surface at this time */
     sel.plane = hf.x[0] + cpl_piston_displacement(&fsurf, t_abs);
     double row_ej[3] = {t_abs, cpl_ejected_mass(&fr, &sel), (double)fr.n};
-    if (f_ej)
-      ms_csv_row(f_ej, 3, row_ej);
+    if (f_ej) ms_csv_row(f_ej, 3, row_ej);
     if (p->drag_law != CPL_DRAG_NONE) {
       st = cont_grid_run_to(glive, t_abs);
       if (st != MS_OK) {
@@ -1612,8 +1547,7 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     /* free-surface check */
     double ug = cpl_piston_velocity(&fsurf, t_abs), up = cd_free_surface_velocity(sim, 0);
     double row_fs[3] = {t_abs, ug, up};
-    if (f_fs)
-      ms_csv_row(f_fs, 3, row_fs);
+    if (f_fs) ms_csv_row(f_fs, 3, row_fs);
     if (fs_n < fs_cap) {
       fs_t[fs_n] = t_abs;
       fs_ug[fs_n] = ug;
@@ -1627,17 +1561,14 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
       cpl_snapshot_info info = {t_abs, a, rho0, fo.box};
       st = cpl_write_snapshot(path, &view, &fr, &info);
       free(path);
-      if (st != MS_OK)
-        break;
+      if (st != MS_OK) break;
       snprintf(name, sizeof name, "spectrum_%04ld.csv", next_out);
       char title[160];
       snprintf(title, sizeof title, "fragment spectrum N(g) at t = %g (10us), b = %g", t_abs,
                p->bond);
       st = write_table(ctx, name, &fr, 0, &sel, title);
-      if (dist)
-        st = par_agree_status(st); /* rank 0's file error stops every rank */
-      if (st != MS_OK)
-        break;
+      if (dist) st = par_agree_status(st); /* rank 0's file error stops every rank */
+      if (st != MS_OK) break;
       cd_energy en;
       cd_sim_energy(sim, &en);
       ms_log(ctx, MS_LOG_INFO,
@@ -1685,13 +1616,10 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
      * phase, as in the drive check) until it first falls below 90 % of the running maximum
      * (later peaks are reverberations in the unbroken grid) */
     double u_all = 0, u_ref = 0;
-    for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++)
-      u_all = fmax(u_all, hf.u[k]);
+    for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++) u_all = fmax(u_all, hf.u[k]);
     for (size_t k = 0; k < hf.n && hf.t[k] <= t_start + sim->t; k++) {
-      if (hf.u[k] < 0.05 * u_all)
-        continue;
-      if (hf.u[k] < 0.9 * u_ref)
-        break;
+      if (hf.u[k] < 0.05 * u_all) continue;
+      if (hf.u[k] < 0.9 * u_ref) break;
       u_ref = fmax(u_ref, hf.u[k]);
     }
     cpl_particles view = particle_view(ps, skip);
@@ -1721,21 +1649,17 @@ ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p) {
     for (int k = 0; k < 6 && st == MS_OK; k++)
       st = write_table(ctx, names[k], &fr, k, &sel, k == 0 ? title : NULL);
   }
-  if (dist)
-    st = par_agree_status(st);
+  if (dist) st = par_agree_status(st);
 particle_done:
   if (f_ej) {
     ms_status s2 = commit_csv(&af_ej);
-    if (st == MS_OK)
-      st = s2;
+    if (st == MS_OK) st = s2;
   }
   if (f_fs) {
     ms_status s2 = commit_csv(&af_fs);
-    if (st == MS_OK)
-      st = s2;
+    if (st == MS_OK) st = s2;
   }
-  if (dist)
-    st = par_agree_status(st);
+  if (dist) st = par_agree_status(st);
 
   /* 4. transport of the ejecta to the detector (not checkpointed: no gas log) */
   gas.log = NULL;
@@ -1744,8 +1668,7 @@ particle_done:
   cpl_gaslog_free(&ls.gaslog);
   if (st == MS_OK && p->det_distance > 0 && p->transport_end > t_start + sim->t)
     st = transport_phase(ctx, p, &fr, &sel, &gas, t_start + sim->t, x_fs + p->det_distance, rho0);
-  if (st == MS_OK)
-    st = check_replicated(ctx, glive, NULL);
+  if (st == MS_OK) st = check_replicated(ctx, glive, NULL);
   cpl_fragments_free(&fr);
   free(skip);
   free(ghost_owner);

@@ -1,4 +1,4 @@
-/* cpl.h — the one public header of the coupling library (DESIGN.md §6, docs/coupling.md).
+/* cpl.h — the one public header of the coupling library (docs/design.md §6, docs/coupling.md).
  *
  * What lives here:
  *   - fragments: bonds |r_i − r_k| ≤ b·a, connected components by union–find over a cell-list
@@ -10,7 +10,7 @@
  *   - the piston drive built from a tagged grid node's history (displacement-preserving), and the
  *     interfaces the one-way drive and two-way coupling expect from the grid and the particles.
  *
- * Units are internal (DESIGN.md §2): g, cm, 10 µs; velocity km/s, viscosity g/(cm·10 µs),
+ * Units are internal (docs/design.md §2): g, cm, 10 µs; velocity km/s, viscosity g/(cm·10 µs),
  * force g·cm/(10 µs)², energy kJ.
  */
 #ifndef MSCALE_CPL_H
@@ -147,7 +147,7 @@ bool cpl_is_ejecta(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s);
 /* Total ejected mass (for the ejected-mass-vs-time history). */
 double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s);
 
-/* Jets vs spall (paper 002 §4.2; docs/coupling.md §9). Detached material = every fragment but
+/* Jets vs spall ([Davydov] §4.2; docs/coupling.md §9). Detached material = every fragment but
  * the bulk, the fragment holding the deepest particle (smallest normal·r; the piston side, so a
  * spalled slab larger than what stays behind is still detached). Each detached fragment is a
  * jet if its centre-of-mass normal velocity exceeds (1 + margin)·u_ref (u_ref: the flat free
@@ -191,7 +191,7 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
                              const cpl_snapshot_info *info);
 
 /* ========================================================================================== */
-/* Gas drag (DESIGN.md §6; Schiller–Naumann as in the Logos multiphase paper, seed 004)        */
+/* Gas drag (docs/design.md §6; Schiller–Naumann as in the Logos multiphase paper, [Logos])        */
 
 /* Gas state at a point: density g/cm³, velocity km/s, pressure GPa, dynamic viscosity
  * g/(cm·10 µs) (air at 300 K: 1.8e-5 Pa·s = 1.8e-9 internal). */
@@ -215,13 +215,13 @@ double cpl_reynolds(const cpl_gas *g, double d, const double v[3]);
 /* Drag force on a sphere of diameter d moving with v: F = ½ ρ_g C_D (π d²/4) |v_r| v_r with
  * v_r = u_g − v, evaluated as F = 3π μ d f(Re) v_r (finite at v_r → 0). */
 void cpl_drag_force(cpl_drag_law law, const cpl_gas *g, double d, const double v[3], double F[3]);
-/* Stokes relaxation time τ = ρ_p d²/(18 μ) (seed 004, Logos paper). */
+/* Stokes relaxation time τ = ρ_p d²/(18 μ) ([Logos], Logos paper). */
 double cpl_stokes_time(double rho_p, double d, double mu);
 
 /* Gas state at position x and time t. Returns false where there is no gas (no drag there). */
 typedef bool (*cpl_gas_fn)(void *user, const double x[3], double t, cpl_gas *out);
 
-/* Particle phase (DESIGN.md §6: the force is shared over the fragment's particles): add to
+/* Particle phase (docs/design.md §6: the force is shared over the fragment's particles): add to
  * particle i's force m_i/M times its fragment's drag, the fragment moving with its centre-of-
  * mass velocity with diameter f->diameter (so f must have been found with rho0 > 0). Only the
  * fragments selected by `sel` feel drag (NULL: all). fz may be NULL (2D). Uses f's scratch,
@@ -381,11 +381,11 @@ void cpl_problem_free(cpl_problem *p);
 typedef struct cpl_run_summary {
   size_t particles;
   long steps;
-  cpl_fs_check check;    /* free-surface drive check */
-  double energy_balance; /* (E(t_end) − E(0))/piston work of the particle phase */
-  double piston_work;    /* kJ */
-  size_t fragments;      /* at the end of the particle phase */
-  double ejected_mass;   /* g (every fragment but the largest) */
+  cpl_fs_check check;         /* free-surface drive check */
+  double energy_balance;      /* (E(t_end) − E(0))/piston work of the particle phase */
+  double piston_work;         /* kJ */
+  size_t fragments;           /* at the end of the particle phase */
+  double ejected_mass;        /* g (every fragment but the largest) */
   cpl_ejecta_classes classes; /* jets vs slow detached material at the end (one-way runs) */
   double u_ref;               /* the grid's free-surface jump-off velocity (first peak) */
   size_t transported, arrived;

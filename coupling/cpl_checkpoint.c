@@ -51,10 +51,10 @@ void cpl_gaslog_free(cpl_gaslog *l) {
   memset(l, 0, sizeof *l);
 }
 
-static const char *const loop_attrs[] = {
-    "step",   "next_out", "last_search", "p_particles", "returned_p", "returned_e",
-    "gsteps", "J_grid",   "J_particles", "W_grid",      "W_particles", "owed",
-    "dtg_last", "p_avg",  "w_before"};
+static const char *const loop_attrs[] = {"step",        "next_out",   "last_search", "p_particles",
+                                         "returned_p",  "returned_e", "gsteps",      "J_grid",
+                                         "J_particles", "W_grid",     "W_particles", "owed",
+                                         "dtg_last",    "p_avg",      "w_before"};
 enum { N_TW = sizeof(cpl_two_way_acc) / sizeof(double) };
 enum { N_LOOP = sizeof loop_attrs / sizeof *loop_attrs, N_E0 = sizeof(cd_energy) / sizeof(double) };
 _Static_assert(N_LOOP == 6 + N_TW, "loop_attrs: 6 loop values, then cpl_two_way_acc in order");
@@ -97,8 +97,10 @@ static ms_status read_table(ms_h5r *h, const char *name, size_t ncol, size_t nma
   size_t nc = 0;
   ms_status st = ms_h5_read_doubles_rows(h, name, 0, SIZE_MAX, v, n, &nc, e);
   if (st == MS_OK && (nc != ncol || *n > nmax)) {
-    dk_error_at(e, "checkpoint", 0, 0, "'%s' has %zu rows of %zu values, expected at most %zu of "
-                "%zu", name, *n, nc, nmax, ncol);
+    dk_error_at(e, "checkpoint", 0, 0,
+                "'%s' has %zu rows of %zu values, expected at most %zu of "
+                "%zu",
+                name, *n, nc, nmax, ncol);
     st = MS_ERR_INPUT;
   }
   return st;

@@ -28,10 +28,10 @@ void cpl_gaslog_free(cpl_gaslog *l);
 
 /* The two-way loop's accumulators (coupled.c, struct two_way), as the checkpoint stores them. */
 typedef struct cpl_two_way_acc {
-  double gsteps;                 /* grid steps done */
-  double Jg, Jp, Wg, Wp;         /* impulse and work per cm² as grid and particles received them */
-  double owed, dtg_last, p_avg;  /* impulse in flight, last grid step, particle pressure */
-  double w_before;               /* Wp before the last grid step */
+  double gsteps;                /* grid steps done */
+  double Jg, Jp, Wg, Wp;        /* impulse and work per cm² as grid and particles received them */
+  double owed, dtg_last, p_avg; /* impulse in flight, last grid step, particle pressure */
+  double w_before;              /* Wp before the last grid step */
 } cpl_two_way_acc;
 
 /* The particle-phase loop's own state at the end of a step. */

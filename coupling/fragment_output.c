@@ -1,4 +1,4 @@
-/* Fragment spectra and the distributions ejecta experiments report (DESIGN.md §6):
+/* Fragment spectra and the distributions ejecta experiments report (docs/design.md §6):
  * N(g), per-fragment table, cumulative N(≥m), mass/diameter histograms, ejected mass vs
  * velocity. Every table is a CSV with core's units header. */
 #include "cpl_impl.h"
@@ -14,10 +14,8 @@ void cpl_spectrum_build(const cpl_fragments *f, cpl_spectrum *s) {
   memset(s, 0, sizeof *s);
   int64_t gmax = 0;
   for (size_t k = 0; k < f->n; k++)
-    if (f->count[k] > gmax)
-      gmax = f->count[k];
-  if (!f->n)
-    return;
+    if (f->count[k] > gmax) gmax = f->count[k];
+  if (!f->n) return;
   /* dense histogram over g = 1..gmax, then compress to the g that occur */
   int64_t *cnt = ms_calloc((size_t)gmax + 1, sizeof *cnt);
   double *mass = ms_calloc((size_t)gmax + 1, sizeof *mass);
@@ -26,8 +24,7 @@ void cpl_spectrum_build(const cpl_fragments *f, cpl_spectrum *s) {
     mass[f->count[k]] += f->mass[k];
   }
   size_t rows = 0;
-  for (int64_t g = 1; g <= gmax; g++)
-    rows += cnt[g] > 0;
+  for (int64_t g = 1; g <= gmax; g++) rows += cnt[g] > 0;
   s->g = ms_calloc(rows, sizeof *s->g);
   s->count = ms_calloc(rows, sizeof *s->count);
   s->mass = ms_calloc(rows, sizeof *s->mass);
@@ -43,8 +40,7 @@ void cpl_spectrum_build(const cpl_fragments *f, cpl_spectrum *s) {
 }
 
 void cpl_spectrum_free(cpl_spectrum *s) {
-  if (!s)
-    return;
+  if (!s) return;
   free(s->g);
   free(s->count);
   free(s->mass);
@@ -64,14 +60,12 @@ void cpl_ejecta_sel_default(cpl_ejecta_sel *s) {
 size_t cpl_largest_fragment(const cpl_fragments *f) {
   size_t best = (size_t)-1;
   for (size_t k = 0; k < f->n; k++)
-    if (best == (size_t)-1 || f->mass[k] > f->mass[best])
-      best = k;
+    if (best == (size_t)-1 || f->mass[k] > f->mass[best]) best = k;
   return best;
 }
 
 bool cpl_is_ejecta_with(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s, size_t largest) {
-  if (s->exclude_largest && k == largest)
-    return false;
+  if (s->exclude_largest && k == largest) return false;
   double r = s->normal[0] * f->cx[k] + s->normal[1] * f->cy[k] + s->normal[2] * f->cz[k];
   return r > s->plane;
 }
@@ -84,8 +78,7 @@ double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s) {
   size_t big = s->exclude_largest ? cpl_largest_fragment(f) : (size_t)-1;
   double m = 0;
   for (size_t k = 0; k < f->n; k++)
-    if (cpl_is_ejecta_with(f, k, s, big))
-      m += f->mass[k];
+    if (cpl_is_ejecta_with(f, k, s, big)) m += f->mass[k];
   return m;
 }
 
@@ -124,10 +117,8 @@ typedef struct keyed {
 
 static int cmp_desc(const void *a, const void *b) {
   const keyed *x = a, *y = b;
-  if (x->key > y->key)
-    return -1;
-  if (x->key < y->key)
-    return 1;
+  if (x->key > y->key) return -1;
+  if (x->key < y->key) return 1;
   return (x->k > y->k) - (x->k < y->k);
 }
 
@@ -136,18 +127,15 @@ void cpl_write_cumulative(FILE *out, const cpl_fragments *f, const char *title) 
   static const char *const units[] = {"g", "fragments", "g"};
   ms_csv_header(out, title ? title : "cumulative N(>=m) and mass in fragments >= m", 3, names,
                 units);
-  if (!f->n)
-    return;
+  if (!f->n) return;
   keyed *o = ms_calloc(f->n, sizeof *o);
-  for (size_t k = 0; k < f->n; k++)
-    o[k] = (keyed){f->mass[k], k};
+  for (size_t k = 0; k < f->n; k++) o[k] = (keyed){f->mass[k], k};
   qsort(o, f->n, sizeof *o, cmp_desc);
   double msum = 0;
   for (size_t r = 0; r < f->n; r++) {
     msum += o[r].key;
     /* one row per distinct mass: the row carries everything at least this heavy */
-    if (r + 1 < f->n && o[r + 1].key == o[r].key)
-      continue;
+    if (r + 1 < f->n && o[r + 1].key == o[r].key) continue;
     fprintf(out, "%.10g,%zu,%.10g\n", o[r].key, r + 1, msum);
   }
   free(o);
@@ -163,19 +151,15 @@ void cpl_write_histogram(FILE *out, const cpl_fragments *f, cpl_hist_of what, in
                       : (what == CPL_HIST_MASS ? "fragment mass distribution (log bins)"
                                                : "equivalent-diameter distribution (log bins)"),
                 4, names, units);
-  if (nbins < 1 || !f->n)
-    return;
+  if (nbins < 1 || !f->n) return;
   const double *val = what == CPL_HIST_MASS ? f->mass : f->diameter;
   double lo = INFINITY, hi = -INFINITY;
   for (size_t k = 0; k < f->n; k++)
     if (isfinite(val[k]) && val[k] > 0) {
-      if (val[k] < lo)
-        lo = val[k];
-      if (val[k] > hi)
-        hi = val[k];
+      if (val[k] < lo) lo = val[k];
+      if (val[k] > hi) hi = val[k];
     }
-  if (!(lo <= hi))
-    return;
+  if (!(lo <= hi)) return;
   /* widen a degenerate range so every value falls inside one bin */
   double llo = log(lo), lhi = log(hi);
   if (lhi - llo < 1e-12) {
@@ -186,13 +170,10 @@ void cpl_write_histogram(FILE *out, const cpl_fragments *f, cpl_hist_of what, in
   double *cnt = ms_calloc((size_t)nbins, sizeof *cnt);
   double *mass = ms_calloc((size_t)nbins, sizeof *mass);
   for (size_t k = 0; k < f->n; k++) {
-    if (!(isfinite(val[k]) && val[k] > 0))
-      continue;
+    if (!(isfinite(val[k]) && val[k] > 0)) continue;
     int b = (int)floor((log(val[k]) - llo) / (lhi - llo) * nbins);
-    if (b < 0)
-      b = 0;
-    if (b >= nbins)
-      b = nbins - 1;
+    if (b < 0) b = 0;
+    if (b >= nbins) b = nbins - 1;
     cnt[b] += 1;
     mass[b] += f->mass[k];
   }
@@ -222,8 +203,7 @@ void cpl_write_ejecta_velocity(FILE *out, const cpl_fragments *f, const cpl_ejec
   double msum = 0;
   for (size_t r = 0; r < m; r++) {
     msum += f->mass[o[r].k];
-    if (r + 1 < m && o[r + 1].key == o[r].key)
-      continue;
+    if (r + 1 < m && o[r + 1].key == o[r].key) continue;
     fprintf(out, "%.10g,%.10g\n", o[r].key, msum);
   }
   free(o);
@@ -235,8 +215,7 @@ void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const d
   out->bulk = SIZE_MAX;
   double deepest = INFINITY;
   for (size_t i = 0; i < p->n && i < f->n_particles; i++) {
-    if (f->id[i] < 0)
-      continue;
+    if (f->id[i] < 0) continue;
     double d = normal[0] * p->x[i] + normal[1] * p->y[i] + (p->z ? normal[2] * p->z[i] : 0.0);
     if (d < deepest) {
       deepest = d;
@@ -250,8 +229,7 @@ void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const d
       continue;
     }
     double vn = normal[0] * f->vx[k] + normal[1] * f->vy[k] + normal[2] * f->vz[k];
-    if (out->n_jet + out->n_slow == 0 || vn > out->v_max)
-      out->v_max = vn;
+    if (out->n_jet + out->n_slow == 0 || vn > out->v_max) out->v_max = vn;
     if (vn > v_cut) {
       out->m_jet += f->mass[k];
       out->n_jet++;

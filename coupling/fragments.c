@@ -1,4 +1,4 @@
-/* Fragments: bonds |r_i − r_k| ≤ b·a (paper 002 §4.2, DESIGN.md §6), connected components by
+/* Fragments: bonds |r_i − r_k| ≤ b·a ([Davydov] §4.2, docs/design.md §6), connected components by
  * union–find, per-fragment statistics. docs/coupling.md describes the algorithm. */
 #define _GNU_SOURCE /* qsort_r */
 #include "cpl_impl.h"
@@ -32,8 +32,7 @@ void cpl_uf_free(cpl_uf *uf) {
 
 size_t cpl_uf_find(cpl_uf *uf, size_t i) {
   size_t root = i;
-  while (uf->parent[root] != root)
-    root = uf->parent[root];
+  while (uf->parent[root] != root) root = uf->parent[root];
   /* path compression: every node on the path points at the root */
   while (uf->parent[i] != root) {
     size_t next = uf->parent[i];
@@ -45,8 +44,7 @@ size_t cpl_uf_find(cpl_uf *uf, size_t i) {
 
 bool cpl_uf_union(cpl_uf *uf, size_t i, size_t k) {
   size_t a = cpl_uf_find(uf, i), b = cpl_uf_find(uf, k);
-  if (a == b)
-    return false;
+  if (a == b) return false;
   /* union by size keeps the trees O(log n) deep even before compression */
   if (uf->size[a] < uf->size[b]) {
     size_t t = a;
@@ -79,8 +77,7 @@ static void free_fragment_arrays(cpl_fragments *f) {
 }
 
 void cpl_fragments_free(cpl_fragments *f) {
-  if (!f)
-    return;
+  if (!f) return;
   free(f->id);
   free_fragment_arrays(f);
   free(f->cell_of);
@@ -92,8 +89,7 @@ void cpl_fragments_free(cpl_fragments *f) {
 }
 
 static void reserve_particles(cpl_fragments *f, size_t n) {
-  if (f->cap_particles >= n && f->id)
-    return;
+  if (f->cap_particles >= n && f->id) return;
   size_t cap = n ? n : 1;
   free(f->id);
   free(f->cell_of);
@@ -107,8 +103,7 @@ static void reserve_particles(cpl_fragments *f, size_t n) {
 }
 
 static void reserve_fragments(cpl_fragments *f, size_t n) {
-  if (f->cap_fragments >= n && f->count)
-    return;
+  if (f->cap_fragments >= n && f->count) return;
   size_t cap = n ? n : 1;
   free_fragment_arrays(f);
   f->first = ms_calloc(cap, sizeof *f->first);
@@ -134,36 +129,27 @@ static inline double coord(const double *a, size_t i) { return a ? a[i] : 0.0; }
 /* Masses are checked for particles [0, n_mass) only (ghost copies of a distributed search
  * carry positions only). */
 static ms_status check_input(const cpl_particles *p, const cpl_fragment_opts *o, size_t n_mass) {
-  if (!p || !o || (p->n && (!p->x || !p->y || !p->mass)))
-    return MS_ERR_INPUT;
-  if (!(o->bond > 0) || !(o->spacing > 0) || !isfinite(o->bond * o->spacing))
-    return MS_ERR_INPUT;
+  if (!p || !o || (p->n && (!p->x || !p->y || !p->mass))) return MS_ERR_INPUT;
+  if (!(o->bond > 0) || !(o->spacing > 0) || !isfinite(o->bond * o->spacing)) return MS_ERR_INPUT;
   double L = o->bond * o->spacing;
   for (int k = 0; k < 3; k++) {
     double P = o->box.period[k];
-    if (P < 0 || !isfinite(P) || !isfinite(o->box.lo[k]))
-      return MS_ERR_INPUT;
+    if (P < 0 || !isfinite(P) || !isfinite(o->box.lo[k])) return MS_ERR_INPUT;
     /* minimum image is only unambiguous if a bond is shorter than half a period */
-    if (P > 0 && !(2 * L < P))
-      return MS_ERR_INPUT;
+    if (P > 0 && !(2 * L < P)) return MS_ERR_INPUT;
   }
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i])
-      continue;
-    if (!isfinite(p->x[i]) || !isfinite(p->y[i]) || !isfinite(coord(p->z, i)))
-      return MS_ERR_INPUT;
-    if (i < n_mass && (!isfinite(p->mass[i]) || p->mass[i] < 0))
-      return MS_ERR_INPUT;
-    if (p->gid && p->gid[i] < 0)
-      return MS_ERR_INPUT;
+    if (p->skip && p->skip[i]) continue;
+    if (!isfinite(p->x[i]) || !isfinite(p->y[i]) || !isfinite(coord(p->z, i))) return MS_ERR_INPUT;
+    if (i < n_mass && (!isfinite(p->mass[i]) || p->mass[i] < 0)) return MS_ERR_INPUT;
+    if (p->gid && p->gid[i] < 0) return MS_ERR_INPUT;
   }
   return MS_OK;
 }
 
 /* Component of a separation vector along axis k reduced to the minimum image. */
 static inline double min_image(double d, double period) {
-  if (period > 0)
-    d -= period * nearbyint(d / period);
+  if (period > 0) d -= period * nearbyint(d / period);
   return d;
 }
 
@@ -190,14 +176,12 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
   size_t n = p->n;
   /* root -> id: reuse cell_of as the map (values (size_t)-1 = unassigned) */
   size_t *root_id = f->cell_of;
-  for (size_t i = 0; i < n; i++)
-    root_id[i] = (size_t)-1;
+  for (size_t i = 0; i < n; i++) root_id[i] = (size_t)-1;
   size_t nfrag = 0;
   if (p->gid) {
     /* roots in order of their smallest gid: cell_items lists the roots, then is sorted */
     for (size_t i = 0; i < n; i++) {
-      if (p->skip && p->skip[i])
-        continue;
+      if (p->skip && p->skip[i]) continue;
       size_t r = cpl_uf_find(&f->uf, i);
       if (root_id[r] == (size_t)-1) {
         root_id[r] = 0;
@@ -208,8 +192,7 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
       }
     }
     qsort_r(f->cell_items, nfrag, sizeof *f->cell_items, cmp_root_key, f->key);
-    for (size_t k = 0; k < nfrag; k++)
-      root_id[f->cell_items[k]] = k;
+    for (size_t k = 0; k < nfrag; k++) root_id[f->cell_items[k]] = k;
   }
   for (size_t i = 0; i < n; i++) {
     if (p->skip && p->skip[i]) {
@@ -217,8 +200,7 @@ static void label_from_roots(cpl_fragments *f, const cpl_particles *p) {
       continue;
     }
     size_t r = cpl_uf_find(&f->uf, i);
-    if (root_id[r] == (size_t)-1)
-      root_id[r] = nfrag++;
+    if (root_id[r] == (size_t)-1) root_id[r] = nfrag++;
     f->id[i] = (int64_t)root_id[r];
   }
   f->n_particles = n;
@@ -240,20 +222,16 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
   const double *pos[3] = {p->x, p->y, p->z};
   size_t active = 0;
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i])
-      continue;
+    if (p->skip && p->skip[i]) continue;
     active++;
     for (int k = 0; k < 3; k++) {
       double v = coord(pos[k], i);
-      if (v < bmin[k])
-        bmin[k] = v;
-      if (v > bmax[k])
-        bmax[k] = v;
+      if (v < bmin[k]) bmin[k] = v;
+      if (v > bmax[k]) bmax[k] = v;
     }
   }
   if (!active)
-    for (int k = 0; k < 3; k++)
-      bmin[k] = bmax[k] = 0;
+    for (int k = 0; k < 3; k++) bmin[k] = bmax[k] = 0;
   /* cell width w ≥ L; grow w until the cell count is at most ~2 per active particle */
   double w = L;
   size_t cap = 2 * (active ? active : 1) + 64;
@@ -263,12 +241,10 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
       double P = o->box.period[k];
       double ext = P > 0 ? P : bmax[k] - bmin[k];
       double nk = floor(ext / w);
-      if (nk < 1)
-        nk = 1;
+      if (nk < 1) nk = 1;
       total *= nk;
     }
-    if (total <= (double)cap)
-      break;
+    if (total <= (double)cap) break;
     w *= 1.5;
   }
   size_t ncell = 1;
@@ -277,8 +253,7 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
     g->periodic[k] = P > 0;
     double ext = P > 0 ? P : bmax[k] - bmin[k];
     size_t nk = (size_t)floor(ext / w);
-    if (nk < 1)
-      nk = 1;
+    if (nk < 1) nk = 1;
     g->nc[k] = nk;
     g->lo[k] = P > 0 ? o->box.lo[k] : bmin[k];
     /* periodic: cells tile the period exactly (width P/nk ≥ w ≥ L) */
@@ -304,21 +279,17 @@ static size_t build_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fr
       double s = (coord(pos[k], i) - g->lo[k]) * g->inv_w[k];
       if (g->periodic[k]) {
         s = fmod(s, nk);
-        if (s < 0)
-          s += nk;
+        if (s < 0) s += nk;
       }
-      if (!(s >= 0))
-        s = 0;
-      if (s >= nk)
-        s = nk - 1; /* the last cell takes the upper edge (and the remainder) */
+      if (!(s >= 0)) s = 0;
+      if (s >= nk) s = nk - 1; /* the last cell takes the upper edge (and the remainder) */
       c[k] = (size_t)s;
     }
     size_t cell = (c[2] * g->nc[1] + c[1]) * g->nc[0] + c[0];
     f->cell_of[i] = cell;
     f->cell_start[cell + 1]++;
   }
-  for (size_t c = 0; c < ncell; c++)
-    f->cell_start[c + 1] += f->cell_start[c];
+  for (size_t c = 0; c < ncell; c++) f->cell_start[c + 1] += f->cell_start[c];
   return ncell;
 }
 
@@ -329,12 +300,10 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   size_t *start = f->cell_start;
   for (size_t i = 0; i < p->n; i++) {
     size_t c = f->cell_of[i];
-    if (c == (size_t)-1)
-      continue;
+    if (c == (size_t)-1) continue;
     f->cell_items[start[c]++] = i;
   }
-  for (size_t c = ncell; c > 0; c--)
-    start[c] = start[c - 1];
+  for (size_t c = ncell; c > 0; c--) start[c] = start[c - 1];
   start[0] = 0;
 
   double L = o->bond * o->spacing, L2 = L * L;
@@ -343,8 +312,7 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
     for (size_t cy = 0; cy < g->nc[1]; cy++)
       for (size_t cx = 0; cx < g->nc[0]; cx++) {
         size_t c = (cz * g->nc[1] + cy) * g->nc[0] + cx;
-        if (start[c] == start[c + 1])
-          continue;
+        if (start[c] == start[c + 1]) continue;
         /* the distinct neighbour cells (a periodic axis with < 3 cells repeats indices) */
         size_t nbr[27];
         int nn = 0;
@@ -363,15 +331,12 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
                   q[k] = (q[k] % nk + nk) % nk;
                 }
               }
-              if (!ok)
-                continue;
+              if (!ok) continue;
               size_t cn = ((size_t)q[2] * g->nc[1] + (size_t)q[1]) * g->nc[0] + (size_t)q[0];
               bool seen = false;
               for (int m = 0; m < nn; m++)
-                if (nbr[m] == cn)
-                  seen = true;
-              if (!seen)
-                nbr[nn++] = cn;
+                if (nbr[m] == cn) seen = true;
+              if (!seen) nbr[nn++] = cn;
             }
         for (size_t a = start[c]; a < start[c + 1]; a++) {
           size_t i = f->cell_items[a];
@@ -379,8 +344,7 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
             size_t cn = nbr[m];
             for (size_t b = start[cn]; b < start[cn + 1]; b++) {
               size_t k = f->cell_items[b];
-              if (k <= i)
-                continue; /* each unordered pair once */
+              if (k <= i) continue; /* each unordered pair once */
               if (bonded(p, &o->box, L2, i, k)) {
                 nb++;
                 cpl_uf_union(&f->uf, i, k);
@@ -393,10 +357,9 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
 }
 
 ms_status cpl_fragments_bond_search(cpl_fragments *f, const cpl_particles *p,
-                                   const cpl_fragment_opts *o, size_t n_mass) {
+                                    const cpl_fragment_opts *o, size_t n_mass) {
   ms_status s = check_input(p, o, n_mass);
-  if (s != MS_OK)
-    return s;
+  if (s != MS_OK) return s;
   reserve_particles(f, p->n);
   cell_grid g;
   size_t ncell = build_cells(f, p, o, &g);
@@ -407,8 +370,7 @@ ms_status cpl_fragments_bond_search(cpl_fragments *f, const cpl_particles *p,
 
 ms_status cpl_fragments_find(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
   ms_status s = cpl_fragments_bond_search(f, p, o, p ? p->n : 0);
-  if (s != MS_OK)
-    return s;
+  if (s != MS_OK) return s;
   label_from_roots(f, p);
   cpl_fragments_stats(f, p, o);
   return MS_OK;
@@ -418,23 +380,18 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
                                  const cpl_fragment_opts *o, const size_t *start,
                                  const int32_t *nbr) {
   ms_status s = check_input(p, o, p ? p->n : 0);
-  if (s != MS_OK)
-    return s;
-  if (p->n && (!start || !nbr))
-    return MS_ERR_INPUT;
+  if (s != MS_OK) return s;
+  if (p->n && (!start || !nbr)) return MS_ERR_INPUT;
   reserve_particles(f, p->n);
   cpl_uf_init(&f->uf, p->n);
   double L = o->bond * o->spacing, L2 = L * L;
   long nb = 0;
   for (size_t i = 0; i < p->n; i++) {
-    if (p->skip && p->skip[i])
-      continue;
+    if (p->skip && p->skip[i]) continue;
     for (size_t b = start[i]; b < start[i + 1]; b++) {
       int32_t k = nbr[b];
-      if (k < 0 || (size_t)k >= p->n || (size_t)k == i)
-        continue;
-      if (p->skip && p->skip[k])
-        continue;
+      if (k < 0 || (size_t)k >= p->n || (size_t)k == i) continue;
+      if (p->skip && p->skip[k]) continue;
       if (bonded(p, &o->box, L2, i, (size_t)k)) {
         nb++;
         cpl_uf_union(&f->uf, i, (size_t)k);
@@ -456,8 +413,7 @@ ms_status cpl_fragments_find_csr(cpl_fragments *f, const cpl_particles *p,
 
 void cpl_acc1_clear(double *acc, size_t nf) {
   memset(acc, 0, nf * CPL_ACC1 * sizeof *acc);
-  for (size_t k = 0; k < nf; k++)
-    acc[k * CPL_ACC1 + CPL_ACC1_KEY] = INFINITY;
+  for (size_t k = 0; k < nf; k++) acc[k * CPL_ACC1 + CPL_ACC1_KEY] = INFINITY;
 }
 
 void cpl_acc1_add(double *acc, const int64_t *id, size_t n, const cpl_particles *p,
@@ -466,8 +422,7 @@ void cpl_acc1_add(double *acc, const int64_t *id, size_t n, const cpl_particles 
   const double *vel[3] = {p->vx, p->vy, p->vz};
   const double two_pi = 2 * CPL_PI;
   for (size_t i = 0; i < n; i++) {
-    if (id[i] < 0)
-      continue;
+    if (id[i] < 0) continue;
     double *a = acc + (size_t)id[i] * CPL_ACC1;
     double m = p->mass[i];
     a[CPL_ACC1_COUNT] += 1;
@@ -485,28 +440,24 @@ void cpl_acc1_add(double *acc, const int64_t *id, size_t n, const cpl_particles 
     double key = p->gid ? (double)p->gid[i] : (double)i;
     if (key < a[CPL_ACC1_KEY]) {
       a[CPL_ACC1_KEY] = key;
-      for (int d = 0; d < 3; d++)
-        a[CPL_ACC1_REF + d] = coord(pos[d], i);
+      for (int d = 0; d < 3; d++) a[CPL_ACC1_REF + d] = coord(pos[d], i);
     }
   }
 }
 
 void cpl_acc1_merge(double *dst, const double *src) {
-  for (int c = 0; c < CPL_ACC1_KEY; c++)
-    dst[c] += src[c];
+  for (int c = 0; c < CPL_ACC1_KEY; c++) dst[c] += src[c];
   if (src[CPL_ACC1_KEY] < dst[CPL_ACC1_KEY])
-    for (int c = CPL_ACC1_KEY; c < CPL_ACC1; c++)
-      dst[c] = src[c];
+    for (int c = CPL_ACC1_KEY; c < CPL_ACC1; c++) dst[c] = src[c];
 }
 
 void cpl_ref_point(const double *acc1, const cpl_box *box, double ref[3]) {
   for (int d = 0; d < 3; d++) {
     double P = box->period[d];
     if (P > 0)
-      ref[d] = box->lo[d] +
-               P * atan2(acc1[CPL_ACC1_SIN + d], acc1[CPL_ACC1_COS + d]) / (2 * CPL_PI);
-    else
-      ref[d] = acc1[CPL_ACC1_REF + d];
+      ref[d] =
+          box->lo[d] + P * atan2(acc1[CPL_ACC1_SIN + d], acc1[CPL_ACC1_COS + d]) / (2 * CPL_PI);
+    else ref[d] = acc1[CPL_ACC1_REF + d];
   }
 }
 
@@ -514,8 +465,7 @@ void cpl_acc2_add(double *acc2, const int64_t *id, size_t n, const cpl_particles
                   const cpl_box *box, const double *ref) {
   const double *pos[3] = {p->x, p->y, p->z};
   for (size_t i = 0; i < n; i++) {
-    if (id[i] < 0)
-      continue;
+    if (id[i] < 0) continue;
     size_t k = (size_t)id[i];
     for (int d = 0; d < 3; d++)
       acc2[3 * k + d] += p->mass[i] * min_image(coord(pos[d], i) - ref[3 * k + d], box->period[d]);
@@ -531,8 +481,7 @@ void cpl_centre(double mass, const double ref[3], const double acc2[3], const cp
     double P = box->period[d];
     if (P > 0) {
       x = box->lo[d] + fmod(x - box->lo[d], P);
-      if (x < box->lo[d])
-        x += P;
+      if (x < box->lo[d]) x += P;
     }
     c[d] = x;
   }
@@ -542,8 +491,7 @@ void cpl_acc3_add(double *acc3, const int64_t *id, size_t n, const cpl_particles
                   const cpl_box *box, const double *ref, const double *off) {
   const double *pos[3] = {p->x, p->y, p->z};
   for (size_t i = 0; i < n; i++) {
-    if (id[i] < 0)
-      continue;
+    if (id[i] < 0) continue;
     size_t k = (size_t)id[i];
     double r2 = 0;
     for (int d = 0; d < 3; d++) {
@@ -582,8 +530,7 @@ void cpl_fragments_stats(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   memset(acc2, 0, 3 * nf * sizeof *acc2);
   memset(acc3, 0, nf * sizeof *acc3);
   cpl_acc1_add(acc1, f->id, p->n, p, &o->box);
-  for (size_t k = 0; k < nf; k++)
-    cpl_ref_point(acc1 + k * CPL_ACC1, &o->box, ref + 3 * k);
+  for (size_t k = 0; k < nf; k++) cpl_ref_point(acc1 + k * CPL_ACC1, &o->box, ref + 3 * k);
   cpl_acc2_add(acc2, f->id, p->n, p, &o->box, ref);
   for (size_t k = 0; k < nf; k++) {
     double centre[3];

@@ -44,10 +44,8 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
         st = ms_h5_attr_double(h, "particles", pn[k], info->box.period[k]);
         if (!st) st = ms_h5_attr_double(h, "particles", ln[k], info->box.lo[k]);
       }
-    if (!st)
-      st = ms_h5_close(h);
-    else
-      ms_h5_abort(h);
+    if (!st) st = ms_h5_close(h);
+    else ms_h5_abort(h);
   }
   const size_t nglobal = dist ? (size_t)par_sum_long((long)n) : n;
   if (st == MS_OK && (!dist || par_rank() == 0)) {

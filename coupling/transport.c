@@ -1,5 +1,5 @@
 /* Transport of detached fragments as point masses through the gas to a detector plane
- * (DESIGN.md §6). Each fragment obeys
+ * (docs/design.md §6). Each fragment obeys
  *   dx/dt = v,   dv/dt = F_drag(x, v, t)/m,
  * which is stiff for micron-size fragments (τ = ρ_p d²/(18 μ) ≪ the flight time), so it is
  * integrated with CVODE's BDF method and a dense 6×6 Newton solve. Every fragment has its own
@@ -56,22 +56,17 @@ void cpl_transport_opts_default(cpl_transport_opts *o) {
 cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas, void *gas_user) {
   cpl_transport *tr = ms_calloc(1, sizeof *tr);
   tr->o = *o;
-  if (!(tr->o.rtol > 0))
-    tr->o.rtol = 1e-8;
-  if (!(tr->o.atol_x > 0))
-    tr->o.atol_x = 1e-10;
-  if (!(tr->o.atol_v > 0))
-    tr->o.atol_v = 1e-10;
-  if (tr->o.max_steps <= 0)
-    tr->o.max_steps = 100000;
+  if (!(tr->o.rtol > 0)) tr->o.rtol = 1e-8;
+  if (!(tr->o.atol_x > 0)) tr->o.atol_x = 1e-10;
+  if (!(tr->o.atol_v > 0)) tr->o.atol_v = 1e-10;
+  if (tr->o.max_steps <= 0) tr->o.max_steps = 100000;
   double nn = sqrt(o->det_normal[0] * o->det_normal[0] + o->det_normal[1] * o->det_normal[1] +
                    o->det_normal[2] * o->det_normal[2]);
   if (!(nn > 0)) {
     tr->o.det_normal[0] = 1;
     tr->o.det_normal[1] = tr->o.det_normal[2] = 0;
   } else {
-    for (int a = 0; a < 3; a++)
-      tr->o.det_normal[a] = o->det_normal[a] / nn;
+    for (int a = 0; a < 3; a++) tr->o.det_normal[a] = o->det_normal[a] / nn;
   }
   tr->gas = gas;
   tr->gas_user = gas_user;
@@ -83,24 +78,17 @@ cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas,
 }
 
 static void rec_free(flight_rec *r) {
-  if (!r)
-    return;
-  if (r->cvode)
-    CVodeFree(&r->cvode);
-  if (r->LS)
-    SUNLinSolFree(r->LS);
-  if (r->A)
-    SUNMatDestroy(r->A);
-  if (r->y)
-    N_VDestroy(r->y);
+  if (!r) return;
+  if (r->cvode) CVodeFree(&r->cvode);
+  if (r->LS) SUNLinSolFree(r->LS);
+  if (r->A) SUNMatDestroy(r->A);
+  if (r->y) N_VDestroy(r->y);
   free(r);
 }
 
 void cpl_transport_free(cpl_transport *tr) {
-  if (!tr)
-    return;
-  for (size_t i = 0; i < tr->n; i++)
-    rec_free(tr->rec[i]);
+  if (!tr) return;
+  for (size_t i = 0; i < tr->n; i++) rec_free(tr->rec[i]);
   free(tr->rec);
   SUNContext_Free(&tr->sunctx);
   free(tr);
@@ -138,8 +126,7 @@ size_t cpl_transport_add(cpl_transport *tr, double mass, const double x[3], cons
   if (normal_dist(tr, x) >= 0) { /* already beyond the detector */
     f->state = CPL_ARRIVED;
     f->t_arrival = t0;
-    for (int a = 0; a < 3; a++)
-      f->v_arrival[a] = v[a];
+    for (int a = 0; a < 3; a++) f->v_arrival[a] = v[a];
   }
   tr->rec[tr->n] = r;
   return tr->n++;
@@ -150,8 +137,7 @@ size_t cpl_transport_add_fragments(cpl_transport *tr, const cpl_fragments *f,
   size_t big = sel && sel->exclude_largest ? cpl_largest_fragment(f) : (size_t)-1;
   size_t added = 0;
   for (size_t k = 0; k < f->n; k++) {
-    if (sel && !cpl_is_ejecta_with(f, k, sel, big))
-      continue;
+    if (sel && !cpl_is_ejecta_with(f, k, sel, big)) continue;
     double x[3] = {f->cx[k], f->cy[k], f->cz[k]}, v[3] = {f->vx[k], f->vy[k], f->vz[k]};
     cpl_transport_add(tr, f->mass[k], x, v, t0);
     added++;
@@ -174,8 +160,7 @@ static int flight_rhs(realtype t, N_Vector y, N_Vector ydot, void *user) {
     D[3 + a] = F[a] / r->fl.mass;
   }
   for (int a = 0; a < 6; a++)
-    if (!isfinite(D[a]))
-      return 1; /* recoverable: CVODE retries with a smaller step */
+    if (!isfinite(D[a])) return 1; /* recoverable: CVODE retries with a smaller step */
   return 0;
 }
 
@@ -188,16 +173,14 @@ static int flight_root(realtype t, N_Vector y, realtype *g, void *user) {
 static bool flight_start(cpl_transport *tr, flight_rec *r) {
   cpl_flight *f = &r->fl;
   r->y = N_VNew_Serial(6, tr->sunctx);
-  if (!r->y)
-    return false;
+  if (!r->y) return false;
   double *Y = N_VGetArrayPointer(r->y);
   for (int a = 0; a < 3; a++) {
     Y[a] = f->x[a];
     Y[3 + a] = f->v[a];
   }
   r->cvode = CVodeCreate(CV_BDF, tr->sunctx);
-  if (!r->cvode)
-    return false;
+  if (!r->cvode) return false;
   N_Vector atol = N_VNew_Serial(6, tr->sunctx);
   double *A = N_VGetArrayPointer(atol);
   for (int a = 0; a < 3; a++) {
@@ -212,12 +195,10 @@ static bool flight_start(cpl_transport *tr, flight_rec *r) {
             CVodeRootInit(r->cvode, 1, flight_root) == CV_SUCCESS &&
             CVodeSetRootDirection(r->cvode, &rootdir) == CV_SUCCESS;
   N_VDestroy(atol);
-  if (!ok)
-    return false;
+  if (!ok) return false;
   r->A = SUNDenseMatrix(6, 6, tr->sunctx);
   r->LS = SUNLinSol_Dense(r->y, r->A, tr->sunctx);
-  if (!r->A || !r->LS || CVodeSetLinearSolver(r->cvode, r->LS, r->A) != CV_SUCCESS)
-    return false;
+  if (!r->A || !r->LS || CVodeSetLinearSolver(r->cvode, r->LS, r->A) != CV_SUCCESS) return false;
   r->started = true;
   return true;
 }
@@ -225,8 +206,7 @@ static bool flight_start(cpl_transport *tr, flight_rec *r) {
 /* Hand the momentum/energy change of one internal step to the gas. */
 static void give_back(cpl_transport *tr, const flight_rec *r, double t0, const double x0[3],
                       const double v0[3]) {
-  if (!tr->ret)
-    return;
+  if (!tr->ret) return;
   const cpl_flight *f = &r->fl;
   double dp[3], xm[3], ke0 = 0, ke1 = 0;
   for (int a = 0; a < 3; a++) {
@@ -241,8 +221,7 @@ static void give_back(cpl_transport *tr, const flight_rec *r, double t0, const d
 static ms_status advance_one(cpl_transport *tr, size_t i, double t_end) {
   flight_rec *r = tr->rec[i];
   cpl_flight *f = &r->fl;
-  if (f->state != CPL_FLYING || f->t >= t_end)
-    return MS_OK;
+  if (f->state != CPL_FLYING || f->t >= t_end) return MS_OK;
   if (!r->started && !flight_start(tr, r)) {
     f->state = CPL_FAILED;
     snprintf(tr->err, sizeof tr->err, "fragment %zu: cannot set up CVODE", i);
@@ -270,12 +249,10 @@ static ms_status advance_one(cpl_transport *tr, size_t i, double t_end) {
     if (flag == CV_ROOT_RETURN) {
       f->state = CPL_ARRIVED;
       f->t_arrival = tret;
-      for (int a = 0; a < 3; a++)
-        f->v_arrival[a] = f->v[a];
+      for (int a = 0; a < 3; a++) f->v_arrival[a] = f->v[a];
       break;
     }
-    if (flag == CV_TSTOP_RETURN)
-      break;
+    if (flag == CV_TSTOP_RETURN) break;
   }
   long ns = 0;
   CVodeGetNumSteps(r->cvode, &ns);
@@ -298,8 +275,7 @@ ms_status cpl_transport_advance(cpl_transport *tr, double t_end) {
   ms_status worst = MS_OK;
   for (size_t i = 0; i < tr->n; i++) {
     ms_status s = advance_one(tr, i, t_end);
-    if (s != MS_OK)
-      worst = s;
+    if (s != MS_OK) worst = s;
   }
   return worst;
 }
@@ -314,8 +290,7 @@ void cpl_write_arrivals(FILE *out, const cpl_transport *tr, const char *title) {
   ms_csv_header(out, title ? title : "fragment arrivals at the detector plane", 7, names, units);
   for (size_t i = 0; i < tr->n; i++) {
     const cpl_flight *f = &tr->rec[i]->fl;
-    if (f->state != CPL_ARRIVED)
-      continue;
+    if (f->state != CPL_ARRIVED) continue;
     fprintf(out, "%zu,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", i, f->mass, f->diameter, f->t_arrival,
             f->v_arrival[0], f->v_arrival[1], f->v_arrival[2]);
   }

@@ -32,12 +32,18 @@ eos_kind eos_get_kind(const eos_t *eos) { return eos->kind; }
 
 const char *eos_kind_name(eos_kind k) {
   switch (k) {
-  case EOS_MG_COLD: return "mg_cold";
-  case EOS_MG_LINEAR: return "mg_linear";
-  case EOS_IDEAL_GAS: return "ideal_gas";
-  case EOS_TABLE_COLD: return "table_cold";
-  case EOS_TABLE_FULL: return "table_full";
-  case EOS_LINEAR_ELASTIC: return "linear_elastic";
+  case EOS_MG_COLD:
+    return "mg_cold";
+  case EOS_MG_LINEAR:
+    return "mg_linear";
+  case EOS_IDEAL_GAS:
+    return "ideal_gas";
+  case EOS_TABLE_COLD:
+    return "table_cold";
+  case EOS_TABLE_FULL:
+    return "table_full";
+  case EOS_LINEAR_ELASTIC:
+    return "linear_elastic";
   }
   return "unknown";
 }
@@ -76,13 +82,15 @@ double eos_sound_speed(const eos_t *eos, double rho, double e) {
 }
 
 double eos_cold_pressure(const eos_t *eos, double delta) {
-  if (!eos_has_cold_curve(eos) || !(delta > 0.0) || !(delta >= eos->delta_min && delta <= eos->delta_max))
+  if (!eos_has_cold_curve(eos) || !(delta > 0.0) ||
+      !(delta >= eos->delta_min && delta <= eos->delta_max))
     return NAN;
   return eos->ops->cold_pressure(eos, delta);
 }
 
 double eos_cold_energy(const eos_t *eos, double delta) {
-  if (!eos_has_cold_curve(eos) || !(delta > 0.0) || !(delta >= eos->delta_min && delta <= eos->delta_max))
+  if (!eos_has_cold_curve(eos) || !(delta > 0.0) ||
+      !(delta >= eos->delta_min && delta <= eos->delta_max))
     return NAN;
   return eos->ops->cold_energy(eos, delta);
 }
@@ -189,10 +197,11 @@ bool eos_hermite_eval(const eos_hermite *h, double x, double *y, double *dy, dou
          (t3 - t2) * m1;
   if (dy)
     *dy = ((6 * t2 - 6 * t) * y0 + (3 * t2 - 4 * t + 1) * m0 + (-6 * t2 + 6 * t) * y1 +
-           (3 * t2 - 2 * t) * m1) / dx;
+           (3 * t2 - 2 * t) * m1) /
+          dx;
   if (d2y)
-    *d2y = ((12 * t - 6) * y0 + (6 * t - 4) * m0 + (-12 * t + 6) * y1 + (6 * t - 2) * m1) /
-           (dx * dx);
+    *d2y =
+        ((12 * t - 6) * y0 + (6 * t - 4) * m0 + (-12 * t + 6) * y1 + (6 * t - 2) * m1) / (dx * dx);
   return true;
 }
 
@@ -213,8 +222,8 @@ static double isentrope_slope(const eos_t *eos, double delta, double eps) {
 
 /* RK4 from δ = 1 towards `dend` in `nstep` steps; writes nodes (δ, ε, dε/dδ) into the arrays
  * (first node δ = 1). Returns the number of nodes written (stops where the EOS is undefined). */
-static size_t integrate_isentrope(const eos_t *eos, double dend, size_t nstep, double *x,
-                                  double *y, double *dy) {
+static size_t integrate_isentrope(const eos_t *eos, double dend, size_t nstep, double *x, double *y,
+                                  double *dy) {
   double h = (dend - 1.0) / (double)nstep, d = 1.0, eps = 0.0;
   double k1 = isentrope_slope(eos, d, eps);
   if (!isfinite(k1)) return 0;

@@ -1,6 +1,6 @@
-/* eos.h — equations of state, materials, Hugoniots and mixtures (DESIGN.md §3).
+/* eos.h — equations of state, materials, Hugoniots and mixtures (docs/design.md §3).
  *
- * Internal units (DESIGN.md §2): ρ g/cm³, e kJ/g, P GPa, c km/s.
+ * Internal units (docs/design.md §2): ρ g/cm³, e kJ/g, P GPa, c km/s.
  * An EOS is an opaque object with a small table of operations (eos/eos_impl.h); the grid calls
  * the array form over whole material regions, the particles ask for the cold curve once at
  * set-up to tabulate their pair potentials.
@@ -11,11 +11,11 @@
 #include "core.h"
 
 typedef enum eos_kind {
-  EOS_MG_COLD,    /* Mie–Grüneisen, cold-curve form: rho0, c0, n, gamma0 */
-  EOS_MG_LINEAR,  /* Mie–Grüneisen, linear Us–up reference Hugoniot: rho0, c0, s, gamma0 */
-  EOS_IDEAL_GAS,  /* gamma, reference (ambient) rho0 and p0 */
-  EOS_TABLE_COLD, /* tabulated cold curve (delta, rho, eps_x, P_x) + Grüneisen gamma */
-  EOS_TABLE_FULL, /* full table P(rho, e), c(rho, e) on a rectangular (rho, e) grid */
+  EOS_MG_COLD,       /* Mie–Grüneisen, cold-curve form: rho0, c0, n, gamma0 */
+  EOS_MG_LINEAR,     /* Mie–Grüneisen, linear Us–up reference Hugoniot: rho0, c0, s, gamma0 */
+  EOS_IDEAL_GAS,     /* gamma, reference (ambient) rho0 and p0 */
+  EOS_TABLE_COLD,    /* tabulated cold curve (delta, rho, eps_x, P_x) + Grüneisen gamma */
+  EOS_TABLE_FULL,    /* full table P(rho, e), c(rho, e) on a rectangular (rho, e) grid */
   EOS_LINEAR_ELASTIC /* small-strain elastic solid for the paper-000 tests: rho0, K (bulk modulus) */
 } eos_kind;
 
@@ -49,8 +49,8 @@ void eos_destroy(eos_t *eos);
 
 eos_kind eos_get_kind(const eos_t *eos);
 const char *eos_kind_name(eos_kind k);
-double eos_rho0(const eos_t *eos);     /* reference density (g/cm³) */
-double eos_c0(const eos_t *eos);       /* reference sound speed c(rho0, e0) (km/s) */
+double eos_rho0(const eos_t *eos); /* reference density (g/cm³) */
+double eos_c0(const eos_t *eos);   /* reference sound speed c(rho0, e0) (km/s) */
 /* Reference specific internal energy e0 (kJ/g): 0 for condensed matter (the cold curve's zero),
  * p0/((γ−1)ρ0) for an ideal gas. The reference state (rho0, e0) is the default initial state of
  * Hugoniots and of mixture components. */
@@ -64,7 +64,7 @@ bool eos_cold_range(const eos_t *eos, double *delta_min, double *delta_max);
 /* Single-state queries. */
 double eos_pressure(const eos_t *eos, double rho, double e);
 double eos_sound_speed(const eos_t *eos, double rho, double e);
-/* Cold curve: P_x(δ) and ε_x(δ), δ = ρ/ρ0 (DESIGN.md §3). NaN if the EOS has none. */
+/* Cold curve: P_x(δ) and ε_x(δ), δ = ρ/ρ0 (docs/design.md §3). NaN if the EOS has none. */
 double eos_cold_pressure(const eos_t *eos, double delta);
 double eos_cold_energy(const eos_t *eos, double delta);
 /* Temperature (K) with a constant specific heat cv set by eos_set_heat_capacity (deck key
@@ -117,8 +117,8 @@ typedef struct eos_materials {
  * left out (e->n tells whether anything went wrong). */
 eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e);
 /* Look a material up by name; records "unknown material 'x' (known: a, b)" at `where`. */
-const eos_material *eos_materials_find(const eos_materials *mats, const char *name,
-                                       dk_errors *e, const dk_doc *doc, const dk_node *where);
+const eos_material *eos_materials_find(const eos_materials *mats, const char *name, dk_errors *e,
+                                       const dk_doc *doc, const dk_node *where);
 const eos_mixture *eos_mixtures_find(const eos_materials *mats, const char *name);
 void eos_materials_free(eos_materials *mats);
 
@@ -139,7 +139,7 @@ ms_status eos_hugoniot(const eos_t *eos, double rho0, double e0, size_t n, const
 ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, double p,
                                    eos_hugoniot_point *out);
 
-/* Kuropatenko mixture rule (paper 002 §1.2, docs/eos.md §9): 1/(D − u) = Σ α_i/(D_i − u_i),
+/* Kuropatenko mixture rule ([Davydov] §1.2, docs/eos.md §9): 1/(D − u) = Σ α_i/(D_i − u_i),
  * with equal pressure in every component. Given the mixture particle velocity u (the
  * components' u_i follow from pressure equilibrium), returns D and p. alpha = volume
  * fractions (sum 1); MS_ERR_INPUT if they are not. */

@@ -1,9 +1,9 @@
-/* eos_analytic.c — the analytic EOS kinds (DESIGN.md §3, docs/eos.md):
+/* eos_analytic.c — the analytic EOS kinds (docs/design.md §3, docs/eos.md):
  *   Mie–Grüneisen cold-curve form, Mie–Grüneisen linear Us–up form, ideal gas, linear elastic. */
 #include "eos_impl.h"
 
 /* ------------------------------------------------------------------------------------------ */
-/* Mie–Grüneisen, cold-curve form (paper 002 §1.2 parameters; DESIGN.md §3):
+/* Mie–Grüneisen, cold-curve form ([Davydov] §1.2 parameters; docs/design.md §3):
  *   P_x(δ) = (ρ0c0²/n)(δⁿ − 1),  ε_x(δ) = (c0²/n)[δⁿ⁻¹/(n−1) + 1/δ − n/(n−1)],
  *   P = P_x + G(ρ)(e − ε_x). */
 
@@ -56,8 +56,8 @@ static void mg_cold_eval(const eos_t *eos, double rho, double e, double *p, doub
   *c2 = eos_mg_c2_from_cold(&m->g, eos->rho0, rho, e, eos->rho0 * c02 * dn1, ex);
 }
 
-static const eos_ops mg_cold_ops = {mg_cold_pressure, mg_cold_c2, mg_cold_px, mg_cold_ex, NULL,
-                                    NULL, mg_cold_eval, NULL};
+static const eos_ops mg_cold_ops = {
+    mg_cold_pressure, mg_cold_c2, mg_cold_px, mg_cold_ex, NULL, NULL, mg_cold_eval, NULL};
 
 eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool gamma_rho_const) {
   if (!(rho0 > 0.0) || !(c0 > 0.0) || !(n > 1.0) || !(gamma0 >= 0.0) || !isfinite(rho0) ||
@@ -72,7 +72,7 @@ eos_t *eos_create_mg_cold(double rho0, double c0, double n, double gamma0, bool 
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Mie–Grüneisen, linear Us–up form (DESIGN.md §3): with η = 1 − ρ0/ρ,
+/* Mie–Grüneisen, linear Us–up form (docs/design.md §3): with η = 1 − ρ0/ρ,
  *   P_H = ρ0c0²η/(1 − sη)²,  e_H = P_H η/(2ρ0)  (Hugoniot from (ρ0, e = 0, P = 0)),
  *   P = P_H + Γ0ρ0 (e − e_H). Defined for 1 − sη > 0 (ρ below the limiting compression
  *   ρ0 s/(s − 1)); NaN beyond. The cold curve is the isentrope through (ρ0, 0). */
@@ -91,8 +91,8 @@ static bool mg_linear_ref(const eos_t *eos, double rho, double *ph, double *eh, 
   *eh = *ph * eta / (2.0 * rho0);
   double dph_deta = k * (1.0 + m->s * eta) / (den * den * den);
   double deta_drho = rho0 / (rho * rho);
-  *dph = dph_deta * deta_drho;                                      /* dP_H/dρ */
-  *deh = (dph_deta * eta + *ph) / (2.0 * rho0) * deta_drho;         /* de_H/dρ */
+  *dph = dph_deta * deta_drho;                              /* dP_H/dρ */
+  *deh = (dph_deta * eta + *ph) / (2.0 * rho0) * deta_drho; /* de_H/dρ */
   return true;
 }
 
@@ -146,10 +146,14 @@ static void mg_linear_eval_array(const eos_t *eos, size_t n, const double *restr
   }
 }
 
-static const eos_ops mg_linear_ops = {mg_linear_pressure,        mg_linear_c2,
-                                      eos_isentrope_cold_pressure, eos_isentrope_cold_energy,
-                                      NULL,                        NULL,
-                                      mg_linear_eval,              mg_linear_eval_array};
+static const eos_ops mg_linear_ops = {mg_linear_pressure,
+                                      mg_linear_c2,
+                                      eos_isentrope_cold_pressure,
+                                      eos_isentrope_cold_energy,
+                                      NULL,
+                                      NULL,
+                                      mg_linear_eval,
+                                      mg_linear_eval_array};
 
 /* Range of the tabulated isentrope (docs/eos.md): compression up to 3 or 95 % of the limiting
  * compression s/(s−1); tension down to 10 % above the spinodal δ = s/(s+1) of the reference
@@ -223,7 +227,7 @@ eos_t *eos_create_ideal_gas(double gamma, double rho0) {
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Linear elastic solid (paper 000 rod tests), docs/eos.md: volumetric strain θ = 1 − ρ0/ρ
+/* Linear elastic solid ([Sofronov] rod tests), docs/eos.md: volumetric strain θ = 1 − ρ0/ρ
  * (positive in compression; −tr E of the discrete model to first order),
  *   P = P_x = Kθ,  ε_x = ∫₁^δ P_x/(ρ0 d²) dd = Kθ²/(2ρ0),  c² = dP/dρ = Kρ0/ρ²;
  * no thermal pressure (Γ = 0), so P does not depend on e. */
@@ -252,8 +256,8 @@ static double elastic_c2(const eos_t *eos, double rho, double e) {
   return l->K * eos->rho0 / (rho * rho);
 }
 
-static const eos_ops elastic_ops = {elastic_pressure, elastic_c2, elastic_px, elastic_ex, NULL,
-                                    NULL, NULL, NULL};
+static const eos_ops elastic_ops = {
+    elastic_pressure, elastic_c2, elastic_px, elastic_ex, NULL, NULL, NULL, NULL};
 
 eos_t *eos_create_linear_elastic(double rho0, double bulk_modulus) {
   if (!(rho0 > 0.0) || !(bulk_modulus > 0.0) || !isfinite(rho0) || !isfinite(bulk_modulus))

@@ -26,7 +26,7 @@ typedef struct eos_ops {
   double (*cold_energy)(const eos_t *eos, double delta);
   /* NULL: T = (e − ε_x(δ))/cv from the cold curve (eos_temperature) */
   double (*temperature)(const eos_t *eos, double rho, double e);
-  void (*free_data)(eos_t *eos);                                 /* NULL: nothing to free */
+  void (*free_data)(eos_t *eos); /* NULL: nothing to free */
   /* Optional fused P and c² for eos_eval's loop (shares powers, table lookups); NULL: the two
    * calls above. Must give the same values as pressure() and sound_speed2(). */
   void (*eval)(const eos_t *eos, double rho, double e, double *p, double *c2);
@@ -61,7 +61,7 @@ static inline double eos_gruneisen_dG(const eos_gruneisen *g) {
   return g->rho_gamma_const ? 0.0 : g->gamma0;
 }
 
-/* Mie–Grüneisen around a cold curve (DESIGN.md §3): P = P_x(δ) + G(ρ)(e − ε_x(δ)), and
+/* Mie–Grüneisen around a cold curve (docs/design.md §3): P = P_x(δ) + G(ρ)(e − ε_x(δ)), and
  * c² = P_x'(δ)/ρ0 + (e − ε_x)(G' + G²/ρ²) (derivation in docs/eos.md). */
 double eos_mg_pressure_from_cold(const eos_gruneisen *g, double rho, double e, double px,
                                  double ex);
@@ -98,8 +98,8 @@ double eos_isentrope_cold_energy(const eos_t *eos, double delta);
  * every data row has the same number of columns.                                              */
 typedef struct eos_text_table {
   size_t nrow, ncol;
-  double *v;  /* row-major [nrow][ncol] */
-  int *line;  /* file line of each row */
+  double *v; /* row-major [nrow][ncol] */
+  int *line; /* file line of each row */
   char **meta_key, **meta_val;
   size_t nmeta;
   int last_line; /* number of lines in the file */

@@ -1,8 +1,8 @@
-/* eos_table_cold.c — tabulated cold curve in the format of Table 1 of paper 002 (docs/eos.md):
+/* eos_table_cold.c — tabulated cold curve in the format of Table 1 of [Davydov] (docs/eos.md):
  * columns delta, rho [g/cm³], eps_x [kJ/g], P_x [GPa]; Mie–Grüneisen thermal part around it.
  *
  * Interpolation: ε_x(δ) is the cubic Hermite interpolant of the tabulated ε_x with nodal slopes
- * dε_x/dδ = P_x/(ρ0 δ²) (the definition ε_x = ∫ P_x/(ρ0 δ²) dδ, DESIGN.md §3), and
+ * dε_x/dδ = P_x/(ρ0 δ²) (the definition ε_x = ∫ P_x/(ρ0 δ²) dδ, docs/design.md §3), and
  * P_x(δ) = ρ0 δ² ε_x'(δ). Both columns are reproduced exactly at the nodes and the pair is
  * thermodynamically consistent everywhere, so cluster forces f = −dE/dr are exact derivatives
  * of the potentials. The reader checks that the interpolated P_x is monotone. */
@@ -62,8 +62,8 @@ static void tc_free(eos_t *eos) {
   if (t) eos_hermite_free(&t->eps);
 }
 
-static const eos_ops table_cold_ops = {tc_pressure, tc_c2, tc_cold_pressure, tc_cold_energy, NULL,
-                                       tc_free, tc_eval, NULL};
+static const eos_ops table_cold_ops = {tc_pressure, tc_c2,   tc_cold_pressure, tc_cold_energy,
+                                       NULL,        tc_free, tc_eval,          NULL};
 
 /* Relative mismatch allowed between the delta column and rho/rho0: Table 1 prints δ with
  * three decimals (rounding error ≤ 5e-4 at δ ≥ 0.455, i.e. ≤ 1.1e-3 relative). */
@@ -79,10 +79,10 @@ eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_con
   if (eos_text_read(path, 4, 4, &tt, e) != MS_OK) return NULL;
   size_t n = tt.nrow;
   const double *v = tt.v;
-#define D(i) v[4 * (i) + 0]
+#define D(i)   v[4 * (i) + 0]
 #define RHO(i) v[4 * (i) + 1]
 #define EPS(i) v[4 * (i) + 2]
-#define PX(i) v[4 * (i) + 3]
+#define PX(i)  v[4 * (i) + 3]
   if (n < 3) {
     dk_error_at(e, path, tt.last_line, 0, "a cold-curve table needs at least 3 rows (found %zu)",
                 n);
@@ -91,8 +91,7 @@ eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_con
   }
   for (size_t i = 0; i < n; ++i) {
     if (!(D(i) > 0.0)) dk_error_at(e, path, tt.line[i], 1, "delta must be > 0 (found %g)", D(i));
-    if (!(RHO(i) > 0.0))
-      dk_error_at(e, path, tt.line[i], 1, "rho must be > 0 (found %g)", RHO(i));
+    if (!(RHO(i) > 0.0)) dk_error_at(e, path, tt.line[i], 1, "rho must be > 0 (found %g)", RHO(i));
   }
   /* Order: strictly monotone in delta, either direction (Table 1 lists δ decreasing). */
   bool increasing = D(1) > D(0);
@@ -126,16 +125,14 @@ eos_t *eos_create_table_cold(const char *path, double gamma0, bool gamma_rho_con
     double escale = 0.0;
     for (size_t i = 0; i < n; ++i) escale = fmax(escale, fabs(EPS(i)));
     if (fabs(EPS(iref)) > 1e-12 * escale)
-      dk_error_at(e, path, tt.line[iref], 1, "eps_x must be 0 at delta = 1 (found %g)",
-                  EPS(iref));
+      dk_error_at(e, path, tt.line[iref], 1, "eps_x must be 0 at delta = 1 (found %g)", EPS(iref));
   }
   if (e->n == nerr0) {
     for (size_t i = 0; i < n; ++i) {
       double dr = RHO(i) / rho0;
       if (fabs(dr / D(i) - 1.0) > DELTA_REL_TOL)
         dk_error_at(e, path, tt.line[i], 1,
-                    "rho/rho0 = %.6g does not match delta = %g (rho0 = %g g/cm^3)", dr, D(i),
-                    rho0);
+                    "rho/rho0 = %.6g does not match delta = %g (rho0 = %g g/cm^3)", dr, D(i), rho0);
     }
   }
   /* P_x must increase with compression (∂P_x/∂δ > 0: a real cold sound speed). */

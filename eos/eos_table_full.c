@@ -69,8 +69,9 @@ static void tf_free(eos_t *eos) {
   free(t->rho), free(t->e), free(t->P), free(t->c2);
 }
 
-static const eos_ops table_full_ops = {tf_pressure, tf_c2, eos_isentrope_cold_pressure,
-                                       eos_isentrope_cold_energy, NULL, tf_free, tf_eval, NULL};
+static const eos_ops table_full_ops = {
+    tf_pressure, tf_c2, eos_isentrope_cold_pressure, eos_isentrope_cold_energy, NULL, tf_free,
+    tf_eval,     NULL};
 
 /* Nodal c² from centred differences of P (one-sided, first order, on the edges). */
 static void nodal_c2_from_p(table_full *t) {
@@ -101,8 +102,7 @@ static eos_t *finish_table(table_full *t, double rho0, const char *where, const 
           dk_error_at(e, where, ln, 1,
                       "P is not monotone in rho: P(rho=%g, e=%g) = %g < P(rho=%g) = %g; tables "
                       "must have dP/drho >= 0",
-                      t->rho[i], t->e[j], t->P[i * ne + j], t->rho[i - 1],
-                      t->P[(i - 1) * ne + j]);
+                      t->rho[i], t->e[j], t->P[i * ne + j], t->rho[i - 1], t->P[(i - 1) * ne + j]);
         ok = false;
         break;
       }
@@ -129,11 +129,14 @@ static eos_t *finish_table(table_full *t, double rho0, const char *where, const 
 
 eos_t *eos_create_table_from(const eos_t *src, double rho_min, double rho_max, size_t nrho,
                              double e_min, double e_max, size_t ne) {
-  if (!src || nrho < 2 || ne < 2 || !(rho_min > 0.0) || !(rho_max > rho_min) ||
-      !(e_max > e_min))
+  if (!src || nrho < 2 || ne < 2 || !(rho_min > 0.0) || !(rho_max > rho_min) || !(e_max > e_min))
     return NULL;
-  table_full t = {nrho, ne, ms_calloc(nrho, sizeof(double)), ms_calloc(ne, sizeof(double)),
-                  ms_calloc(nrho * ne, sizeof(double)), ms_calloc(nrho * ne, sizeof(double))};
+  table_full t = {nrho,
+                  ne,
+                  ms_calloc(nrho, sizeof(double)),
+                  ms_calloc(ne, sizeof(double)),
+                  ms_calloc(nrho * ne, sizeof(double)),
+                  ms_calloc(nrho * ne, sizeof(double))};
   for (size_t i = 0; i < nrho; ++i)
     t.rho[i] = rho_min + (rho_max - rho_min) * (double)i / (double)(nrho - 1);
   for (size_t j = 0; j < ne; ++j) t.e[j] = e_min + (e_max - e_min) * (double)j / (double)(ne - 1);
@@ -184,8 +187,12 @@ static eos_t *read_text(const char *path, dk_errors *e) {
     return NULL;
   }
   size_t nr = n / ne;
-  table_full t = {nr, ne, ms_calloc(nr, sizeof(double)), ms_calloc(ne, sizeof(double)),
-                  ms_calloc(n, sizeof(double)), ms_calloc(n, sizeof(double))};
+  table_full t = {nr,
+                  ne,
+                  ms_calloc(nr, sizeof(double)),
+                  ms_calloc(ne, sizeof(double)),
+                  ms_calloc(n, sizeof(double)),
+                  ms_calloc(n, sizeof(double))};
   for (size_t j = 0; j < ne; ++j) {
     t.e[j] = v[j * nc + 1];
     if (j > 0 && !(t.e[j] > t.e[j - 1]))
@@ -212,8 +219,7 @@ static eos_t *read_text(const char *path, dk_errors *e) {
       t.P[r] = v[r * nc + 2];
       if (nc == 4) {
         if (!(v[r * nc + 3] > 0.0))
-          dk_error_at(e, path, tt.line[r], 1, "sound speed must be > 0 (found %g)",
-                      v[r * nc + 3]);
+          dk_error_at(e, path, tt.line[r], 1, "sound speed must be > 0 (found %g)", v[r * nc + 3]);
         t.c2[r] = v[r * nc + 3] * v[r * nc + 3];
       }
     }
@@ -255,8 +261,8 @@ static eos_t *read_h5(const char *path, dk_errors *e) {
     size_t c0n, c1n;
     if (ms_h5_read_doubles(h, "c", &c, &c0n, &c1n, e) != MS_OK) ok = false;
     else if (c0n != nr || c1n != ne) {
-      dk_error_at(e, path, 0, 0, "dataset c has shape [%zu][%zu], expected [%zu][%zu]", c0n,
-                  c1n, nr, ne);
+      dk_error_at(e, path, 0, 0, "dataset c has shape [%zu][%zu], expected [%zu][%zu]", c0n, c1n,
+                  nr, ne);
       ok = false;
     }
   }

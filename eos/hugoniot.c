@@ -1,5 +1,5 @@
-/* hugoniot.c — Rankine–Hugoniot states for any EOS (DESIGN.md §3) and the Kuropatenko mixture
- * rule (paper 002 §1.2). docs/eos.md describes the method.
+/* hugoniot.c — Rankine–Hugoniot states for any EOS (docs/design.md §3) and the Kuropatenko mixture
+ * rule ([Davydov] §1.2). docs/eos.md describes the method.
  *
  * For a piston (particle) velocity up, with t = up/Us = 1 − ρ0/ρ the jump conditions give
  *   ρ = ρ0/(1 − t),  P_R = P0 + ρ0 up²/t  (Rayleigh line),  e = e0 + up²/2 + P0 t/ρ0,
@@ -51,8 +51,7 @@ static int kin_residual(N_Vector y, N_Vector f, void *user) {
   return isfinite(r) ? 0 : 1; /* recoverable: KINSOL shortens the step */
 }
 
-static void kin_silent(int code, const char *module, const char *function, char *msg,
-                       void *data) {
+static void kin_silent(int code, const char *module, const char *function, char *msg, void *data) {
   (void)code, (void)module, (void)function, (void)msg, (void)data;
 }
 
@@ -219,7 +218,7 @@ ms_status eos_hugoniot_at_pressure(const eos_t *eos, double rho0, double e0, dou
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Kuropatenko rule (paper 002 §1.2, docs/eos.md). Components start at their reference states
+/* Kuropatenko rule ([Davydov] §1.2, docs/eos.md). Components start at their reference states
  * (ρ0_i, e0_i) = (eos_rho0, eos_e0) with pressures P0_i; the mixture starts at
  * ρ0 = Σ α_i ρ0_i, P0 = Σ α_i P0_i. */
 

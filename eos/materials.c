@@ -11,10 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const eos_type_names[] = {"mg_cold",    "mg_linear",  "ideal_gas",
-                                             "table_cold", "table_full", "linear_elastic",
-                                             NULL};
-static const eos_kind eos_type_kinds[] = {EOS_MG_COLD,    EOS_MG_LINEAR, EOS_IDEAL_GAS,
+static const char *const eos_type_names[] = {
+    "mg_cold", "mg_linear", "ideal_gas", "table_cold", "table_full", "linear_elastic", NULL};
+static const eos_kind eos_type_kinds[] = {EOS_MG_COLD,    EOS_MG_LINEAR,  EOS_IDEAL_GAS,
                                           EOS_TABLE_COLD, EOS_TABLE_FULL, EOS_LINEAR_ELASTIC};
 static const char *const gamma_models[] = {"constant", "rho_gamma", NULL};
 
@@ -29,8 +28,7 @@ static const char *const eos_keys[][8] = {
 };
 static const char *const material_keys[] = {"name", "eos", "shear_modulus", "viscosity", NULL};
 static const char *const mixture_keys[] = {"name", "components", NULL};
-static const char *const component_keys[] = {"material", "volume_fraction", "mass_fraction",
-                                             NULL};
+static const char *const component_keys[] = {"material", "volume_fraction", "mass_fraction", NULL};
 
 static bool in_list(const char *key, const char *const *list) {
   for (size_t i = 0; list[i]; ++i)
@@ -75,8 +73,9 @@ static char *read_file_key(dk_errors *e, dk_doc *doc, const dk_node *map, const 
   char *path = dk_resolve_path(doc, file);
   FILE *f = fopen(path, "r");
   if (!f) {
-    dk_error(e, doc, dk_get(map, "file"), "%s.file: cannot open table file '%s' (resolved to '%s'): %s",
-             what, file, path, strerror(errno));
+    dk_error(e, doc, dk_get(map, "file"),
+             "%s.file: cannot open table file '%s' (resolved to '%s'): %s", what, file, path,
+             strerror(errno));
     free(path);
     return NULL;
   }
@@ -132,8 +131,9 @@ static eos_t *read_eos(dk_errors *e, dk_doc *doc, const dk_node *eosmap, const c
     if (path && e->n == nerr0) {
       eos = eos_create_table_cold(path, gamma0, gm == 1, e);
       if (!eos)
-        dk_error(e, doc, dk_get(eosmap, "file"), "%s.file: invalid cold-curve table '%s' (see above)",
-                 what, dk_scalar(dk_get(eosmap, "file")));
+        dk_error(e, doc, dk_get(eosmap, "file"),
+                 "%s.file: invalid cold-curve table '%s' (see above)", what,
+                 dk_scalar(dk_get(eosmap, "file")));
     }
     free(path);
     break;
@@ -143,8 +143,8 @@ static eos_t *read_eos(dk_errors *e, dk_doc *doc, const dk_node *eosmap, const c
     if (path) {
       eos = eos_create_table_full(path, e);
       if (!eos)
-        dk_error(e, doc, dk_get(eosmap, "file"), "%s.file: invalid EOS table '%s' (see above)", what,
-                 dk_scalar(dk_get(eosmap, "file")));
+        dk_error(e, doc, dk_get(eosmap, "file"), "%s.file: invalid EOS table '%s' (see above)",
+                 what, dk_scalar(dk_get(eosmap, "file")));
     }
     free(path);
     break;
@@ -181,8 +181,8 @@ static bool is_broken(const eos_materials *mats, const char *name) {
   return false;
 }
 
-const eos_material *eos_materials_find(const eos_materials *mats, const char *name,
-                                       dk_errors *e, const dk_doc *doc, const dk_node *where) {
+const eos_material *eos_materials_find(const eos_materials *mats, const char *name, dk_errors *e,
+                                       const dk_doc *doc, const dk_node *where) {
   if (!mats || !name) return NULL;
   const eos_material *m = find_material(mats, name);
   if (m || !e || is_broken(mats, name)) return m;
@@ -217,8 +217,8 @@ static int name_line(const dk_node *list, size_t upto, const char *name) {
  * whose `name` no earlier entry has. Sets `what` to "LIST[i]" and *name (NULL if missing);
  * returns the entry, or NULL if it is not a mapping. */
 static const dk_node *named_item(dk_errors *e, dk_doc *doc, const dk_node *list, size_t i,
-                                 const char *list_name, const char *noun,
-                                 const char *const *keys, char what[64], const char **name) {
+                                 const char *list_name, const char *noun, const char *const *keys,
+                                 char what[64], const char **name) {
   const dk_node *item = dk_seq_at(list, i);
   snprintf(what, 64, "%s[%zu]", list_name, i);
   *name = NULL;
@@ -241,16 +241,18 @@ static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_ma
     char what[64];
     const char *name;
     size_t nerr0 = e->n;
-    const dk_node *item = named_item(e, doc, list, i, "mixtures", "mixture", mixture_keys, what,
-                                     &name);
+    const dk_node *item =
+        named_item(e, doc, list, i, "mixtures", "mixture", mixture_keys, what, &name);
     if (!item) continue;
     if (name && !name_line(list, i, name) && (find_material(mats, name) || is_broken(mats, name)))
       dk_error(e, doc, dk_get(item, "name"), "%s.name: '%s' is already the name of a material",
                what, name);
     const dk_node *comps = dk_get(item, "components");
     if (!comps) {
-      dk_error(e, doc, item, "%s: missing required key 'components' (a list of {material: NAME, "
-                             "volume_fraction: X} or {material: NAME, mass_fraction: X})", what);
+      dk_error(e, doc, item,
+               "%s: missing required key 'components' (a list of {material: NAME, "
+               "volume_fraction: X} or {material: NAME, mass_fraction: X})",
+               what);
       continue;
     }
     if (!dk_expect_seq(e, doc, comps, "components")) continue;
@@ -275,7 +277,8 @@ static void read_mixtures(dk_errors *e, dk_doc *doc, const dk_node *list, eos_ma
         if (m) idx[k] = (size_t)(m - mats->m);
         else all_found = false; /* a material with errors of its own (already reported) */
       }
-      bool has_vol = dk_get(c, "volume_fraction") != NULL, has_mass = dk_get(c, "mass_fraction") != NULL;
+      bool has_vol = dk_get(c, "volume_fraction") != NULL,
+           has_mass = dk_get(c, "mass_fraction") != NULL;
       if (has_vol == has_mass) {
         dk_error(e, doc, c, "%s: give exactly one of volume_fraction or mass_fraction", cw);
         continue;
@@ -314,8 +317,9 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
   const dk_node *root = dk_root(doc);
   const dk_node *list = dk_get(root, "materials");
   if (!list) {
-    dk_error(e, doc, root,
-             "missing required top-level key 'materials' (a list of {name: NAME, eos: {type: ...}})");
+    dk_error(
+        e, doc, root,
+        "missing required top-level key 'materials' (a list of {name: NAME, eos: {type: ...}})");
     return NULL;
   }
   if (!dk_expect_seq(e, doc, list, "materials")) return NULL;
@@ -327,8 +331,8 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
     char what[64];
     const char *name;
     size_t nerr0 = e->n;
-    const dk_node *item = named_item(e, doc, list, i, "materials", "material", material_keys, what,
-                                     &name);
+    const dk_node *item =
+        named_item(e, doc, list, i, "materials", "material", material_keys, what, &name);
     if (!item) continue;
     double shear = 0.0, visc = 0.0;
     if (dk_get(item, "shear_modulus"))
@@ -343,8 +347,7 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
     if (!eosmap)
       dk_error(e, doc, item, "%s%s%s%s: missing required key 'eos' (a mapping {type: ..., ...})",
                what, name ? " ('" : "", name ? name : "", name ? "')" : "");
-    else if (dk_expect_map(e, doc, eosmap, eos_what))
-      eos = read_eos(e, doc, eosmap, eos_what);
+    else if (dk_expect_map(e, doc, eosmap, eos_what)) eos = read_eos(e, doc, eosmap, eos_what);
     if (!eos || e->n != nerr0) {
       eos_destroy(eos);
       /* a duplicate is not "broken": the first definition stands */

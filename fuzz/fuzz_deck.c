@@ -41,17 +41,33 @@ static void walk(dk_doc *doc, const dk_node *n, dk_errors *e, int depth) {
     double *list;
     size_t nl;
     switch (sel) {
-    case 0: dk_read_double(e, doc, n, key, MS_DIM_PRESSURE, true, 0, -1e3, 1e3, &d); break;
-    case 1: dk_read_positive(e, doc, n, key, MS_DIM_DENSITY, true, 1, &d); break;
-    case 2: dk_read_int(e, doc, n, key, true, 0, -5, 1000000, &l); break;
-    case 3: dk_read_bool(e, doc, n, key, true, false, &b); break;
-    case 4: dk_read_string(e, doc, n, key, true, NULL, &s); break;
-    case 5: dk_read_enum(e, doc, n, key, true, 0, choices, &k); break;
+    case 0:
+      dk_read_double(e, doc, n, key, MS_DIM_PRESSURE, true, 0, -1e3, 1e3, &d);
+      break;
+    case 1:
+      dk_read_positive(e, doc, n, key, MS_DIM_DENSITY, true, 1, &d);
+      break;
+    case 2:
+      dk_read_int(e, doc, n, key, true, 0, -5, 1000000, &l);
+      break;
+    case 3:
+      dk_read_bool(e, doc, n, key, true, false, &b);
+      break;
+    case 4:
+      dk_read_string(e, doc, n, key, true, NULL, &s);
+      break;
+    case 5:
+      dk_read_enum(e, doc, n, key, true, 0, choices, &k);
+      break;
     case 6:
       if (dk_read_double_list(e, doc, n, key, MS_DIM_VELOCITY, true, &list, &nl)) free(list);
       break;
-    case 7: dk_expect_map(e, doc, dk_get(n, key), key); break;
-    default: dk_expect_seq(e, doc, dk_get(n, key), key); break;
+    case 7:
+      dk_expect_map(e, doc, dk_get(n, key), key);
+      break;
+    default:
+      dk_expect_seq(e, doc, dk_get(n, key), key);
+      break;
     }
     walk(doc, dk_map_value(n, i), e, depth + 1);
   }

@@ -44,10 +44,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   dk_errors e;
   dk_errors_init(&e);
   eos_t *eos;
-  if (mode & 1)
-    eos = eos_create_table_full(path, &e);
-  else
-    eos = eos_create_table_cold(path, (mode >> 1) % 4 * 0.5, (mode >> 3) & 1, &e);
+  if (mode & 1) eos = eos_create_table_full(path, &e);
+  else eos = eos_create_table_cold(path, (mode >> 1) % 4 * 0.5, (mode >> 3) & 1, &e);
   if (eos && e.n) {
     fprintf(stderr, "fuzz oracle: table accepted with errors\n");
     abort();

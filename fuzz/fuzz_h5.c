@@ -34,11 +34,16 @@ static unsigned take(cursor *c) {
 #ifndef FUZZ_H5_RAW
 static double value_from(unsigned b) {
   switch (b % 16) {
-  case 0: return NAN;
-  case 1: return INFINITY;
-  case 2: return -1.0;
-  case 3: return 0.0;
-  default: return (double)(b / 16 + 1) * 0.5 * (b % 16);
+  case 0:
+    return NAN;
+  case 1:
+    return INFINITY;
+  case 2:
+    return -1.0;
+  case 3:
+    return 0.0;
+  default:
+    return (double)(b / 16 + 1) * 0.5 * (b % 16);
   }
 }
 
@@ -61,7 +66,10 @@ static void build_file(const char *path, cursor *c) {
     int rank = shape % 4;
     hsize_t dims[3] = {take(c) % 9, take(c) % 9, take(c) % 4};
     unsigned tsel = take(c) % 8;
-    hid_t ftype = tsel < 4 ? H5T_IEEE_F64LE : tsel == 4 ? H5T_IEEE_F32BE : tsel == 5 ? H5T_STD_I32LE : -1;
+    hid_t ftype = tsel < 4    ? H5T_IEEE_F64LE
+                  : tsel == 4 ? H5T_IEEE_F32BE
+                  : tsel == 5 ? H5T_STD_I32LE
+                              : -1;
     hid_t strtype = -1;
     if (ftype < 0) {
       strtype = H5Tcopy(H5T_C_S1);

@@ -73,10 +73,11 @@ static void build_snapshot(const char *path, cursor *c) {
   dataset(g, "x", n, ncomp, c);
   if (!(flags & 1)) dataset(g, "mass", flags & 2 ? n : take(c) % 41, 0, c);
   if (flags & 4) dataset(g, "v", n, flags & 8 ? 3 : 2, c);
-  static const char *const names[] = {"r0", "rho0", "period_x", "period_y", "period_z",
-                                      "lo_x", "lo_y", "lo_z"};
+  static const char *const names[] = {"r0",       "rho0", "period_x", "period_y",
+                                      "period_z", "lo_x", "lo_y",     "lo_z"};
   for (int k = 0; k < 8; k++)
-    if (flags & (16u << k)) attr(g, names[k], k == 0 && !(flags & 0x1000) ? 1e-3 : value_from(take(c)));
+    if (flags & (16u << k))
+      attr(g, names[k], k == 0 && !(flags & 0x1000) ? 1e-3 : value_from(take(c)));
   H5Gclose(g);
   H5Fclose(f);
 }

@@ -19,8 +19,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   ms_status s = ms_read_table(path, min_cols, &t, &nrow, &ncol, &e);
   if (s == MS_OK) {
     if (e.n || !t || nrow == 0 || ncol < min_cols || ncol == 0) {
-      fprintf(stderr, "fuzz oracle: accepted a table with %zu errors, %zu rows, %zu columns\n",
-              e.n, nrow, ncol);
+      fprintf(stderr, "fuzz oracle: accepted a table with %zu errors, %zu rows, %zu columns\n", e.n,
+              nrow, ncol);
       abort();
     }
     for (size_t i = 0; i < nrow * ncol; i++)

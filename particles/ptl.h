@@ -8,7 +8,7 @@
 #include "eos.h"
 
 /* Particle storage (ptl_): structure-of-arrays, sized once. Units are the internal ones (g, cm,
- * 10 µs: velocity km/s, DESIGN.md §2). */
+ * 10 µs: velocity km/s, docs/design.md §2). */
 
 enum {
   PTL_DRIVEN = 1u,  /* moves with a prescribed velocity (piston); forces on it are only recorded */
@@ -43,13 +43,13 @@ void ptl_state_reserve(ptl_state *s, size_t cap);
 void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi);
 
 /* splitmix64 (the benchmark's generator): u_k in [0,1) is the k-th output (k from 0) of the
- * generator started from `seed` (bench/cd_lammps, /work/shared/bench/cd_lammps.md). */
+ * generator started from `seed` (bench/cd_lammps, bench/problems/cd_lammps.md). */
 double ptl_splitmix64_uniform(uint64_t seed, uint64_t k);
 
 
 /* === Symplectic RKN integrators (rkn_) === */
 
-/* Explicit symplectic Runge–Kutta–Nyström schemes for r'' = a(r) (DESIGN.md §5.2, paper 000 §2).
+/* Explicit symplectic Runge–Kutta–Nyström schemes for r'' = a(r) (docs/design.md §5.2, [Sofronov] §2).
  * An m-stage scheme is given by α, γ (β_l = γ_l(1 − α_l), a_lk = γ_k(α_l − α_k) for k < l):
  *   q_l     = r + Δt α_l u + Δt² Σ_{k<l} a_lk a(q_k)
  *   r^{n+1} = r + Δt u + Δt² Σ β_l a(q_l),   u^{n+1} = u + Δt Σ γ_l a(q_l).

@@ -56,7 +56,8 @@ void ptl_state_reserve(ptl_state *s, size_t cap) {
   ptl_state *t = ptl_state_create(cap, s->dim);
   double *src[] = {s->x, s->y, s->z, s->vx, s->vy, s->vz, s->fx, s->fy, s->fz, s->mass};
   double *dst[] = {t->x, t->y, t->z, t->vx, t->vy, t->vz, t->fx, t->fy, t->fz, t->mass};
-  for (size_t k = 0; k < sizeof src / sizeof *src; k++) memcpy(dst[k], src[k], s->n * sizeof(double));
+  for (size_t k = 0; k < sizeof src / sizeof *src; k++)
+    memcpy(dst[k], src[k], s->n * sizeof(double));
   memcpy(t->gid, s->gid, s->n * sizeof *s->gid);
   memcpy(t->mat, s->mat, s->n);
   memcpy(t->flags, s->flags, s->n);
@@ -74,7 +75,8 @@ void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi) {
   if (lo > hi) lo = hi;
   size_t m = hi - lo;
   double *arr[] = {s->x, s->y, s->z, s->vx, s->vy, s->vz, s->fx, s->fy, s->fz, s->mass};
-  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) memmove(arr[k], arr[k] + lo, m * sizeof(double));
+  for (size_t k = 0; k < sizeof arr / sizeof *arr; k++)
+    memmove(arr[k], arr[k] + lo, m * sizeof(double));
   memmove(s->gid, s->gid + lo, m * sizeof *s->gid);
   memmove(s->mat, s->mat + lo, m);
   memmove(s->flags, s->flags + lo, m);

@@ -1,7 +1,7 @@
-/* rkn.c — explicit symplectic Runge–Kutta–Nyström integrators (DESIGN.md §5.2, paper 000 §2).
+/* rkn.c — explicit symplectic Runge–Kutta–Nyström integrators (docs/design.md §5.2, [Sofronov] §2).
  *
- * Coefficients: Verlet α = ½, γ = 1. SIA4 (Candy & Rozmus 1991) as printed in paper 000.
- * RKN4 and its conjugate: the printed coefficients are garbled; DESIGN.md §5.2 gives
+ * Coefficients: Verlet α = ½, γ = 1. SIA4 (Candy & Rozmus 1991) as printed in [Sofronov].
+ * RKN4 and its conjugate: the printed coefficients are garbled; docs/design.md §5.2 gives
  * α = ((3±√3)/6, (3∓√3)/6, (3±√3)/6), γ = ((3∓2√3)/12, ½, (3±2√3)/12), which satisfy every
  * 4th-order RKN condition (checked numerically in tests/ptl/test_rkn_order.c).
  */
@@ -21,13 +21,13 @@ static void schemes_init(void) {
   const double c1 = cbrt(2.0), c2 = cbrt(4.0), s3 = sqrt(3.0);
   schemes[RKN_VERLET] = (rkn_scheme){RKN_VERLET, "verlet", 1, 2, {0.5, 0, 0}, {1.0, 0, 0}};
   double g1 = c1 / 3.0 + c2 / 6.0 + 2.0 / 3.0;
-  schemes[RKN_SIA4] = (rkn_scheme){RKN_SIA4,
-                                   "sia4",
-                                   3,
-                                   4,
-                                   {c1 / 6.0 + c2 / 12.0 + 1.0 / 3.0, 0.5,
-                                    2.0 / 3.0 - c1 / 6.0 - c2 / 12.0},
-                                   {g1, -1.0 / 3.0 - 2.0 * c1 / 3.0 - c2 / 3.0, g1}};
+  schemes[RKN_SIA4] =
+      (rkn_scheme){RKN_SIA4,
+                   "sia4",
+                   3,
+                   4,
+                   {c1 / 6.0 + c2 / 12.0 + 1.0 / 3.0, 0.5, 2.0 / 3.0 - c1 / 6.0 - c2 / 12.0},
+                   {g1, -1.0 / 3.0 - 2.0 * c1 / 3.0 - c2 / 3.0, g1}};
   schemes[RKN_RKN4] = (rkn_scheme){RKN_RKN4,
                                    "rkn4",
                                    3,
@@ -53,8 +53,8 @@ const rkn_scheme *rkn_scheme_get(rkn_kind kind) {
 struct rkn_integrator {
   rkn_scheme s;
   size_t ndof, cap; /* dofs in use / allocated */
-  double *q;      /* stage positions */
-  double *acc[3]; /* stage accelerations a(q_l) */
+  double *q;        /* stage positions */
+  double *acc[3];   /* stage accelerations a(q_l) */
 };
 
 rkn_integrator *rkn_create(rkn_kind kind, size_t ndof) {
@@ -158,7 +158,8 @@ ms_status rkn_step_soa(rkn_integrator *ig, double t, double dt, int ncomp, doubl
     ms_status st = accel(user, tl, acc);
     if (st != MS_OK) return st;
   }
-  for (int c = 0; c < ncomp; ++c) finish_step(s, dt, (long)n, ig->q + c * n, u[c], ig->acc, c * n, r[c]);
+  for (int c = 0; c < ncomp; ++c)
+    finish_step(s, dt, (long)n, ig->q + c * n, u[c], ig->acc, c * n, r[c]);
   if (constrain) constrain(user, t + dt, true);
   return MS_OK;
 }
@@ -191,10 +192,8 @@ double rkn_stability_limit(rkn_kind kind) {
   double lo = z, hi = z + step; /* bisect the first crossing of |tr| = 2 */
   for (int it = 0; it < 60; ++it) {
     double mid = 0.5 * (lo + hi);
-    if (trace_amplification(s, mid) < 2.0)
-      lo = mid;
-    else
-      hi = mid;
+    if (trace_amplification(s, mid) < 2.0) lo = mid;
+    else hi = mid;
   }
   return lo;
 }

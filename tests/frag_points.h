@@ -49,7 +49,7 @@ static inline void frag_points_free(frag_points *c) {
 /* The finder's view: skip flags, z and gids only when asked for (NULL: none, 2D, index order). */
 static inline cpl_particles frag_points_view(const frag_points *c, bool use_skip, bool use_z,
                                              bool use_gid) {
-  cpl_particles p = {c->n,  c->x,  c->y,  use_z ? c->z : NULL,       c->vx,
+  cpl_particles p = {c->n,  c->x,  c->y, use_z ? c->z : NULL,       c->vx,
                      c->vy, c->vz, c->m, use_skip ? c->skip : NULL, use_gid ? c->gid : NULL};
   return p;
 }

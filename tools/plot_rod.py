@@ -11,7 +11,7 @@
       radial displacement and velocity of every particle (dm_sphere_radial.csv) against r,
       with the exact solution.
   plot_rod.py slice OUTDIR -o slice.png
-      "schlieren" pictures S = 0.8 exp(-5|u|/|u|max) of the first z layer (paper 000 Fig. 5)
+      "schlieren" pictures S = 0.8 exp(-5|u|/|u|max) of the first z layer ([Sofronov] Fig. 5)
       from every dm_profile_NNN.csv of a 3D run.
 
 Run with Debian's python (/usr/bin/python3: numpy, matplotlib). Units g, cm, 10 us.
@@ -39,7 +39,7 @@ def read_csv(path):
 
 
 def triangle_exact(x, t, L, eps, c):
-    """d'Alembert form of paper 000 §5.1 (odd 4L-periodic extension of the triangle)."""
+    """d'Alembert form of [Sofronov] §5.1 (odd 4L-periodic extension of the triangle)."""
     def ext(y):
         y = np.mod(y + L, 4 * L) - L
         return np.where(y <= L, eps * y, eps * (2 * L - y))
@@ -77,7 +77,7 @@ def rod(args):
                 label="cross scheme " + (label or path))
     ax.set_xlabel("t c / L")
     ax.set_ylabel("w(L/2, t)  [1e-4 cm]")
-    ax.set_title("Paper 000 §6.1: rod, triangle initial data, last 10 L/c before 250 L/c")
+    ax.set_title("[Sofronov] §6.1: rod, triangle initial data, last 10 L/c before 250 L/c")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -94,7 +94,7 @@ def contact(args):
     ax.axvline(1.0, color="gray", lw=0.8)
     ax.set_xlabel("x [cm]")
     ax.set_ylabel("sigma_xx [GPa]")
-    ax.set_title("Paper 000 §6.2: Fe | Be contact, t = 0.1 (10 us)")
+    ax.set_title("[Sofronov] §6.2: Fe | Be contact, t = 0.1 (10 us)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -118,7 +118,7 @@ def sphere(args):
     for a in ax:
         a.grid(alpha=0.3)
         a.legend(fontsize=8, markerscale=8)
-    fig.suptitle("Paper 000 §6.3: spherical wave from a cube source " + args.title)
+    fig.suptitle("[Sofronov] §6.3: spherical wave from a cube source " + args.title)
     fig.tight_layout()
     fig.savefig(args.o, dpi=110)
 

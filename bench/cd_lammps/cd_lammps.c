@@ -92,7 +92,11 @@ int main(int argc, char **argv) {
         int m = 0;
         for (int k = 0; k < nfr; k++)
           if (tfr[k] >= from[b2] * tfr[nfr - 1] * (1 - 1e-12) && isfinite(zz[a2][k])) {
-            sx += tfr[k]; sy += zz[a2][k]; sxx += tfr[k] * tfr[k]; sxy += tfr[k] * zz[a2][k]; m++;
+            sx += tfr[k];
+            sy += zz[a2][k];
+            sxx += tfr[k] * tfr[k];
+            sxy += tfr[k] * zz[a2][k];
+            m++;
           }
         double D = (m * sxy - sx * sy) / (m * sxx - sx * sx);
         printf("shock speed D = %.4f km/s (front at vz = %.1f u, fit t >= %.2f T, %d frames)\n", D,

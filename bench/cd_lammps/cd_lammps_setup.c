@@ -29,10 +29,11 @@ cd_sim *cd_lammps_setup(bool probB, const eos_t *eos, int *nx_out) {
     p->vx[i] = p->vy[i] = 0.0;
     p->vz[i] = UP;
   }
-  cd_box box = {.lo = {0, 0, 0}, .hi = {nx * a, nx * a, nz * a},
+  cd_box box = {.lo = {0, 0, 0},
+                .hi = {nx * a, nx * a, nz * a},
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, probB ? CD_BC_FREE : CD_BC_PERIODIC}};
-  cd_config cfg = {.r0 = R0, .skin = skin, .dt = dt, .cutoff = CD_CUTOFF_PLAIN,
-                   .lattice = CD_LATTICE_FCC};
+  cd_config cfg = {
+      .r0 = R0, .skin = skin, .dt = dt, .cutoff = CD_CUTOFF_PLAIN, .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = ms_calloc(1, sizeof *t);
   if (cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0.0, rc, 0.5 * R0, 1.0, 0) != MS_OK) {

@@ -1,10 +1,10 @@
 #!/bin/bash
 # Time mscale's cluster dynamics against LAMMPS on problems A and B of
-# /work/shared/bench/cd_lammps.md, alternating the two codes in one session (docs/benchmarks.md).
+# bench/problems/cd_lammps.md, alternating the two codes in one session (docs/benchmarks.md).
 #   bench/cd_lammps/run_compare.sh BUILD_DIR LAMMPS_DIR [REPS] [CASES] [THREADS]
 # THREADS: a list of N (mscale with N OpenMP threads against LAMMPS on N ranks) and Nr (mscale
 # on N MPI ranks, bench/cd_mpi's cd_mpi_bench with its default partition, against LAMMPS on N).
-# LAMMPS_DIR: a writable copy of /work/shared/bench/lammps where gen/ was made by
+# LAMMPS_DIR: a writable copy of bench/problems/lammps where gen/ was made by
 # `/usr/bin/python3 gen_inputs.py gen` (run.sh does it). Prints one markdown row per run pair:
 # loop times, particle-steps/s and the ratio, with the 1-minute load average before each pair;
 # then the CPU seconds of the loop (LAMMPS: loop time × its "% CPU use" × ranks; mscale: process

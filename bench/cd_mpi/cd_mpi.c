@@ -34,7 +34,8 @@ int main(int argc, char **argv) {
   ms_ctx_init_serial(&ctx);
   if (par_init(&argc, &argv, &ctx) != MS_OK) return 1;
   if (argc < 2 || (strcmp(argv[1], "A") && strcmp(argv[1], "B"))) {
-    if (ctx.rank == 0) fprintf(stderr, "usage: %s A|B [--steps N] [--partition auto|metis|slab]\n", argv[0]);
+    if (ctx.rank == 0)
+      fprintf(stderr, "usage: %s A|B [--steps N] [--partition auto|metis|slab]\n", argv[0]);
     par_finalize();
     return 2;
   }
@@ -45,15 +46,18 @@ int main(int argc, char **argv) {
     if (!strcmp(argv[k], "--steps") && k + 1 < argc) steps = atol(argv[++k]);
     else if (!strcmp(argv[k], "--partition") && k + 1 < argc) {
       k++;
-      method = !strcmp(argv[k], "slab") ? CD_PART_SLAB
-               : !strcmp(argv[k], "auto") ? CD_PART_AUTO : CD_PART_METIS;
+      method = !strcmp(argv[k], "slab")   ? CD_PART_SLAB
+               : !strcmp(argv[k], "auto") ? CD_PART_AUTO
+                                          : CD_PART_METIS;
     }
   }
   eos_t *eos = eos_create_mg_cold(RHO0, C0, NEXP, 2.0, true);
   cd_sim *s = cd_lammps_setup(probB, eos, NULL);
   const size_t n = s->p->n;
   if (ctx.size > 1) {
-    cd_mpi_config mc = {.partition = method, .rebalance_threshold = 1.2, .rebalance_interval = 10,
+    cd_mpi_config mc = {.partition = method,
+                        .rebalance_threshold = 1.2,
+                        .rebalance_interval = 10,
                         .replicated = true};
     cd_sim_set_mpi(s, &mc);
   }
@@ -92,10 +96,17 @@ int main(int argc, char **argv) {
   /* per rank: owned, ghosts, list entries, force wall, CPU outside MPI (where the time goes),
    * peak resident memory, wall inside MPI calls and in ghost refreshes + migrations */
   enum { NPR = 8 };
-  double mine[NPR] = {(double)s->p->nlocal, (double)(s->p->n - s->p->nlocal), pairs,
-                      s->wall_time_force, work, peak_rss_mb(), mw1 - mw0, xs};
+  double mine[NPR] = {(double)s->p->nlocal,
+                      (double)(s->p->n - s->p->nlocal),
+                      pairs,
+                      s->wall_time_force,
+                      work,
+                      peak_rss_mb(),
+                      mw1 - mw0,
+                      xs};
   double *all = ms_calloc((size_t)NPR * ctx.size, sizeof *all);
-  int *cnt = ms_calloc((size_t)ctx.size, sizeof *cnt), *dsp = ms_calloc((size_t)ctx.size, sizeof *dsp);
+  int *cnt = ms_calloc((size_t)ctx.size, sizeof *cnt),
+      *dsp = ms_calloc((size_t)ctx.size, sizeof *dsp);
   for (int r = 0; r < ctx.size; r++) cnt[r] = NPR, dsp[r] = NPR * r;
   par_allgatherv_doubles(mine, NPR, all, cnt, dsp);
   if (ctx.rank == 0) {
@@ -103,24 +114,27 @@ int main(int argc, char **argv) {
       const double *a = all + NPR * r;
       printf("rank %d: owned %.0f, ghosts %.0f, list entries %.0f, force %.3f s (%.2f ns per "
              "entry-step), CPU outside MPI %.3f s, wall in MPI %.3f s (ghosts %.3f s), peak RSS "
-             "%.1f MB\n", r, a[0], a[1], a[2], a[3], 1e9 * a[3] / (a[2] * (double)steps), a[4],
-             a[6], a[7], a[5]);
+             "%.1f MB\n",
+             r, a[0], a[1], a[2], a[3], 1e9 * a[3] / (a[2] * (double)steps), a[4], a[6], a[7],
+             a[5]);
     }
     printf("problem %s on %d rank(s): N = %zu, steps = %ld, setup %.3f s\n", argv[1], ctx.size, n,
            steps, setup);
     if (ms)
       printf("decomposition: %dx%dx%d coarse cells, %s%s, owned max %zu, ghosts %zu in all "
              "(%.2f %% of N), edge cut %ld, imbalance %.4f, load %.4f (other map %.4f), "
-             "rebalances %ld\n", ms->ncell[0], ms->ncell[1], ms->ncell[2],
+             "rebalances %ld\n",
+             ms->ncell[0], ms->ncell[1], ms->ncell[2],
              ms->partition.method == CD_PART_METIS ? "metis" : "slab",
              method == CD_PART_AUTO ? " (auto)" : "", ms->max_owned, ms->total_ghosts,
              100.0 * ms->total_ghosts / n, ms->partition.edge_cut, ms->imbalance,
              ms->partition.load, ms->partition.rejected_load, ms->rebalances);
     printf("loop wall %.3f s (slowest rank; force %.3f, lists+migration %.3f, exchange %.3f), "
-           "rebuilds %ld\n", wall_max, fw, nw, xs_max, cd_sim_rebuilds(s));
+           "rebuilds %ld\n",
+           wall_max, fw, nw, xs_max, cd_sim_rebuilds(s));
     printf("loop CPU %.3f s summed over ranks (max rank %.3f); CPU outside MPI calls: max rank "
-           "%.3f s; wall inside MPI calls: max rank %.3f s\n", cpu_sum, cpu_max, work_max,
-           comm_wall_max);
+           "%.3f s; wall inside MPI calls: max rank %.3f s\n",
+           cpu_sum, cpu_max, work_max, comm_wall_max);
     printf("list entries: max rank %.0f, all ranks %.0f\n", pairs_max, pairs_sum);
     printf("exchanged %.4g doubles in all (%.3g per particle-step)\n", xd_sum,
            xd_sum / ((double)n * steps));

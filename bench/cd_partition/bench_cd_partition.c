@@ -76,11 +76,13 @@ static int cmd_snapshot(int argc, char **argv) {
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--cell") && i + 1 < argc) kcell = atof(argv[++i]);
     else if (!strcmp(argv[i], "--scale") && i + 1 < argc) scale = atol(argv[++i]);
-    else if (!strcmp(argv[i], "--parts") && i + 1 < argc) nparts = parse_parts(argv[++i], parts, 16);
+    else if (!strcmp(argv[i], "--parts") && i + 1 < argc)
+      nparts = parse_parts(argv[++i], parts, 16);
     else nparts = -1;
   }
   if (nparts < 1 || !(kcell > 0) || scale < 1) {
-    fprintf(stderr, "bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,...] [--scale S]\n");
+    fprintf(stderr,
+            "bench_cd_partition snapshot FILE.h5 [--cell K] [--parts 2,4,...] [--scale S]\n");
     return 2;
   }
   dk_errors e;
@@ -101,7 +103,8 @@ static int cmd_snapshot(int argc, char **argv) {
   for (int a = 0; a < 3; ++a) {
     dk_errors quiet;
     dk_errors_init(&quiet);
-    per[a] = ms_h5_read_attr_double(h, "/particles", pname[a], &period[a], &quiet) == MS_OK && period[a] > 0;
+    per[a] = ms_h5_read_attr_double(h, "/particles", pname[a], &period[a], &quiet) == MS_OK &&
+             period[a] > 0;
     lo[a] = INFINITY;
     hi[a] = -INFINITY;
     for (size_t i = 0; i < n; ++i) {
@@ -138,17 +141,19 @@ static int cmd_snapshot(int argc, char **argv) {
   size_t occupied = 0;
   for (size_t c = 0; c < nv; ++c) occupied += wt[c] > 0;
   printf("# %s: %zu particles, r0 = %.4g cm, cells %d x %d x %d of %.3g r0 (%zu, %zu occupied), "
-         "weight %ld per particle\n", path, n, r0, nc[0], nc[1], nc[2], kcell, nv, occupied, scale);
+         "weight %ld per particle\n",
+         path, n, r0, nc[0], nc[1], nc[2], kcell, nv, occupied, scale);
   printf("# extent [cm]: x %.4g..%.4g  y %.4g..%.4g  z %.4g..%.4g; periodic %d%d%d\n", lo[0], hi[0],
          lo[1], hi[1], lo[2], hi[2], per[0], per[1], per[2]);
-  printf("| parts | method | imbalance | edge cut | halo cells (sum) | halo max/part | neighbour parts max |\n");
+  printf("| parts | method | imbalance | edge cut | halo cells (sum) | halo max/part | neighbour "
+         "parts max |\n");
   printf("|---|---|---|---|---|---|---|\n");
   int32_t *owner = ms_calloc(nv, sizeof *owner);
   for (int k = 0; k < nparts; ++k) {
     row r;
     if (partition(nc, per, wt, parts[k], CD_PART_METIS, 0, owner, &r)) return 1;
-    printf("| %d | METIS | %.4f | %ld | %ld | %ld | %d |\n", parts[k], r.st.imbalance, r.st.edge_cut,
-           r.st.halo_cells, r.halo_max, r.nbr_max);
+    printf("| %d | METIS | %.4f | %ld | %ld | %ld | %d |\n", parts[k], r.st.imbalance,
+           r.st.edge_cut, r.st.halo_cells, r.halo_max, r.nbr_max);
     for (int a = 0; a < 3; ++a) {
       if (nc[a] < 2) continue;
       if (partition(nc, per, wt, parts[k], CD_PART_SLAB, a, owner, &r)) return 1;
@@ -181,7 +186,8 @@ static int cmd_grid(int argc, char **argv) {
   int64_t *w = ms_calloc(nv, sizeof *w);
   for (size_t c = 0; c < nv; ++c) w[c] = 64 * ppc;
   int32_t *owner = ms_calloc(nv, sizeof *owner);
-  printf("method,parts,cells,imbalance,edge_cut,halo_sum,halo_max,halo_mean,nbr_max,nbr_mean,seconds\n");
+  printf("method,parts,cells,imbalance,edge_cut,halo_sum,halo_max,halo_mean,nbr_max,nbr_mean,"
+         "seconds\n");
   for (int k = 0; k < np; ++k)
     for (int m = 0; m < 2; ++m) {
       row r;

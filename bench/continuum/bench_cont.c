@@ -26,11 +26,19 @@ int main(int argc, char **argv) {
   }
   bool gas = argc > 3 && !strcmp(argv[3], "gas");
   eos_t *al = gas ? eos_create_ideal_gas(1.4, 2.703) : eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
-  cont_layer_spec layers[2] = {
-      {.name = "flyer", .eos = al, .thickness = 1.0, .rho = 2.703, .u = 2.0, .e = gas ? 1.0 : 0.0,
-       .ncells = cells / 2},
-      {.name = "target", .eos = al, .thickness = 1.0, .rho = 2.703, .e = gas ? 1.0 : 0.0,
-       .ncells = cells - cells / 2}};
+  cont_layer_spec layers[2] = {{.name = "flyer",
+                                .eos = al,
+                                .thickness = 1.0,
+                                .rho = 2.703,
+                                .u = 2.0,
+                                .e = gas ? 1.0 : 0.0,
+                                .ncells = cells / 2},
+                               {.name = "target",
+                                .eos = al,
+                                .thickness = 1.0,
+                                .rho = 2.703,
+                                .e = gas ? 1.0 : 0.0,
+                                .ncells = cells - cells / 2}};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = layers;
@@ -69,8 +77,7 @@ int main(int argc, char **argv) {
   printf("bench_cont: CPU time %.3f s for %.3f s wall: %.3e cell-steps per CPU-second, %.2f ns\n",
          cpu, w3 - w2, (double)cells * (double)steps / cpu, 1e9 * cpu / ((double)cells * steps));
   printf("bench_cont: energy drift %.2e (relative), t = %.4g\n",
-         (b.internal + b.kinetic - b.work - b0.internal - b0.kinetic) /
-             (b0.internal + b0.kinetic),
+         (b.internal + b.kinetic - b.work - b0.internal - b0.kinetic) / (b0.internal + b0.kinetic),
          cont_grid_time(g));
   cont_grid_destroy(g);
   eos_destroy(al);

@@ -1,5 +1,5 @@
 /* bench_dm_peri — particle-steps per second of the Hamiltonian discrete model on the benchmark
- * of ../shared/bench/dm_lammps.md (simple cubic 50³, horizon 3.015 h, Verlet, 300 steps).
+ * of bench/problems/dm_lammps.md (simple cubic 50³, horizon 3.015 h, Verlet, 300 steps).
  *
  *   bench_dm_peri [DECK]      (default DECK: bench/dm_peri/dm_peri.yaml; fewer steps: copy the
  *                             deck and edit `steps:`)
@@ -21,8 +21,7 @@ int main(int argc, char **argv) {
     if (!strcmp(argv[i], "--help")) {
       printf("usage: bench_dm_peri [DECK]\n");
       return 0;
-    } else
-      deck = argv[i];
+    } else deck = argv[i];
   }
   dk_errors e;
   dk_errors_init(&e);

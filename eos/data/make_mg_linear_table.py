@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Write a full (rho, e) EOS table in mscale's text format (docs/eos.md) sampled from the
 Mie-Grueneisen linear Us-up form: P = P_H + G0 rho0 (e - e_H), eta = 1 - rho0/rho,
-P_H = rho0 c0^2 eta / (1 - s eta)^2, e_H = P_H eta / (2 rho0)   (DESIGN.md section 3).
+P_H = rho0 c0^2 eta / (1 - s eta)^2, e_H = P_H eta / (2 rho0)   (docs/design.md §3).
 
 Usage: /usr/bin/python3 make_mg_linear_table.py OUT.txt [rho0 c0 s gamma0 rho_min rho_max n_rho
                                                          e_min e_max n_e]

@@ -1,8 +1,8 @@
 /* cd.h — the public header of the cluster-dynamics library (particles/cd/).
  *
- * Cluster dynamics (paper 002, DESIGN.md §5.1): particles ("clusters") of size r0 on a
+ * Cluster dynamics ([Davydov], docs/design.md §5.1): particles ("clusters") of size r0 on a
  * close-packed lattice interact through pair potentials built from an EOS cold curve;
- * docs/particles-cd.md. Units are the internal ones (DESIGN.md §2). */
+ * docs/particles-cd.md. Units are the internal ones (docs/design.md §2). */
 #ifndef MSCALE_CD_H
 #define MSCALE_CD_H
 
@@ -42,7 +42,7 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
                       cd_site_filter keep, void *user, double **xyz, int32_t **grain,
                       double *porosity);
 
-/* ---- pair potentials (DESIGN.md §5.1) ---- */
+/* ---- pair potentials (docs/design.md §5.1) ---- */
 /* fcc:  E(r) = (√2 ρ0 r0³/12) ε_x((r0/r)³),  f(r) = −dE/dr = (√2/4) r² P_x((r0/r)³);
  * 2D:   E(r) = (m/3) ε_x((r0/r)²),           f(r) = r h P_x((r0/r)²)/√3 (docs/particles-cd.md).
  * Tabulated once as a cubic Hermite interpolant of E in s = r² (values and exact slopes
@@ -53,13 +53,13 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
 enum { CD_FIT_MAXDEG = 9, CD_FIT_SHIFT = 49, CD_FIT_NSEG = 16 };
 
 typedef struct cd_pair_table {
-  int nint;          /* intervals in s */
+  int nint; /* intervals in s */
   double s_lo, h, inv_h;
-  double rc, rc2;    /* cutoff (hard truncation) */
-  double r0;         /* nearest-neighbour distance at rest */
-  double e_rc;       /* E(rc): energy a pair takes with it when it leaves the cutoff */
-  double *fcoef;     /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
-  double *ecoef;     /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
+  double rc, rc2; /* cutoff (hard truncation) */
+  double r0;      /* nearest-neighbour distance at rest */
+  double e_rc;    /* E(rc): energy a pair takes with it when it leaves the cutoff */
+  double *fcoef;  /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
+  double *ecoef;  /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
   /* F/r on fit_slo <= s < rc2 as Σ_p fit_coef[p][k mod 16] (s − c_k)^p, c_k the centre of the
    * segment k = bits(s) >> CD_FIT_SHIFT; fit_ok when it matches the cold curve to 1e-12 and
    * the table to 1e-9 of max|F/r| (else the kernels use the table only) */
@@ -72,8 +72,7 @@ typedef struct cd_pair_table {
 /* Reference (untabulated) pair energy and force from an EOS cold curve. */
 double cd_pair_energy_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
                             double r);
-double cd_pair_force_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness,
-                           double r);
+double cd_pair_force_exact(const eos_t *eos, cd_lattice lat, double r0, double thickness, double r);
 /* Build the table for materials a and b (b == a: the material's own potential; otherwise the
  * mixing rule E_ab = ½(E_a + E_b), whose attractive branch (E' < 0, r > r0) is scaled by
  * `attraction` in [0, 1] so an interface can be weaker than either bulk). r_min: inner end
@@ -94,7 +93,7 @@ enum { CD_MAX_MATERIALS = 8 };
 
 typedef enum cd_bc { CD_BC_FREE = 0, CD_BC_PERIODIC, CD_BC_WALL } cd_bc;
 
-/* Cutoff treatment (DESIGN.md §5.1, "known trap"):
+/* Cutoff treatment (docs/design.md §5.1, "known trap"):
  *  CD_CUTOFF_PLAIN  — every pair closer than R_c interacts (the benchmark's model);
  *  CD_CUTOFF_BONDED — interaction partners fixed at set-up (pairs closer than R_c then);
  *                     a bond farther than R_c breaks for good; non-bonded pairs (and broken
@@ -102,7 +101,7 @@ typedef enum cd_bc { CD_BC_FREE = 0, CD_BC_PERIODIC, CD_BC_WALL } cd_bc;
 typedef enum cd_cutoff_mode { CD_CUTOFF_PLAIN = 0, CD_CUTOFF_BONDED } cd_cutoff_mode;
 
 /* Time integrator (docs/particles-cd.md): velocity Verlet (fused kick–drift, the default and
- * the benchmark's), or one of the symplectic RKN schemes of rkn_ (DESIGN.md §5.2) — position
+ * the benchmark's), or one of the symplectic RKN schemes of rkn_ (docs/design.md §5.2) — position
  * Verlet = RKN "verlet", SIA4, RKN4, RKN4 conjugate; damping is a separate step after any. */
 typedef enum cd_integrator {
   CD_INT_VELOCITY_VERLET = 0,
@@ -121,14 +120,14 @@ typedef struct cd_box {
 } cd_box;
 
 typedef struct cd_config {
-  double r0;               /* nearest-neighbour distance (cluster size a) */
-  double skin;             /* Verlet skin (list radius = max R_c + skin) */
-  double dt;               /* time step */
+  double r0;   /* nearest-neighbour distance (cluster size a) */
+  double skin; /* Verlet skin (list radius = max R_c + skin) */
+  double dt;   /* time step */
   cd_cutoff_mode cutoff;
-  double damping_gamma;    /* Γ of eq. 6 (paper 002), 1/time; 0 = off */
-  int sort_every;          /* renumber particles into cell order every k-th list build (0: 8) */
-  cd_lattice lattice;      /* for the reference volume per particle (per-particle stress) */
-  double thickness;        /* 2D plane-strain thickness h (unused in 3D) */
+  double damping_gamma;     /* Γ of eq. 6 ([Davydov]), 1/time; 0 = off */
+  int sort_every;           /* renumber particles into cell order every k-th list build (0: 8) */
+  cd_lattice lattice;       /* for the reference volume per particle (per-particle stress) */
+  double thickness;         /* 2D plane-strain thickness h (unused in 3D) */
   cd_integrator integrator; /* default (0): velocity Verlet */
 } cd_config;
 
@@ -147,14 +146,14 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
 void cd_history_free(cd_history *h);
 
 typedef struct cd_energy {
-  double kinetic;      /* ½ m v² of integrated (non-driven) particles */
-  double potential;    /* Σ pair energies of pairs inside their cutoff */
-  double dissipated;   /* energy removed by the relative-velocity damping */
-  double broken;       /* energy carried away by pairs/bonds leaving the cutoff */
-  double piston_work;  /* work done on the particles by driven (piston) particles */
-  double wall_work;    /* 0 (specular walls do no work); kept for the balance's form */
-  double total;        /* kinetic + potential + dissipated + broken − piston_work */
-  double momentum[3];  /* Σ m v of integrated particles */
+  double kinetic;     /* ½ m v² of integrated (non-driven) particles */
+  double potential;   /* Σ pair energies of pairs inside their cutoff */
+  double dissipated;  /* energy removed by the relative-velocity damping */
+  double broken;      /* energy carried away by pairs/bonds leaving the cutoff */
+  double piston_work; /* work done on the particles by driven (piston) particles */
+  double wall_work;   /* 0 (specular walls do no work); kept for the balance's form */
+  double total;       /* kinetic + potential + dissipated + broken − piston_work */
+  double momentum[3]; /* Σ m v of integrated particles */
 } cd_energy;
 
 typedef struct cd_neigh cd_neigh; /* link cells + Verlet lists (particles/neighbour.c) */
@@ -167,12 +166,12 @@ typedef enum cd_partition_method {
 } cd_partition_method;
 typedef struct cd_partition_stats {
   cd_partition_method method; /* of the map (CD_PART_AUTO: the one it chose) */
-  double imbalance; /* max part weight / mean part weight (weights as given) */
-  double load;      /* max over parts of (part weight + 0.25 × weight of its halo cells, the
+  double imbalance;           /* max part weight / mean part weight (weights as given) */
+  double load;          /* max over parts of (part weight + 0.25 × weight of its halo cells, the
                      * ghosts) / mean part weight: the cost model CD_PART_AUTO minimises */
   double rejected_load; /* CD_PART_AUTO: the load of the map it did not take; else NaN */
-  long edge_cut;    /* edges of the 26-neighbour coarse-cell graph joining different parts */
-  long halo_cells;  /* Σ over parts of the cells not in the part but adjacent to it */
+  long edge_cut;        /* edges of the 26-neighbour coarse-cell graph joining different parts */
+  long halo_cells;      /* Σ over parts of the cells not in the part but adjacent to it */
 } cd_partition_stats;
 /* Assign each of the ncell[0]*ncell[1]*ncell[2] coarse cells (index ix + ncell[0]*(iy +
  * ncell[1]*iz)) to one of nparts parts balancing Σ weight (particle counts); periodic axes wrap in
@@ -187,8 +186,8 @@ typedef struct cd_partition_stats {
  * weights summing above 2^30 are scaled down for METIS's 32-bit idx_t. MS_ERR_INPUT: bad
  * arguments, negative weights, more than 2^31/26 cells; MS_ERR_INTERNAL: METIS failed. */
 ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
-                             int nparts, cd_partition_method method, int slab_axis,
-                             int32_t *owner, cd_partition_stats *stats);
+                             int nparts, cd_partition_method method, int slab_axis, int32_t *owner,
+                             cd_partition_stats *stats);
 /* The figures of a given owner map (stats->method is meaningless). MS_ERR_INPUT: bad
  * arguments or an owner outside [0, nparts). */
 ms_status cd_partition_evaluate(const int ncell[3], const bool periodic[3], const int64_t *weight,
@@ -196,8 +195,8 @@ ms_status cd_partition_evaluate(const int ncell[3], const bool periodic[3], cons
 /* Per-part figures of an owner map: halo[p] = cells outside part p adjacent to it (its ghost
  * cells), neighbours[p] = distinct other parts adjacent to p (its messages per exchange).
  * Arrays of nparts entries; either may be NULL. */
-void cd_partition_halo(const int ncell[3], const bool periodic[3], const int32_t *owner,
-                       int nparts, long *halo, int *neighbours);
+void cd_partition_halo(const int ncell[3], const bool periodic[3], const int32_t *owner, int nparts,
+                       long *halo, int *neighbours);
 
 /* Cluster dynamics on MPI ranks (particles/cd_par.c, docs/mpi.md): the box is cut into coarse
  * cells (>= r_list wide) owned by ranks (cd_partition_cells, recomputed when the load is
@@ -216,22 +215,22 @@ typedef struct cd_mpi_config {
 } cd_mpi_config;
 typedef struct cd_mpi_stats {
   int ranks;
-  int ncell[3];                  /* coarse cells */
-  size_t owned, ghosts;          /* this rank, at the last list build */
+  int ncell[3];         /* coarse cells */
+  size_t owned, ghosts; /* this rank, at the last list build */
   size_t global, max_owned, total_ghosts;
-  double imbalance;              /* max owned / mean owned, at the last list build */
-  cd_partition_stats partition;  /* of the owner map in use (weights = particle counts) */
-  long partitions;               /* partitions computed (1 = the initial one) */
-  long rebalances;               /* repartitions because of imbalance */
-  long rebalance_step;           /* step of the last rebalance, imbalance before and after */
+  double imbalance;             /* max owned / mean owned, at the last list build */
+  cd_partition_stats partition; /* of the owner map in use (weights = particle counts) */
+  long partitions;              /* partitions computed (1 = the initial one) */
+  long rebalances;              /* repartitions because of imbalance */
+  long rebalance_step;          /* step of the last rebalance, imbalance before and after */
   double rebalance_before, rebalance_after;
-  double exchange_s;             /* wall time in ghost refreshes and migrations, this rank */
-  double exchanged_doubles;      /* received, this rank */
-  long lost_bonds;               /* bonded mode: partners not found on the rank at a migration */
+  double exchange_s;        /* wall time in ghost refreshes and migrations, this rank */
+  double exchanged_doubles; /* received, this rank */
+  long lost_bonds;          /* bonded mode: partners not found on the rank at a migration */
 } cd_mpi_stats;
 
 typedef struct cd_sim {
-  ptl_state *p;                 /* owned */
+  ptl_state *p; /* owned */
   cd_box box;
   cd_config cfg;
   int nmat;
@@ -241,37 +240,37 @@ typedef struct cd_sim {
   double t;
   long step;
   /* piston */
-  cd_history piston;            /* u(t) of every PTL_DRIVEN particle */
+  cd_history piston; /* u(t) of every PTL_DRIVEN particle */
   double piston_dir[3];
   size_t n_driven;
-  int32_t *driven;              /* indices of driven particles */
+  int32_t *driven; /* indices of driven particles */
   /* balance accumulators */
   double dissipated, piston_work, broken_bonded;
   long n_inside0[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* pairs inside R_c at start (plain) */
   bool have_inside0;
-  double *scratch;              /* 3N, damping velocity increments (NULL if no damping) */
-  int32_t *partners;            /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
+  double *scratch;   /* 3N, damping velocity increments (NULL if no damping) */
+  int32_t *partners; /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
   long n_broken_bonds;
-  bool forces_zeroed;           /* the step zeroed f in its drift loop */
-  double disp_bound;            /* Σ Δt·max|v| since the last build (cheap rebuild pre-check) */
-  double vmax_last;             /* max|v| of the last Verlet step (when to take the extents) */
-  struct cd_layer_sums *sums;   /* per-layer accumulators of the kernels */
+  bool forces_zeroed;         /* the step zeroed f in its drift loop */
+  double disp_bound;          /* Σ Δt·max|v| since the last build (cheap rebuild pre-check) */
+  double vmax_last;           /* max|v| of the last Verlet step (when to take the extents) */
+  struct cd_layer_sums *sums; /* per-layer accumulators of the kernels */
   int sums_cap;
-  double *pw;                   /* [N][6] per-particle virials (allocated by diagnostics) */
+  double *pw; /* [N][6] per-particle virials (allocated by diagnostics) */
   /* RKN integrators (cfg.integrator != velocity Verlet): stage buffers, driven particles'
    * positions at the start of the step, the piston force at each stage */
   struct rkn_integrator *rkn;
-  double rkn_reach[2];          /* stage excursion bound: |q_l − r^n| ≤ Δt c0 max|v| + Δt² c1 max|a| */
-  double *driven_x0;            /* [n_driven][3] */
+  double rkn_reach[2]; /* stage excursion bound: |q_l − r^n| ≤ Δt c0 max|v| + Δt² c1 max|a| */
+  double *driven_x0;   /* [n_driven][3] */
   double stage_force[3];
   int stage;
   double wall_time_force, wall_time_neigh;
-  long last_build_step;         /* step of the last list build (full or half lists: cd_sim.c) */
-  double kick_hdt;              /* > 0: the fit kernel also kicks v += kick_hdt f/m (cd_sim.c) */
-  struct cd_dd *dd;             /* MPI decomposition (cd_par.c); NULL on one rank */
+  long last_build_step; /* step of the last list build (full or half lists: cd_sim.c) */
+  double kick_hdt;      /* > 0: the fit kernel also kicks v += kick_hdt f/m (cd_sim.c) */
+  struct cd_dd *dd;     /* MPI decomposition (cd_par.c); NULL on one rank */
   cd_mpi_config mpi;
-  bool mpi_on;                  /* cd_sim_set_mpi was called */
-  char err[512];                /* what the instability guard found (cd_sim_error) */
+  bool mpi_on;   /* cd_sim_set_mpi was called */
+  char err[512]; /* what the instability guard found (cd_sim_error) */
 } cd_sim;
 
 enum { CD_MAX_PARTNERS = 16 };
@@ -305,10 +304,10 @@ typedef struct cd_relax_config {
   bool quench;          /* zero v_i whenever v_i·f_i < 0 */
   bool box;             /* rescale the box toward zero mean normal stress */
   int box_every;
-  double tau, modulus;  /* box relaxation time; stiffness (GPa), e.g. ρ0 c0² */
+  double tau, modulus; /* box relaxation time; stiffness (GPa), e.g. ρ0 c0² */
   double max_strain;
   bool rebond;
-  bool plain;           /* bonded runs: relax with the plain cutoff (every pair inside R_c
+  bool plain; /* bonded runs: relax with the plain cutoff (every pair inside R_c
                          * attracts, so grain-boundary gaps close), then form the bonds anew */
 } cd_relax_config;
 typedef struct cd_relax_result {
@@ -321,7 +320,7 @@ typedef struct cd_relax_result {
   double energy;                /* kinetic + potential before − potential after */
   double dissipated;            /* of which the damping and the quench removed */
   double quenched;
-  long broken_bonds;            /* bonds broken during the relaxation */
+  long broken_bonds; /* bonds broken during the relaxation */
 } cd_relax_result;
 ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *cfg, cd_relax_result *out);
 /* Before cd_sim_init: distribute over the MPI ranks (no effect on one rank). Each rank passes
@@ -366,7 +365,7 @@ void cd_sim_virial(cd_sim *s, double volume, double stress[6]);
  * The per-particle stress of snapshots is (W_i + m v_a v_b)/V0 with V0 the reference volume
  * per site (cd_cluster_volume): compression-positive, referred to the undeformed volume. */
 void cd_sim_particle_virial(cd_sim *s, double *w);
-/* Von Mises intensity σ_u of a symmetric tensor (DESIGN.md §5.1, eq. 4 corrected). */
+/* Von Mises intensity σ_u of a symmetric tensor (docs/design.md §5.1, eq. 4 corrected). */
 double cd_von_mises(const double s[6]);
 /* Mean velocity of the PTL_SURFACE particles along `axis` (NaN if none). */
 double cd_free_surface_velocity(const cd_sim *s, int axis);

@@ -37,9 +37,8 @@ static size_t owned_count(const ms_ctx *ctx, const cd_sim *s) {
   return s->dd ? s->p->nlocal : (ctx->rank == 0 ? s->p->n : 0);
 }
 
-static const char *const attr_names[] = {"step",          "t",              "dissipated",
-                                         "piston_work",   "broken_bonded",  "n_broken_bonds",
-                                         "nbuild"};
+static const char *const attr_names[] = {
+    "step", "t", "dissipated", "piston_work", "broken_bonded", "n_broken_bonds", "nbuild"};
 enum { N_ATTR = sizeof attr_names / sizeof *attr_names };
 
 ms_status cd_checkpoint_write(ms_h5 *h, const ms_ctx *ctx, const cd_sim *s) {
@@ -78,8 +77,8 @@ ms_status cd_checkpoint_write(ms_h5 *h, const ms_ctx *ctx, const cd_sim *s) {
   /* the balance accumulators are per-rank shares under MPI: the file holds their sums */
   double acc[4] = {s->dissipated, s->piston_work, s->broken_bonded, (double)s->n_broken_bonds};
   if (s->dd) par_sum_doubles(acc, 4);
-  const double vals[N_ATTR] = {(double)s->step, s->t,   acc[0], acc[1],
-                               acc[2],          acc[3], (double)s->nl->nbuild};
+  const double vals[N_ATTR] = {(double)s->step,      s->t, acc[0], acc[1], acc[2], acc[3],
+                               (double)s->nl->nbuild};
   for (int k = 0; k < N_ATTR && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "/cd", attr_names[k], vals[k]);
   if (st == MS_OK && s->dd) { /* the decomposition, for a restart on as many ranks */
@@ -125,8 +124,9 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
   cd_restart *r = ms_calloc(1, sizeof *r);
   double total = 0, ranks = 0, *dseg = NULL, *pos = NULL, *vel = NULL, *mass = NULL, *in0 = NULL;
   int64_t *gid = NULL, *mat = NULL, *flags = NULL;
-  double *vals[N_ATTR] = {&r->step,          &r->t,           &r->dissipated, &r->piston_work,
-                          &r->broken_bonded, &r->n_broken_bonds, &r->nbuild};
+  double *vals[N_ATTR] = {
+      &r->step,           &r->t,     &r->dissipated, &r->piston_work, &r->broken_bonded,
+      &r->n_broken_bonds, &r->nbuild};
   ms_status st = ms_h5_read_attr_double(h, "/cd", "particles", &total, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, "/", "ranks", &ranks, e);
   for (int k = 0; k < N_ATTR && st == MS_OK; k++)
@@ -160,8 +160,8 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
   if (st == MS_OK) st = read_i(h, "/cd/flags", row0, nrow, &flags, e);
   if (st == MS_OK) st = read_d(h, "/cd/inside0", 0, 64, 1, &in0, e);
   if (st == MS_OK && bonded)
-    st = read_i(h, "/cd/partners", row0 * CD_MAX_PARTNERS, nrow * CD_MAX_PARTNERS,
-                &r->partner_gid, e);
+    st = read_i(h, "/cd/partners", row0 * CD_MAX_PARTNERS, nrow * CD_MAX_PARTNERS, &r->partner_gid,
+                e);
   /* same rank count: the owner map, so every rank gets its old particles back in their order */
   if (st == MS_OK && (int)ranks == ctx->size && ctx->size > 1 && ms_h5_exists(h, "/cd/owner")) {
     int64_t *o = NULL;
@@ -194,8 +194,10 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
       r->p->flags[i] = (uint8_t)flags[i];
       if (gid[i] < 0 || gid[i] >= (int64_t)total || mat[i] < 0 || mat[i] >= CD_MAX_MATERIALS ||
           flags[i] < 0 || flags[i] > 255 || !(mass[i] > 0)) {
-        dk_error_at(e, "checkpoint", 0, 0, "particle row %zu is damaged (gid %lld, material "
-                    "%lld, mass %g)", row0 + i, (long long)gid[i], (long long)mat[i], mass[i]);
+        dk_error_at(e, "checkpoint", 0, 0,
+                    "particle row %zu is damaged (gid %lld, material "
+                    "%lld, mass %g)",
+                    row0 + i, (long long)gid[i], (long long)mat[i], mass[i]);
         st = MS_ERR_INPUT;
         break;
       }
@@ -232,8 +234,10 @@ ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e) {
       int64_t g = r->partner_gid[q];
       s->partners[q] = g >= 0 && g <= gmax ? index_of[g] : -1;
       if (g >= 0 && s->partners[q] < 0) {
-        dk_error_at(e, "checkpoint", 0, 0, "a bonded partner (gid %lld) of particle %lld is "
-                    "missing", (long long)g, (long long)p->gid[q / CD_MAX_PARTNERS]);
+        dk_error_at(e, "checkpoint", 0, 0,
+                    "a bonded partner (gid %lld) of particle %lld is "
+                    "missing",
+                    (long long)g, (long long)p->gid[q / CD_MAX_PARTNERS]);
         free(index_of);
         return MS_ERR_INPUT;
       }

@@ -3,7 +3,7 @@
  * Profile stress (compression positive, i.e. the pressure tensor; Cauchy stress = −P):
  *   P_ab(bin) = (1/V_bin) Σ_{i in bin} [ m_i (v_i − v̄)_a (v_i − v̄)_b + W_i,ab ],
  * W_i = ½ Σ_j f(r) r_a r_b / r the particle's share of the pair virial, v̄ the bin's mean
- * velocity; σ_u is the von Mises intensity of P (DESIGN.md §5.1). Driven (piston) particles are
+ * velocity; σ_u is the von Mises intensity of P (docs/design.md §5.1). Driven (piston) particles are
  * left out of profiles.
  */
 #include "cd_impl.h"
@@ -124,7 +124,8 @@ ms_status cd_sim_guard(cd_sim *s) {
       if (!isfinite(q[c][i])) snprintf(what, sizeof what, "non-finite %s = %g", name[c], q[c][i]);
     double v = sqrt(p->vx[i] * p->vx[i] + p->vy[i] * p->vy[i] + p->vz[i] * p->vz[i]);
     if (!what[0] && v * s->cfg.dt > step_max)
-      snprintf(what, sizeof what, "speed |v| = %g km/s moves it %.3g r0 per step, more than 0.5 "
+      snprintf(what, sizeof what,
+               "speed |v| = %g km/s moves it %.3g r0 per step, more than 0.5 "
                "r0: the time step cannot follow it (reduce dt/courant or the drive)",
                v, v * s->cfg.dt / s->cfg.r0);
     for (int a = 0; a < 3 && !what[0]; a++)
@@ -132,9 +133,11 @@ ms_status cd_sim_guard(cd_sim *s) {
         snprintf(what, sizeof what, "left the box through the wall: %s = %g outside [%g, %g]",
                  name[a], q[a][i], s->box.lo[a], s->box.hi[a]);
     if (what[0]) {
-      snprintf(s->err, sizeof s->err, "unstable at step %ld, t = %.9g: particle %zu (%s"
-               "at %g, %g, %g): %s", s->step, s->t, i,
-               p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i], p->z[i], what);
+      snprintf(s->err, sizeof s->err,
+               "unstable at step %ld, t = %.9g: particle %zu (%s"
+               "at %g, %g, %g): %s",
+               s->step, s->t, i, p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i],
+               p->z[i], what);
       return MS_ERR_UNSTABLE;
     }
   }
@@ -183,7 +186,8 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
         st = ms_h5_attr_double(h, "particles", pname[a], s->box.hi[a] - s->box.lo[a]);
         if (st == MS_OK) st = ms_h5_attr_double(h, "particles", lname[a], s->box.lo[a]);
       }
-    if (st == MS_OK) st = ms_h5_close(h); else ms_h5_abort(h);
+    if (st == MS_OK) st = ms_h5_close(h);
+    else ms_h5_abort(h);
   }
   const size_t nglobal = s->dd ? (size_t)par_sum_long((long)n) : n;
   if (st == MS_OK && (!s->dd || par_rank() == 0)) {

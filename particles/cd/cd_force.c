@@ -1,6 +1,6 @@
 /* cd_force.c — pair forces, energies, virials and the relative-velocity damping.
  *
- * Pair term (paper 002 eqs. 1–2, tabulated in cd_potential.c): for a pair at d = x_i − x_j,
+ * Pair term ([Davydov] eqs. 1–2, tabulated in cd_potential.c): for a pair at d = x_i − x_j,
  * s = |d|², the force on i is (F/r)(s)·d and on j its opposite (F > 0 repulsive).
  * Virial: ½ Σ_{i≠j} f r_a r_b / r = Σ_{pairs} (F/r) d_a d_b.
  *
@@ -51,9 +51,9 @@ static inline void finish_particle(const cd_neigh *nl, const int32_t *restrict l
                                    int32_t pos, int32_t i, double xi, double yi, double zi,
                                    const double *restrict x, const double *restrict y,
                                    const double *restrict z, double *restrict fx,
-                                   double *restrict fy, double *restrict fz, double slo,
-                                   double ih, double rc2, const double *restrict fc, double fxi,
-                                   double fyi, double fzi) {
+                                   double *restrict fy, double *restrict fz, double slo, double ih,
+                                   double rc2, const double *restrict fc, double fxi, double fyi,
+                                   double fzi) {
   const int np = nl->nplain[pos], ni = nl->nimg[pos];
   for (int k = k0; k < np; k++) {
     const int32_t j = lst[k];
@@ -80,8 +80,7 @@ static inline void finish_particle(const cd_neigh *nl, const int32_t *restrict l
  * ~12 % faster on one core; three or four lanes were no better). Each particle's remaining
  * entries follow one at a time. The order of the f_j updates is fixed by the layout alone, so
  * results stay independent of the thread count. */
-static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t,
-                              int layer) {
+static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
   const double slo = t->s_lo, ih = t->inv_h, rc2 = t->rc2;
@@ -114,8 +113,8 @@ static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_ta
   }
   if (pos < end) { /* an odd particle at the layer's end */
     const int32_t pi = nl->sorted[pos];
-    finish_particle(nl, buf + nl->first[pos], 0, pos, pi, x[pi], y[pi], z[pi], x, y, z, fx, fy,
-                    fz, slo, ih, rc2, fc, 0.0, 0.0, 0.0);
+    finish_particle(nl, buf + nl->first[pos], 0, pos, pi, x[pi], y[pi], z[pi], x, y, z, fx, fy, fz,
+                    slo, ih, rc2, fc, 0.0, 0.0, 0.0);
   }
 }
 
@@ -199,8 +198,7 @@ static inline void image_forces(const cd_neigh *nl, const ptl_state *p, const cd
   for (int k = 0; k < nl->nimg[pos]; k++) {
     const int32_t j = img[2 * k];
     const double *sh = nl->shift[img[2 * k + 1]];
-    const double dx = x[i] - (x[j] + sh[0]), dy = y[i] - (y[j] + sh[1]),
-                 dz = z[i] - (z[j] + sh[2]);
+    const double dx = x[i] - (x[j] + sh[0]), dy = y[i] - (y[j] + sh[1]), dz = z[i] - (z[j] + sh[2]);
     const double s = fma(dx, dx, fma(dy, dy, dz * dz));
     if (s < t->rc2) {
       const double fr = fit_force(t, s);
@@ -275,8 +273,8 @@ static inline void add_force(ptl_state *p, int32_t i, double fxi, double fyi, do
   }
 }
 
-static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t,
-                             int layer, double hdt) {
+static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer,
+                             double hdt) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
 #if defined(__AVX512F__)
@@ -300,9 +298,9 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
     const int32_t i0 = iv[0];
     /* a whole group of consecutive particles (the usual case after a renumbering build):
      * vector loads and, below, the closing in vector form */
-    const bool run = nlane == CD_GROUP &&
-                     _mm256_cmpeq_epi32_mask(ivv, _mm256_add_epi32(_mm256_set1_epi32(i0), lane_no))
-                         == 0xff;
+    const bool run =
+        nlane == CD_GROUP &&
+        _mm256_cmpeq_epi32_mask(ivv, _mm256_add_epi32(_mm256_set1_epi32(i0), lane_no)) == 0xff;
     const __m512d xi = run ? _mm512_loadu_pd(x + i0) : load8(x, iv),
                   yi = run ? _mm512_loadu_pd(y + i0) : load8(y, iv),
                   zi = run ? _mm512_loadu_pd(z + i0) : load8(z, iv);
@@ -394,7 +392,8 @@ static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_tab
 
 /* Bonded mode: drop bond (i, j) from both partner rows. */
 static void break_bond(int32_t *partners, int32_t i, int32_t j) {
-  int32_t *pi = partners + (size_t)i * CD_MAX_PARTNERS, *pj = partners + (size_t)j * CD_MAX_PARTNERS;
+  int32_t *pi = partners + (size_t)i * CD_MAX_PARTNERS,
+          *pj = partners + (size_t)j * CD_MAX_PARTNERS;
   for (int k = 0; k < CD_MAX_PARTNERS; k++) {
     if (pi[k] == j) pi[k] = -1;
     if (pj[k] == i) pj[k] = -1;
@@ -500,8 +499,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
  * particles that the static schedules of the step's other loops give it, so its data stays in
  * its core's caches (with dynamic scheduling problem A's step was 20 % slower on 2 threads:
  * docs/benchmarks.md). */
-static void thread_layers(const cd_neigh *nl, const int *list, int a, int b, int *ka,
-                          int *kb) {
+static void thread_layers(const cd_neigh *nl, const int *list, int a, int b, int *ka, int *kb) {
   int nth = 1, tid = 0;
 #if defined(_OPENMP)
   nth = omp_get_num_threads();
@@ -554,16 +552,14 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
       thread_layers(nl, nl->phase_layer, a, b, &ka, &kb);
       for (int k = ka; k < kb; k++) {
         const int l = nl->phase_layer[k];
-        if (fast)
-          layer_forces_fast(nl, p, s->pair[0][0], l);
-        else
-          layer_forces_full(s, l, sums ? sums + l : NULL, pw, wf);
+        if (fast) layer_forces_fast(nl, p, s->pair[0][0], l);
+        else layer_forces_full(s, l, sums ? sums + l : NULL, pw, wf);
       }
     }
   }
 }
 
-/* ---- damping (paper 002 eq. 6) ---- */
+/* ---- damping ([Davydov] eq. 6) ---- */
 
 static void layer_damping(cd_sim *s, int layer, double *dv) {
   const cd_neigh *nl = s->nl;

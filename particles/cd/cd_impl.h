@@ -32,7 +32,7 @@
 #define CD_PAR(n) ((long)(n) >= 8192)
 
 #define CD_NB_BONDED ((int32_t)0x40000000)
-#define CD_NB_INDEX ((int32_t)0x3fffffff)
+#define CD_NB_INDEX  ((int32_t)0x3fffffff)
 
 struct cd_neigh {
   double rlist, skin;
@@ -44,14 +44,14 @@ struct cd_neigh {
   int phase_start[4]; /* layers of phase k: phase_layer[phase_start[k] .. phase_start[k+1]) */
   int *phase_layer;
   size_t ncells, cells_cap;
-  int32_t *cell_start; /* ncells + 1, into sorted */
-  int32_t *sorted;     /* particle indices in cell order (layer-major) */
-  int32_t *cell_of;    /* cell index of each particle (build scratch) */
-  int32_t *layer_start;/* nlayer + 1, into sorted */
+  int32_t *cell_start;  /* ncells + 1, into sorted */
+  int32_t *sorted;      /* particle indices in cell order (layer-major) */
+  int32_t *cell_of;     /* cell index of each particle (build scratch) */
+  int32_t *layer_start; /* nlayer + 1, into sorted */
   int layers_cap;
-  uint32_t *first;     /* per position: offset in the layer's buffer */
+  uint32_t *first; /* per position: offset in the layer's buffer */
   uint16_t *nplain, *nimg;
-  int32_t **buf;       /* per layer */
+  int32_t **buf; /* per layer */
   size_t *buf_cap, *buf_len;
   float *xb, *yb, *zb; /* positions at the last build (float: see xb_err) */
   double xb_err;       /* bound on |x − (double)xb| from float rounding, subtracted from skin/2 */
@@ -59,11 +59,11 @@ struct cd_neigh {
                         * block, also the renumbering scratch) */
   double shift[27][3];
   long nbuild;
-  size_t n;            /* particles when built */
-  bool colour;         /* layers are processed in parallel phases */
-  bool full;           /* full lists: every pair under both particles (the fast path's;
+  size_t n;      /* particles when built */
+  bool colour;   /* layers are processed in parallel phases */
+  bool full;     /* full lists: every pair under both particles (the fast path's;
                         * cd_half_pair picks the half list out of them) */
-  bool overfull;       /* some particle had more than CD_MAX_CAND candidates */
+  bool overfull; /* some particle had more than CD_MAX_CAND candidates */
 };
 
 /* Entry k of a list row that starts at `row` with np plain entries, then its image pairs (see
@@ -157,20 +157,20 @@ bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound
  * (dx, dy, dz) into the locals d2max, hx, hy, hz, lx, ly, lz (−min, so that all are maxima)
  * and nan_seen of an OpenMP max-reduction over them (a macro: the loops stay vectorised); then
  * cd_extents_finish. */
-#define CD_EXTENT_UPDATE(dx, dy, dz)                                                             \
-  do {                                                                                           \
-    const double d2_ = (dx) * (dx) + (dy) * (dy) + (dz) * (dz);                                  \
-    nan_seen = d2_ == d2_ ? nan_seen : 1;                                                        \
-    d2max = d2_ > d2max ? d2_ : d2max;                                                           \
-    hx = (dx) > hx ? (dx) : hx;                                                                  \
-    hy = (dy) > hy ? (dy) : hy;                                                                  \
-    hz = (dz) > hz ? (dz) : hz;                                                                  \
-    lx = -(dx) > lx ? -(dx) : lx;                                                                \
-    ly = -(dy) > ly ? -(dy) : ly;                                                                \
-    lz = -(dz) > lz ? -(dz) : lz;                                                                \
+#define CD_EXTENT_UPDATE(dx, dy, dz)                                                               \
+  do {                                                                                             \
+    const double d2_ = (dx) * (dx) + (dy) * (dy) + (dz) * (dz);                                    \
+    nan_seen = d2_ == d2_ ? nan_seen : 1;                                                          \
+    d2max = d2_ > d2max ? d2_ : d2max;                                                             \
+    hx = (dx) > hx ? (dx) : hx;                                                                    \
+    hy = (dy) > hy ? (dy) : hy;                                                                    \
+    hz = (dz) > hz ? (dz) : hz;                                                                    \
+    lx = -(dx) > lx ? -(dx) : lx;                                                                  \
+    ly = -(dy) > ly ? -(dy) : ly;                                                                  \
+    lz = -(dz) > lz ? -(dz) : lz;                                                                  \
   } while (0)
-static inline void cd_extents_finish(double ext[7], double d2max, double hx, double hy,
-                                     double hz, double lx, double ly, double lz, int nan_seen) {
+static inline void cd_extents_finish(double ext[7], double d2max, double hx, double hy, double hz,
+                                     double lx, double ly, double lz, int nan_seen) {
   const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};
   const bool finite = !nan_seen && d2max < INFINITY; /* an infinite component makes d2 infinite */
   for (int k = 0; k < 7; k++) ext[k] = finite ? e[k] : INFINITY; /* NaN: rebuild */

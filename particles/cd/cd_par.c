@@ -32,7 +32,7 @@ struct cd_dd {
   bool per[3];
   size_t ncells;
   int32_t *owner, *owner_new; /* [ncells] */
-  long map_version;            /* bumped whenever `owner` changes */
+  long map_version;           /* bumped whenever `owner` changes */
   /* per cell of this rank: the other ranks owning a cell of its 26-stencil (foreign_ranks),
    * halo_rank[halo_start[c] .. halo_start[c+1]); empty for other ranks' cells. Rebuilt when the
    * map changed (halo_version != map_version), so a list build looks ranks up instead of
@@ -52,12 +52,12 @@ struct cd_dd {
   size_t nsend, send_cap;
   double *sbuf, *rbuf;
   size_t sbuf_cap, rbuf_cap;
-  int32_t *cell;   /* [cap] coarse cell of each owned particle */
-  int32_t *perm;   /* [cap] sort scratch */
-  double *tmp;     /* [cap] sort scratch */
-  int64_t *pgid;   /* bonded: [cap][CD_MAX_PARTNERS] partner gids */
-  int32_t *gid_map;/* bonded: gid -> local index, [ngid] (−1 elsewhere) */
-  size_t ngid;     /* gids are creation indices, below the global count */
+  int32_t *cell;    /* [cap] coarse cell of each owned particle */
+  int32_t *perm;    /* [cap] sort scratch */
+  double *tmp;      /* [cap] sort scratch */
+  int64_t *pgid;    /* bonded: [cap][CD_MAX_PARTNERS] partner gids */
+  int32_t *gid_map; /* bonded: gid -> local index, [ngid] (−1 elsewhere) */
+  size_t ngid;      /* gids are creation indices, below the global count */
   long builds_since;
   bool replicated; /* until the first migration: every rank holds every particle */
   cd_mpi_stats st;
@@ -245,7 +245,7 @@ ms_status cd_dd_create(cd_sim *s) {
   d->perm = ms_calloc(cap, sizeof *d->perm);
   d->tmp = ms_calloc(cap, sizeof *d->tmp);
   const int P = d->size;
-  int **arr[] = {&d->mcnt_s, &d->mcnt_r, &d->mdsp_s, &d->mdsp_r, &d->nbr, &d->gcnt_s, &d->gcnt_r,
+  int **arr[] = {&d->mcnt_s, &d->mcnt_r, &d->mdsp_s, &d->mdsp_r, &d->nbr,    &d->gcnt_s, &d->gcnt_r,
                  &d->gdsp_s, &d->gdsp_r, &d->xcnt_s, &d->xcnt_r, &d->xdsp_s, &d->xdsp_r};
   for (size_t k = 0; k < sizeof arr / sizeof *arr; k++)
     *arr[k] = ms_calloc((size_t)P + 1, sizeof(int));
@@ -279,12 +279,11 @@ void cd_dd_set_builds_since(cd_dd *d, long builds_since) { d->builds_since = bui
 
 void cd_dd_free(cd_dd *d) {
   if (!d) return;
-  void *arr[] = {d->owner,  d->owner_new, d->weight, d->halo_start, d->halo_rank,
-                 d->mcnt_s, d->mcnt_r,    d->mdsp_s, d->mdsp_r,     d->nbr,
-                 d->gcnt_s, d->gcnt_r,    d->gdsp_s,
-                 d->gdsp_r, d->xcnt_s,    d->xcnt_r, d->xdsp_s, d->xdsp_r,   d->send_idx,
-                 d->sbuf,   d->rbuf,      d->cell,   d->perm,   d->tmp,      d->pgid,
-                 d->gid_map};
+  void *arr[] = {d->owner,    d->owner_new, d->weight, d->halo_start, d->halo_rank, d->mcnt_s,
+                 d->mcnt_r,   d->mdsp_s,    d->mdsp_r, d->nbr,        d->gcnt_s,    d->gcnt_r,
+                 d->gdsp_s,   d->gdsp_r,    d->xcnt_s, d->xcnt_r,     d->xdsp_s,    d->xdsp_r,
+                 d->send_idx, d->sbuf,      d->rbuf,   d->cell,       d->perm,      d->tmp,
+                 d->pgid,     d->gid_map};
   for (size_t k = 0; k < sizeof arr / sizeof *arr; k++) free(arr[k]);
   free(d);
 }
@@ -549,8 +548,8 @@ void cd_dd_refresh(cd_sim *s, unsigned what) {
     double *restrict buf = d->sbuf + (size_t)a * ns;
     const double *restrict src = arr[a];
     for (size_t q = 0; q < ns; q++) buf[q] = src[idx[q]];
-    par_exchange_post(d->nnbr, d->nbr, buf, d->gcnt_s, d->gdsp_s, arr[a] + g0, d->gcnt_r,
-                      d->gdsp_r, 100 + a);
+    par_exchange_post(d->nnbr, d->nbr, buf, d->gcnt_s, d->gdsp_s, arr[a] + g0, d->gcnt_r, d->gdsp_r,
+                      100 + a);
   }
   par_exchange_wait();
   if (what & CD_REFRESH_X)

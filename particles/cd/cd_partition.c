@@ -129,8 +129,7 @@ static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int
   const double limit = 1073741824.0; /* 2^30 */
   const double scale = total > limit ? (limit - (double)nv) / (total - (double)nv) : 1.0;
   idx_t *vwgt = ms_calloc((size_t)nv, sizeof(idx_t));
-  for (idx_t c = 0; c < nv; ++c)
-    vwgt[c] = (idx_t)llround((double)weight[c] * scale) + 1;
+  for (idx_t c = 0; c < nv; ++c) vwgt[c] = (idx_t)llround((double)weight[c] * scale) + 1;
   idx_t *part = ms_calloc((size_t)nv, sizeof(idx_t));
   idx_t ncon = 1, np = nparts, objval = 0, nvtx = nv;
   idx_t opts[METIS_NOPTIONS];
@@ -202,10 +201,11 @@ static ms_status check_grid(const int ncell[3], const bool periodic[3], const in
 }
 
 ms_status cd_partition_cells(const int ncell[3], const bool periodic[3], const int64_t *weight,
-                             int nparts, cd_partition_method method, int slab_axis,
-                             int32_t *owner, cd_partition_stats *stats) {
+                             int nparts, cd_partition_method method, int slab_axis, int32_t *owner,
+                             cd_partition_stats *stats) {
   if (check_grid(ncell, periodic, weight, nparts, owner) != MS_OK || slab_axis < 0 ||
-      slab_axis > 2 || (method != CD_PART_SLAB && method != CD_PART_METIS && method != CD_PART_AUTO))
+      slab_axis > 2 ||
+      (method != CD_PART_SLAB && method != CD_PART_METIS && method != CD_PART_AUTO))
     return MS_ERR_INPUT;
   const size_t nv = (size_t)ncell[0] * ncell[1] * ncell[2];
   cell_graph g = {0};
@@ -274,8 +274,8 @@ static size_t unique_pairs(int64_t *pairs, size_t n) {
   return u;
 }
 
-void cd_partition_halo(const int ncell[3], const bool periodic[3], const int32_t *owner,
-                       int nparts, long *halo, int *neighbours) {
+void cd_partition_halo(const int ncell[3], const bool periodic[3], const int32_t *owner, int nparts,
+                       long *halo, int *neighbours) {
   if (halo) memset(halo, 0, (size_t)nparts * sizeof *halo);
   if (neighbours) memset(neighbours, 0, (size_t)nparts * sizeof *neighbours);
   /* adjacent part pairs (p << 32 | q), compacted whenever the buffer fills: their number is

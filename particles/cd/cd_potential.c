@@ -1,4 +1,4 @@
-/* cd_potential.c — pair potentials from an EOS cold curve (paper 002 eqs. 1–2, DESIGN.md §5.1).
+/* cd_potential.c — pair potentials from an EOS cold curve ([Davydov] eqs. 1–2, docs/design.md §5.1).
  *
  * fcc (12 neighbours, 6 bonds per particle, volume per particle r0³/√2):
  *   $E(r) = \frac{\sqrt2 \rho_0 r_0^3}{12}\,\varepsilon_x(\delta)$, $\delta = (r_0/r)^3$,
@@ -186,7 +186,8 @@ static void pair_fit_build(cd_pair_table *t, const eos_t *a, const eos_t *b, cd_
       const double c = bitsd((k << sh) | (UINT64_C(1) << (sh - 1)));
       double m[CD_FIT_MAXDEG + 1];
       fit_segment(a, b, lat, r0, h, attraction, lo, hi, c, deg, m);
-      for (int p = 0; p <= CD_FIT_MAXDEG; p++) t->fit_coef[p][k % CD_FIT_NSEG] = p <= deg ? m[p] : 0.0;
+      for (int p = 0; p <= CD_FIT_MAXDEG; p++)
+        t->fit_coef[p][k % CD_FIT_NSEG] = p <= deg ? m[p] : 0.0;
       for (int q = 0; q <= NCHECK; q++) {
         const double s = q == NCHECK ? nextafter(hi, 0.0) : lo + (hi - lo) * q / NCHECK;
         const double fit = cd_pair_fit_eval(t, s), ex = exact_fr(a, b, lat, r0, h, attraction, s);
@@ -305,7 +306,7 @@ void cd_pair_table_free(cd_pair_table *t) {
  * polynomial at s_lo cut after the quadratic term of E: E = e0 + e1 w + e2 w², F/r = f0 + f1 w
  * (w = (s − s_lo)/h < 0), so F/r keeps growing linearly as s falls and E stays consistent
  * (a safety net: r_min defaults to 0.5 r0, i.e. δ = 8; a tabulated cold curve may end sooner,
- * Table 1 of paper 002 at 0.75 r0). */
+ * Table 1 of [Davydov] at 0.75 r0). */
 double cd_pair_table_energy(const cd_pair_table *t, double r) {
   double s = r * r;
   if (s >= t->rc2) return 0.0;

@@ -23,26 +23,27 @@ typedef enum { SURF_FLAT = 0, SURF_SINE, SURF_RANDOM } surface_kind;
 static const char *const surface_names[] = {"flat", "sine", "random", NULL};
 static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
 static const char *const mode_names[] = {"plain", "bonded", NULL};
-static const char *const partition_names[] = {"slab", "metis", "auto", NULL}; /* cd_partition_method */
+static const char *const partition_names[] = {"slab", "metis", "auto",
+                                              NULL}; /* cd_partition_method */
 
 typedef struct cd_region {
-  int mat;                    /* index into the problem's material list */
+  int mat; /* index into the problem's material list */
   region_shape shape;
-  double lo[3], hi[3];        /* box */
-  double center[3], radius;   /* sphere, cylinder (axis `axis`) */
-  int axis;                   /* cylinder axis; halfspace normal axis */
-  double plane;               /* halfspace: x_axis < plane */
+  double lo[3], hi[3];      /* box */
+  double center[3], radius; /* sphere, cylinder (axis `axis`) */
+  int axis;                 /* cylinder axis; halfspace normal axis */
+  double plane;             /* halfspace: x_axis < plane */
   double velocity[3];
   bool piston;
-  bool matrix;                /* fills only the sites no other region takes (no overlap check) */
-  int ngrains;                /* polycrystal / grain structure (box regions; 0 = single crystal) */
+  bool matrix; /* fills only the sites no other region takes (no overlap check) */
+  int ngrains; /* polycrystal / grain structure (box regions; 0 = single crystal) */
   uint64_t grain_seed;
-  bool rotate;                /* random lattice orientation per grain */
-  double dmin;                /* overlap removal distance / r0 */
-  int ngmat;                  /* grain materials (0: the region's material) */
+  bool rotate; /* random lattice orientation per grain */
+  double dmin; /* overlap removal distance / r0 */
+  int ngmat;   /* grain materials (0: the region's material) */
   int gmat[CD_MAX_MATERIALS];
   double gfrac[CD_MAX_MATERIALS];
-  surface_kind surface;       /* box: profile of the hi face along `surface_axis` */
+  surface_kind surface; /* box: profile of the hi face along `surface_axis` */
   int surface_axis, surface_along;
   double amplitude, wavelength;
   uint64_t seed;
@@ -60,7 +61,8 @@ struct cd_problem {
   double origin[3];
   int nmat;
   const eos_material *mat[CD_MAX_MATERIALS];
-  double rc_pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS], attraction[CD_MAX_MATERIALS][CD_MAX_MATERIALS];
+  double rc_pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS],
+      attraction[CD_MAX_MATERIALS][CD_MAX_MATERIALS];
   int nreg;
   cd_region reg[CD_MAX_REGIONS];
   cd_history piston;
@@ -68,8 +70,8 @@ struct cd_problem {
   double thermal_amp;
   uint64_t thermal_seed;
   int out_every, profile_axis, profile_bins, snapshots;
-  cd_mpi_config mpi; /* decomposition on MPI ranks (docs/input-cd.md "mpi") */
-  double front_u; /* reference velocity for front tracking (piston velocity by default) */
+  cd_mpi_config mpi;      /* decomposition on MPI ranks (docs/input-cd.md "mpi") */
+  double front_u;         /* reference velocity for front tracking (piston velocity by default) */
   long checkpoint_every;  /* steps between checkpoints (0: none) */
   double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
   uint64_t deck_hash;     /* resolved deck (t_end left out) and piston history */
@@ -78,8 +80,8 @@ struct cd_problem {
   double relax_j, relax_tau; /* damping J (0: none); box tau in r0/c0 */
 };
 
-static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc,
-                          const dk_node *at, const char *name, dk_errors *e) {
+static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc, const dk_node *at,
+                          const char *name, dk_errors *e) {
   for (int k = 0; k < p->nmat; k++)
     if (strcmp(p->mat[k]->name, name) == 0) return k;
   const eos_material *m = eos_materials_find(mats, name, e, doc, at);
@@ -89,8 +91,10 @@ static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc,
     return -1;
   }
   if (!eos_has_cold_curve(m->eos)) {
-    dk_error(e, doc, at, "material '%s' has no cold curve (its EOS is %s): cluster dynamics "
-             "needs P_x(delta) and eps_x(delta)", name, eos_kind_name(eos_get_kind(m->eos)));
+    dk_error(e, doc, at,
+             "material '%s' has no cold curve (its EOS is %s): cluster dynamics "
+             "needs P_x(delta) and eps_x(delta)",
+             name, eos_kind_name(eos_get_kind(m->eos)));
     return -1;
   }
   p->mat[p->nmat] = m;
@@ -112,7 +116,8 @@ static bool read_vec(dk_errors *e, dk_doc *doc, const dk_node *map, const char *
   }
   if (!dk_read_double_list(e, doc, map, key, unit, true, &v, &n)) return false;
   bool ok = (int)n == dim;
-  if (!ok) dk_error(e, doc, node, "'%s' needs %d components (dimension %d), got %zu", key, dim, dim, n);
+  if (!ok)
+    dk_error(e, doc, node, "'%s' needs %d components (dimension %d), got %zu", key, dim, dim, n);
   for (int a = 0; a < 3; a++) out[a] = ok && a < dim ? v[a] : (def ? def[a] : 0.0);
   free(v);
   return ok;
@@ -131,8 +136,7 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
   const char *mname = NULL;
   if (dk_read_string(e, doc, rn, "material", true, NULL, &mname))
     r->mat = material_index(p, mats, doc, dk_get(rn, "material"), mname, e);
-  else
-    r->mat = -1;
+  else r->mat = -1;
   int shape = 0;
   dk_read_enum(e, doc, rn, "shape", false, SHAPE_BOX, shape_names, &shape);
   r->shape = (region_shape)shape;
@@ -142,7 +146,8 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     read_vec(e, doc, rn, "lo", d, MS_DIM_LENGTH, true, NULL, r->lo);
     read_vec(e, doc, rn, "hi", d, MS_DIM_LENGTH, true, NULL, r->hi);
     for (int a = 0; a < d; a++)
-      if (!(r->hi[a] > r->lo[a])) dk_error(e, doc, rn, "box region: hi must exceed lo on every axis");
+      if (!(r->hi[a] > r->lo[a]))
+        dk_error(e, doc, rn, "box region: hi must exceed lo on every axis");
     break;
   case SHAPE_SPHERE:
     read_vec(e, doc, rn, "center", d, MS_DIM_LENGTH, true, NULL, r->center);
@@ -154,8 +159,10 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     dk_read_positive(e, doc, rn, "radius", MS_DIM_LENGTH, true, 0, &r->radius);
     dk_read_int(e, doc, rn, "axis", false, d == 2 ? 2 : 2, 0, 2, &ax);
     r->axis = (int)ax;
-    read_vec(e, doc, rn, "lo", d, MS_DIM_LENGTH, false, (double[3]){-INFINITY, -INFINITY, -INFINITY}, r->lo);
-    read_vec(e, doc, rn, "hi", d, MS_DIM_LENGTH, false, (double[3]){INFINITY, INFINITY, INFINITY}, r->hi);
+    read_vec(e, doc, rn, "lo", d, MS_DIM_LENGTH, false,
+             (double[3]){-INFINITY, -INFINITY, -INFINITY}, r->lo);
+    read_vec(e, doc, rn, "hi", d, MS_DIM_LENGTH, false, (double[3]){INFINITY, INFINITY, INFINITY},
+             r->hi);
     break;
   }
   case SHAPE_HALFSPACE: {
@@ -195,8 +202,7 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     dk_read_double(e, doc, gn, "min_distance", MS_DIM_NONE, false, 0.8, 0.1, 1.0, &r->dmin);
     r->ngrains = (int)ng;
     r->grain_seed = (uint64_t)seed;
-    if (r->shape != SHAPE_BOX)
-      dk_error(e, doc, gn, "a polycrystal fills a box region");
+    if (r->shape != SHAPE_BOX) dk_error(e, doc, gn, "a polycrystal fills a box region");
     const dk_node *ml = dk_get(gn, "materials");
     if (ml && dk_expect_seq(e, doc, ml, "polycrystal materials")) {
       double *fr = NULL;
@@ -212,7 +218,8 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
         sum += fr[k];
         r->ngmat = (int)k + 1;
       }
-      if (nf && fabs(sum - 1.0) > 1e-6) dk_error(e, doc, gn, "polycrystal: fractions must sum to 1 (%g)", sum);
+      if (nf && fabs(sum - 1.0) > 1e-6)
+        dk_error(e, doc, gn, "polycrystal: fractions must sum to 1 (%g)", sum);
       free(fr);
     }
   }
@@ -222,7 +229,9 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
 /* seeds and materials of a region's grains (the seeds are those of cd_polycrystal) */
 static void grain_seed(const cd_region *r, int dim, int g, double x[3]) {
   for (int a = 0; a < 3; a++)
-    x[a] = a < dim ? r->lo[a] + (r->hi[a] - r->lo[a]) * ptl_splitmix64_uniform(r->grain_seed, 3 * (uint64_t)g + a) : 0.0;
+    x[a] = a < dim ? r->lo[a] + (r->hi[a] - r->lo[a]) *
+                                    ptl_splitmix64_uniform(r->grain_seed, 3 * (uint64_t)g + a)
+                   : 0.0;
 }
 static int grain_material(const cd_region *r, int g) {
   if (r->ngmat == 0) return r->mat;
@@ -240,7 +249,10 @@ static int nearest_grain(const cd_region *r, int dim, const double x[3]) {
     double s[3], d2 = 0;
     grain_seed(r, dim, g, s);
     for (int a = 0; a < dim; a++) d2 += (x[a] - s[a]) * (x[a] - s[a]);
-    if (d2 < bd) { bd = d2; best = g; }
+    if (d2 < bd) {
+      bd = d2;
+      best = g;
+    }
   }
   return best;
 }
@@ -268,7 +280,8 @@ static bool region_contains(const cd_region *r, const double x[3], int dim) {
   case SHAPE_BOX:
     for (int a = 0; a < dim; a++) {
       double hi = r->hi[a];
-      if (r->surface != SURF_FLAT && a == r->surface_axis) hi += surface_height(r, x[r->surface_along]);
+      if (r->surface != SURF_FLAT && a == r->surface_axis)
+        hi += surface_height(r, x[r->surface_along]);
       if (x[a] < r->lo[a] || x[a] >= hi) return false;
     }
     return true;
@@ -319,8 +332,9 @@ static double region_measure(const cd_problem *p, const cd_region *r) {
       inside *= fmax(0.0, fmin(hi, p->box.hi[a]) - fmax(r->lo[a], p->box.lo[a]));
     }
     if (r->shape == SHAPE_CYLINDER) /* 2D: a disc (axis 2) or a strip 2r wide */
-      inside = p->dim == 2 && r->axis == 2 ? M_PI * r->radius * r->radius
-               : inside * (p->dim == 3 ? M_PI * r->radius * r->radius : 2.0 * r->radius);
+      inside = p->dim == 2 && r->axis == 2
+                   ? M_PI * r->radius * r->radius
+                   : inside * (p->dim == 3 ? M_PI * r->radius * r->radius : 2.0 * r->radius);
     break;
   case SHAPE_SPHERE:
     inside = p->dim == 3 ? 4.0 / 3.0 * M_PI * pow(r->radius, 3) : M_PI * r->radius * r->radius;
@@ -341,7 +355,8 @@ static void memory_check(const cd_problem *p, dk_doc *doc, const dk_node *sec, d
   for (int k = 0; k < p->nreg; k++) space += region_measure(p, &p->reg[k]);
   double box = 1.0;
   for (int a = 0; a < p->dim; a++) box *= p->box.hi[a] - p->box.lo[a];
-  double site = cd_cluster_volume(p->lattice, p->r0, p->thickness) / (p->dim == 2 ? p->thickness : 1.0);
+  double site =
+      cd_cluster_volume(p->lattice, p->r0, p->thickness) / (p->dim == 2 ? p->thickness : 1.0);
   ms_mem_estimate m;
   ms_mem_init(&m);
   ms_mem_add(&m, dk_get(sec, "regions"), "cluster_dynamics particles", fmin(space, box) / site,
@@ -359,13 +374,16 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   p->dim = (int)dim;
   p->lattice = dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC;
   dk_read_positive(e, doc, sec, "r0", MS_DIM_LENGTH, true, 0, &p->r0);
-  if (dim == 2) dk_read_positive(e, doc, sec, "thickness", MS_DIM_LENGTH, false, p->r0, &p->thickness);
+  if (dim == 2)
+    dk_read_positive(e, doc, sec, "thickness", MS_DIM_LENGTH, false, p->r0, &p->thickness);
   else p->thickness = p->r0;
   const dk_node *rcn = dk_get(sec, "cutoff");
   dk_read_double(e, doc, sec, "cutoff", MS_DIM_NONE, false, 1.2, -INFINITY, INFINITY, &p->rc);
   if (!(p->rc > 1.0))
-    dk_error(e, doc, rcn ? rcn : sec, "cutoff R_c/r0 = %g must exceed 1 (the nearest-neighbour "
-             "distance): below it the lattice has no bonds", p->rc);
+    dk_error(e, doc, rcn ? rcn : sec,
+             "cutoff R_c/r0 = %g must exceed 1 (the nearest-neighbour "
+             "distance): below it the lattice has no bonds",
+             p->rc);
   int mode = CD_CUTOFF_BONDED;
   dk_read_enum(e, doc, sec, "cutoff_mode", false, CD_CUTOFF_BONDED, mode_names, &mode);
   p->mode = (cd_cutoff_mode)mode;
@@ -379,7 +397,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   p->table_intervals = (int)nint;
   dk_read_double(e, doc, sec, "damping", MS_DIM_NONE, false, 0.0, 0.0, 1e6, &p->damping_j);
   int integ = CD_INT_VELOCITY_VERLET;
-  dk_read_enum(e, doc, sec, "integrator", false, CD_INT_VELOCITY_VERLET, cd_integrator_names, &integ);
+  dk_read_enum(e, doc, sec, "integrator", false, CD_INT_VELOCITY_VERLET, cd_integrator_names,
+               &integ);
   p->integrator = (cd_integrator)integ;
 
   /* box */
@@ -398,13 +417,16 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
         int k = -1;
         for (int c = 0; v && bc_names[c]; c++)
           if (!strcmp(v, bc_names[c])) k = c;
-        if (k < 0) dk_error(e, doc, dk_seq_at(bcn, a), "boundary '%s': expected free, periodic or wall", v ? v : "?");
+        if (k < 0)
+          dk_error(e, doc, dk_seq_at(bcn, a), "boundary '%s': expected free, periodic or wall",
+                   v ? v : "?");
         else p->box.bc[a] = (cd_bc)k;
       }
     }
     read_vec(e, doc, bn, "lattice_origin", p->dim, MS_DIM_LENGTH, false, p->box.lo, p->origin);
     for (int a = 0; a < p->dim; a++)
-      if (!(p->box.hi[a] > p->box.lo[a])) dk_error(e, doc, bn, "box: hi must exceed lo on axis %d", a);
+      if (!(p->box.hi[a] > p->box.lo[a]))
+        dk_error(e, doc, bn, "box: hi must exceed lo on axis %d", a);
     /* periodic axes must hold a whole number of lattice periods, at least 2 */
     double per[3];
     lattice_period(p, per);
@@ -412,11 +434,15 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
       if (p->box.bc[a] != CD_BC_PERIODIC) continue;
       double L = p->box.hi[a] - p->box.lo[a], q = L / per[a];
       if (fabs(q - round(q)) > 1e-6 * q)
-        dk_error(e, doc, bn, "periodic axis %d: length %g is not a whole number of lattice periods "
-                 "(%g)", a, L, per[a]);
+        dk_error(e, doc, bn,
+                 "periodic axis %d: length %g is not a whole number of lattice periods "
+                 "(%g)",
+                 a, L, per[a]);
       if (round(q) < 2)
-        dk_error(e, doc, bn, "periodic axis %d: fewer than 2 lattice periods (%.3g) across it: "
-                 "a particle would interact with its own image", a, q);
+        dk_error(e, doc, bn,
+                 "periodic axis %d: fewer than 2 lattice periods (%.3g) across it: "
+                 "a particle would interact with its own image",
+                 a, q);
       else if (L < 2.0 * (p->rc + p->skin) * p->r0)
         dk_error(e, doc, bn, "periodic axis %d: length %g below 2 (R_c + skin) = %g", a, L,
                  2.0 * (p->rc + p->skin) * p->r0);
@@ -442,7 +468,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     const dk_node *at = dk_seq_at(dk_get(bn, "hi"), (size_t)axis);
     box_too_big = !(sites <= CD_MAX_LATTICE_SITES);
     if (box_too_big)
-      dk_error(e, doc, at ? at : bn, "box: holds about %.3g lattice sites at spacing %g cm (axis "
+      dk_error(e, doc, at ? at : bn,
+               "box: holds about %.3g lattice sites at spacing %g cm (axis "
                "%d is the longest); at most %.3g are possible (particle indices are 32-bit)",
                sites, p->r0, axis, CD_MAX_LATTICE_SITES);
   }
@@ -490,7 +517,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     read_vec(e, doc, pn, "direction", p->dim, MS_DIM_NONE, true, NULL, p->piston_dir);
     const dk_node *vn = dk_get(pn, "velocity"), *hn = dk_get(pn, "history");
     if ((vn != NULL) == (hn != NULL))
-      dk_error(e, doc, pn, "piston: give exactly one of 'velocity' (constant) or 'history' (CSV t,u)");
+      dk_error(e, doc, pn,
+               "piston: give exactly one of 'velocity' (constant) or 'history' (CSV t,u)");
     if (vn) {
       double u = 0;
       dk_read_double(e, doc, pn, "velocity", MS_DIM_VELOCITY, true, 0, -INFINITY, INFINITY, &u);
@@ -503,8 +531,10 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
       if (dk_read_string(e, doc, pn, "history", true, NULL, &file)) {
         char *path = dk_resolve_path(doc, file);
         if (cd_history_read(&p->piston, path, dk_units(doc) == MS_UNITS_SI, e) != MS_OK)
-          dk_error(e, doc, hn, "piston history '%s' rejected (see the message above: it needs "
-                   "columns t, u with t strictly increasing)", path);
+          dk_error(e, doc, hn,
+                   "piston history '%s' rejected (see the message above: it needs "
+                   "columns t, u with t strictly increasing)",
+                   path);
         free(path);
       }
     }
@@ -513,7 +543,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_error(e, doc, sec, "a region has 'piston: true' but there is no 'piston:' section");
   }
   double fu = p->piston.n ? fabs(p->piston.u[p->piston.n - 1]) : 0.0;
-  dk_read_double(e, doc, sec, "front_velocity", MS_DIM_VELOCITY, false, fu, 0, INFINITY, &p->front_u);
+  dk_read_double(e, doc, sec, "front_velocity", MS_DIM_VELOCITY, false, fu, 0, INFINITY,
+                 &p->front_u);
 
   const dk_node *tn = dk_get(sec, "thermal");
   if (tn && dk_expect_map(e, doc, tn, "thermal")) {
@@ -532,8 +563,7 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_read_int(e, doc, on, "snapshots", false, 0, 0, 100000, &snaps);
   }
   if (on && dk_node_kind(on) == DK_MAP) {
-    dk_read_checkpoint_interval(e, doc, on, "", "steps", &p->checkpoint_every,
-                                &p->checkpoint_time);
+    dk_read_checkpoint_interval(e, doc, on, "", "steps", &p->checkpoint_every, &p->checkpoint_time);
   }
   p->out_every = (int)every;
   p->profile_axis = (int)axis;
@@ -550,14 +580,17 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_read_bool(e, doc, xn, "box", false, true, &p->relax.box);
     dk_read_int(e, doc, xn, "box_every", false, 10, 1, 1L << 30, &every);
     dk_read_double(e, doc, xn, "tau", MS_DIM_NONE, false, 10.0, 1e-3, 1e9, &p->relax_tau);
-    dk_read_double(e, doc, xn, "max_strain", MS_DIM_NONE, false, 1e-3, 1e-9, 0.1, &p->relax.max_strain);
+    dk_read_double(e, doc, xn, "max_strain", MS_DIM_NONE, false, 1e-3, 1e-9, 0.1,
+                   &p->relax.max_strain);
     dk_read_bool(e, doc, xn, "plain", false, true, &p->relax.plain);
     p->relax.box_every = (int)every;
     p->relax.rebond = true;
   }
 
-  p->mpi = (cd_mpi_config){.partition = CD_PART_AUTO, .rebalance_threshold = 1.2,
-                           .rebalance_interval = 10, .replicated = true};
+  p->mpi = (cd_mpi_config){.partition = CD_PART_AUTO,
+                           .rebalance_threshold = 1.2,
+                           .rebalance_interval = 10,
+                           .replicated = true};
   const dk_node *mn = dk_get(sec, "mpi");
   if (mn && dk_expect_map(e, doc, mn, "mpi")) {
     int pm = CD_PART_AUTO;
@@ -568,8 +601,10 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     dk_read_int(e, doc, mn, "rebalance_interval", false, 10, 1, 1L << 30, &iv);
     const dk_node *tn = dk_get(mn, "rebalance_threshold");
     if (tn && p->mpi.rebalance_threshold > 0 && p->mpi.rebalance_threshold < 1)
-      dk_error(e, doc, tn, "rebalance_threshold %g: the imbalance max/mean is >= 1; give a value "
-               ">= 1, or 0 for never", p->mpi.rebalance_threshold);
+      dk_error(e, doc, tn,
+               "rebalance_threshold %g: the imbalance max/mean is >= 1; give a value "
+               ">= 1, or 0 for never",
+               p->mpi.rebalance_threshold);
     p->mpi.partition = (cd_partition_method)pm;
     p->mpi.rebalance_interval = (int)iv;
   }
@@ -582,7 +617,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     double per[3];
     lattice_period(p, per);
     long ncell[3] = {1, 1, 1};
-    for (int a = 0; a < p->dim; a++) ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
+    for (int a = 0; a < p->dim; a++)
+      ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
     bool reported[CD_MAX_REGIONS][CD_MAX_REGIONS] = {{false}};
     const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
     const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
@@ -592,19 +628,25 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
         for (long ix = 0; ix < ncell[0]; ix++)
           for (int b = 0; b < nb; b++) {
             const double *bs = p->dim == 3 ? fcc[b] : tri[b];
-            double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
+            double x[3] = {p->origin[0] + (ix + bs[0]) * per[0],
+                           p->origin[1] + (iy + bs[1]) * per[1],
                            p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
             int first = -1;
             for (int k = 0; k < p->nreg; k++) {
               /* a region whose material has errors of its own (mat < 0) is not compared */
               if (p->reg[k].matrix || p->reg[k].mat < 0 || !region_contains(&p->reg[k], x, p->dim))
                 continue;
-              if (first < 0) { first = k; continue; }
+              if (first < 0) {
+                first = k;
+                continue;
+              }
               if (p->reg[k].mat != p->reg[first].mat && !reported[first][k]) {
                 reported[first][k] = true;
-                dk_error(e, doc, p->reg[k].node, "region %d (material '%s') overlaps region %d "
+                dk_error(e, doc, p->reg[k].node,
+                         "region %d (material '%s') overlaps region %d "
                          "(material '%s'), e.g. at (%g, %g, %g): regions of different materials "
-                         "must not overlap", k + 1, p->mat[p->reg[k].mat]->name, first + 1,
+                         "must not overlap",
+                         k + 1, p->mat[p->reg[k].mat]->name, first + 1,
                          p->mat[p->reg[first].mat]->name, x[0], x[1], x[2]);
               }
             }
@@ -659,7 +701,10 @@ static int owner_region(const cd_problem *p, const double x[3]) {
   return -1;
 }
 
-typedef struct owner_filter { const cd_problem *p; int reg; } owner_filter;
+typedef struct owner_filter {
+  const cd_problem *p;
+  int reg;
+} owner_filter;
 static bool owned_by(void *user, const double x[3]) {
   const owner_filter *f = user;
   return owner_region(f->p, x) == f->reg;
@@ -669,7 +714,8 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
   double per[3];
   lattice_period(p, per);
   long ncell[3] = {1, 1, 1};
-  for (int a = 0; a < p->dim; a++) ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
+  for (int a = 0; a < p->dim; a++)
+    ncell[a] = (long)ceil((p->box.hi[a] - p->origin[a]) / per[a]) + 1;
   const int nb = p->dim == 3 ? 4 : 2;
   const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
@@ -712,14 +758,18 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
     /* grains wrap along a periodic axis that the region spans */
     bool per[3] = {false, false, false};
     for (int a = 0; a < p->dim; a++)
-      per[a] = p->box.bc[a] == CD_BC_PERIODIC && r->lo[a] <= p->box.lo[a] && r->hi[a] >= p->box.hi[a];
+      per[a] =
+          p->box.bc[a] == CD_BC_PERIODIC && r->lo[a] <= p->box.lo[a] && r->hi[a] >= p->box.hi[a];
     owner_filter f = {p, k};
     size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, per, r->ngrains, r->grain_seed,
                               r->dmin, owned_by, &f, &xyz, &grain, &por);
-    if (r->surface != SURF_FLAT) por = 1.0 - (double)n * vol / (p->dim == 2 ? vbox * p->thickness : vbox);
+    if (r->surface != SURF_FLAT)
+      por = 1.0 - (double)n * vol / (p->dim == 2 ? vbox * p->thickness : vbox);
     for (size_t i = 0; i < n; i++) site_add(&l, xyz + 3 * i, k, grain_material(r, grain[i]));
-    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
-           "residual porosity %.2f %%", k + 1, r->ngrains, n, 100.0 * por);
+    ms_log(ctx, MS_LOG_INFO,
+           "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
+           "residual porosity %.2f %%",
+           k + 1, r->ngrains, n, 100.0 * por);
     free(xyz);
     free(grain);
   }
@@ -740,35 +790,41 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
 }
 
 static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, double vfs) {
-  double row[11] = {s->t, e->kinetic, e->potential, e->dissipated, e->broken, e->piston_work,
-                    e->total, e->momentum[0], e->momentum[1], e->momentum[2], vfs};
+  double row[11] = {s->t,           e->kinetic,     e->potential, e->dissipated,
+                    e->broken,      e->piston_work, e->total,     e->momentum[0],
+                    e->momentum[1], e->momentum[2], vfs};
   ms_csv_row(f, 11, row);
 }
 
 static void write_headers(FILE *fe, FILE *fp, FILE *ff) {
-  static const char *const ecol[] = {"t", "kinetic", "potential", "dissipated", "broken",
-                                     "piston_work", "total", "px", "py", "pz", "v_free_surface"};
-  static const char *const eunit[] = {"10us", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2", "g(km/s)^2",
-                                      "g(km/s)^2", "g(km/s)^2", "g km/s", "g km/s", "g km/s", "km/s"};
-  ms_csv_header(fe, "cluster dynamics energy balance (total = kinetic + potential + dissipated "
-                "+ broken - piston_work)", 11, ecol, eunit);
+  static const char *const ecol[] = {"t",      "kinetic",     "potential",     "dissipated",
+                                     "broken", "piston_work", "total",         "px",
+                                     "py",     "pz",          "v_free_surface"};
+  static const char *const eunit[] = {"10us",      "g(km/s)^2", "g(km/s)^2", "g(km/s)^2",
+                                      "g(km/s)^2", "g(km/s)^2", "g(km/s)^2", "g km/s",
+                                      "g km/s",    "g km/s",    "km/s"};
+  ms_csv_header(fe,
+                "cluster dynamics energy balance (total = kinetic + potential + dissipated "
+                "+ broken - piston_work)",
+                11, ecol, eunit);
   const char *pcol[CD_PROFILE_NCOL + 1] = {"t"};
-  const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm", "-", "g/cm^3", "km/s", "km/s", "km/s",
-                                            "GPa", "GPa", "GPa", "GPa", "GPa", "GPa", "GPa"};
+  const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm",  "-",   "g/cm^3", "km/s", "km/s", "km/s",
+                                            "GPa",  "GPa", "GPa", "GPa",    "GPa",  "GPa",  "GPa"};
   for (int c = 0; c < CD_PROFILE_NCOL; c++) pcol[c + 1] = cd_profile_columns[c];
   ms_csv_header(fp, "cluster dynamics binned profiles (stress compression-positive)",
                 CD_PROFILE_NCOL + 1, pcol, punit);
   static const char *const fcol[] = {"t", "front"}, *const funit[] = {"10us", "cm"};
-  ms_csv_header(ff, "shock front: where the bin-mean velocity along the profile axis falls "
-                "below half the front_velocity", 2, fcol, funit);
+  ms_csv_header(ff,
+                "shock front: where the bin-mean velocity along the profile axis falls "
+                "below half the front_velocity",
+                2, fcol, funit);
 }
 
 /* ---- checkpoints (docs/mpi.md): OUTDIR/cd_checkpoint.h5 ---- */
 #define CD_CHECKPOINT_FORMAT "mscale cluster_dynamics checkpoint 1"
 enum { CD_NSTREAMS = 3, CD_MAX_FRONT = 4096 };
-static const char *const stream_names[CD_NSTREAMS] = {"/outputs/cd_energy.csv",
-                                                      "/outputs/cd_profiles.csv",
-                                                      "/outputs/cd_front.csv"};
+static const char *const stream_names[CD_NSTREAMS] = {
+    "/outputs/cd_energy.csv", "/outputs/cd_profiles.csv", "/outputs/cd_front.csv"};
 
 /* The state at the end of a step, before that step's outputs: the particles (after
  * cd_sim_refresh, which the restart repeats), the CSV text so far and the front samples. */
@@ -783,8 +839,8 @@ static ms_status write_checkpoint(ms_ctx *ctx, const cd_problem *p, cd_sim *s,
   for (int k = 0; k < CD_NSTREAMS && st == MS_OK; k++)
     st = ms_ckpt_save_afile(ctx, h, stream_names[k], streams[k]);
   if (st == MS_OK)
-    st = ms_h5_write_doubles_dist(h, "/outputs/front", ctx->rank == 0 ? (size_t)nf : 0, 2,
-                                  front, "10us, cm");
+    st = ms_h5_write_doubles_dist(h, "/outputs/front", ctx->rank == 0 ? (size_t)nf : 0, 2, front,
+                                  "10us, cm");
   return ms_ckpt_commit(ctx, h, st, "cd_checkpoint.h5", s->step);
 }
 
@@ -797,7 +853,8 @@ static ms_status restore_outputs(const ms_ctx *ctx, ms_h5r *h, ms_afile *const s
     st = ms_ckpt_restore_afile(ctx, h, stream_names[k], streams[k], &e);
   double *v = NULL;
   size_t n = 0, ncol = 0;
-  if (st == MS_OK) st = ms_h5_read_doubles_rows(h, "/outputs/front", 0, SIZE_MAX, &v, &n, &ncol, &e);
+  if (st == MS_OK)
+    st = ms_h5_read_doubles_rows(h, "/outputs/front", 0, SIZE_MAX, &v, &n, &ncol, &e);
   if (st == MS_OK && (ncol != 2 || n > CD_MAX_FRONT)) {
     dk_error_at(&e, ctx->restart, 0, 0, "'/outputs/front' is not a table of at most %d (t, z) rows",
                 CD_MAX_FRONT);
@@ -822,7 +879,9 @@ static void add_thermal(const cd_problem *p, ptl_state *ps, bool dist) {
   for (size_t i = 0; i < ps->nlocal; i++) {
     if (ps->flags[i] & PTL_DRIVEN) continue;
     for (int c = 0; c < p->dim; c++) {
-      double dv = p->thermal_amp * (2.0 * ptl_splitmix64_uniform(p->thermal_seed, 3 * (uint64_t)ps->gid[i] + c) - 1.0);
+      double dv =
+          p->thermal_amp *
+          (2.0 * ptl_splitmix64_uniform(p->thermal_seed, 3 * (uint64_t)ps->gid[i] + c) - 1.0);
       v[c][i] += dv;
       mean[c] += dv;
     }
@@ -848,13 +907,15 @@ static ms_status relax_sample(ms_ctx *ctx, const cd_problem *p, cd_sim *s, doubl
   ms_status st = cd_sim_relax(s, &rc, &r);
   if (st != MS_OK) return st;
   const double vsolid = (double)nglobal * cd_cluster_volume(p->lattice, p->r0, p->thickness);
-  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: relaxation: %ld steps; mean stress xx yy zz %.4g "
+  ms_log(ctx, MS_LOG_INFO,
+         "cluster_dynamics: relaxation: %ld steps; mean stress xx yy zz %.4g "
          "%.4g %.4g -> %.4g %.4g %.4g GPa; box stretch %.5f %.5f %.5f; density %.5g -> %.5g g/cm3, "
          "porosity (1 - N V_site/V) %.3f -> %.3f %%; energy released %.4g kJ/g (damping and quench "
-         "%.4g); %ld bonds broken", r.steps, r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0],
-         r.stress[1], r.stress[2], r.lambda[0], r.lambda[1], r.lambda[2], r.mass / r.volume0,
-         r.mass / r.volume, 100.0 * (1.0 - vsolid / r.volume0), 100.0 * (1.0 - vsolid / r.volume),
-         r.energy / r.mass, r.dissipated / r.mass, r.broken_bonds);
+         "%.4g); %ld bonds broken",
+         r.steps, r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0], r.stress[1], r.stress[2],
+         r.lambda[0], r.lambda[1], r.lambda[2], r.mass / r.volume0, r.mass / r.volume,
+         100.0 * (1.0 - vsolid / r.volume0), 100.0 * (1.0 - vsolid / r.volume), r.energy / r.mass,
+         r.dissipated / r.mass, r.broken_bonds);
   if (p->thermal_amp > 0) add_thermal(p, s->p, s->dd != NULL);
   return MS_OK;
 }
@@ -907,10 +968,14 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   }
   double c0max = 0;
   for (int k = 0; k < p->nmat; k++) c0max = fmax(c0max, eos_c0(p->mat[k]->eos));
-  cd_config cfg = {.r0 = p->r0, .skin = p->skin * p->r0,
-                   .dt = p->dt > 0 ? p->dt : p->courant * p->r0 / c0max, .cutoff = p->mode,
+  cd_config cfg = {.r0 = p->r0,
+                   .skin = p->skin * p->r0,
+                   .dt = p->dt > 0 ? p->dt : p->courant * p->r0 / c0max,
+                   .cutoff = p->mode,
                    .damping_gamma = p->damping_j > 0 ? c0max / (p->damping_j * p->r0) : 0.0,
-                   .sort_every = 8, .lattice = p->lattice, .thickness = p->thickness,
+                   .sort_every = 8,
+                   .lattice = p->lattice,
+                   .thickness = p->thickness,
                    .integrator = p->integrator};
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n;
@@ -923,8 +988,10 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
       if (cd_pair_table_build(t, p->mat[a]->eos, p->mat[b]->eos, p->lattice, p->r0, p->thickness,
                               p->rc_pair[a][b] * p->r0, p->r_min * p->r0, p->attraction[a][b],
                               p->table_intervals) != MS_OK) {
-        ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot tabulate the pair potential of '%s'-'%s' "
-               "on [r_min, R_c] (cold curve undefined there?)", p->mat[a]->name, p->mat[b]->name);
+        ms_log(ctx, MS_LOG_ERROR,
+               "cluster_dynamics: cannot tabulate the pair potential of '%s'-'%s' "
+               "on [r_min, R_c] (cold curve undefined there?)",
+               p->mat[a]->name, p->mat[b]->name);
         free(t);
         cd_sim_free(s);
         cd_restart_free(rs);
@@ -941,8 +1008,10 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     dk_errors_init(&e);
     st = cd_restart_step(rs) > nsteps ? MS_ERR_INPUT : cd_sim_init_restart(s, rs, &e);
     if (cd_restart_step(rs) > nsteps)
-      dk_error_at(&e, ctx->restart, 0, 0, "the checkpoint is at step %ld, beyond this deck's "
-                  "end (step %ld)", cd_restart_step(rs), nsteps);
+      dk_error_at(&e, ctx->restart, 0, 0,
+                  "the checkpoint is at step %ld, beyond this deck's "
+                  "end (step %ld)",
+                  cd_restart_step(rs), nsteps);
     if (st != MS_OK && ctx->rank == 0) dk_errors_print(&e, stderr);
     dk_errors_free(&e);
   } else {
@@ -956,10 +1025,11 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     ms_h5_close_read(rh);
     return st;
   }
-  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
-         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle", nglobal, p->nmat, cfg.dt,
-         p->rc, mode_names[p->mode], cfg.damping_gamma, cd_integrator_names[p->integrator],
-         cd_sim_bytes(s) / (ps->nlocal ? ps->nlocal : 1));
+  ms_log(ctx, MS_LOG_INFO,
+         "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
+         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle",
+         nglobal, p->nmat, cfg.dt, p->rc, mode_names[p->mode], cfg.damping_gamma,
+         cd_integrator_names[p->integrator], cd_sim_bytes(s) / (ps->nlocal ? ps->nlocal : 1));
   const cd_mpi_stats *ms = cd_sim_mpi_stats(s);
   long rebalances_logged = 0;
   if (ms) {
@@ -969,11 +1039,12 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
       snprintf(alt, sizeof alt, " (auto; %s: load %.3f)",
                partition_names[pst->method == CD_PART_SLAB ? CD_PART_METIS : CD_PART_SLAB],
                pst->rejected_load);
-    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %dx%dx%d coarse cells, %s partition%s: "
+    ms_log(ctx, MS_LOG_INFO,
+           "cluster_dynamics on %d ranks: %dx%dx%d coarse cells, %s partition%s: "
            "edge cut %ld, imbalance %.3f, load %.3f; owned max %zu, ghosts %zu in all; "
-           "rebalance above %g (checked every %d list builds)", ms->ranks, ms->ncell[0],
-           ms->ncell[1], ms->ncell[2], partition_names[pst->method], alt, pst->edge_cut,
-           ms->imbalance, pst->load, ms->max_owned, ms->total_ghosts,
+           "rebalance above %g (checked every %d list builds)",
+           ms->ranks, ms->ncell[0], ms->ncell[1], ms->ncell[2], partition_names[pst->method], alt,
+           pst->edge_cut, ms->imbalance, pst->load, ms->max_owned, ms->total_ghosts,
            p->mpi.rebalance_threshold, p->mpi.rebalance_interval);
   }
 
@@ -1020,9 +1091,10 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   if (p->dim == 2) area *= p->thickness;
   double *prof = ms_calloc((size_t)p->profile_bins * CD_PROFILE_NCOL, sizeof *prof);
   const long snap_every = p->snapshots > 0 ? (nsteps + p->snapshots - 1) / p->snapshots : 0;
-  const long ckpt_every = p->checkpoint_every > 0
-                              ? p->checkpoint_every
-                              : (p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / cfg.dt)) : 0);
+  const long ckpt_every =
+      p->checkpoint_every > 0
+          ? p->checkpoint_every
+          : (p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / cfg.dt)) : 0);
   double front[2 * CD_MAX_FRONT]; /* (t, z) of the front fit */
   int nf = 0;
   long step0 = 0;
@@ -1042,9 +1114,11 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     if (st != MS_OK) break;
     if (ms && ms->rebalances > rebalances_logged) {
       rebalances_logged = ms->rebalances;
-      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: rebalance at step %ld: imbalance %.3f -> %.3f, "
-             "edge cut %ld, %s map", ms->rebalance_step, ms->rebalance_before,
-             ms->rebalance_after, ms->partition.edge_cut, partition_names[ms->partition.method]);
+      ms_log(ctx, MS_LOG_INFO,
+             "cluster_dynamics: rebalance at step %ld: imbalance %.3f -> %.3f, "
+             "edge cut %ld, %s map",
+             ms->rebalance_step, ms->rebalance_before, ms->rebalance_after, ms->partition.edge_cut,
+             partition_names[ms->partition.method]);
     }
     if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
       st = write_checkpoint(ctx, p, s, streams, front, nf);
@@ -1074,8 +1148,10 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
       }
       ms_progress_update(&prog, s->t, k);
       if (ms && k % (10L * p->out_every) == 0)
-        ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: step %ld: owned max %zu (imbalance %.3f), "
-               "ghosts %zu in all", k, ms->max_owned, ms->imbalance, ms->total_ghosts);
+        ms_log(ctx, MS_LOG_INFO,
+               "cluster_dynamics: step %ld: owned max %zu (imbalance %.3f), "
+               "ghosts %zu in all",
+               k, ms->max_owned, ms->imbalance, ms->total_ghosts);
     }
     if (snap_every && (k % snap_every == 0 || k == nsteps)) {
       char name[64];
@@ -1087,7 +1163,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   }
   ms_progress_finish(&prog, s->t, s->step);
   if (st == MS_ERR_UNSTABLE) { /* the guard's finding, the state it found, the series so far */
-    if (cd_sim_error(s)[0]) /* on the rank that found it */
+    if (cd_sim_error(s)[0])    /* on the rank that found it */
       ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: %s", cd_sim_error(s));
     char *sp = ms_out_path(ctx, "cd_snap_unstable.h5");
     if (cd_write_snapshot(s, sp) == MS_OK)
@@ -1100,30 +1176,40 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     for (int k = 0; k < nf; k++) {
       const double tk = front[2 * k], zk = front[2 * k + 1];
       if (tk >= 0.25 * front[2 * (nf - 1)]) {
-        sx += tk; sy += zk; sxx += tk * tk; sxy += tk * zk; m++;
+        sx += tk;
+        sy += zk;
+        sxx += tk * tk;
+        sxy += tk * zk;
+        m++;
       }
     }
     if (m > 2)
-      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: shock speed D = %.4f km/s (front fit over t >= T/4)",
+      ms_log(ctx, MS_LOG_INFO,
+             "cluster_dynamics: shock speed D = %.4f km/s (front fit over t >= T/4)",
              (m * sxy - sx * sy) / (m * sxx - sx * sx));
   }
-  ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: %ld steps, %ld list builds, %ld broken bonds, wall "
-         "force %.2f s, lists %.2f s", s->step, cd_sim_rebuilds(s),
-         dist ? par_sum_long(s->n_broken_bonds) : s->n_broken_bonds, s->wall_time_force,
-         s->wall_time_neigh);
+  ms_log(ctx, MS_LOG_INFO,
+         "cluster_dynamics: %ld steps, %ld list builds, %ld broken bonds, wall "
+         "force %.2f s, lists %.2f s",
+         s->step, cd_sim_rebuilds(s), dist ? par_sum_long(s->n_broken_bonds) : s->n_broken_bonds,
+         s->wall_time_force, s->wall_time_neigh);
   if (ms) {
     const double xmax = par_max_double(ms->exchange_s), xmin = par_min_double(ms->exchange_s);
     const double recv = par_sum_double(ms->exchanged_doubles);
-    ms_log(ctx, MS_LOG_INFO, "cluster_dynamics on %d ranks: %ld partitions (%ld rebalances), "
+    ms_log(ctx, MS_LOG_INFO,
+           "cluster_dynamics on %d ranks: %ld partitions (%ld rebalances), "
            "imbalance %.3f at the end; migration and ghost exchange %.3f-%.3f s per rank; %.4g "
-           "doubles received in all; %ld bonds lost at migrations", ms->ranks, ms->partitions,
-           ms->rebalances, ms->imbalance, xmin, xmax, recv, par_sum_long(ms->lost_bonds));
+           "doubles received in all; %ld bonds lost at migrations",
+           ms->ranks, ms->partitions, ms->rebalances, ms->imbalance, xmin, xmax, recv,
+           par_sum_long(ms->lost_bonds));
   }
   free(prof);
   if ((st == MS_OK || st == MS_ERR_UNSTABLE) && root) { /* unstable: keep the series so far */
     ms_status sc = ms_afile_commit(&fe);
-    if (sc == MS_OK) sc = ms_afile_commit(&fp); else ms_afile_abort(&fp);
-    if (sc == MS_OK) sc = ms_afile_commit(&ff); else ms_afile_abort(&ff);
+    if (sc == MS_OK) sc = ms_afile_commit(&fp);
+    else ms_afile_abort(&fp);
+    if (sc == MS_OK) sc = ms_afile_commit(&ff);
+    else ms_afile_abort(&ff);
     if (sc != MS_OK) ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot write the CSV files");
     if (st == MS_OK) st = sc;
   } else if (st != MS_OK && st != MS_ERR_UNSTABLE) {

@@ -15,7 +15,7 @@
  * Piston work: W += ½(F_old + F_new)·dir·Δs with F the force of the particles on the piston and
  * Δs the piston displacement in the step (trapezoid rule, consistent with Verlet).
  *
- * RKN steps (position Verlet, SIA4, RKN4, RKN4 conjugate; DESIGN.md §5.2) go through
+ * RKN steps (position Verlet, SIA4, RKN4, RKN4 conjugate; docs/design.md §5.2) go through
  * rkn_step_soa on x, y, z in place (rkn_step_cd): the lists are checked and rebuilt only at step
  * boundaries, with the skin test widened by a bound on how far the stage positions reach from
  * x^n; driven particles sit at x_p(t_l) = x_p(t_n) + ∫u dt at every stage; piston work is the
@@ -27,8 +27,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const cd_integrator_names[] = {"velocity_verlet", "position_verlet", "sia4", "rkn4",
-                                           "rkn4_conjugate", NULL};
+const char *const cd_integrator_names[] = {
+    "velocity_verlet", "position_verlet", "sia4", "rkn4", "rkn4_conjugate", NULL};
 static const rkn_kind rkn_of[CD_INT_COUNT] = {RKN_VERLET, RKN_VERLET, RKN_SIA4, RKN_RKN4,
                                               RKN_RKN4_CONJ};
 
@@ -40,7 +40,8 @@ double cd_history_eval(const cd_history *h, double t) {
   size_t lo = 0, hi = h->n - 1;
   while (hi - lo > 1) {
     size_t mid = (lo + hi) / 2;
-    if (h->t[mid] <= t) lo = mid; else hi = mid;
+    if (h->t[mid] <= t) lo = mid;
+    else hi = mid;
   }
   double w = (t - h->t[lo]) / (h->t[hi] - h->t[lo]);
   return h->u[lo] + w * (h->u[hi] - h->u[lo]);
@@ -393,8 +394,14 @@ static void reflect_walls(cd_sim *s) {
     const double lo = s->box.lo[a], hi = s->box.hi[a];
     for (long i = 0; i < n; i++) {
       if (p->flags[i] & (PTL_DRIVEN | PTL_REMOVED)) continue;
-      if (xa[i] < lo) { xa[i] = 2.0 * lo - xa[i]; va[i] = -va[i]; }
-      if (xa[i] > hi) { xa[i] = 2.0 * hi - xa[i]; va[i] = -va[i]; }
+      if (xa[i] < lo) {
+        xa[i] = 2.0 * lo - xa[i];
+        va[i] = -va[i];
+      }
+      if (xa[i] > hi) {
+        xa[i] = 2.0 * hi - xa[i];
+        va[i] = -va[i];
+      }
     }
   }
 }
@@ -549,33 +556,32 @@ static ms_status vv_step(cd_sim *s) {
    * max|v|), the loop also takes the displacement extents the exact test then needs, saving it
    * a pass over x and the build positions (not with walls, which move particles after the
    * loop). Two loops: a test inside one keeps it from vectorising. */
-  const bool walls = s->box.bc[0] == CD_BC_WALL || s->box.bc[1] == CD_BC_WALL ||
-                     s->box.bc[2] == CD_BC_WALL;
-  const bool track = !walls && s->disp_bound + 2.0 * dt * s->vmax_last >=
-                                   0.5 * s->cfg.skin - s->nl->xb_err;
+  const bool walls =
+      s->box.bc[0] == CD_BC_WALL || s->box.bc[1] == CD_BC_WALL || s->box.bc[2] == CD_BC_WALL;
+  const bool track =
+      !walls && s->disp_bound + 2.0 * dt * s->vmax_last >= 0.5 * s->cfg.skin - s->nl->xb_err;
   double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
   double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all are maxima */
   int nan_seen = 0;
-#define KICK_DRIFT_ZERO(i)                                                                      \
-  const double c = hdt / m[i];                                                                  \
-  vx[i] += c * fx[i];                                                                           \
-  vy[i] += c * fy[i];                                                                           \
-  vz[i] += c * fz[i];                                                                           \
-  fx[i] = fy[i] = fz[i] = 0.0;                                                                  \
-  x[i] += dt * vx[i];                                                                           \
-  y[i] += dt * vy[i];                                                                           \
-  z[i] += dt * vz[i];                                                                           \
-  const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];                              \
+#define KICK_DRIFT_ZERO(i)                                                                         \
+  const double c = hdt / m[i];                                                                     \
+  vx[i] += c * fx[i];                                                                              \
+  vy[i] += c * fy[i];                                                                              \
+  vz[i] += c * fz[i];                                                                              \
+  fx[i] = fy[i] = fz[i] = 0.0;                                                                     \
+  x[i] += dt * vx[i];                                                                              \
+  y[i] += dt * vy[i];                                                                              \
+  z[i] += dt * vz[i];                                                                              \
+  const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];                                 \
   vmax2 = v2 > vmax2 ? v2 : vmax2;
   if (!track) {
 #pragma omp parallel for simd schedule(static) reduction(max : vmax2) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) {
-      KICK_DRIFT_ZERO(i)
-    }
+    for (long i = 0; i < n; i++) { KICK_DRIFT_ZERO(i) }
   } else {
     const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
-#pragma omp parallel for simd schedule(static) if (CD_PAR(n)) \
-    reduction(max : vmax2, d2max, hx, hy, hz, lx, ly, lz, nan_seen)
+#pragma omp parallel for simd schedule(static) if (CD_PAR(n))                                      \
+    reduction(max                                                                                  \
+              : vmax2, d2max, hx, hy, hz, lx, ly, lz, nan_seen)
     for (long i = 0; i < n; i++) {
       KICK_DRIFT_ZERO(i)
       const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
@@ -584,7 +590,7 @@ static ms_status vv_step(cd_sim *s) {
   }
 #undef KICK_DRIFT_ZERO
   if (!(vmax2 < INFINITY)) vmax2 = INFINITY; /* NaN: the exact test, which rebuilds */
-  if (s->dd) vmax2 = par_max_double(vmax2); /* the serial run's bound on every rank */
+  if (s->dd) vmax2 = par_max_double(vmax2);  /* the serial run's bound on every rank */
   s->vmax_last = sqrt(vmax2);
   s->disp_bound += dt * s->vmax_last;
   reflect_walls(s);
@@ -663,8 +669,8 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
   if (s->cfg.cutoff == CD_CUTOFF_PLAIN)
     for (int a = 0; a < s->nmat; a++)
       for (int b = 0; b < s->nmat; b++)
-        broken += s->pair[a][b]->e_rc *
-                  (double)(s->n_inside0[a][b] - inside[a * CD_MAX_MATERIALS + b]);
+        broken +=
+            s->pair[a][b]->e_rc * (double)(s->n_inside0[a][b] - inside[a * CD_MAX_MATERIALS + b]);
   out->kinetic = ke;
   out->potential = pe;
   out->dissipated = dissipated;
@@ -855,7 +861,8 @@ ms_status cd_sim_relax(cd_sim *s, const cd_relax_config *rc, cd_relax_result *ou
   out->quenched = s->dd ? par_sum_double(quenched) : quenched;
   const double damped = s->dissipated - diss0;
   out->dissipated = (s->dd ? par_sum_double(damped) : damped) + out->quenched;
-  out->broken_bonds = s->dd ? par_sum_long(s->n_broken_bonds - broken0) : s->n_broken_bonds - broken0;
+  out->broken_bonds =
+      s->dd ? par_sum_long(s->n_broken_bonds - broken0) : s->n_broken_bonds - broken0;
   s->piston.n = piston_n;
   s->cfg.damping_gamma = gamma_run;
   s->partners = partners;

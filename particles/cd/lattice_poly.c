@@ -1,4 +1,4 @@
-/* lattice_poly.c — Voronoi polycrystal packings (paper 002 §2, DESIGN.md §5.1).
+/* lattice_poly.c — Voronoi polycrystal packings ([Davydov] §2, docs/design.md §5.1).
  *
  * Grains: `ngrains` seed points uniform in the box; grain g owns the points nearer to its seed
  * than to any other (a Voronoi cell) and is filled with the close-packed lattice (fcc in 3D,
@@ -23,7 +23,8 @@
 #include <string.h>
 
 static void random_rotation(int dim, uint64_t seed, int g, double R[9]) {
-  double u1 = ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + 100), u2 = ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + 101),
+  double u1 = ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + 100),
+         u2 = ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + 101),
          u3 = ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + 102);
   const double two_pi = 6.283185307179586;
   if (dim == 2) {
@@ -34,15 +35,19 @@ static void random_rotation(int dim, uint64_t seed, int g, double R[9]) {
   }
   /* Shoemake's uniform random unit quaternion */
   double a = sqrt(1 - u1), b = sqrt(u1);
-  double q0 = a * sin(two_pi * u2), q1 = a * cos(two_pi * u2), q2 = b * sin(two_pi * u3), q3 = b * cos(two_pi * u3);
-  double M[9] = {1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2),
-                 2 * (q1 * q2 + q0 * q3), 1 - 2 * (q1 * q1 + q3 * q3), 2 * (q2 * q3 - q0 * q1),
-                 2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), 1 - 2 * (q1 * q1 + q2 * q2)};
+  double q0 = a * sin(two_pi * u2), q1 = a * cos(two_pi * u2), q2 = b * sin(two_pi * u3),
+         q3 = b * cos(two_pi * u3);
+  double M[9] = {
+      1 - 2 * (q2 * q2 + q3 * q3), 2 * (q1 * q2 - q0 * q3),     2 * (q1 * q3 + q0 * q2),
+      2 * (q1 * q2 + q0 * q3),     1 - 2 * (q1 * q1 + q3 * q3), 2 * (q2 * q3 - q0 * q1),
+      2 * (q1 * q3 - q0 * q2),     2 * (q2 * q3 + q0 * q1),     1 - 2 * (q1 * q1 + q2 * q2)};
   memcpy(R, M, sizeof M);
 }
 
 /* component a of x − y, to the nearest image along a periodic axis */
-static double image_delta(double d, double L, bool per) { return per ? d - L * nearbyint(d / L) : d; }
+static double image_delta(double d, double L, bool per) {
+  return per ? d - L * nearbyint(d / L) : d;
+}
 
 size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], const double hi[3],
                       const bool periodic[3], int ngrains, uint64_t seed, double dmin,
@@ -60,9 +65,11 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
   for (int a = 0; a < nd; a++) vbox *= hi[a] - lo[a];
   for (int g = 0; g < ngrains; g++)
     for (int a = 0; a < nd; a++)
-      seeds[3 * g + a] = lo[a] + (hi[a] - lo[a]) * ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + a);
+      seeds[3 * g + a] =
+          lo[a] + (hi[a] - lo[a]) * ptl_splitmix64_uniform(seed, 3 * (uint64_t)g + a);
   /* typical grain radius and the half-size of the lattice block generated around each seed */
-  const double rtyp = dim == 2 ? sqrt(vbox / ngrains / 3.14159) : cbrt(vbox / ngrains * 0.75 / 3.14159);
+  const double rtyp =
+      dim == 2 ? sqrt(vbox / ngrains / 3.14159) : cbrt(vbox / ngrains * 0.75 / 3.14159);
   const double half = 3.0 * rtyp + 2.0 * r0;
   const double fcc[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   const double tri[2][3] = {{0, 0, 0}, {0.5, 0.5, 0}};
@@ -82,9 +89,11 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
         for (long ix = -m[0]; ix <= m[0]; ix++)
           for (int b = 0; b < nb; b++) {
             const double *bs = dim == 2 ? tri[b] : fcc[b];
-            double l[3] = {(ix + bs[0]) * per[0], (iy + bs[1]) * per[1], dim == 2 ? 0.0 : (iz + bs[2]) * per[2]};
+            double l[3] = {(ix + bs[0]) * per[0], (iy + bs[1]) * per[1],
+                           dim == 2 ? 0.0 : (iz + bs[2]) * per[2]};
             double x[3];
-            for (int a = 0; a < 3; a++) x[a] = seeds[3 * g + a] + R[3 * a] * l[0] + R[3 * a + 1] * l[1] + R[3 * a + 2] * l[2];
+            for (int a = 0; a < 3; a++)
+              x[a] = seeds[3 * g + a] + R[3 * a] * l[0] + R[3 * a + 1] * l[1] + R[3 * a + 2] * l[2];
             if (dim == 2) x[2] = 0.0;
             double xu[3] = {x[0], x[1], x[2]};
             bool in = true;
@@ -184,7 +193,8 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
       memmove(xyz + 3 * q, xyz + 3 * i, 3 * sizeof *xyz);
       grain[q++] = grain[i];
     }
-  const double vsite = cd_cluster_volume(dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC, r0, thickness);
+  const double vsite =
+      cd_cluster_volume(dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC, r0, thickness);
   *porosity = 1.0 - (double)kept * vsite / (vbox * (dim == 2 ? thickness : 1.0));
   *xyz_out = xyz;
   *grain_out = grain;

@@ -100,9 +100,10 @@ static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, 
   const float *restrict xb = nl->xb, *restrict yb = nl->yb, *restrict zb = nl->zb;
   double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
   double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all seven are maxima */
-  int nan_seen = 0; /* the maxima skip NaN */
-#pragma omp parallel for simd schedule(static) \
-    reduction(max : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
+  int nan_seen = 0;                                      /* the maxima skip NaN */
+#pragma omp parallel for simd schedule(static)                                                     \
+    reduction(max                                                                                  \
+              : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
     const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
     CD_EXTENT_UPDATE(dx, dy, dz);
@@ -130,10 +131,8 @@ bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound
   const double margin = nl->xb_err + reach; /* NaN reach: no margin is left */
   if (bound < 0.5 * nl->skin - margin) return true;
   double ext[8];
-  if (known_ext)
-    memcpy(ext, known_ext, 7 * sizeof *ext);
-  else
-    displacement_extent(nl, p, n, ext);
+  if (known_ext) memcpy(ext, known_ext, 7 * sizeof *ext);
+  else displacement_extent(nl, p, n, ext);
   ext[7] = margin < INFINITY ? margin : INFINITY;
   if (dd) par_max_doubles(ext, 8); /* the RKN reach differs between ranks */
   const double half = 0.5 * nl->skin - ext[7];
@@ -147,9 +146,9 @@ bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound
     box2 += w * w;
     wmax = w > wmax ? w : wmax;
   }
-  if (box2 <= h2) return true; /* the whole bounding box within skin/2 of its centre */
+  if (box2 <= h2) return true;       /* the whole bounding box within skin/2 of its centre */
   if (!(wmax <= half)) return false; /* some |Δ − c| > skin/2 for every c */
-  double m2 = spread2(nl, p, n, c); /* the distance to the centre itself: a second pass */
+  double m2 = spread2(nl, p, n, c);  /* the distance to the centre itself: a second pass */
   if (dd) m2 = par_max_double(m2);
   return m2 <= h2;
 }
@@ -195,8 +194,7 @@ static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float 
     }
     const __m512 dx = _mm512_sub_ps(vxi, xj), dy = _mm512_sub_ps(vyi, yj),
                  dz = _mm512_sub_ps(vzi, zj);
-    const __m512 d2 =
-        _mm512_fmadd_ps(dx, dx, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dz, dz)));
+    const __m512 d2 = _mm512_fmadd_ps(dx, dx, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dz, dz)));
     const __mmask16 take = _mm512_mask_cmp_ps_mask(live, d2, vrl2, _CMP_LT_OQ);
     /* no branch on `take` (unpredictable); compress in a register and store the whole vector:
      * compress-to-memory is slow on Zen 4 */
@@ -242,7 +240,11 @@ static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float 
 
 /* One range of a cell's stencil: sorted positions q0 .. q1 − 1 with their image code; `same`
  * ranges (same layer, or no colouring) keep only q > p (cd_impl.h). */
-typedef struct stencil_range { int32_t q0, q1; int code; bool same; } stencil_range;
+typedef struct stencil_range {
+  int32_t q0, q1;
+  int code;
+  bool same;
+} stencil_range;
 
 /* Image code of the shift (s0, s1, s2) along the axes ax[0..2]: 13 is no image. */
 static inline int stencil_code(const int ax[3], int s0, int s1, int s2) {
@@ -260,18 +262,15 @@ static inline void add_range(stencil_range *st, int *nst, int32_t q0, int32_t q1
                              bool same, int32_t cell_q0) {
   if (q0 == q1 || (same && q1 <= cell_q0)) return;
   stencil_range *last = *nst > 0 ? st + *nst - 1 : NULL;
-  if (last && last->q1 == q0 && last->code == code && last->same == same)
-    last->q1 = q1;
-  else
-    st[(*nst)++] = (stencil_range){q0, q1, code, same};
+  if (last && last->q1 == q0 && last->code == code && last->same == same) last->q1 = q1;
+  else st[(*nst)++] = (stencil_range){q0, q1, code, same};
 }
 
 /* Full lists: store the group of `nlane` positions from g0 (their counts already in nplain,
  * nimg) in the layout of cd_impl.h; returns the new length (entries are written only while
  * they fit in cap; padding entries of shorter lists are 0, never read). */
-static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, int32_t g0,
-                          int nlane, int32_t gcand[][CD_MAX_CAND + 16],
-                          int32_t gimg[][CD_MAX_CAND + 2]) {
+static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, int32_t g0, int nlane,
+                          int32_t gcand[][CD_MAX_CAND + 16], int32_t gimg[][CD_MAX_CAND + 2]) {
   int kmax = 0;
   for (int l = 0; l < nlane; l++) kmax = nl->nplain[g0 + l] > kmax ? nl->nplain[g0 + l] : kmax;
   if (len + (size_t)CD_GROUP * kmax <= cap)
@@ -312,8 +311,16 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
     int nst = 0;
     for (int o0 = -1; o0 <= 1; o0++) {
       int m0 = k[0] + o0, s0 = 0;
-      if (m0 < 0) { if (!per[0]) continue; m0 += n0; s0 = -1; }
-      if (m0 >= n0) { if (!per[0]) continue; m0 -= n0; s0 = 1; }
+      if (m0 < 0) {
+        if (!per[0]) continue;
+        m0 += n0;
+        s0 = -1;
+      }
+      if (m0 >= n0) {
+        if (!per[0]) continue;
+        m0 -= n0;
+        s0 = 1;
+      }
       bool same_layer = (m0 == k[0]) && (s0 == 0 || n0 == 1);
       bool next_layer = false;
       if (nl->colour) {
@@ -324,19 +331,35 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
       }
       for (int o1 = -1; o1 <= 1; o1++) {
         int m1 = k[1] + o1, s1 = 0;
-        if (m1 < 0) { if (!per[1]) continue; m1 += n1; s1 = -1; }
-        if (m1 >= n1) { if (!per[1]) continue; m1 -= n1; s1 = 1; }
+        if (m1 < 0) {
+          if (!per[1]) continue;
+          m1 += n1;
+          s1 = -1;
+        }
+        if (m1 >= n1) {
+          if (!per[1]) continue;
+          m1 -= n1;
+          s1 = 1;
+        }
         const bool same = !next_layer && !nl->full; /* full lists keep q < p too */
         const int32_t row = (m0 * n1 + m1) * n2;
         if (k[2] >= 1 && k[2] + 1 < n2) { /* the row's three cells are contiguous: one range */
-          add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2],
-                    stencil_code(ax, s0, s1, 0), same, cs[c]);
+          add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2], stencil_code(ax, s0, s1, 0),
+                    same, cs[c]);
           continue;
         }
         for (int o2 = -1; o2 <= 1; o2++) {
           int m2 = k[2] + o2, s2 = 0;
-          if (m2 < 0) { if (!per[2]) continue; m2 += n2; s2 = -1; }
-          if (m2 >= n2) { if (!per[2]) continue; m2 -= n2; s2 = 1; }
+          if (m2 < 0) {
+            if (!per[2]) continue;
+            m2 += n2;
+            s2 = -1;
+          }
+          if (m2 >= n2) {
+            if (!per[2]) continue;
+            m2 -= n2;
+            s2 = 1;
+          }
           add_range(st, &nst, cs[row + m2], cs[row + m2 + 1], stencil_code(ax, s0, s1, s2), same,
                     cs[c]);
         }
@@ -352,7 +375,10 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         if (st[e].same && q0 <= pos) q0 = pos + 1;
         if (st[e].code == 13) {
           /* branchless: store every candidate, advance only for those inside r_list */
-          if (q1 - q0 > CD_MAX_CAND - nc) { q1 = q0 + (CD_MAX_CAND - nc); nl->overfull = true; }
+          if (q1 - q0 > CD_MAX_CAND - nc) {
+            q1 = q0 + (CD_MAX_CAND - nc);
+            nl->overfull = true;
+          }
           if (q0 <= pos && pos < q1) { /* full lists: the range around the particle itself */
             nc += select_range(nl, q0, pos, NULL, xi, yi, zi, rl2, cand + nc);
             q0 = pos + 1;
@@ -361,7 +387,10 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
         } else {
           const float sv[3] = {(float)nl->shift[st[e].code][0], (float)nl->shift[st[e].code][1],
                                (float)nl->shift[st[e].code][2]};
-          if (q1 - q0 > CD_MAX_CAND / 2 - nimg) { q1 = q0 + (CD_MAX_CAND / 2 - nimg); nl->overfull = true; }
+          if (q1 - q0 > CD_MAX_CAND / 2 - nimg) {
+            q1 = q0 + (CD_MAX_CAND / 2 - nimg);
+            nl->overfull = true;
+          }
           const int m = select_range(nl, q0, q1, sv, xi, yi, zi, rl2, imgj);
           for (int q = 0; q < m; q++, nimg++) {
             img[2 * nimg] = imgj[q];
@@ -629,9 +658,10 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
     amax = fmax(amax, fmax(fabs(lo[a]), fabs(lo[a] + L[a])) + nl->rlist);
     lmax = fmax(lmax, L[a]);
   }
-  const double ulp = 0x1.0p-24, derr = 1.7320508075688772 * ulp * (4 * amax + 3 * lmax + 2 * nl->rlist);
-  const float rl2f = nextafterf(
-      (float)((nl->rlist + derr) * (nl->rlist + derr) * (1.0 + 8 * ulp)), INFINITY);
+  const double ulp = 0x1.0p-24,
+               derr = 1.7320508075688772 * ulp * (4 * amax + 3 * lmax + 2 * nl->rlist);
+  const float rl2f =
+      nextafterf((float)((nl->rlist + derr) * (nl->rlist + derr) * (1.0 + 8 * ulp)), INFINITY);
   int again;
   nl->overfull = false;
   do {

@@ -4,8 +4,8 @@
 
 #include "ptl.h"
 
-/* The least-squares deformation-gradient particle model of paper 000 §1 with the exact pairwise
- * Hamiltonian force (DESIGN.md §5.2; docs/particles-dm.md). Small-strain linear elasticity:
+/* The least-squares deformation-gradient particle model of [Sofronov] §1 with the exact pairwise
+ * Hamiltonian force (docs/design.md §5.2; docs/particles-dm.md). Small-strain linear elasticity:
  *   A_i = Σ_k ξ_ik⊗ξ_ik,  C_i = Σ_k (w_k − w_i)⊗(A_i⁻¹ξ_ik),  E_i = sym C_i,
  *   σ_i = λ_i tr(E_i) I + 2G_i E_i,  H = Σ m_i|u_i|²/2 + Σ V_i σ_i:E_i/2,
  *   F_i = −∂H/∂w_i = Σ_{k∈N_i} (P_i + P_k) ξ_ik,  P_i = V_i σ_i A_i⁻¹   (families are symmetric).
@@ -13,8 +13,8 @@
  * dim = 3: full 3D. Vectors are always stored with 3 components (unused ones stay 0). */
 
 typedef enum dm_bc {
-  DM_FREE = 0,      /* moves under the model's forces */
-  DM_FIXED = 1,     /* u = 0, w held at its initial value (fixed particle layers) */
+  DM_FREE = 0,       /* moves under the model's forces */
+  DM_FIXED = 1,      /* u = 0, w held at its initial value (fixed particle layers) */
   DM_PRESCRIBED = 2, /* w(t) given by the model's prescribed-displacement callback */
   DM_MIRROR = 3      /* ghost: w = S w_partner (S = diag(msign)), a mirror image across a wall
                       * (S = −I: clamped wall, u = 0 on it) or a symmetry plane (S flips the
@@ -25,13 +25,13 @@ typedef enum dm_bc {
 typedef struct dm_state {
   size_t n;
   int dim;
-  double *X;       /* reference positions */
-  double *w;       /* displacements */
-  double *u;       /* velocities (momentum p = m u) */
-  double *mass;    /* m_i */
-  double *vol;     /* V_i = m_i / ρ_i⁰ */
-  double *K, *G;   /* bulk and shear moduli per particle (material interfaces) */
-  uint8_t *bc;     /* dm_bc */
+  double *X;         /* reference positions */
+  double *w;         /* displacements */
+  double *u;         /* velocities (momentum p = m u) */
+  double *mass;      /* m_i */
+  double *vol;       /* V_i = m_i / ρ_i⁰ */
+  double *K, *G;     /* bulk and shear moduli per particle (material interfaces) */
+  uint8_t *bc;       /* dm_bc */
   uint32_t *partner; /* DM_MIRROR: the real particle mirrored */
   int8_t *msign;     /* DM_MIRROR: [n][3] sign per component */
 } dm_state;
@@ -40,9 +40,9 @@ void dm_state_alloc(dm_state *s, size_t n, int dim); /* zeroed arrays */
 void dm_state_free(dm_state *s);
 
 typedef struct dm_options {
-  double horizon;  /* δ_r (cm): N_i = {k ≠ i : |X_k − X_i| < δ_r} (periodic images included) */
-  double box[3];   /* periodic length per axis, 0 = not periodic (X must lie in [0, box)) */
-  double cond_max; /* largest accepted condition number of A_i (0 → default 1e8) */
+  double horizon; /* δ_r (cm): N_i = {k ≠ i : |X_k − X_i| < δ_r} (periodic images included) */
+  double box[3];  /* periodic length per axis, 0 = not periodic (X must lie in [0, box)) */
+  double cond_max;  /* largest accepted condition number of A_i (0 → default 1e8) */
   double hourglass; /* stabilisation coefficient c_s (0 = off; docs/particles-dm.md) */
 } dm_options;
 
@@ -63,9 +63,9 @@ typedef struct dm_model {
   double *cond;  /* [n] condition number of A_i */
   double *kappa; /* [n] hourglass stiffness c_s G_i V_i / tr A_i (0 when off) */
   /* Work and output arrays, filled by dm_forces: */
-  double *C;     /* [n][9] displacement gradient C_i (row a: ∂w_a, column b: ∂/∂X_b) */
-  double *sigma; /* [n][9] stress σ_i (symmetric; GPa) */
-  double *Q;     /* [n][9] V_i σ_i A_i⁻¹ − κ_i C_i */
+  double *C;      /* [n][9] displacement gradient C_i (row a: ∂w_a, column b: ∂/∂X_b) */
+  double *sigma;  /* [n][9] stress σ_i (symmetric; GPa) */
+  double *Q;      /* [n][9] V_i σ_i A_i⁻¹ − κ_i C_i */
   double *energy; /* [n] V_i U_i (+ hourglass energy), kJ */
   dm_prescribe_fn prescribe;
   void *prescribe_user;
@@ -91,7 +91,7 @@ double dm_kinetic_energy(const dm_state *s); /* Σ m|u|²/2 (mirror ghosts exclu
 /* Total linear momentum Σ m u and the reference angular momentum J = Σ X × m u, which the
  * small-strain Hamiltonian conserves exactly (docs/particles-dm.md). */
 void dm_momenta(const dm_state *s, double P[3], double J[3]);
-/* Cauchy stress Σ_i = σ_i (I + C_iᵀ) / det(I + C_i) (paper 000 §1), [n][9], from the last
+/* Cauchy stress Σ_i = σ_i (I + C_iᵀ) / det(I + C_i) ([Sofronov] §1), [n][9], from the last
  * dm_forces / dm_potential_energy call. */
 void dm_cauchy_stress(const dm_model *m, double *S);
 /* Zero-energy-mode measure: returns sqrt(Σ_i Σ_k |z_ik|²) with z_ik the least-squares residual
@@ -115,12 +115,13 @@ void dm_constrain(void *user, double t, double *q, double *u);
  * Owned values are bitwise independent of the rank count. */
 typedef struct dm_dist dm_dist;
 typedef struct dm_dist_stats {
-  long edge_cut, edge_cut_slab;         /* cut bonds: METIS, plain x slabs (comparison) */
-  double imbalance, imbalance_slab;     /* max rank weight / mean (weight = bonds + 1) */
-  size_t owned, ghosts;                 /* this rank */
+  long edge_cut, edge_cut_slab;     /* cut bonds: METIS, plain x slabs (comparison) */
+  double imbalance, imbalance_slab; /* max rank weight / mean (weight = bonds + 1) */
+  size_t owned, ghosts;             /* this rank */
   size_t max_owned, max_ghosts, total_ghosts, bonds;
   double partition_s;
-  double exchange_s, exchanged_doubles; /* this rank: wall time in ghost exchanges, doubles received */
+  double exchange_s,
+      exchanged_doubles; /* this rank: wall time in ghost exchanges, doubles received */
 } dm_dist_stats;
 typedef struct dm_dist_diag {
   double kinetic, potential; /* kJ, non-mirror particles */
@@ -155,7 +156,7 @@ void dm_dist_release_global(dm_dist *d);
 void dm_dist_gather(dm_dist *d, const double *local, int width, double *global);
 void dm_dist_scatter(dm_dist *d, const double *global, int width, double *local);
 
-/* Exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
+/* Exact reference solutions of [Sofronov] §5 (units g, cm, 10 µs). */
 /* §5.1 rod 0<x<2L, fixed ends, triangle initial displacement (series, nterms terms). */
 double dm_exact_rod_triangle(double x, double t, double L, double eps, double c, int nterms);
 /* §5.1 smooth data: w = εL sin(πx/2L) cos(πct/2L). */
@@ -167,8 +168,8 @@ double dm_exact_contact_stress(double x, double t, double L, double eps, double 
                                double rho2, double E2);
 /* §5.3 spherical wave from a source w(r0, t) = w0(1 − cos ωt): radial displacement w(r,t),
  * radial velocity u(r,t). cl = longitudinal wave speed. */
-void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl,
-                     double *w, double *u);
+void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl, double *w,
+                     double *u);
 
 /* Deck problem type `discrete_model` (docs/input-dm.md). */
 typedef struct dm_problem dm_problem;
@@ -184,25 +185,25 @@ typedef struct dm_run_summary {
   size_t real_particles;   /* the lattice inside the domain (the ones that are timed) */
   long steps;
   double dt, t_end;
-  double omega_dt;        /* ω_max Δt (power iteration) vs the scheme's stability limit */
+  double omega_dt; /* ω_max Δt (power iteration) vs the scheme's stability limit */
   double wall_s, particle_steps_per_s; /* time-stepping loop only (real particles) */
-  double cpu_s;           /* process CPU time of that loop, all threads (load-independent) */
-  double energy_err_max;  /* max |H(t) − H(0)| / H(0) over the energy samples */
+  double cpu_s;          /* process CPU time of that loop, all threads (load-independent) */
+  double energy_err_max; /* max |H(t) − H(0)| / H(0) over the energy samples */
   /* zero-energy-mode indicator |z|(t) / max_t |Δw|(t) (dm_hourglass_norm) at the energy
    * samples: first, largest and last value */
   double hourglass_first, hourglass_max, hourglass_last;
-  double amp_err, phase_err;  /* rod, over the last 10 L/c of w(x_probe, t): A − 1 and s (units
+  double amp_err, phase_err; /* rod, over the last 10 L/c of w(x_probe, t): A − 1 and s (units
                                * of L/c) of the least-squares fit w ≈ A·w_exact(t − s) */
-  double peak_err;            /* rod: (max|w| − max|w_exact|)/max|w_exact| (includes ringing) */
-  double rms_err;             /* rod: rms(w − w_exact)/max|w_exact| over that window, no fit */
-  double err_l1, err_l2, err_max; /* contact: σ_xx at t_end; sphere: radial w at t_end; all
+  double peak_err;           /* rod: (max|w| − max|w_exact|)/max|w_exact| (includes ringing) */
+  double rms_err;            /* rod: rms(w − w_exact)/max|w_exact| over that window, no fit */
+  double err_l1, err_l2, err_max;    /* contact: σ_xx at t_end; sphere: radial w at t_end; all
                                    * relative to the exact solution's maximum */
-  double err_u_l2;            /* sphere: radial velocity, L2, relative to u0 = w0 ω */
+  double err_u_l2;                   /* sphere: radial velocity, L2, relative to u0 = w0 ω */
   double kinetic_end, potential_end; /* energies at t_end (kJ) */
-  int ranks;                  /* MPI ranks of the run; partition quality (dm_dist_stats): */
+  int ranks;                         /* MPI ranks of the run; partition quality (dm_dist_stats): */
   long edge_cut, edge_cut_slab;
   double imbalance, imbalance_slab;
-  long restart_step;          /* step the run continued from (0: a fresh start) */
+  long restart_step; /* step the run continued from (0: a fresh start) */
 } dm_run_summary;
 const dm_run_summary *dm_problem_summary(const dm_problem *p);
 /* Global displacements and velocities ([n][3], particle order) at the end of the last run

@@ -1,4 +1,4 @@
-/* dm_exact.c — exact reference solutions of paper 000 §5 (units g, cm, 10 µs). */
+/* dm_exact.c — exact reference solutions of [Sofronov] §5 (units g, cm, 10 µs). */
 #include "dm.h"
 
 #include <math.h>
@@ -16,7 +16,7 @@ static double triangle_ext(double y, double L, double eps) {
 double dm_exact_rod_triangle(double x, double t, double L, double eps, double c, int nterms) {
   if (nterms <= 0) /* d'Alembert: w = ½[W(x − ct) + W(x + ct)], exact, no truncation */
     return 0.5 * (triangle_ext(x - c * t, L, eps) + triangle_ext(x + c * t, L, eps));
-  /* Paper 000 §5.1 series: w = 8εL/π² Σ (−1)ⁿ/(2n+1)² sin((2n+1)πx/2L) cos((2n+1)πct/2L) */
+  /* [Sofronov] §5.1 series: w = 8εL/π² Σ (−1)ⁿ/(2n+1)² sin((2n+1)πx/2L) cos((2n+1)πct/2L) */
   double sum = 0.0;
   for (int n = nterms - 1; n >= 0; --n) {
     double m = 2.0 * n + 1.0;
@@ -42,7 +42,7 @@ double dm_exact_contact_stress(double x, double t, double L, double eps, double 
 #define SIGMA0(y) (S * cos(k * (y)))
   if (x < L) {
     double right = 0.5 * SIGMA0(x - c1 * t); /* right-going half of the initial data */
-    double y = x + c1 * t;                    /* where the left-going part started */
+    double y = x + c1 * t;                   /* where the left-going part started */
     double left = y < L ? 0.5 * SIGMA0(y)
                         /* reflected at the contact: the incident half that reached x = L at
                          * time t − (L − x)/c1 started at 2L − x − c1 t */
@@ -55,9 +55,9 @@ double dm_exact_contact_stress(double x, double t, double L, double eps, double 
 #undef SIGMA0
 }
 
-/* Paper 000 §5.3: Φ(τ) and its derivatives for f(t) = w0(1 − cos ωt), α = ωr0/C. */
-void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl,
-                     double *w, double *u) {
+/* [Sofronov] §5.3: Φ(τ) and its derivatives for f(t) = w0(1 − cos ωt), α = ωr0/C. */
+void dm_exact_sphere(double r, double t, double r0, double w0, double period, double cl, double *w,
+                     double *u) {
   const double om = 2.0 * M_PI / period, al = om * r0 / cl;
   const double tau = t - (r - r0) / cl;
   if (tau < 0) {

@@ -1,4 +1,4 @@
-/* dm_family.c — families of the Hamiltonian discrete model (paper 000 §1, §3; DESIGN.md §5.2).
+/* dm_family.c — families of the Hamiltonian discrete model ([Sofronov] §1, §3; docs/design.md §5.2).
  *
  * N_i = {k ≠ i : |X_k − X_i| < δ_r} in the reference configuration, built once with a cell
  * list of cell size ≥ δ_r (periodic axes wrap, recording which image a neighbour came from),
@@ -81,7 +81,7 @@ typedef struct cell_grid {
   int nc[3];          /* cells per axis */
   double lo[3], w[3]; /* origin and cell width */
   int periodic[3];
-  size_t *cstart; /* [ncell+1] */
+  size_t *cstart;  /* [ncell+1] */
   uint32_t *cpart; /* particles sorted by cell */
 } cell_grid;
 
@@ -175,8 +175,8 @@ static size_t visit_family(const cell_grid *g, const dm_state *s, const dm_model
           }
         }
         if (skip) continue;
-        size_t c = ((size_t)cc[2] * (size_t)g->nc[1] + (size_t)cc[1]) * (size_t)g->nc[0] +
-                   (size_t)cc[0];
+        size_t c =
+            ((size_t)cc[2] * (size_t)g->nc[1] + (size_t)cc[1]) * (size_t)g->nc[0] + (size_t)cc[0];
         int code = (im[0] + 1) + 3 * (im[1] + 1) + 9 * (im[2] + 1);
         for (size_t p = g->cstart[c]; p < g->cstart[c + 1]; ++p) {
           uint32_t k = g->cpart[p];
@@ -263,9 +263,8 @@ ms_status dm_build_shape(dm_model *m, const ms_ctx *ctx, size_t *first_bad) {
     }
     m->cond[i] = dm_sym_inverse(dim, A, &m->Ainv[9 * i]);
     double trA = A[0] + A[4] + A[8];
-    m->kappa[i] = (m->opt.hourglass > 0 && trA > 0)
-                      ? m->opt.hourglass * s->G[i] * s->vol[i] / trA
-                      : 0.0;
+    m->kappa[i] =
+        (m->opt.hourglass > 0 && trA > 0) ? m->opt.hourglass * s->G[i] * s->vol[i] / trA : 0.0;
   }
   size_t nbad = 0;
   for (size_t i = 0; i < s->n; ++i) {

@@ -1,5 +1,5 @@
 /* dm_model.c — strain, stress, energy and the exact Hamiltonian force of the discrete model
- * (paper 000 §1 with the correction of DESIGN.md §5.2).
+ * ([Sofronov] §1 with the correction of docs/design.md §5.2).
  *
  * Energy: H_el = Σ_i V_i U_i(E_i), C_i = Σ_k Δw_ik ⊗ g_ik with Δw_ik = w_k − w_i and
  * g_ik = A_i⁻¹ξ_ik, so ∂H/∂w_k (from particle i's term) = V_i σ_i g_ik and
@@ -70,8 +70,8 @@ dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_st
   for (size_t i = 0; i < s->n; ++i) {
     if (!(s->mass[i] > 0) || !(s->vol[i] > 0) || !(s->K[i] > 0) || !(s->G[i] >= 0)) {
       ms_log(ctx, MS_LOG_ERROR,
-             "discrete model: particle %zu at (%g, %g, %g) needs mass, volume, K > 0 and G >= 0",
-             i, s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2]);
+             "discrete model: particle %zu at (%g, %g, %g) needs mass, volume, K > 0 and G >= 0", i,
+             s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2]);
       return NULL;
     }
     if (s->bc[i] == DM_MIRROR && (s->partner[i] >= s->n || s->bc[s->partner[i]] == DM_MIRROR)) {
@@ -158,10 +158,9 @@ static inline void strain_stress(dm_model *restrict m, const double *restrict w,
   const int dim = s->dim;
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
-      C[3 * a + c] = a < dim ? Bt[3 * a] * Ai[c] + Bt[3 * a + 1] * Ai[3 + c] +
-                                   Bt[3 * a + 2] * Ai[6 + c]
-                             : 0.0;
-  /* E = sym C; σ = λ tr E I + 2G E (paper 000 eq. 3 and the formula after it) */
+      C[3 * a + c] =
+          a < dim ? Bt[3 * a] * Ai[c] + Bt[3 * a + 1] * Ai[3 + c] + Bt[3 * a + 2] * Ai[6 + c] : 0.0;
+  /* E = sym C; σ = λ tr E I + 2G E ([Sofronov] eq. 3 and the formula after it) */
   const double G = s->G[i], lam = s->K[i] - 2.0 * G / 3.0, V = s->vol[i];
   const double tr = C[0] + C[4] + C[8];
   double *sg = &m->sigma[9 * i];
@@ -180,8 +179,9 @@ static inline void strain_stress(dm_model *restrict m, const double *restrict w,
   double *Q = &m->Q[9 * i];
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
-      Q[3 * a + c] = V * (sg[3 * a] * Ai[c] + sg[3 * a + 1] * Ai[3 + c] + sg[3 * a + 2] * Ai[6 + c]) -
-                     kap * C[3 * a + c];
+      Q[3 * a + c] =
+          V * (sg[3 * a] * Ai[c] + sg[3 * a + 1] * Ai[3 + c] + sg[3 * a + 2] * Ai[6 + c]) -
+          kap * C[3 * a + c];
 }
 
 /* Pass 2 for particle i: F_i = Σ_k (Q_i + Q_k) ξ_ik [+ (κ_i + κ_k) Δw_ik]. */

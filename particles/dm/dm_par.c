@@ -33,10 +33,10 @@
 
 struct dm_dist {
   int rank, size;
-  dm_model *gm;    /* the global model (replicated set-up; not owned) */
+  dm_model *gm; /* the global model (replicated set-up; not owned) */
   size_t n_global;
-  dm_state ls;     /* local particles: owned, then ghosts */
-  dm_model *lm;    /* local model (families of owned particles in local indices) */
+  dm_state ls;  /* local particles: owned, then ghosts */
+  dm_model *lm; /* local model (families of owned particles in local indices) */
   size_t n_owned, n_ghost;
   uint32_t *gid;      /* [n_local] global index */
   uint32_t *local_of; /* [n_global] local index, UINT32_MAX if not on this rank */
@@ -304,10 +304,8 @@ static void build_local(dm_dist *d) {
         int q = d->part[m->nbr[b]];
         if (q == me || mark[q]) continue;
         mark[q] = 1;
-        if (pass == 0)
-          d->scount[q]++;
-        else
-          d->send_idx[(size_t)d->sdispl[q] + fill[q]++] = (uint32_t)l;
+        if (pass == 0) d->scount[q]++;
+        else d->send_idx[(size_t)d->sdispl[q] + fill[q]++] = (uint32_t)l;
       }
     }
     free(fill);

@@ -1,5 +1,5 @@
 /* dm_problem.c — the deck problem type `discrete_model` (docs/input-dm.md): builds a lattice of
- * particles in a box with per-face boundaries, material layers, initial data of paper 000 §5
+ * particles in a box with per-face boundaries, material layers, initial data of [Sofronov] §5
  * or random velocities (benchmark), an optional spherical displacement source, integrates with
  * a symplectic RKN scheme and compares with the exact solutions where one exists.
  */
@@ -22,8 +22,8 @@ enum profile {
   PROF_CONTACT,
   PROF_RANDOM_VELOCITY
 };
-static const char *const profile_names[] = {"none",     "rod_triangle",    "rod_sine",
-                                            "contact_harmonic", "random_velocity", NULL};
+static const char *const profile_names[] = {
+    "none", "rod_triangle", "rod_sine", "contact_harmonic", "random_velocity", NULL};
 
 typedef struct dm_layer {
   double x_max; /* particles with x < x_max (the last layer takes the rest) */
@@ -101,8 +101,7 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
     if (!dk_expect_map(e, doc, it, "discrete_model.layers[]")) continue;
     ly->x_max = INFINITY; /* absent: the rest of the domain (no default written back) */
     if (dk_get(it, "x_max"))
-      dk_read_double(e, doc, it, "x_max", MS_DIM_LENGTH, true, 0, -INFINITY, INFINITY,
-                     &ly->x_max);
+      dk_read_double(e, doc, it, "x_max", MS_DIM_LENGTH, true, 0, -INFINITY, INFINITY, &ly->x_max);
     const char *mname = NULL;
     if (dk_get(it, "material")) {
       dk_read_string(e, doc, it, "material", true, NULL, &mname);
@@ -135,8 +134,7 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   dk_read_positive(e, doc, sec, "spacing", MS_DIM_LENGTH, true, 0, &p->h);
   dk_read_double(e, doc, sec, "horizon", MS_DIM_NONE, false, 1.5, 1.0, 10.0, &p->horizon);
   const dk_node *dom = dk_get(sec, "domain");
-  if (!dom)
-    dk_error(e, doc, sec, "discrete_model: 'domain' with 'lo' and 'hi' lists is required");
+  if (!dom) dk_error(e, doc, sec, "discrete_model: 'domain' with 'lo' and 'hi' lists is required");
   else if (dk_expect_map(e, doc, dom, "discrete_model.domain")) {
     double *lo = NULL, *hi = NULL;
     size_t nlo = 0, nhi = 0;
@@ -161,11 +159,13 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     free(hi);
   }
   for (int a = p->dim; a < 3; ++a) p->ncell[a] = 1;
-  if (e->n == nerr0) { /* refuse what cannot fit before anything is allocated (docs/reliability.md) */
+  if (e->n ==
+      nerr0) { /* refuse what cannot fit before anything is allocated (docs/reliability.md) */
     double n = (double)p->ncell[0] * (double)p->ncell[1] * (double)p->ncell[2];
     /* family members within the horizon δ (in spacings): 2δ, πδ², (4/3)πδ³ in 1, 2, 3 D */
-    double d = p->horizon, members = p->dim == 1 ? 2 * d : p->dim == 2 ? M_PI * d * d
-                                                                   : 4.0 / 3.0 * M_PI * d * d * d;
+    double d = p->horizon, members = p->dim == 1   ? 2 * d
+                                     : p->dim == 2 ? M_PI * d * d
+                                                   : 4.0 / 3.0 * M_PI * d * d * d;
     /* measured: ~290 MB for 125k particles with 122 members each (bench/dm_peri) */
     ms_mem_estimate m;
     ms_mem_init(&m);
@@ -176,10 +176,8 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   const dk_node *bnd = dk_get(sec, "boundaries");
   if (bnd && !dk_expect_map(e, doc, bnd, "discrete_model.boundaries")) bnd = NULL;
   for (int f = 0; f < 2 * p->dim; ++f) {
-    if (bnd)
-      dk_read_enum(e, doc, bnd, face_keys[f], false, FACE_FREE, face_bc_names, &p->face[f]);
-    else
-      p->face[f] = FACE_FREE;
+    if (bnd) dk_read_enum(e, doc, bnd, face_keys[f], false, FACE_FREE, face_bc_names, &p->face[f]);
+    else p->face[f] = FACE_FREE;
   }
   for (int a = 0; a < p->dim; ++a) {
     int plo = p->face[2 * a] == FACE_PERIODIC, phi = p->face[2 * a + 1] == FACE_PERIODIC;
@@ -208,7 +206,8 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
     } else if (p->profile != PROF_NONE) {
       dk_read_positive(e, doc, ini, "amplitude", MS_DIM_NONE, true, 0, &p->amplitude);
       dk_read_positive(e, doc, ini, "length", MS_DIM_LENGTH, true, 0, &p->length);
-      if (p->profile == PROF_ROD_SINE) dk_read_int(e, doc, ini, "mode", false, 1, 1, 100000, &p->mode);
+      if (p->profile == PROF_ROD_SINE)
+        dk_read_int(e, doc, ini, "mode", false, 1, 1, 100000, &p->mode);
       if (p->dim != 1)
         dk_error(e, doc, ini, "discrete_model.initial: profile '%s' is a 1D (rod) problem",
                  profile_names[p->profile]);
@@ -229,14 +228,10 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   }
 
   dk_read_enum(e, doc, sec, "integrator", false, RKN_VERLET, rkn_scheme_names, &p->integrator);
-  if (dk_get(sec, "dt"))
-    dk_read_positive(e, doc, sec, "dt", MS_DIM_TIME, true, 0, &p->dt);
-  else
-    dk_read_positive(e, doc, sec, "courant", MS_DIM_NONE, false, 0.5, &p->courant);
-  if (dk_get(sec, "steps"))
-    dk_read_int(e, doc, sec, "steps", true, 0, 1, LONG_MAX, &p->steps);
-  else
-    dk_read_positive(e, doc, sec, "t_end", MS_DIM_TIME, true, 0, &p->t_end);
+  if (dk_get(sec, "dt")) dk_read_positive(e, doc, sec, "dt", MS_DIM_TIME, true, 0, &p->dt);
+  else dk_read_positive(e, doc, sec, "courant", MS_DIM_NONE, false, 0.5, &p->courant);
+  if (dk_get(sec, "steps")) dk_read_int(e, doc, sec, "steps", true, 0, 1, LONG_MAX, &p->steps);
+  else dk_read_positive(e, doc, sec, "t_end", MS_DIM_TIME, true, 0, &p->t_end);
   dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, 0.0, 0.0, 100.0, &p->hourglass);
   dk_read_double(e, doc, sec, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
 
@@ -320,14 +315,11 @@ static void build_particles(dm_problem *p, dm_state *s) {
           if (idx[a] >= p->ncell[a]) f = 2 * a + 1, mir[a] = 2 * p->ncell[a] - 1 - idx[a];
           if (f < 0) continue;
           outside = 1;
-          if (p->face[f] == FACE_FIXED)
-            fixed = 1;
+          if (p->face[f] == FACE_FIXED) fixed = 1;
           else if (p->face[f] == FACE_WALL)
             for (int c = 0; c < 3; ++c) sign[c] = (int8_t)-sign[c];
-          else if (p->face[f] == FACE_SYMMETRY)
-            sign[a] = (int8_t)-sign[a];
-          else
-            skip = 1;
+          else if (p->face[f] == FACE_SYMMETRY) sign[a] = (int8_t)-sign[a];
+          else skip = 1;
         }
         if (skip) continue;
         size_t id;
@@ -339,9 +331,9 @@ static void build_particles(dm_problem *p, dm_state *s) {
             s->bc[id] = DM_FIXED;
           } else {
             s->bc[id] = DM_MIRROR;
-            s->partner[id] = (uint32_t)((size_t)mir[0] +
-                                        (size_t)p->ncell[0] * ((size_t)mir[1] +
-                                                               (size_t)p->ncell[1] * (size_t)mir[2]));
+            s->partner[id] = (uint32_t)((size_t)mir[0] + (size_t)p->ncell[0] *
+                                                             ((size_t)mir[1] + (size_t)p->ncell[1] *
+                                                                                   (size_t)mir[2]));
             for (int c = 0; c < 3; ++c) s->msign[3 * id + c] = c < p->dim ? sign[c] : 1;
           }
         }
@@ -378,7 +370,8 @@ static void set_initial(dm_problem *p, dm_state *s, size_t nreal) {
       s->w[3 * i] = x < L ? eps * sin(8.0 * M_PI * x / L) : 0.0;
       break;
     case PROF_RANDOM_VELOCITY: /* as bench/lammps/gen_inputs.py: u = A(2ξ − 1), ξ the (3i+c)-th */
-      for (int c = 0; c < 3; ++c) s->u[3 * i + c] = p->amplitude * (2.0 * splitmix_uniform(&rng) - 1.0);
+      for (int c = 0; c < 3; ++c)
+        s->u[3 * i + c] = p->amplitude * (2.0 * splitmix_uniform(&rng) - 1.0);
       break;
     default:
       break;
@@ -421,8 +414,7 @@ static double tridiag_max_eig(const double *al, const double *be, int k) {
     }
     if (above == k) /* every eigenvalue below x */
       hi = x;
-    else
-      lo = x;
+    else lo = x;
   }
   return hi;
 }
@@ -505,10 +497,10 @@ static void write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, s
   }
   double *S = malloc(9 * s->n * sizeof(double));
   dm_cauchy_stress(m, S);
-  const char *names[] = {"x", "y", "z", "w_x", "w_y", "w_z", "u_x", "u_y", "u_z", "sigma_xx",
-                         "cauchy_xx", "exact"};
-  const char *units[] = {"cm", "cm", "cm", "cm", "cm", "cm", "km/s", "km/s", "km/s", "GPa",
-                         "GPa", "GPa or cm"};
+  const char *names[] = {"x",   "y",   "z",   "w_x",      "w_y",       "w_z",
+                         "u_x", "u_y", "u_z", "sigma_xx", "cauchy_xx", "exact"};
+  const char *units[] = {"cm",   "cm",   "cm",   "cm",  "cm",  "cm",
+                         "km/s", "km/s", "km/s", "GPa", "GPa", "GPa or cm"};
   char title[160];
   snprintf(title, sizeof title,
            "discrete model profile at t = %.9g (10 us); exact = sigma_xx (contact) or w_x (rod) "
@@ -522,8 +514,8 @@ static void write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, s
     const dm_layer *l0 = &p->layers[0];
     if (p->profile == PROF_CONTACT && p->nlayers >= 2) {
       const dm_layer *l1 = &p->layers[1];
-      ex = dm_exact_contact_stress(X[0], t, p->length, p->amplitude, l0->rho,
-                                   l0->K + 4 * l0->G / 3, l1->rho, l1->K + 4 * l1->G / 3);
+      ex = dm_exact_contact_stress(X[0], t, p->length, p->amplitude, l0->rho, l0->K + 4 * l0->G / 3,
+                                   l1->rho, l1->K + 4 * l1->G / 3);
     } else if (p->profile == PROF_ROD_TRIANGLE) {
       ex = dm_exact_rod_triangle(X[0], t, p->length, p->amplitude, rod_wave_speed(p), 0);
     } else if (p->profile == PROF_ROD_SINE) {
@@ -531,9 +523,18 @@ static void write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, s
       ex = p->amplitude * L * sin(p->mode * M_PI * X[0] / (2 * L)) *
            cos(p->mode * M_PI * c * t / (2 * L));
     }
-    double row[12] = {X[0], X[1], X[2], s->w[3 * i], s->w[3 * i + 1], s->w[3 * i + 2],
-                      s->u[3 * i], s->u[3 * i + 1], s->u[3 * i + 2], m->sigma[9 * i],
-                      S[9 * i], ex};
+    double row[12] = {X[0],
+                      X[1],
+                      X[2],
+                      s->w[3 * i],
+                      s->w[3 * i + 1],
+                      s->w[3 * i + 2],
+                      s->u[3 * i],
+                      s->u[3 * i + 1],
+                      s->u[3 * i + 2],
+                      m->sigma[9 * i],
+                      S[9 * i],
+                      ex};
     ms_csv_row(af.f, 12, row);
   }
   free(S);
@@ -577,10 +578,8 @@ static void write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double 
     if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_xx", nreal, 1, sxx, "GPa");
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", t);
     if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)step);
-    if (st == MS_OK)
-      st = ms_h5_close(h);
-    else
-      ms_h5_abort(h);
+    if (st == MS_OK) st = ms_h5_close(h);
+    else ms_h5_abort(h);
   }
   if (st == MS_OK) {
     ms_xdmf_attr attr[] = {{"displacement", "particles/w", 3, false},
@@ -658,8 +657,8 @@ static double rod_exact(const dm_problem *p, double x, double t) {
 
 /* Residual of the fit w(t) ≈ A·w_exact(t − s) over the window for a given lag s (A optimal);
  * returns the residual and A. */
-static double lag_fit(const dm_problem *p, const double *hist, size_t first, size_t nrec,
-                      double x, double sh, double *A) {
+static double lag_fit(const dm_problem *p, const double *hist, size_t first, size_t nrec, double x,
+                      double sh, double *A) {
   double ww = 0, we = 0, ee = 0;
   for (size_t r = first; r < nrec; ++r) {
     double w = hist[2 * r + 1], ex = rod_exact(p, x, hist[2 * r] - sh);
@@ -704,10 +703,10 @@ static void rod_analysis(dm_problem *p, const double *hist, size_t nrec, double 
   double a = best - smax / ncoarse, b = best + smax / ncoarse;
   for (int it = 0; it < 50; ++it) {
     double m1 = a + 0.381966 * (b - a), m2 = a + 0.618034 * (b - a);
-    if (lag_fit(p, hist, first, nrec, xprobe, m1, &A) < lag_fit(p, hist, first, nrec, xprobe, m2, &A))
+    if (lag_fit(p, hist, first, nrec, xprobe, m1, &A) <
+        lag_fit(p, hist, first, nrec, xprobe, m2, &A))
       b = m2;
-    else
-      a = m1;
+    else a = m1;
   }
   double sh = 0.5 * (a + b);
   lag_fit(p, hist, first, nrec, xprobe, sh, &A);
@@ -740,8 +739,9 @@ static void report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, 
   free(acc);
   if (what[0] || ctx->rank == 0)
     ms_log(ctx, MS_LOG_ERROR, "discrete model: unstable at step %ld, t = %.9g: %s", step + 1, t,
-           what[0] ? what : "non-finite acceleration in a stage of the step (the state at its "
-                            "start is finite)");
+           what[0] ? what
+                   : "non-finite acceleration in a stage of the step (the state at its "
+                     "start is finite)");
   if (ctx->rank == 0) {
     write_snapshot(octx, m, nreal, t, step, "dm_snapshot_unstable.h5");
     ms_log(ctx, MS_LOG_ERROR, "discrete model: final state written to dm_snapshot_unstable.h5");
@@ -822,21 +822,18 @@ static ms_status write_checkpoint(const ms_ctx *ctx, const dm_state *s, double d
   if (st == MS_OK && ck->nerec > 0)
     st = ms_h5_write_doubles(h, "/history/energy", ck->nerec, 5, ck->ehist, "10 us, kJ");
   const char *names[] = {"step", "dt", "particles", "E0", "dw_scale", "energy_err_max", "ranks"};
-  double vals[] = {(double)ck->step, dt, (double)s->n, ck->E0, ck->dw_scale, ck->energy_err_max,
-                   (double)ranks};
+  double vals[] = {(double)ck->step,   dt,           (double)s->n, ck->E0, ck->dw_scale,
+                   ck->energy_err_max, (double)ranks};
   for (int k = 0; k < 7 && st == MS_OK; ++k) st = ms_h5_attr_double(h, "/", names[k], vals[k]);
   if (st == MS_OK) st = ms_h5_attr_string(h, "/", "format", "mscale discrete_model checkpoint 1");
   if (h) {
-    if (st == MS_OK)
-      st = ms_h5_close(h);
-    else
-      ms_h5_abort(h);
+    if (st == MS_OK) st = ms_h5_close(h);
+    else ms_h5_abort(h);
   }
   if (st == MS_OK)
     ms_log(ctx, MS_LOG_INFO, "discrete model: checkpoint at step %ld written to %s", ck->step,
            path);
-  else
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: cannot write the checkpoint %s", path);
+  else ms_log(ctx, MS_LOG_ERROR, "discrete model: cannot write the checkpoint %s", path);
   free(path);
   return st;
 }
@@ -933,8 +930,8 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     if (s.bc[i] == DM_MIRROR && s.bc[s.partner[i]] == DM_PRESCRIBED) s.bc[i] = DM_PRESCRIBED;
   set_initial(p, &s, nreal);
 
-  dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max,
-                    .hourglass = p->hourglass};
+  dm_options opt = {
+      .horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = p->hourglass};
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
   ms_status st;
@@ -1163,21 +1160,22 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   sum->cpu_s = cpu;
   long nrun = nsteps - step0;
   sum->particle_steps_per_s = wall > 0 ? (double)nreal * nrun / wall : 0;
-  if (st == MS_ERR_UNSTABLE) report_unstable(ctx, &octx, m, d, ls, nreal, last_step, last_step * dt);
+  if (st == MS_ERR_UNSTABLE)
+    report_unstable(ctx, &octx, m, d, ls, nreal, last_step, last_step * dt);
 
   /* analyses against the exact solutions */
   dm_dist_global_stress(d);
   if (st == MS_OK) {
     if ((p->profile == PROF_ROD_TRIANGLE || p->profile == PROF_ROD_SINE) && p->nprobes) {
       double *h1 = ms_calloc(2 * nrec, sizeof(double));
-      for (size_t r = 0; r < nrec; ++r) h1[2 * r] = hist[r * pcols], h1[2 * r + 1] = hist[r * pcols + 1];
+      for (size_t r = 0; r < nrec; ++r)
+        h1[2 * r] = hist[r * pcols], h1[2 * r + 1] = hist[r * pcols + 1];
       rod_analysis(p, h1, nrec, pr[0].x);
       free(h1);
       ms_log(ctx, MS_LOG_INFO,
              "rod: probe x = %.6g, last 10 L/c: amplitude error %+.3f %% (least-squares fit), "
              "lag %+.5f L/c, peak error %+.3f %%, rms error %.3f %% of the amplitude",
-             pr[0].x, 100 * sum->amp_err, sum->phase_err, 100 * sum->peak_err,
-             100 * sum->rms_err);
+             pr[0].x, 100 * sum->amp_err, sum->phase_err, 100 * sum->peak_err, 100 * sum->rms_err);
     }
     if (p->profile == PROF_CONTACT) {
       contact_analysis(p, m, nreal, sum->t_end);
@@ -1203,7 +1201,7 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
 
   if (hist) {
     const char **nm = ms_calloc(pcols, sizeof(char *)), **un = ms_calloc(pcols, sizeof(char *));
-    char (*lab)[32] = ms_calloc(pcols, sizeof *lab);
+    char(*lab)[32] = ms_calloc(pcols, sizeof *lab);
     nm[0] = "t", un[0] = "10 us";
     for (size_t q = 0; q < p->nprobes; ++q) {
       snprintf(lab[q + 1], 32, "w_x(%.6g)", pr[q].x);
@@ -1220,22 +1218,68 @@ ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
     const char *un[] = {"10 us", "kJ", "kJ", "kJ", "1"};
     write_series(&octx, "dm_energy.csv", "energy (real particles) and zero-energy-mode indicator",
                  5, nm, un, ehist, nerec);
-    const char *snm[] = {"particles", "real_particles", "bonds", "steps", "dt", "t_end", "omega_dt", "wall_s", "cpu_s",
-                         "particle_steps_per_s", "energy_err_max", "hourglass_first",
-                         "hourglass_max", "hourglass_last", "amp_err", "phase_err_L_over_c",
-                         "peak_err", "rms_err", "err_l1", "err_l2", "err_max", "err_u_l2",
-                         "kinetic_end", "potential_end", "ranks", "edge_cut", "edge_cut_slab",
-                         "imbalance", "imbalance_slab", "restart_step"};
-    const char *sun[] = {"1", "1", "1", "1", "10 us", "10 us", "1", "s", "s", "1/s", "1", "1", "1", "1",
-                         "1", "L/c", "1", "1", "1", "1", "1", "1", "kJ", "kJ", "1", "1", "1", "1",
-                         "1", "1"};
-    double row[30] = {(double)sum->particles, (double)sum->real_particles, (double)sum->bonds, (double)sum->steps, sum->dt,
-                      sum->t_end, sum->omega_dt, sum->wall_s, sum->cpu_s, sum->particle_steps_per_s,
-                      sum->energy_err_max, sum->hourglass_first, sum->hourglass_max,
-                      sum->hourglass_last, sum->amp_err, sum->phase_err, sum->peak_err, sum->rms_err,
-                      sum->err_l1, sum->err_l2, sum->err_max, sum->err_u_l2, sum->kinetic_end,
-                      sum->potential_end, (double)sum->ranks, (double)sum->edge_cut,
-                      (double)sum->edge_cut_slab, sum->imbalance, sum->imbalance_slab,
+    const char *snm[] = {"particles",
+                         "real_particles",
+                         "bonds",
+                         "steps",
+                         "dt",
+                         "t_end",
+                         "omega_dt",
+                         "wall_s",
+                         "cpu_s",
+                         "particle_steps_per_s",
+                         "energy_err_max",
+                         "hourglass_first",
+                         "hourglass_max",
+                         "hourglass_last",
+                         "amp_err",
+                         "phase_err_L_over_c",
+                         "peak_err",
+                         "rms_err",
+                         "err_l1",
+                         "err_l2",
+                         "err_max",
+                         "err_u_l2",
+                         "kinetic_end",
+                         "potential_end",
+                         "ranks",
+                         "edge_cut",
+                         "edge_cut_slab",
+                         "imbalance",
+                         "imbalance_slab",
+                         "restart_step"};
+    const char *sun[] = {"1", "1", "1",  "1",  "10 us", "10 us", "1", "s", "s", "1/s",
+                         "1", "1", "1",  "1",  "1",     "L/c",   "1", "1", "1", "1",
+                         "1", "1", "kJ", "kJ", "1",     "1",     "1", "1", "1", "1"};
+    double row[30] = {(double)sum->particles,
+                      (double)sum->real_particles,
+                      (double)sum->bonds,
+                      (double)sum->steps,
+                      sum->dt,
+                      sum->t_end,
+                      sum->omega_dt,
+                      sum->wall_s,
+                      sum->cpu_s,
+                      sum->particle_steps_per_s,
+                      sum->energy_err_max,
+                      sum->hourglass_first,
+                      sum->hourglass_max,
+                      sum->hourglass_last,
+                      sum->amp_err,
+                      sum->phase_err,
+                      sum->peak_err,
+                      sum->rms_err,
+                      sum->err_l1,
+                      sum->err_l2,
+                      sum->err_max,
+                      sum->err_u_l2,
+                      sum->kinetic_end,
+                      sum->potential_end,
+                      (double)sum->ranks,
+                      (double)sum->edge_cut,
+                      (double)sum->edge_cut_slab,
+                      sum->imbalance,
+                      sum->imbalance_slab,
                       (double)sum->restart_step};
     write_series(&octx, "dm_summary.csv", "discrete model run summary", 30, snm, sun, row, 1);
   }

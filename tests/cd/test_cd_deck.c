@@ -17,25 +17,24 @@
 
 #include "cd.h"
 
-static const char *mats =
-    "materials:\n"
-    "  - name: al\n"
-    "    eos: {type: mg_cold, rho0: 2.71, c0: 5.35, n: 4.0, gamma0: 2.0}\n"
-    "  - name: pb\n"
-    "    eos: {type: mg_cold, rho0: 11.34, c0: 1.972, n: 3.0, gamma0: 2.0}\n";
+static const char *mats = "materials:\n"
+                          "  - name: al\n"
+                          "    eos: {type: mg_cold, rho0: 2.71, c0: 5.35, n: 4.0, gamma0: 2.0}\n"
+                          "  - name: pb\n"
+                          "    eos: {type: mg_cold, rho0: 11.34, c0: 1.972, n: 3.0, gamma0: 2.0}\n";
 
 /* a small piston problem; a = sqrt(2)*5e-4 = 7.0710678118654752e-4, 4 periods across x and y */
-#define GOOD_SECTION                                                                             \
-  "cluster_dynamics:\n"                                                                          \
-  "  r0: 5.0e-4\n"                                                                               \
-  "  cutoff: %s\n"                                                                               \
-  "  t_end: 2.0e-5\n"                                                                            \
-  "  box: {lo: [0, 0, 0], hi: [%s, 2.8284271247461901e-3, 1.0e-2], boundary: [periodic, "       \
-  "periodic, free]}\n"                                                                           \
-  "  regions:\n"                                                                                 \
-  "    - {material: al, lo: [0, 0, 0], hi: [1, 1, 1.4e-3], piston: true}\n"                       \
-  "    - {material: %s, lo: [0, 0, %s], hi: [1, 1, 1.0e-2]}\n"                                    \
-  "  piston: {direction: [0, 0, 1], %s}\n"                                                       \
+#define GOOD_SECTION                                                                               \
+  "cluster_dynamics:\n"                                                                            \
+  "  r0: 5.0e-4\n"                                                                                 \
+  "  cutoff: %s\n"                                                                                 \
+  "  t_end: 2.0e-5\n"                                                                              \
+  "  box: {lo: [0, 0, 0], hi: [%s, 2.8284271247461901e-3, 1.0e-2], boundary: [periodic, "          \
+  "periodic, free]}\n"                                                                             \
+  "  regions:\n"                                                                                   \
+  "    - {material: al, lo: [0, 0, 0], hi: [1, 1, 1.4e-3], piston: true}\n"                        \
+  "    - {material: %s, lo: [0, 0, %s], hi: [1, 1, 1.0e-2]}\n"                                     \
+  "  piston: {direction: [0, 0, 1], %s}\n"                                                         \
   "  output: {every: 5, profile_bins: 20, snapshots: 1}\n"
 
 static cd_problem *read_deck(const char *text, dk_errors *e, dk_doc **docp, eos_materials **mp) {
@@ -57,7 +56,8 @@ static void free_deck(cd_problem *p, eos_materials *m, dk_doc *doc, dk_errors *e
   dk_errors_free(e);
 }
 
-static char *deck(const char *rc, const char *lx, const char *mat2, const char *z2, const char *piston) {
+static char *deck(const char *rc, const char *lx, const char *mat2, const char *z2,
+                  const char *piston) {
   char *buf = malloc(8192);
   int n = snprintf(buf, 8192, "%s", mats);
   snprintf(buf + n, 8192 - n, GOOD_SECTION, rc, lx, mat2, z2, piston);
@@ -72,7 +72,8 @@ static bool has_error(const dk_errors *e, const char *needle) {
 
 /* Reads a deck that must have no errors and runs it into a fresh temporary directory `dir`
  * (a mkdtemp template, filled in). */
-static cd_problem *run_deck(const char *text, char *dir, dk_errors *e, dk_doc **doc, eos_materials **m) {
+static cd_problem *run_deck(const char *text, char *dir, dk_errors *e, dk_doc **doc,
+                            eos_materials **m) {
   cd_problem *p = read_deck(text, e, doc, m);
   dk_errors_print(e, stderr);
   assert_int_equal(e->n, 0);
@@ -138,13 +139,16 @@ static void test_bad_input(void **state) {
   (void)state;
   char *t;
   /* R_c at or below the nearest-neighbour distance */
-  expect_error(t = deck("0.95", "2.8284271247461901e-3", "al", "1.4e-3", "velocity: 1.0"), "must exceed 1");
+  expect_error(t = deck("0.95", "2.8284271247461901e-3", "al", "1.4e-3", "velocity: 1.0"),
+               "must exceed 1");
   free(t);
   /* one lattice period across periodic x */
-  expect_error(t = deck("1.2", "7.0710678118654752e-4", "al", "1.4e-3", "velocity: 1.0"), "fewer than 2 lattice periods");
+  expect_error(t = deck("1.2", "7.0710678118654752e-4", "al", "1.4e-3", "velocity: 1.0"),
+               "fewer than 2 lattice periods");
   free(t);
   /* overlapping regions of different materials (second region starts inside the first) */
-  expect_error(t = deck("1.2", "2.8284271247461901e-3", "pb", "1.0e-3", "velocity: 1.0"), "must not overlap");
+  expect_error(t = deck("1.2", "2.8284271247461901e-3", "pb", "1.0e-3", "velocity: 1.0"),
+               "must not overlap");
   free(t);
   /* piston history with a jump in time (t repeats) */
   char hist[] = "/tmp/cd_hist_XXXXXX";
@@ -155,16 +159,19 @@ static void test_bad_input(void **state) {
   fclose(f);
   char pist[256];
   snprintf(pist, sizeof pist, "history: %s", hist);
-  expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3", pist), "rejected"); /* and the file:row "jump in time" message */
+  expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3", pist),
+               "rejected"); /* and the file:row "jump in time" message */
   free(t);
   unlink(hist);
   /* a relaxation stage without its time, and with a negative damping (the piston's flow map
    * closes and a `relax:` map follows) */
   expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3",
-                        "velocity: 1.0}\n  relax: {damping: 5"), "time");
+                        "velocity: 1.0}\n  relax: {damping: 5"),
+               "time");
   free(t);
   expect_error(t = deck("1.2", "2.8284271247461901e-3", "al", "1.4e-3",
-                        "velocity: 1.0}\n  relax: {time: 1e-4, damping: -1"), "damping");
+                        "velocity: 1.0}\n  relax: {time: 1e-4, damping: -1"),
+               "damping");
   free(t);
 }
 
@@ -220,8 +227,10 @@ static void test_polycrystal_profiled(void **state) {
     if (yi >= y0) nsample++;
     if (fabs(xi - 0.25 * lx) < 2 * r0 && yi > crest_top) crest_top = yi;
   }
-  const double dense = lx * (y1 - y0) / (0.5 * sqrt(3.0) * r0 * r0); /* sites of the dense lattice */
-  printf("polycrystal with a sine face: %zu sample sites, %.3f of dense; crest site %.3f r0 below the crest\n",
+  const double dense =
+      lx * (y1 - y0) / (0.5 * sqrt(3.0) * r0 * r0); /* sites of the dense lattice */
+  printf("polycrystal with a sine face: %zu sample sites, %.3f of dense; crest site %.3f r0 below "
+         "the crest\n",
          nsample, nsample / dense, (y1 + amp - crest_top) / r0);
   assert_true(crest_top > y1 + amp - r0);
   assert_true(nsample > 0.8 * dense && nsample < dense);
@@ -235,8 +244,9 @@ static void test_polycrystal_profiled(void **state) {
 static void test_example_decks(void **state) {
   (void)state;
   const char *src = getenv("MSCALE_SOURCE_DIR");
-  static const char *const names[] = {"cd-piston-al.yaml", "cd-piston-history.yaml", "cd-dusting.yaml",
-                                      "cd-grooves-2d.yaml", "cd-heterogeneous.yaml", "cd-poly-al.yaml",
+  static const char *const names[] = {"cd-piston-al.yaml",       "cd-piston-history.yaml",
+                                      "cd-dusting.yaml",         "cd-grooves-2d.yaml",
+                                      "cd-heterogeneous.yaml",   "cd-poly-al.yaml",
                                       "cd-rz80-polycrystal.yaml"};
   for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
     char path[4096];
@@ -260,8 +270,8 @@ static void test_example_decks(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_good_deck_runs), cmocka_unit_test(test_bad_input),
-                                     cmocka_unit_test(test_polycrystal_profiled),
-                                     cmocka_unit_test(test_example_decks)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_good_deck_runs), cmocka_unit_test(test_bad_input),
+      cmocka_unit_test(test_polycrystal_profiled), cmocka_unit_test(test_example_decks)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

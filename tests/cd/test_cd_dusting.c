@@ -1,4 +1,4 @@
-/* Dusting check (paper 002 §3, Figs. 18–20): a plane shock (piston u = 2 km/s, R_c = 1.1 r0)
+/* Dusting check ([Davydov] §3, Figs. 18–20): a plane shock (piston u = 2 km/s, R_c = 1.1 r0)
  * reaches the smooth free surface of an aluminium slab with a periodic cross-section of two
  * lattice periods. Without damping, the anharmonic lattice throws single clusters off the
  * surface; with the relative-velocity damping Γ = c0/(50 a) (eq. 6) the spurious detached mass
@@ -46,7 +46,8 @@ static size_t detached(const cd_sim *s, double *v_surface) {
       for (int k = 0; k < np + ni; k++) {
         const double *sh;
         int32_t j = *cd_nb_entry(nl, lst, np, k, &sh) & CD_NB_INDEX;
-        double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1], dz = p->z[i] - p->z[j] - sh[2];
+        double dx = p->x[i] - p->x[j] - sh[0], dy = p->y[i] - p->y[j] - sh[1],
+               dz = p->z[i] - p->z[j] - sh[2];
         if (dx * dx + dy * dy + dz * dz < b2) {
           int32_t a = find(par, i), c = find(par, j);
           if (a != c) par[a < c ? c : a] = a < c ? a : c;
@@ -92,11 +93,17 @@ static size_t run(double J, cd_cutoff_mode mode, int nz, double *vfs) {
     p->vy[i] = 0.01 * (2 * ptl_splitmix64_uniform(3, 3 * i + 1) - 1);
   }
   cd_box box = {.hi = {nx * a, nx * a, nz * a}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = mode,
-                   .damping_gamma = J > 0 ? C0 / (J * R0) : 0.0, .sort_every = 8, .lattice = CD_LATTICE_FCC};
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = 0.02 * R0 / C0,
+                   .cutoff = mode,
+                   .damping_gamma = J > 0 ? C0 / (J * R0) : 0.0,
+                   .sort_every = 8,
+                   .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.1 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.1 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   double th[1] = {0}, uh[1] = {2.0}, dir[3] = {0, 0, 1};
   cd_history h = {1, th, uh};
@@ -108,8 +115,10 @@ static size_t run(double J, cd_cutoff_mode mode, int nz, double *vfs) {
   size_t nd = detached(s, vfs);
   cd_energy e;
   cd_sim_energy(s, &e);
-  printf("J = %g (%s): %zu of %zu clusters detached, free-surface velocity %.4f km/s, dissipated %.3g of piston work %.3g\n",
-         J, mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", nd, p->n, *vfs, e.dissipated, e.piston_work);
+  printf("J = %g (%s): %zu of %zu clusters detached, free-surface velocity %.4f km/s, dissipated "
+         "%.3g of piston work %.3g\n",
+         J, mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", nd, p->n, *vfs, e.dissipated,
+         e.piston_work);
   cd_sim_free(s);
   eos_destroy(eos);
   return nd;
@@ -120,7 +129,8 @@ static void test_dusting(void **state) {
   const int nz = 150;
   for (int mode = CD_CUTOFF_PLAIN; mode <= CD_CUTOFF_BONDED; mode++) {
     double v0, v1;
-    size_t d0 = run(0.0, (cd_cutoff_mode)mode, nz, &v0), d1 = run(50.0, (cd_cutoff_mode)mode, nz, &v1);
+    size_t d0 = run(0.0, (cd_cutoff_mode)mode, nz, &v0),
+           d1 = run(50.0, (cd_cutoff_mode)mode, nz, &v1);
     /* without damping some clusters fly off (4 of 2400 in both modes at this size); damping
      * must cut the detached mass at least tenfold (here: to none) */
     assert_true(d0 > 0);

@@ -1,5 +1,5 @@
 /* Cluster-dynamics time stepping (docs/particles-cd.md): NVE energy conservation, the energy
- * balance with relative-velocity damping (eq. 6 of paper 002), momentum conservation, forces
+ * balance with relative-velocity damping (eq. 6 of [Davydov]), momentum conservation, forces
  * from the Verlet lists vs brute force after many rebuilds, results independent of the number
  * of OpenMP threads, and the piston's work balance; then every integrator (cfg.integrator):
  * measured convergence order, NVE drift, and the same piston shock speed. */
@@ -36,13 +36,20 @@ static cd_sim *hot_block_with(const eos_t *eos, int n, double vamp, double gamma
     }
   for (size_t i = 0; i < p->n; i++)
     for (int c = 0; c < 3; c++) v[c][i] -= mean[c];
-  cd_box box = {.lo = {0, 0, 0}, .hi = {n * a, n * a, n * a},
+  cd_box box = {.lo = {0, 0, 0},
+                .hi = {n * a, n * a, n * a},
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = dt_frac * R0 / C0, .cutoff = mode,
-                   .damping_gamma = gamma, .lattice = CD_LATTICE_FCC, .integrator = integ};
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = dt_frac * R0 / C0,
+                   .cutoff = mode,
+                   .damping_gamma = gamma,
+                   .lattice = CD_LATTICE_FCC,
+                   .integrator = integ};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   assert_int_equal(cd_sim_init(s), MS_OK);
   return s;
@@ -67,7 +74,11 @@ static void balance(cd_sim *s, long nsteps, int every, double *drift, double *de
     cd_sim_energy(s, &e);
     double d = (e.total - e0) / scale;
     worst = fmax(worst, fabs(d));
-    st += k; se += d; stt += (double)k * k; ste += k * d; m++;
+    st += k;
+    se += d;
+    stt += (double)k * k;
+    ste += k * d;
+    m++;
   }
   double slope = (m * ste - st * se) / (m * stt - st * st);
   *drift = fabs(slope * nsteps);
@@ -85,7 +96,8 @@ static void test_nve(void **state) {
   double drift, dev;
   cd_sim *s = hot_block(eos, 3, 0.2, 0.0, 0.02, CD_CUTOFF_PLAIN);
   balance(s, 10000, 10, &drift, &dev, NULL);
-  printf("NVE dt = 0.02 r0/c0: drift %.3g, max deviation %.3g (relative), rebuilds %ld\n", drift, dev, cd_sim_rebuilds(s));
+  printf("NVE dt = 0.02 r0/c0: drift %.3g, max deviation %.3g (relative), rebuilds %ld\n", drift,
+         dev, cd_sim_rebuilds(s));
   assert_true(drift < 1e-6);
   cd_energy e;
   cd_sim_energy(s, &e);
@@ -114,12 +126,14 @@ static void test_damping_balance(void **state) {
   cd_sim_energy(s, &e0);
   balance(s, 10000, 10, &drift, &dev, NULL);
   cd_sim_energy(s, &e1);
-  printf("damped: drift %.3g, max deviation %.3g, dissipated %.4g of KE0 %.4g\n", drift, dev, e1.dissipated, e0.kinetic);
+  printf("damped: drift %.3g, max deviation %.3g, dissipated %.4g of KE0 %.4g\n", drift, dev,
+         e1.dissipated, e0.kinetic);
   assert_true(drift < 1e-6 && dev < 1e-6);
   assert_true(e1.dissipated > 0.1 * e0.kinetic);
   double pscale = 0;
   for (size_t i = 0; i < s->p->n; i++) pscale += s->p->mass[i] * fabs(s->p->vx[i]);
-  for (int c = 0; c < 3; c++) assert_true(fabs(e1.momentum[c] - e0.momentum[c]) < 1e-12 * fmax(pscale, 1e-30) + 1e-25);
+  for (int c = 0; c < 3; c++)
+    assert_true(fabs(e1.momentum[c] - e0.momentum[c]) < 1e-12 * fmax(pscale, 1e-30) + 1e-25);
   cd_sim_free(s);
   eos_destroy(eos);
 }
@@ -157,7 +171,8 @@ static void test_lists_vs_brute_force(void **state) {
   for (int k = 0; k < 1500; k++) assert_int_equal(cd_sim_step(s), MS_OK);
   assert_true(cd_sim_rebuilds(s) > 3);
   const double worst = forces_vs_brute_force(s);
-  printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n", cd_sim_rebuilds(s), worst);
+  printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n",
+         cd_sim_rebuilds(s), worst);
   assert_true(worst < 1e-9); /* only summation order differs */
   cd_sim_free(s);
   eos_destroy(eos);
@@ -185,8 +200,8 @@ static void test_lists_moving_block(void **state) {
     rebuilds[drift] = cd_sim_rebuilds(s);
     if (drift) {
       const double worst = forces_vs_brute_force(s);
-      printf("drifting block: %ld rebuilds (at rest %ld), lists vs brute force %.3g\n",
-             rebuilds[1], rebuilds[0], worst);
+      printf("drifting block: %ld rebuilds (at rest %ld), lists vs brute force %.3g\n", rebuilds[1],
+             rebuilds[0], worst);
       assert_true(worst < 1e-9);
     }
     cd_sim_free(s);
@@ -330,11 +345,16 @@ static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_integrator in
   cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
   for (size_t i = 0; i < (size_t)4 * nx * nx * 2; i++) p->flags[i] = PTL_DRIVEN;
   cd_box box = {.hi = {nx * a, nx * a, nz * a}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = mode,
-                   .lattice = CD_LATTICE_FCC, .integrator = integ};
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = 0.02 * R0 / C0,
+                   .cutoff = mode,
+                   .lattice = CD_LATTICE_FCC,
+                   .integrator = integ};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   double th[2] = {0, 1}, uh[2] = {1.0, 1.0}, dir[3] = {0, 0, 1};
   cd_history h = {2, th, uh};
@@ -352,14 +372,19 @@ static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_integrator in
     if (k % 100 || k < 400 || k > 1800) continue;
     cd_profile(s, 2, -0.25 * a, (nbin - 0.25) * a, nbin, nx * a * nx * a, prof);
     double zf = cd_front_position(prof, nbin, 2, 1.0, 0.5);
-    st += s->t; sz += zf; stt += s->t * s->t; stz += s->t * zf; nfit++;
+    st += s->t;
+    sz += zf;
+    stt += s->t * s->t;
+    stz += s->t * zf;
+    nfit++;
   }
   *D = (nfit * stz - st * sz) / (nfit * stt - st * st);
   cd_sim_energy(s, e1);
   double err = (e1->total - e0.total) / e1->piston_work;
   printf("piston (%s, %s): work %.6g, KE %.6g PE %.6g broken %.3g, balance error %.3g of the work, "
-         "D = %.5f km/s\n", mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", cd_integrator_names[integ],
-         e1->piston_work, e1->kinetic, e1->potential, e1->broken, err, *D);
+         "D = %.5f km/s\n",
+         mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", cd_integrator_names[integ], e1->piston_work,
+         e1->kinetic, e1->potential, e1->broken, err, *D);
   cd_sim_free(s);
   return err;
 }
@@ -428,8 +453,9 @@ static void test_integrator_order(void **state) {
     double *xr = positions_after(eos, (cd_integrator)k, dt0 / 16, 16 * n0, nb + 2);
     double e1 = max_distance(x1, xr, 108), e2 = max_distance(x2, xr, 108);
     double order = log2(e1 / e2);
-    printf("%-16s error %.3e (dt) %.3e (dt/2) of r0: order %.3f (expected %d), rebuilds %ld %ld %ld\n",
-           cd_integrator_names[k], e1 / R0, e2 / R0, order, expected[k], nb[0], nb[1], nb[2]);
+    printf(
+        "%-16s error %.3e (dt) %.3e (dt/2) of r0: order %.3f (expected %d), rebuilds %ld %ld %ld\n",
+        cd_integrator_names[k], e1 / R0, e2 / R0, order, expected[k], nb[0], nb[1], nb[2]);
     assert_true(fabs(order - expected[k]) < 0.15);
     free(x1);
     free(x2);
@@ -486,12 +512,13 @@ static void test_integrator_piston(void **state) {
  * `integrators` (the per-scheme order, drift and piston runs: ~1 min of CPU in Release, far more
  * under ASan) is registered as test_cd_integrators with the `validation` label. */
 int main(int argc, char **argv) {
-  const struct CMUnitTest core[] = {
-      cmocka_unit_test(test_nve), cmocka_unit_test(test_damping_balance),
-      cmocka_unit_test(test_lists_vs_brute_force), cmocka_unit_test(test_lists_moving_block),
-      cmocka_unit_test(test_fit_path_vs_table),
-      cmocka_unit_test(test_threads_bitwise),
-      cmocka_unit_test(test_piston_balance)};
+  const struct CMUnitTest core[] = {cmocka_unit_test(test_nve),
+                                    cmocka_unit_test(test_damping_balance),
+                                    cmocka_unit_test(test_lists_vs_brute_force),
+                                    cmocka_unit_test(test_lists_moving_block),
+                                    cmocka_unit_test(test_fit_path_vs_table),
+                                    cmocka_unit_test(test_threads_bitwise),
+                                    cmocka_unit_test(test_piston_balance)};
   const struct CMUnitTest integrators[] = {cmocka_unit_test(test_integrator_order),
                                            cmocka_unit_test(test_integrator_nve),
                                            cmocka_unit_test(test_integrator_piston)};

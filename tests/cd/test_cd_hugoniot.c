@@ -1,6 +1,6 @@
-/* Hugoniot validation of cluster dynamics (paper 002 §1.1, DESIGN.md §5.1): a piston driven at
+/* Hugoniot validation of cluster dynamics ([Davydov] §1.1, docs/design.md §5.1): a piston driven at
  * up into an fcc aluminium slab (shock along [001] unless --orient; periodic cross-section, free
- * far end). Cold curves: Table 1 of paper 002 (OSA, eos/data/al_osa_cold.txt) and the
+ * far end). Cold curves: Table 1 of [Davydov] (OSA, eos/data/al_osa_cold.txt) and the
  * cold-curve Mie–Grüneisen form (rho0 2.71, c0 5.35, n 4). Reference: experimental Al Hugoniot
  * Us = 5.35 + 1.34 up, and the cold curve's own EOS Hugoniot (`mscale hugoniot`, Γ0 = 2).
  * Shock speed, four ways (they agree for a steady shock; their spread is the measurement's
@@ -14,7 +14,7 @@
  *
  * CI (default): bonded cutoff (the remedy of the known trap), 6x6x180 cells. Asserted: D within
  * 3 % of Us at up = 2, 3 km/s (Table-1 curve) and 2, 4 (MG curve); at up = 1.5 (Table 1) the
- * ordered lattice is too stiff (paper 002 §2; validation.md), asserted as over-stiff by less
+ * ordered lattice is too stiff ([Davydov] §2; validation.md), asserted as over-stiff by less
  * than 6 % (momentum and mass D). --poly-ci (ctest test_cd_hugoniot_poly): a relaxed Voronoi
  * polycrystal with the plain cutoff, momentum D against the porous Hugoniot at its measured
  * density (run_poly).
@@ -44,7 +44,7 @@
 
 static bool full_run = false;
 static double opt_vacancies = 0.0; /* --vacancies: fraction of sample sites left empty */
-static FILE *dump = NULL; /* --dump FILE: profiles along z at every sample (exploration) */
+static FILE *dump = NULL;          /* --dump FILE: profiles along z at every sample (exploration) */
 
 typedef struct shock_result {
   double D, D_ahead, D_mom, rho_ratio, pzz, pxx, sigma_u, up_behind;
@@ -55,8 +55,8 @@ typedef struct shock_result {
 typedef struct poly_sample {
   ptl_state *p;
   cd_box box;
-  double porosity;   /* of the generated packing, 1 − N V_site/V_box */
-  double rho00;      /* mean bin density of the relaxed sample's interior */
+  double porosity; /* of the generated packing, 1 − N V_site/V_box */
+  double rho00;    /* mean bin density of the relaxed sample's interior */
   cd_relax_result rr;
 } poly_sample;
 
@@ -81,7 +81,11 @@ static double fit_slope(const double *t, const double *z, int n, double tmin) {
   int m = 0;
   for (int k = 0; k < n; k++)
     if (t[k] >= tmin && isfinite(z[k])) {
-      sx += t[k]; sy += z[k]; sxx += t[k] * t[k]; sxy += t[k] * z[k]; m++;
+      sx += t[k];
+      sy += z[k];
+      sxx += t[k] * t[k];
+      sxy += t[k] * z[k];
+      m++;
     }
   return m > 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : NAN;
 }
@@ -101,11 +105,15 @@ static void orient_cell(orientation o, double cell[3], int *nb, double basis[6][
     memcpy(basis, b, sizeof b);
   } else if (o == ORIENT_110) {
     static const double b[2][3] = {{0, 0, 0}, {0.5, 0.5, 0.5}};
-    cell[0] = 1.0; cell[1] = s2; cell[2] = 1.0;
+    cell[0] = 1.0;
+    cell[1] = s2;
+    cell[2] = 1.0;
     *nb = 2;
     memcpy(basis, b, sizeof b);
   } else {
-    cell[0] = 1.0; cell[1] = s3; cell[2] = s6;
+    cell[0] = 1.0;
+    cell[1] = s3;
+    cell[2] = s6;
     *nb = 6;
     for (int k = 0; k < 3; k++) /* plane k shifted by k·(½, 1/6) of the in-plane cell */
       for (int q = 0; q < 2; q++) {
@@ -155,19 +163,26 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
 }
 
 static cd_config run_config(cd_cutoff_mode mode, cd_integrator integ) {
-  return (cd_config){.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / 5.35, .cutoff = mode,
-                     .sort_every = 8, .lattice = CD_LATTICE_FCC, .integrator = integ};
+  return (cd_config){.r0 = R0,
+                     .skin = 0.1 * R0,
+                     .dt = 0.02 * R0 / 5.35,
+                     .cutoff = mode,
+                     .sort_every = 8,
+                     .lattice = CD_LATTICE_FCC,
+                     .integrator = integ};
 }
 
-static double opt_rc = 1.2; /* --rc: R_c / r0 (exploration) */
-static double opt_thermal = 0.01; /* --thermal: initial velocity amplitude, km/s (exploration) */
+static double opt_rc = 1.2;        /* --rc: R_c / r0 (exploration) */
+static double opt_thermal = 0.01;  /* --thermal: initial velocity amplitude, km/s (exploration) */
 static double opt_damping_j = 0.0; /* --damping J: relative-velocity damping Γ = c0/(J r0) in the
-                                    * shock run (paper 002 eq. 6; exploration), 0: off */
+                                    * shock run ([Davydov] eq. 6; exploration), 0: off */
 
 static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
   cd_sim *s = cd_sim_create(p, box, cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, opt_rc * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, opt_rc * R0, 0.5 * R0, 1.0, 0),
+      MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   return s;
 }
@@ -228,7 +243,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   cd_sim_set_piston(s, &h, dir);
   assert_int_equal(cd_sim_init(s), MS_OK);
   /* run until the front has crossed ~70 % of the slab, at a guessed D = Us(exp) (+20 %) */
-  const double L = box.hi[2] - box.lo[2], Dg = 5.35 + 1.34 * up, area = (box.hi[0] - box.lo[0]) * (box.hi[1] - box.lo[1]);
+  const double L = box.hi[2] - box.lo[2], Dg = 5.35 + 1.34 * up,
+               area = (box.hi[0] - box.lo[0]) * (box.hi[1] - box.lo[1]);
   const long nsteps = (long)(0.7 * L / (1.2 * Dg) / cfg.dt), every = nsteps / 40 + 1;
   /* bins of whole lattice planes (2, 3, 2 planes of [001], [110], [111]: about a wide),
    * centred between planes (a polycrystal: a wide) */
@@ -258,7 +274,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
         for (int b = 0; b < nbin; b++) {
           const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
           if (row[1] > 0)
-            fprintf(dump, "%g,%g,%g,%g,%g,%g,%g,%g\n", up, s->t, row[0], row[2], row[5], row[6], row[8], row[12]);
+            fprintf(dump, "%g,%g,%g,%g,%g,%g,%g,%g\n", up, s->t, row[0], row[2], row[5], row[6],
+                    row[8], row[12]);
         }
     }
   }
@@ -274,7 +291,11 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   for (int b = 0; b < nbin; b++) {
     const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
     if (row[0] > zp + 5 * a && row[0] < zfront - 5 * a && row[1] > 0) {
-      rho += row[2]; pzz += row[8]; vz += row[5]; pxx += 0.5 * (row[6] + row[7]); su += row[12];
+      rho += row[2];
+      pzz += row[8];
+      vz += row[5];
+      pxx += 0.5 * (row[6] + row[7]);
+      su += row[12];
       cnt++;
     }
   }
@@ -302,7 +323,8 @@ static double p_eos_at(const eos_t *eos, double rho) {
   for (int it = 0; it < 50; it++) {
     double mid = 0.5 * (lo + hi), up[1] = {mid};
     if (eos_hugoniot(eos, eos_rho0(eos), 0.0, 1, up, &hp) != MS_OK) return NAN;
-    if (hp.rho < rho) lo = mid; else hi = mid;
+    if (hp.rho < rho) lo = mid;
+    else hi = mid;
   }
   return hp.p;
 }
@@ -332,7 +354,7 @@ static double opt_dmin = 0.8, opt_relax_time = 60.0, opt_relax_j = 5.0;
 static int opt_seed = 7, opt_quench = 1, opt_plain = 1;
 static bool poly_ci = false; /* --poly-ci: the CI polycrystal case (test_cd_hugoniot_poly) */
 
-/* Hugoniot of a porous sample (paper 002's porous targets; docs/eos.md): initial density
+/* Hugoniot of a porous sample ([Davydov]'s porous targets; docs/eos.md): initial density
  * rho00 < ρ0 at P = 0, e = 0 (the pores close without resistance), final state on the
  * full-density EOS. With t = 1 − rho00/ρ: P = rho00 up²/t (Rayleigh line), e = up²/2 (energy
  * jump with P0 = 0); solve P_eos(rho00/(1 − t), up²/2) = rho00 up²/t by bisection on t up to
@@ -342,7 +364,8 @@ static double porous_us(const eos_t *eos, double rho00, double up) {
   for (int it = 0; it < 100; it++) {
     const double t = 0.5 * (lo + hi);
     const double g = eos_pressure(eos, rho00 / (1.0 - t), 0.5 * up * up) - rho00 * up * up / t;
-    if (g < 0) lo = t; else hi = t;
+    if (g < 0) lo = t;
+    else hi = t;
   }
   return up / (0.5 * (lo + hi));
 }
@@ -366,7 +389,8 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   }
   free(xyz);
   free(grain);
-  ps.box = (cd_box){.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  ps.box =
+      (cd_box){.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
   const cd_config cfg = run_config(opt_mode >= 0 ? (cd_cutoff_mode)opt_mode : CD_CUTOFF_BONDED,
                                    CD_INT_VELOCITY_VERLET);
   cd_sim *s = make_sim(eos, p, &ps.box, &cfg);
@@ -374,9 +398,13 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   const double c0 = eos_c0(eos);
   const cd_relax_config rc = {.time = opt_relax_time * R0 / c0,
                               .damping_gamma = opt_relax_j > 0 ? c0 / (opt_relax_j * R0) : 0.0,
-                              .quench = opt_quench != 0, .box = true, .box_every = 10,
-                              .tau = 10.0 * R0 / c0, .modulus = eos_rho0(eos) * c0 * c0,
-                              .rebond = true, .plain = opt_plain != 0};
+                              .quench = opt_quench != 0,
+                              .box = true,
+                              .box_every = 10,
+                              .tau = 10.0 * R0 / c0,
+                              .modulus = eos_rho0(eos) * c0 * c0,
+                              .rebond = true,
+                              .plain = opt_plain != 0};
   assert_int_equal(cd_sim_relax(s, &rc, &ps.rr), MS_OK);
   ps.box = s->box;
   /* interior density: bins 5a away from both ends */
@@ -395,15 +423,17 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   }
   const cd_relax_result *r = &ps.rr;
   printf("polycrystal: %d grains, min_distance %.2f r0, seed %d, %zu sites, generated porosity "
-         "%.2f %%\n", opt_ngrains, opt_dmin, opt_seed, n, 100 * ps.porosity);
-  printf("relaxation: %ld steps (%.0f r0/c0, J %.1f, quench %d, plain %d): mean stress xx yy zz %.3f %.3f "
+         "%.2f %%\n",
+         opt_ngrains, opt_dmin, opt_seed, n, 100 * ps.porosity);
+  printf("relaxation: %ld steps (%.0f r0/c0, J %.1f, quench %d, plain %d): mean stress xx yy zz "
+         "%.3f %.3f "
          "%.3f -> %.4f %.4f %.4f GPa; stretch %.5f %.5f %.5f; density (mass/volume) %.4f -> %.4f, "
          "interior bins %.4f g/cm3 (rho/rho0 %.4f); energy released %.4g kJ/g (dissipated "
-         "%.4g); %ld bonds broken\n", r->steps, opt_relax_time, opt_relax_j, opt_quench, opt_plain,
-         r->stress0[0], r->stress0[1], r->stress0[2], r->stress[0], r->stress[1], r->stress[2],
-         r->lambda[0], r->lambda[1], r->lambda[2], r->mass / r->volume0, r->mass / r->volume,
-         ps.rho00, ps.rho00 / eos_rho0(eos), r->energy / r->mass, r->dissipated / r->mass,
-         r->broken_bonds);
+         "%.4g); %ld bonds broken\n",
+         r->steps, opt_relax_time, opt_relax_j, opt_quench, opt_plain, r->stress0[0], r->stress0[1],
+         r->stress0[2], r->stress[0], r->stress[1], r->stress[2], r->lambda[0], r->lambda[1],
+         r->lambda[2], r->mass / r->volume0, r->mass / r->volume, ps.rho00,
+         ps.rho00 / eos_rho0(eos), r->energy / r->mass, r->dissipated / r->mass, r->broken_bonds);
   fflush(stdout);
   cd_sim_free(s);
   return ps;
@@ -422,15 +452,19 @@ static void run_poly(const eos_t *eos, const char *cname, const double *ups, int
     assert_true(ps.rho00 > 0.9 * eos_rho0(eos) && ps.rho00 < eos_rho0(eos));
   }
   eos_t *fit = eos_create_mg_linear(eos_rho0(eos), 5.35, 1.34, 2.0);
-  printf("| cold curve | up km/s | rho00/rho0 | D front | D ahead | D momentum | D mass | Us solid | Us porous (fit) | Us porous (cold-curve EOS) | (D-Us porous fit)/Us: front / ahead / momentum / mass | rho/rho0 | P_zz GPa | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("| cold curve | up km/s | rho00/rho0 | D front | D ahead | D momentum | D mass | Us solid "
+         "| Us porous (fit) | Us porous (cold-curve EOS) | (D-Us porous fit)/Us: front / ahead / "
+         "momentum / mass | rho/rho0 | P_zz GPa | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int k = 0; k < nup; k++) {
     const double up = ups[k];
-    shock_result r = piston_shock(eos, opt_mode >= 0 ? (cd_cutoff_mode)opt_mode : CD_CUTOFF_BONDED, up,
-                                  opt_nx, opt_nz, ORIENT_001, opt_integ, &ps);
+    shock_result r = piston_shock(eos, opt_mode >= 0 ? (cd_cutoff_mode)opt_mode : CD_CUTOFF_BONDED,
+                                  up, opt_nx, opt_nz, ORIENT_001, opt_integ, &ps);
     const double rho = r.rho_ratio * eos_rho0(eos), d_mass = up * rho / (rho - r.rho00);
-    const double us = 5.35 + 1.34 * up, usp = porous_us(fit, r.rho00, up), usc = porous_us(eos, r.rho00, up);
-    printf("| %s | %.1f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f / %+.1f / %+.1f / %+.1f %% | %.3f | %.1f | %.1f | %.2f |\n",
+    const double us = 5.35 + 1.34 * up, usp = porous_us(fit, r.rho00, up),
+                 usc = porous_us(eos, r.rho00, up);
+    printf("| %s | %.1f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f / %+.1f / "
+           "%+.1f / %+.1f %% | %.3f | %.1f | %.1f | %.2f |\n",
            cname, up, r.rho00 / eos_rho0(eos), r.D, r.D_ahead, r.D_mom, d_mass, us, usp, usc,
            100 * (r.D - usp) / usp, 100 * (r.D_ahead - usp) / usp, 100 * (r.D_mom - usp) / usp,
            100 * (d_mass - usp) / usp, r.rho_ratio, r.pzz, r.pxx, r.sigma_u);
@@ -464,7 +498,9 @@ static void test_hugoniot(void **state) {
     eos_destroy(curves[1]);
     return;
   }
-  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D (momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
+  printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D "
+         "(momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | "
+         "P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   eos_t *fit = eos_create_mg_linear(eos_rho0(curves[0]), 5.35, 1.34, 2.0);
   for (int c = 0; c < 2; c++) {
@@ -479,20 +515,22 @@ static void test_hugoniot(void **state) {
         double us = 5.35 + 1.34 * up;
         eos_hugoniot_point hp;
         double upl[1] = {up};
-        double eos_us = eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
+        double eos_us =
+            eos_hugoniot(curves[c], eos_rho0(curves[c]), 0.0, 1, upl, &hp) == MS_OK ? hp.us : NAN;
         const double compression = r.rho_ratio * eos_rho0(curves[c]) / r.rho00; /* ρ/ρ00 */
         const double d_mass = up * compression / (compression - 1.0);
         if (opt_vacancies > 0)
           printf("vacancies: rho00/rho0 %.5f, porous Us (fit) %.3f km/s\n",
                  r.rho00 / eos_rho0(curves[c]), porous_us(fit, r.rho00, up));
         const double rho = r.rho_ratio * eos_rho0(curves[c]);
-        printf("| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | "
-               "%.1f | %.1f | %.1f | %.1f | %.2f |\n",
-               cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
-               r.D, r.D_ahead, r.D_mom, d_mass, us, 100 * (r.D - us) / us, eos_us, r.rho_ratio,
-               r.pzz, p_exp_at(eos_rho0(curves[c]), rho), p_eos_at(curves[c], rho), r.pxx, r.sigma_u);
+        printf(
+            "| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | "
+            "%.1f | %.1f | %.1f | %.1f | %.2f |\n",
+            cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
+            r.D, r.D_ahead, r.D_mom, d_mass, us, 100 * (r.D - us) / us, eos_us, r.rho_ratio, r.pzz,
+            p_exp_at(eos_rho0(curves[c]), rho), p_eos_at(curves[c], rho), r.pxx, r.sigma_u);
         fflush(stdout);
-        /* Paper 002 §2: the close-packed cluster medium needs no plasticity model for
+        /* [Davydov] §2: the close-packed cluster medium needs no plasticity model for
          * up > 1.5–2 km/s and is too stiff below. Measured here (validation.md): at the CI
          * points (2–4 km/s) the four D estimates lie within −3.4 … +3.1 % of Us (their spread,
          * up to 2.5 %, is the CI size's measurement uncertainty), the front D within 2.6 %. At
@@ -533,7 +571,8 @@ int main(int argc, char **argv) {
       if (dump) fprintf(dump, "up,t,z,rho,vz,Pxx,Pzz,sigma_u\n");
     } else if (!strcmp(argv[k], "--orient") && k + 1 < argc) {
       k++;
-      opt_orient = !strcmp(argv[k], "110") ? ORIENT_110 : (!strcmp(argv[k], "111") ? ORIENT_111 : ORIENT_001);
+      opt_orient = !strcmp(argv[k], "110") ? ORIENT_110
+                                           : (!strcmp(argv[k], "111") ? ORIENT_111 : ORIENT_001);
     } else if (!strcmp(argv[k], "--integrator") && k + 1 < argc) {
       k++;
       for (int q = 0; cd_integrator_names[q]; q++)

@@ -1,4 +1,4 @@
-/* Homogeneous compression/tension of perfect lattices (DESIGN.md §5.1): the virial stress of a
+/* Homogeneous compression/tension of perfect lattices (docs/design.md §5.1): the virial stress of a
  * uniformly strained fcc (3D) or triangular (2D) lattice must equal the input cold curve
  * P_x(δ), for δ in [0.6, 2], with the analytic Mie–Grüneisen cold curve and with Table 1's
  * tabulated OSA cold curve. Also the von Mises intensity (zero for a hydrostatic state). */
@@ -16,7 +16,8 @@
 
 #define R0 5.0e-4
 
-static const double deltas[] = {0.6, 0.7, 0.8, 0.9, 0.95, 0.99, 1.01, 1.05, 1.1, 1.3, 1.5, 1.75, 2.0};
+static const double deltas[] = {0.6,  0.7, 0.8, 0.9, 0.95, 0.99, 1.01,
+                                1.05, 1.1, 1.3, 1.5, 1.75, 2.0};
 
 /* Virial pressure tensor of a uniformly strained periodic lattice with cutoff mode `mode`. */
 static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, double rc,
@@ -28,8 +29,10 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
   const double lam_final = lam;
   lam = 1.0;
   double m = eos_rho0(eos) * cd_cluster_volume(lat, R0, h);
-  ptl_state *p = ptl_state_create(lat == CD_LATTICE_FCC ? 4 * n * n * n : 2 * 2 * n * n * 2, lat == CD_LATTICE_FCC ? 3 : 2);
-  cd_box box = {.bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, lat == CD_LATTICE_FCC ? CD_BC_PERIODIC : CD_BC_FREE}};
+  ptl_state *p = ptl_state_create(lat == CD_LATTICE_FCC ? 4 * n * n * n : 2 * 2 * n * n * 2,
+                                  lat == CD_LATTICE_FCC ? 3 : 2);
+  cd_box box = {
+      .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, lat == CD_LATTICE_FCC ? CD_BC_PERIODIC : CD_BC_FREE}};
   double vol;
   if (lat == CD_LATTICE_FCC) {
     double zero[3] = {0, 0, 0}, sh[3] = {0.25, 0.25, 0.25};
@@ -44,7 +47,8 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
     box.hi[1] = 2 * n * sqrt(3.0) * R0 * lam;
     vol = box.hi[0] * box.hi[1] * h;
   }
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 1e-6, .cutoff = mode, .lattice = lat, .thickness = h};
+  cd_config cfg = {
+      .r0 = R0, .skin = 0.1 * R0, .dt = 1e-6, .cutoff = mode, .lattice = lat, .thickness = h};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(cd_pair_table_build(t, eos, eos, lat, R0, h, rc, 0.5 * R0, 1.0, 0), MS_OK);
@@ -57,12 +61,13 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
   cd_sim_free(s);
 }
 
-static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff_mode mode, const char *what) {
+static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff_mode mode,
+                          const char *what) {
   const double pscale = eos_rho0(eos) * pow(eos_c0(eos), 2);
   for (size_t k = 0; k < sizeof deltas / sizeof *deltas; k++) {
     double d = deltas[k], P[6];
     /* The plain cutoff lets the second shell (√2 r in fcc, √3 r in 2D) in once it is closer
-     * than R_c — the known trap of DESIGN.md §5.1 (fcc with R_c = 1.2 r0: δ > 1.64). There the
+     * than R_c — the known trap of docs/design.md §5.1 (fcc with R_c = 1.2 r0: δ > 1.64). There the
      * plain cutoff must NOT reproduce P_x (checked below); the bonded mode must, everywhere. */
     double r = R0 * (lat == CD_LATTICE_FCC ? cbrt(1.0 / d) : sqrt(1.0 / d));
     double second = r * (lat == CD_LATTICE_FCC ? sqrt(2.0) : sqrt(3.0));
@@ -70,7 +75,8 @@ static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff
     strained_stress(eos, lat, d, rc, mode, P);
     double px = eos_cold_pressure(eos, d);
     if (trapped) {
-      printf("%s delta %.2f: second shell inside R_c: P %.6g vs P_x %.6g (trap)\n", what, d, P[0], px);
+      printf("%s delta %.2f: second shell inside R_c: P %.6g vs P_x %.6g (trap)\n", what, d, P[0],
+             px);
       assert_true(fabs(P[0] - px) > 1e-3 * fabs(px));
       continue;
     }
@@ -78,7 +84,8 @@ static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff
      * error is ~1e-9 of the force scale, test_cd_potential) */
     double tol = 1e-6 * fmax(fabs(px), 1e-3 * pscale);
     int nd = lat == CD_LATTICE_FCC ? 3 : 2;
-    printf("%s delta %.2f: P_x %.12g  virial %.12g %.12g %.12g  rel.err %.2e sigma_u %.3g\n", what, d, px, P[0], P[1], P[2], (P[0] - px) / fmax(fabs(px), 1e-3 * pscale), cd_von_mises(P));
+    printf("%s delta %.2f: P_x %.12g  virial %.12g %.12g %.12g  rel.err %.2e sigma_u %.3g\n", what,
+           d, px, P[0], P[1], P[2], (P[0] - px) / fmax(fabs(px), 1e-3 * pscale), cd_von_mises(P));
     for (int a = 0; a < nd; a++) assert_true(fabs(P[a] - px) < tol);
     assert_true(fabs(P[3]) < tol); /* no shear in a uniformly strained lattice */
     if (nd == 3) {
@@ -133,7 +140,7 @@ static void test_tri2d_mg(void **state) {
 static void test_von_mises(void **state) {
   (void)state;
   double uni[6] = {3, 0, 0, 0, 0, 0}, shear[6] = {0, 0, 0, 2, 0, 0}, hyd[6] = {5, 5, 5, 0, 0, 0};
-  assert_true(fabs(cd_von_mises(uni) - 3.0) < 1e-15);        /* uniaxial: σ_u = |σ| */
+  assert_true(fabs(cd_von_mises(uni) - 3.0) < 1e-15);             /* uniaxial: σ_u = |σ| */
   assert_true(fabs(cd_von_mises(shear) - 2 * sqrt(3.0)) < 1e-14); /* pure shear: √3 τ */
   assert_true(cd_von_mises(hyd) == 0.0);
 }
@@ -173,7 +180,10 @@ static void check_poly(int dim, bool periodic) {
   }
   for (int k = 0; k < 6; k++) assert_true(seen[k]);
   assert_true(worst >= 0.8 * R0 * (1 - 1e-12));
-  free(x); free(x2); free(g); free(g2);
+  free(x);
+  free(x2);
+  free(g);
+  free(g2);
 }
 
 static void test_polycrystal(void **state) {
@@ -186,11 +196,15 @@ static void test_polycrystal(void **state) {
 
 /* A bonded fcc run of p in box (Δt = 0.02 r0/c0, R_c = 1.2 r0), initialised. */
 static cd_sim *bonded_sim(const eos_t *eos, ptl_state *p, const cd_box *box) {
-  const cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / eos_c0(eos),
-                         .cutoff = CD_CUTOFF_BONDED, .lattice = CD_LATTICE_FCC};
+  const cd_config cfg = {.r0 = R0,
+                         .skin = 0.1 * R0,
+                         .dt = 0.02 * R0 / eos_c0(eos),
+                         .cutoff = CD_CUTOFF_BONDED,
+                         .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_sim_create(p, box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   assert_int_equal(cd_sim_init(s), MS_OK);
   return s;
@@ -224,15 +238,21 @@ static void test_relax(void **state) {
     cd_sim *s = bonded_sim(eos, p, &box);
     const double strain[3] = {0.99, 1.005, 0.98};
     assert_int_equal(cd_sim_affine(s, strain), MS_OK);
-    cd_relax_config rc = {.time = 100 * R0 / c0, .damping_gamma = c0 / (5 * R0), .quench = true,
-                          .box = true, .tau = 5 * R0 / c0, .modulus = eos_rho0(eos) * c0 * c0,
-                          .rebond = true, .plain = plain};
+    cd_relax_config rc = {.time = 100 * R0 / c0,
+                          .damping_gamma = c0 / (5 * R0),
+                          .quench = true,
+                          .box = true,
+                          .tau = 5 * R0 / c0,
+                          .modulus = eos_rho0(eos) * c0 * c0,
+                          .rebond = true,
+                          .plain = plain};
     cd_relax_result r;
     assert_int_equal(cd_sim_relax(s, &rc, &r), MS_OK);
     printf("relax (plain %d): stress %.3g %.3g %.3g -> %.3g %.3g %.3g GPa, stretch x strain - 1: "
-           "%.2e %.2e %.2e, energy released %.4g kJ/g\n", plain, r.stress0[0], r.stress0[1],
-           r.stress0[2], r.stress[0], r.stress[1], r.stress[2], r.lambda[0] * strain[0] - 1,
-           r.lambda[1] * strain[1] - 1, r.lambda[2] * strain[2] - 1, r.energy / r.mass);
+           "%.2e %.2e %.2e, energy released %.4g kJ/g\n",
+           plain, r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0], r.stress[1], r.stress[2],
+           r.lambda[0] * strain[0] - 1, r.lambda[1] * strain[1] - 1, r.lambda[2] * strain[2] - 1,
+           r.energy / r.mass);
     assert_true(r.stress0[2] > 1.0); /* the strain did compress */
     for (int a = 0; a < 3; a++) {
       assert_true(fabs(r.stress[a]) < 1e-4);
@@ -241,7 +261,8 @@ static void test_relax(void **state) {
     }
     assert_true(r.energy > 0 && r.broken_bonds == 0 && s->n_broken_bonds == 0);
     assert_true(s->t == 0.0 && s->step == 0);
-    for (size_t i = 0; i < s->p->n; i++) assert_true(s->p->vx[i] == 0 && s->p->vy[i] == 0 && s->p->vz[i] == 0);
+    for (size_t i = 0; i < s->p->n; i++)
+      assert_true(s->p->vx[i] == 0 && s->p->vy[i] == 0 && s->p->vz[i] == 0);
     cd_energy en;
     cd_sim_energy(s, &en);
     assert_true(en.dissipated == 0 && en.piston_work == 0 && en.broken == 0);
@@ -260,8 +281,10 @@ static void test_relax(void **state) {
  * runs give the same positions bit for bit). Bound |P_aa| < 0.1 GPa after 30 r0/c0: measured
  * 0.06 GPa here (from 5–10 GPa), below 0.05 GPa in the Hugoniot samples (the quench leaves
  * grain-scale vibrations; a 0.1 GPa residual is 0.1 % of the pressures of the Hugoniot runs). */
-static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_out, double **x_out) {
-  const double a = sqrt(2.0) * R0, c0 = eos_c0(eos), lo[3] = {0, 0, 0}, hi[3] = {6 * a, 6 * a, 12 * a};
+static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_out,
+                              double **x_out) {
+  const double a = sqrt(2.0) * R0, c0 = eos_c0(eos), lo[3] = {0, 0, 0},
+               hi[3] = {6 * a, 6 * a, 12 * a};
   const bool per[3] = {true, true, false};
   double *xyz = NULL, por = 0;
   int32_t *grain = NULL;
@@ -271,17 +294,24 @@ static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_
   for (size_t i = 0; i < n; i++) ptl_state_add(p, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], m, 0);
   free(xyz);
   free(grain);
-  const cd_box box = {.hi = {hi[0], hi[1], hi[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
+  const cd_box box = {.hi = {hi[0], hi[1], hi[2]},
+                      .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
   cd_sim *s = bonded_sim(eos, p, &box);
-  cd_relax_config rc = {.time = 30 * R0 / c0, .damping_gamma = c0 / (5 * R0), .quench = true,
-                        .box = true, .box_every = 10, .tau = 10 * R0 / c0,
-                        .modulus = eos_rho0(eos) * c0 * c0, .rebond = true, .plain = true};
+  cd_relax_config rc = {.time = 30 * R0 / c0,
+                        .damping_gamma = c0 / (5 * R0),
+                        .quench = true,
+                        .box = true,
+                        .box_every = 10,
+                        .tau = 10 * R0 / c0,
+                        .modulus = eos_rho0(eos) * c0 * c0,
+                        .rebond = true,
+                        .plain = true};
   cd_relax_result r;
   assert_int_equal(cd_sim_relax(s, &rc, &r), MS_OK);
   printf("polycrystal relax: %zu sites, generated porosity %.2f %%, stress %.3f %.3f %.3f -> %.4f "
-         "%.4f %.4f GPa, density %.4f -> %.4f g/cm3, energy released %.4g kJ/g\n", n, 100 * por,
-         r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0], r.stress[1], r.stress[2],
-         r.mass / r.volume0, r.mass / r.volume, r.energy / r.mass);
+         "%.4f %.4f GPa, density %.4f -> %.4f g/cm3, energy released %.4g kJ/g\n",
+         n, 100 * por, r.stress0[0], r.stress0[1], r.stress0[2], r.stress[0], r.stress[1],
+         r.stress[2], r.mass / r.volume0, r.mass / r.volume, r.energy / r.mass);
   for (int k = 0; k < 3; k++) assert_true(r.stress0[k] > 0.5);
   memcpy(stress_out, r.stress, 3 * sizeof *stress_out);
   *rho_out = r.mass / r.volume;
@@ -314,9 +344,10 @@ static void test_relax_polycrystal(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_fcc_mg), cmocka_unit_test(test_fcc_table1),
-                                     cmocka_unit_test(test_tri2d_mg), cmocka_unit_test(test_von_mises),
-                                     cmocka_unit_test(test_polycrystal), cmocka_unit_test(test_relax),
-                                     cmocka_unit_test(test_relax_polycrystal)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_fcc_mg),           cmocka_unit_test(test_fcc_table1),
+      cmocka_unit_test(test_tri2d_mg),         cmocka_unit_test(test_von_mises),
+      cmocka_unit_test(test_polycrystal),      cmocka_unit_test(test_relax),
+      cmocka_unit_test(test_relax_polycrystal)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

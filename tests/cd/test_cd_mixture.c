@@ -1,4 +1,4 @@
-/* Heterogeneous material (paper 002 §1.2): B4C and h-BN grains (cold-curve Mie–Grüneisen
+/* Heterogeneous material ([Davydov] §1.2): B4C and h-BN grains (cold-curve Mie–Grüneisen
  * parameters of the paper), shocked by a piston; the measured D(u) is compared with the
  * Kuropatenko mixture rule 1/(D − u) = Σ α_i/(D_i − u_i) (eos_kuropatenko). Grains: Voronoi
  * cells of random seeds on one fcc lattice (no rotation), each grain B4C with probability equal to
@@ -35,13 +35,18 @@ static double fit_slope(const double *t, const double *z, int n, double tmin) {
   int m = 0;
   for (int k = 0; k < n; k++)
     if (t[k] >= tmin && isfinite(z[k])) {
-      sx += t[k]; sy += z[k]; sxx += t[k] * t[k]; sxy += t[k] * z[k]; m++;
+      sx += t[k];
+      sy += z[k];
+      sxx += t[k] * t[k];
+      sxy += t[k] * z[k];
+      m++;
     }
   return m > 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : NAN;
 }
 
 /* returns D; *alpha_out the realised B4C volume fraction (sites), *rho0_out the mean density */
-static double mixture_shock(eos_t *const comp[2], double alpha, double up, int nx, int nz, double *alpha_out) {
+static double mixture_shock(eos_t *const comp[2], double alpha, double up, int nx, int nz,
+                            double *alpha_out) {
   const double a = sqrt(2.0) * R0, vs = cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
   ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
   double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
@@ -52,7 +57,8 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
   double *seed = malloc(3 * (size_t)ng * sizeof *seed);
   int *gm = malloc((size_t)ng * sizeof *gm);
   for (int g = 0; g < ng; g++) {
-    for (int c = 0; c < 3; c++) seed[3 * g + c] = L[c] * ptl_splitmix64_uniform(99, 3 * (uint64_t)g + c);
+    for (int c = 0; c < 3; c++)
+      seed[3 * g + c] = L[c] * ptl_splitmix64_uniform(99, 3 * (uint64_t)g + c);
     gm[g] = ptl_splitmix64_uniform(77, (uint64_t)g) < alpha ? 0 : 1;
   }
   const size_t npist = (size_t)4 * nx * nx * 2;
@@ -68,7 +74,10 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
         if (c < 2) d -= L[c] * round(d / L[c]);
         d2 += d * d;
       }
-      if (d2 < bd) { bd = d2; best = g; }
+      if (d2 < bd) {
+        bd = d2;
+        best = g;
+      }
     }
     p->mat[i] = (uint8_t)gm[best];
     p->mass[i] = eos_rho0(comp[gm[best]]) * vs;
@@ -80,13 +89,19 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
   free(gm);
   cd_box box = {.hi = {L[0], L[1], L[2]}, .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_FREE}};
   const double cmax = fmax(eos_c0(comp[0]), eos_c0(comp[1]));
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / cmax, .cutoff = CD_CUTOFF_BONDED,
-                   .sort_every = 8, .lattice = CD_LATTICE_FCC};
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = 0.02 * R0 / cmax,
+                   .cutoff = CD_CUTOFF_BONDED,
+                   .sort_every = 8,
+                   .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 2);
   for (int x = 0; x < 2; x++)
     for (int y = x; y < 2; y++) {
       cd_pair_table *t = calloc(1, sizeof *t);
-      assert_int_equal(cd_pair_table_build(t, comp[x], comp[y], CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+      assert_int_equal(cd_pair_table_build(t, comp[x], comp[y], CD_LATTICE_FCC, R0, 0, 1.2 * R0,
+                                           0.5 * R0, 1.0, 0),
+                       MS_OK);
       cd_sim_set_pair(s, x, y, t);
     }
   double th[1] = {0}, uh[1] = {up}, dir[3] = {0, 0, 1};
@@ -114,11 +129,12 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
 
 static void test_kuropatenko(void **state) {
   (void)state;
-  eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),    /* B4C */
-                    eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)};  /* h-BN */
+  eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),   /* B4C */
+                    eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)}; /* h-BN */
   const double ups_full[4] = {1.0, 2.0, 3.0, 4.0}, ups_ci[1] = {2.0};
   const int nup = full_run ? 4 : 1, nx = full_run ? 8 : 6, nz = full_run ? 240 : 160;
-  printf("| B4C volume fraction | u km/s | D (CD) km/s | D (Kuropatenko / EOS Hugoniot) km/s | difference |\n|---|---|---|---|---|\n");
+  printf("| B4C volume fraction | u km/s | D (CD) km/s | D (Kuropatenko / EOS Hugoniot) km/s | "
+         "difference |\n|---|---|---|---|---|\n");
   for (int k = 0; k < nup; k++) {
     const double up = full_run ? ups_full[k] : ups_ci[k];
     /* pure components first (alpha = 1: all B4C, 0: all h-BN), then the two mixtures */
@@ -130,7 +146,8 @@ static void test_kuropatenko(void **state) {
       double frac[2] = {al, 1.0 - al};
       const eos_t *cc[2] = {comp[0], comp[1]};
       assert_int_equal(eos_kuropatenko(2, cc, frac, up, &Dk, &pk), MS_OK);
-      printf("| %.3f | %.1f | %.3f | %.3f | %+.1f %% |\n", al, up, Dm[m], Dk, 100 * (Dm[m] - Dk) / Dk);
+      printf("| %.3f | %.1f | %.3f | %.3f | %+.1f %% |\n", al, up, Dm[m], Dk,
+             100 * (Dm[m] - Dk) / Dk);
       fflush(stdout);
     }
     /* what must hold whatever the mixing rule: the mixture's shock is slower than pure B4C's
@@ -159,7 +176,8 @@ static double rule_u_of_p(double rho0, const double *D, double p) {
   double lo = 0.0, hi = 10.0;
   for (int it = 0; it < 100; it++) {
     const double u = 0.5 * (lo + hi);
-    if (rho0 * tab_d(D, u) * u < p) lo = u; else hi = u;
+    if (rho0 * tab_d(D, u) * u < p) lo = u;
+    else hi = u;
   }
   return 0.5 * (lo + hi);
 }
@@ -177,11 +195,13 @@ static double rule_mixture_u(const double rho0i[2], double D[2][NRULE], const do
   return 2.0 * q / (W + sqrt(W * W + 4.0 * q));
 }
 
-static double rule_tabulated(const double rho0i[2], double D[2][NRULE], const double alpha[2], double u) {
+static double rule_tabulated(const double rho0i[2], double D[2][NRULE], const double alpha[2],
+                             double u) {
   double lo = 0.0, hi = 500.0, W = NAN; /* GPa */
   for (int it = 0; it < 100; it++) {
     const double p = 0.5 * (lo + hi);
-    if (rule_mixture_u(rho0i, D, alpha, p, &W) < u) lo = p; else hi = p;
+    if (rule_mixture_u(rho0i, D, alpha, p, &W) < u) lo = p;
+    else hi = p;
   }
   rule_mixture_u(rho0i, D, alpha, 0.5 * (lo + hi), &W);
   return u + W;
@@ -193,11 +213,13 @@ static void lattice_rule_run(eos_t *const comp[2]) {
   double D[2][NRULE];
   for (int c = 0; c < 2; c++) {
     double al;
-    for (int k = 0; k < NRULE; k++) D[c][k] = mixture_shock(comp, alphas[c], rule_u[k], nx, nz, &al);
+    for (int k = 0; k < NRULE; k++)
+      D[c][k] = mixture_shock(comp, alphas[c], rule_u[k], nx, nz, &al);
     printf("%s lattice: D = %.3f, %.3f, %.3f km/s at u = 1, 2, 3 (EOS c0 %.3f)\n",
            c ? "h-BN" : "B4C", D[c][0], D[c][1], D[c][2], eos_c0(comp[c]));
   }
-  printf("| B4C volume fraction (sites) | u km/s | D (CD) km/s | Kuropatenko, lattice Hugoniots | difference | Kuropatenko, EOS Hugoniots | difference |\n|---|---|---|---|---|---|---|\n");
+  printf("| B4C volume fraction (sites) | u km/s | D (CD) km/s | Kuropatenko, lattice Hugoniots | "
+         "difference | Kuropatenko, EOS Hugoniots | difference |\n|---|---|---|---|---|---|---|\n");
   const double mix[2] = {0.262, 0.732}, up = 2.0;
   for (int m = 0; m < 2; m++) {
     double al, De = NAN, pk;
@@ -213,8 +235,8 @@ static void lattice_rule_run(eos_t *const comp[2]) {
 
 static void test_lattice_rule(void **state) {
   (void)state;
-  eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),    /* B4C */
-                    eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)};  /* h-BN */
+  eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),   /* B4C */
+                    eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)}; /* h-BN */
   lattice_rule_run(comp);
   eos_destroy(comp[0]);
   eos_destroy(comp[1]);
@@ -230,5 +252,6 @@ int main(int argc, char **argv) {
   omp_set_num_threads(1);
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_kuropatenko)};
   const struct CMUnitTest rule[] = {cmocka_unit_test(test_lattice_rule)};
-  return lattice_rule ? cmocka_run_group_tests(rule, NULL, NULL) : cmocka_run_group_tests(tests, NULL, NULL);
+  return lattice_rule ? cmocka_run_group_tests(rule, NULL, NULL)
+                      : cmocka_run_group_tests(tests, NULL, NULL);
 }

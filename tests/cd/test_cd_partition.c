@@ -151,8 +151,9 @@ static void test_auto_choice(void **state) {
     assert_memory_equal(oa, ob, (size_t)nv * sizeof *oa);
     assert_true(sa.load == sb.load && sa.load <= sa.rejected_load);
     assert_int_equal(cd_partition_cells(n, per, w, parts[k],
-                                        expect[k] == CD_PART_SLAB ? CD_PART_METIS : CD_PART_SLAB,
-                                        2, ob, &sother), MS_OK);
+                                        expect[k] == CD_PART_SLAB ? CD_PART_METIS : CD_PART_SLAB, 2,
+                                        ob, &sother),
+                     MS_OK);
     assert_true(sother.load == sa.rejected_load);
     cd_partition_stats ev;
     assert_int_equal(cd_partition_evaluate(n, per, w, parts[k], oa, &ev), MS_OK);
@@ -161,7 +162,7 @@ static void test_auto_choice(void **state) {
   cd_partition_stats s8;
   assert_int_equal(cd_partition_cells(n, per, w, 8, CD_PART_SLAB, 2, ob, &s8), MS_OK);
   assert_true(fabs(s8.load - 1.25) < 1e-15); /* an inner slab: 2 planes + 2 halo planes */
-  oa[0] = 8; /* an owner outside [0, parts) */
+  oa[0] = 8;                                 /* an owner outside [0, parts) */
   cd_partition_stats ev;
   assert_int_equal(cd_partition_evaluate(n, per, w, 8, oa, &ev), MS_ERR_INPUT);
   free(w);
@@ -186,8 +187,9 @@ static void test_metis_beats_slabs(void **state) {
     assert_int_equal(cd_partition_cells(n, per, w, parts[k], CD_PART_METIS, 0, om, &sm), MS_OK);
     assert_int_equal(cd_partition_cells(n, per, w, parts[k], CD_PART_SLAB, 0, os, &ss), MS_OK);
     printf("16^3, %2d parts: METIS cut %ld halo %ld imbalance %.4f | slab cut %ld halo %ld "
-           "imbalance %.4f\n", parts[k], sm.edge_cut, sm.halo_cells, sm.imbalance, ss.edge_cut,
-           ss.halo_cells, ss.imbalance);
+           "imbalance %.4f\n",
+           parts[k], sm.edge_cut, sm.halo_cells, sm.imbalance, ss.edge_cut, ss.halo_cells,
+           ss.imbalance);
     assert_true(sm.edge_cut <= ss.edge_cut);
     assert_true(sm.imbalance < 1.04);
     assert_true(ss.imbalance == 1.0); /* 16 planes split evenly */
@@ -236,7 +238,8 @@ static void test_periodic_wrap(void **state) {
   long halo[4];
   int nbrs[4];
   for (int per = 0; per < 2; ++per) { /* 4 slabs of 2 cells: ends have 1 neighbour unless wrapped */
-    assert_int_equal(cd_partition_cells(ring8, per ? px : open, w, 4, CD_PART_SLAB, 0, owner, NULL), MS_OK);
+    assert_int_equal(cd_partition_cells(ring8, per ? px : open, w, 4, CD_PART_SLAB, 0, owner, NULL),
+                     MS_OK);
     cd_partition_halo(ring8, per ? px : open, owner, 4, halo, nbrs);
     for (int p = 0; p < 4; ++p) {
       bool end = !per && (p == 0 || p == 3);
@@ -281,8 +284,8 @@ static void test_stats_brute_force(void **state) {
       for (size_t k = 0; k < 4; ++k)
         for (int axis = 0; axis < 3; ++axis) {
           cd_partition_stats st, bf;
-          const cd_partition_method meth = (cd_partition_method[]){CD_PART_SLAB, CD_PART_METIS,
-                                                                   CD_PART_AUTO}[m];
+          const cd_partition_method meth =
+              (cd_partition_method[]){CD_PART_SLAB, CD_PART_METIS, CD_PART_AUTO}[m];
           assert_int_equal(cd_partition_cells(n, pers[g], w, parts[k], meth, axis, owner, &st),
                            MS_OK);
           long halo[5], bhalo[5];
@@ -299,7 +302,8 @@ static void test_stats_brute_force(void **state) {
           assert_true(fabs(st.imbalance - bf.imbalance) <= 1e-14 * bf.imbalance);
           assert_true(fabs(st.load - bf.load) <= 1e-14 * bf.load); /* summed in another order */
           if (parts[k] == 1) assert_int_equal(st.edge_cut, 0);
-          if (st.method == CD_PART_SLAB) { /* slabs: parts non-decreasing in plane-major order, each within one
+          if (st.method ==
+              CD_PART_SLAB) { /* slabs: parts non-decreasing in plane-major order, each within one
                          * cell weight of the mean (the midpoint rule) */
             const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
             const int64_t stride[3] = {1, n[0], (int64_t)n[0] * n[1]};
@@ -315,8 +319,7 @@ static void test_stats_brute_force(void **state) {
                   total += (double)w[c];
                   wmax = fmax(wmax, (double)w[c]);
                 }
-            for (int p = 0; p < parts[k]; ++p)
-              assert_true(fabs(pw[p] - total / parts[k]) <= wmax);
+            for (int p = 0; p < parts[k]; ++p) assert_true(fabs(pw[p] - total / parts[k]) <= wmax);
           }
         }
     free(w);
@@ -339,9 +342,9 @@ static void test_bad_arguments(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_slab_known_weights), cmocka_unit_test(test_metis_beats_slabs),
-      cmocka_unit_test(test_determinism),        cmocka_unit_test(test_periodic_wrap),
-      cmocka_unit_test(test_stats_brute_force),  cmocka_unit_test(test_bad_arguments),
+      cmocka_unit_test(test_slab_known_weights),    cmocka_unit_test(test_metis_beats_slabs),
+      cmocka_unit_test(test_determinism),           cmocka_unit_test(test_periodic_wrap),
+      cmocka_unit_test(test_stats_brute_force),     cmocka_unit_test(test_bad_arguments),
       cmocka_unit_test(test_slab_cut_inside_plane), cmocka_unit_test(test_auto_choice),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,4 +1,4 @@
-/* Cluster-dynamics pair potentials (DESIGN.md §5.1, paper 002 eqs. 1–2, Table 1):
+/* Cluster-dynamics pair potentials (docs/design.md §5.1, [Davydov] eqs. 1–2, Table 1):
  * tabulated force vs the analytic formula, force = −dE/dr of the tabulated energy, Table 1's
  * E and f columns from its ε_x and P_x columns, the 2D potential, the mixing rule. */
 #include <math.h>
@@ -46,7 +46,9 @@ static void test_table_vs_formula_fcc(void **state) {
   (void)state;
   eos_t *eos = al_mg();
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 0),
+      MS_OK);
   double eerr, ferr = force_error(&t, eos, CD_LATTICE_FCC, 0.0, 0.6 * R0, &eerr);
   printf("fcc: max force error %.3g, energy error %.3g (relative, floor 1e-3 max)\n", ferr, eerr);
   /* the benchmark requires 1e-6 relative agreement with the formulas */
@@ -72,7 +74,9 @@ static void test_fit(void **state) {
   (void)state;
   eos_t *eos = al_mg();
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 0),
+      MS_OK);
   assert_true(t.fit_ok);
   assert_true(t.fit_deg <= CD_FIT_MAXDEG);
   assert_true(t.fit_slo <= 0.6 * 0.6 * 1.2 * 1.2 * R0 * R0); /* (R_c/2)² up to a segment */
@@ -95,7 +99,9 @@ static void test_fit(void **state) {
   const double rlo = sqrt(t.s_lo), ftab = fabs(cd_pair_table_force(&t, rlo) / rlo);
   assert_true(err_tab < 1e-9 * ftab);
   cd_pair_table_free(&t);
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 64), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 64),
+      MS_OK);
   assert_false(t.fit_ok);
   cd_pair_table_free(&t);
   eos_destroy(eos);
@@ -107,7 +113,9 @@ static void test_force_is_energy_derivative(void **state) {
   (void)state;
   eos_t *eos = al_mg();
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 256), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0.0, 1.2 * R0, 0.5 * R0, 1.0, 256),
+      MS_OK);
   double fscale = fabs(cd_pair_table_force(&t, 0.7 * R0)), worst = 0.0;
   for (int k = 0; k < 4999; k++) {
     double r = (0.55 + 0.64 * (k + 0.5) / 5000.0) * R0, h = 1e-6 * R0;
@@ -121,7 +129,7 @@ static void test_force_is_energy_derivative(void **state) {
   eos_destroy(eos);
 }
 
-/* Table 1 of paper 002: E(r) [J] and f(r) [N] columns follow from eps_x and P_x by eqs. 1–2.
+/* Table 1 of [Davydov]: E(r) [J] and f(r) [N] columns follow from eps_x and P_x by eqs. 1–2.
  * Internal units: energy g·(km/s)² = 1e3 J, force g·cm/(10 µs)² = 1e5 N. The printed columns
  * have 4 significant digits: tolerance 0.3 %. */
 static void test_paper_table1(void **state) {
@@ -134,25 +142,26 @@ static void test_paper_table1(void **state) {
   eos_t *eos = eos_create_table_cold(path, 2.0, true, &e);
   dk_errors_print(&e, stderr);
   assert_non_null(eos);
-  static const double row[][3] = {/* r/r0, E [J], f [N] */
-                                  {0.75, 8.304e-07, 1.936e+00}, {0.8, 4.332e-07, 1.253e+00},
-                                  {0.85, 1.969e-07, 6.796e-01}, {0.9, 7.249e-08, 3.437e-01},
-                                  {0.95, 1.513e-08, 1.317e-01}, {1.05, 1.053e-08, -7.678e-02},
-                                  {1.1, 3.583e-08, -1.222e-01}, {1.15, 7.042e-08, -1.529e-01},
-                                  {1.2, 1.117e-07, -1.766e-01}, {1.25, 1.585e-07, -1.971e-01},
-                                  {1.3, 2.102e-07, -2.163e-01}};
+  static const double row[][3] = {
+      /* r/r0, E [J], f [N] */
+      {0.75, 8.304e-07, 1.936e+00},  {0.8, 4.332e-07, 1.253e+00},   {0.85, 1.969e-07, 6.796e-01},
+      {0.9, 7.249e-08, 3.437e-01},   {0.95, 1.513e-08, 1.317e-01},  {1.05, 1.053e-08, -7.678e-02},
+      {1.1, 3.583e-08, -1.222e-01},  {1.15, 7.042e-08, -1.529e-01}, {1.2, 1.117e-07, -1.766e-01},
+      {1.25, 1.585e-07, -1.971e-01}, {1.3, 2.102e-07, -2.163e-01}};
   for (size_t k = 0; k < sizeof row / sizeof *row; k++) {
     double r = row[k][0] * R0;
     /* the table rows list delta with 3 decimals; evaluate at the printed delta's r */
     double E = cd_pair_energy_exact(eos, CD_LATTICE_FCC, R0, 0, r) * 1e3;
     double f = cd_pair_force_exact(eos, CD_LATTICE_FCC, R0, 0, r) * 1e5;
-    printf("r/r0 %.2f: E %.4e J (paper %.4e), f %.4e N (paper %.4e)\n", row[k][0], E, row[k][1], f, row[k][2]);
+    printf("r/r0 %.2f: E %.4e J (paper %.4e), f %.4e N (paper %.4e)\n", row[k][0], E, row[k][1], f,
+           row[k][2]);
     assert_true(fabs(E - row[k][1]) < 3e-3 * fabs(row[k][1]));
     assert_true(fabs(f - row[k][2]) < 3e-3 * fabs(row[k][2]));
   }
   /* and the table built from it reproduces the formula inside the cold curve's range */
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   assert_true(t.s_lo >= pow(0.75 * R0, 2) * (1 - 1e-9)); /* clamped to the table's delta range */
   double eerr, ferr = force_error(&t, eos, CD_LATTICE_FCC, 0.0, 0.76 * R0, &eerr);
   printf("Table-1 EOS: max force error %.3g, energy %.3g\n", ferr, eerr);
@@ -173,13 +182,16 @@ static void test_2d_potential(void **state) {
   for (int k = 1; k < 100; k++) {
     double r = (0.7 + 0.6 * k / 100.0) * R0, dr = 1e-6 * R0;
     double fd = -(cd_pair_energy_exact(eos, CD_LATTICE_TRI2D, R0, h, r + dr) -
-                  cd_pair_energy_exact(eos, CD_LATTICE_TRI2D, R0, h, r - dr)) / (2 * dr);
+                  cd_pair_energy_exact(eos, CD_LATTICE_TRI2D, R0, h, r - dr)) /
+                (2 * dr);
     double f = cd_pair_force_exact(eos, CD_LATTICE_TRI2D, R0, h, r);
     double scale = fabs(cd_pair_force_exact(eos, CD_LATTICE_TRI2D, R0, h, 0.7 * R0));
     assert_true(fabs(fd - f) < 1e-7 * scale);
   }
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, eos, eos, CD_LATTICE_TRI2D, R0, h, 1.35 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(&t, eos, eos, CD_LATTICE_TRI2D, R0, h, 1.35 * R0, 0.5 * R0, 1.0, 0),
+      MS_OK);
   double eerr, ferr = force_error(&t, eos, CD_LATTICE_TRI2D, h, 0.6 * R0, &eerr);
   printf("2D: max force error %.3g, energy %.3g\n", ferr, eerr);
   assert_true(ferr < 1e-6);
@@ -193,10 +205,12 @@ static void test_mixing_rule(void **state) {
   eos_t *a = eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true);  /* B4C */
   eos_t *b = eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true); /* h-BN */
   cd_pair_table t;
-  assert_int_equal(cd_pair_table_build(&t, a, b, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 0.5, 0), MS_OK);
+  assert_int_equal(cd_pair_table_build(&t, a, b, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 0.5, 0),
+                   MS_OK);
   for (int k = 0; k < 10; k++) {
     double r = (0.8 + 0.04 * k) * R0;
-    double ea = cd_pair_energy_exact(a, CD_LATTICE_FCC, R0, 0, r), eb = cd_pair_energy_exact(b, CD_LATTICE_FCC, R0, 0, r);
+    double ea = cd_pair_energy_exact(a, CD_LATTICE_FCC, R0, 0, r),
+           eb = cd_pair_energy_exact(b, CD_LATTICE_FCC, R0, 0, r);
     double want = 0.5 * (ea + eb) * (r > R0 ? 0.5 : 1.0);
     assert_true(fabs(cd_pair_table_energy(&t, r) - want) < 1e-7 * fabs(want) + 1e-20);
   }
@@ -206,9 +220,11 @@ static void test_mixing_rule(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_table_vs_formula_fcc), cmocka_unit_test(test_force_is_energy_derivative),
-      cmocka_unit_test(test_paper_table1), cmocka_unit_test(test_2d_potential),
-      cmocka_unit_test(test_mixing_rule), cmocka_unit_test(test_fit)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_table_vs_formula_fcc),
+                                     cmocka_unit_test(test_force_is_energy_derivative),
+                                     cmocka_unit_test(test_paper_table1),
+                                     cmocka_unit_test(test_2d_potential),
+                                     cmocka_unit_test(test_mixing_rule),
+                                     cmocka_unit_test(test_fit)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

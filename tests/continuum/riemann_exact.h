@@ -5,7 +5,9 @@
 
 #include <math.h>
 
-typedef struct riemann_state { double rho, u, p; } riemann_state;
+typedef struct riemann_state {
+  double rho, u, p;
+} riemann_state;
 
 /* Pressure function f_K(p) and its derivative for one side (Toro eq. 4.6–4.7). */
 static void riemann_f(double p, const riemann_state *K, double g, double *f, double *df) {
@@ -27,8 +29,9 @@ static void riemann_star(const riemann_state *L, const riemann_state *R, double 
                          double *us) {
   double cL = sqrt(g * L->p / L->rho), cR = sqrt(g * R->p / R->rho);
   double z = (g - 1.0) / (2.0 * g);
-  double p = pow((cL + cR - 0.5 * (g - 1.0) * (R->u - L->u)) /
-                     (cL / pow(L->p, z) + cR / pow(R->p, z)), 1.0 / z);
+  double p =
+      pow((cL + cR - 0.5 * (g - 1.0) * (R->u - L->u)) / (cL / pow(L->p, z) + cR / pow(R->p, z)),
+          1.0 / z);
   for (int it = 0; it < 100; ++it) {
     double fL, dL, fR, dR;
     riemann_f(p, L, g, &fL, &dL);

@@ -14,7 +14,9 @@
 
 enum { NSTEPS = 10000 };
 
-typedef struct drift { double energy, momentum; } drift;
+typedef struct drift {
+  double energy, momentum;
+} drift;
 
 /* Runs NSTEPS steps, returns the largest relative drifts seen. Energy is scaled by
  * |IE| + KE + |W| (the largest energy in play), momentum by Σ M|u| + |impulse|. */
@@ -32,8 +34,8 @@ static drift run_steps(cont_grid *g, void (*hook)(cont_grid *, long)) {
     double de = fabs(b.internal + b.kinetic - b.work - e0) / escale;
     cont_view v = cont_grid_view(g);
     double pscale = fabs(b.impulse) + fabs(p0);
-    for (size_t j = 0; j < v.nnodes; ++j) pscale += fabs(v.u[j]) * 0.5 *
-        ((j > 0 ? v.mass[j - 1] : 0) + (j < v.ncells ? v.mass[j] : 0));
+    for (size_t j = 0; j < v.nnodes; ++j)
+      pscale += fabs(v.u[j]) * 0.5 * ((j > 0 ? v.mass[j - 1] : 0) + (j < v.ncells ? v.mass[j] : 0));
     double dp = fabs(b.momentum - b.impulse - p0) / pscale;
     if (de > d.energy) d.energy = de;
     if (dp > d.momentum) d.momentum = dp;
@@ -55,8 +57,14 @@ static void test_planar_impact_wall_free(void **state) {
   cont_layer_spec layers[3] = {
       {.name = "target", .eos = al, .thickness = 0.2, .rho = 2.703, .ncells = 60},
       {.name = "flyer", .eos = al, .thickness = 0.1, .rho = 2.703, .u = -1.5, .ncells = 30},
-      {.name = "air", .eos = air, .thickness = 0.3, .rho = 1.2e-3, .e = e_air, .ncells = 30,
-       .grade_ratio = 1.05, .grade_side = CONT_GRADE_LEFT}};
+      {.name = "air",
+       .eos = air,
+       .thickness = 0.3,
+       .rho = 1.2e-3,
+       .e = e_air,
+       .ncells = 30,
+       .grade_ratio = 1.05,
+       .grade_side = CONT_GRADE_LEFT}};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = layers;
@@ -68,7 +76,8 @@ static void test_planar_impact_wall_free(void **state) {
   assert_non_null(g);
   drift d = run_steps(g, NULL);
   printf("planar impact, wall + free surface: %d steps to t = %.4g, max energy drift %.2e, "
-         "momentum drift %.2e\n", NSTEPS, cont_grid_time(g), d.energy, d.momentum);
+         "momentum drift %.2e\n",
+         NSTEPS, cont_grid_time(g), d.energy, d.momentum);
   assert_true(d.energy < tol);
   assert_true(d.momentum < tol);
   cont_grid_destroy(g);
@@ -97,15 +106,20 @@ static void test_spherical_piston_pressure(void **state) {
     s.left.kind = CONT_BC_PISTON;
     s.left.fn = (cont_fn){.kind = CONT_FN_TABLE, .n = 3, .t = tt, .v = vv};
     s.right.kind = CONT_BC_PRESSURE;
-    s.right.fn = (cont_fn){.kind = CONT_FN_TRAPEZOID, .value = 5.0, .t0 = 0.001, .rise = 0.002,
-                           .hold = 0.01, .fall = 0.005};
+    s.right.fn = (cont_fn){.kind = CONT_FN_TRAPEZOID,
+                           .value = 5.0,
+                           .t0 = 0.001,
+                           .rise = 0.002,
+                           .hold = 0.01,
+                           .fall = 0.005};
     char msg[256];
     cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
     assert_non_null(g);
     drift d = run_steps(g, NULL);
     cont_balance b = cont_grid_balance(g);
     printf("geometry %d, piston + pressure pulse: t = %.4g, boundary work %.4g, max energy drift "
-           "%.2e\n", k, cont_grid_time(g), b.work, d.energy);
+           "%.2e\n",
+           k, cont_grid_time(g), b.work, d.energy);
     assert_true(fabs(b.work) > 1e-3 * (b.internal + b.kinetic)); /* the boundaries did work */
     assert_true(d.energy < tol);
     if (k == 0) assert_true(d.momentum < tol);
@@ -125,8 +139,7 @@ static void coupling_hook(cont_grid *g, long n) {
 
 static void test_coupling_hooks(void **state) {
   eos_t *al = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
-  cont_layer_spec layer = {.name = "al", .eos = al, .thickness = 1.0, .rho = 2.703,
-                           .ncells = 100};
+  cont_layer_spec layer = {.name = "al", .eos = al, .thickness = 1.0, .rho = 2.703, .ncells = 100};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = &layer;
@@ -138,8 +151,8 @@ static void test_coupling_hooks(void **state) {
   assert_non_null(g);
   drift d = run_steps(g, coupling_hook);
   cont_balance b = cont_grid_balance(g);
-  printf("coupling hooks: work %.4g, impulse %.4g, max drifts energy %.2e momentum %.2e\n",
-         b.work, b.impulse, d.energy, d.momentum);
+  printf("coupling hooks: work %.4g, impulse %.4g, max drifts energy %.2e momentum %.2e\n", b.work,
+         b.impulse, d.energy, d.momentum);
   assert_true(fabs(b.work) > 0.0 && fabs(b.impulse) > 0.0);
   assert_true(d.energy < tol);
   assert_true(d.momentum < tol);
@@ -174,10 +187,11 @@ static void test_chunk_boundaries(void **state) {
   for (size_t j = 0; j < v.nnodes; ++j) asym_u = fmax(asym_u, fabs(v.u[j] + v.u[v.ncells - j]));
   for (size_t i = 0; i < v.ncells; ++i)
     asym_rho = fmax(asym_rho, fabs(v.rho[i] - v.rho[v.ncells - 1 - i]) / v.rho[i]);
-  double de = fabs(b.internal + b.kinetic - b.work - b0.internal - b0.kinetic) /
-              (b0.internal + b0.kinetic);
+  double de =
+      fabs(b.internal + b.kinetic - b.work - b0.internal - b0.kinetic) / (b0.internal + b0.kinetic);
   printf("chunked grid (3000 cells): t = %.4g, mirror asymmetry u %.2e, rho %.2e, energy drift "
-         "%.2e, momentum %.2e\n", cont_grid_time(g), asym_u, asym_rho, de, b.momentum);
+         "%.2e, momentum %.2e\n",
+         cont_grid_time(g), asym_u, asym_rho, de, b.momentum);
   assert_true(asym_u < 1e-10 && asym_rho < 1e-10);
   assert_true(de < tol);
   assert_true(fabs(b.momentum) < 1e-12); /* ±1 km/s slabs of equal mass: zero total */

@@ -20,8 +20,8 @@ static void test_time_functions(void **state) {
   assert_true(cont_fn_eval(&tab, 0.5) == 1.0);
   assert_true(cont_fn_eval(&tab, 2.0) == 0.0);
   assert_true(cont_fn_eval(&tab, 5.0) == -2.0);
-  cont_fn tr = {.kind = CONT_FN_TRAPEZOID, .value = 4.0, .t0 = 1.0, .rise = 1.0, .hold = 2.0,
-                .fall = 1.0};
+  cont_fn tr = {
+      .kind = CONT_FN_TRAPEZOID, .value = 4.0, .t0 = 1.0, .rise = 1.0, .hold = 2.0, .fall = 1.0};
   assert_true(cont_fn_eval(&tr, 0.5) == 0.0);
   assert_true(cont_fn_eval(&tr, 1.5) == 2.0);
   assert_true(cont_fn_eval(&tr, 3.0) == 4.0);
@@ -37,11 +37,25 @@ static void test_time_functions(void **state) {
 
 static void test_grading_and_sampling(void **state) {
   eos_t *gas = eos_create_ideal_gas(1.4, 1.0);
-  cont_layer_spec layers[2] = {
-      {.name = "a", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 1.0, .ncells = 20,
-       .grade_ratio = 1.1, .grade_side = CONT_GRADE_RIGHT, .material = 3},
-      {.name = "b", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 1.0, .u = 1.0, .ncells = 20,
-       .grade_ratio = 1.1, .grade_side = CONT_GRADE_LEFT, .material = 5}};
+  cont_layer_spec layers[2] = {{.name = "a",
+                                .eos = gas,
+                                .thickness = 1.0,
+                                .rho = 1.0,
+                                .e = 1.0,
+                                .ncells = 20,
+                                .grade_ratio = 1.1,
+                                .grade_side = CONT_GRADE_RIGHT,
+                                .material = 3},
+                               {.name = "b",
+                                .eos = gas,
+                                .thickness = 1.0,
+                                .rho = 1.0,
+                                .e = 1.0,
+                                .u = 1.0,
+                                .ncells = 20,
+                                .grade_ratio = 1.1,
+                                .grade_side = CONT_GRADE_LEFT,
+                                .material = 5}};
   cont_setup s;
   cont_setup_defaults(&s);
   s.x_left = -1.0;
@@ -100,8 +114,14 @@ static void test_rest_and_uniform_motion(void **state) {
   eos_t *gas = eos_create_ideal_gas(1.4, 1.0);
   const double p_in = eos_pressure(gas, 1.0, 2.5); /* (γ−1)ρe, ~1 up to rounding of γ−1 */
   for (int geo = 0; geo < 3; ++geo) {
-    cont_layer_spec layer = {.name = "g", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 2.5,
-                             .ncells = 50, .grade_ratio = 1.05, .grade_side = CONT_GRADE_BOTH};
+    cont_layer_spec layer = {.name = "g",
+                             .eos = gas,
+                             .thickness = 1.0,
+                             .rho = 1.0,
+                             .e = 2.5,
+                             .ncells = 50,
+                             .grade_ratio = 1.05,
+                             .grade_side = CONT_GRADE_BOTH};
     cont_setup s;
     cont_setup_defaults(&s);
     s.geometry = (cont_geometry)geo;
@@ -123,8 +143,8 @@ static void test_rest_and_uniform_motion(void **state) {
     assert_true(umax == 0.0);
     cont_grid_destroy(g);
   }
-  cont_layer_spec layer = {.name = "g", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 2.5,
-                           .u = 1.0, .ncells = 50};
+  cont_layer_spec layer = {
+      .name = "g", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 2.5, .u = 1.0, .ncells = 50};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = &layer;
@@ -150,9 +170,8 @@ static void test_rest_and_uniform_motion(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_time_functions),
-                                     cmocka_unit_test(test_grading_and_sampling),
-                                     cmocka_unit_test(test_energy_from_pressure),
-                                     cmocka_unit_test(test_rest_and_uniform_motion)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_time_functions), cmocka_unit_test(test_grading_and_sampling),
+      cmocka_unit_test(test_energy_from_pressure), cmocka_unit_test(test_rest_and_uniform_motion)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

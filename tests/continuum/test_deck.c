@@ -206,9 +206,9 @@ static void test_good_deck_runs(void **state) {
   ms_ctx ctx;
   char *dir = make_outdir(&ctx);
   assert_int_equal(cont_problem_run(&ctx, r.p), MS_OK);
-  const char *files[] = {"profile_0000.h5", "profile_0000.xmf", "profile_0000.csv",
+  const char *files[] = {"profile_0000.h5", "profile_0000.xmf",  "profile_0000.csv",
                          "profile_0001.h5", "profile_final.csv", "history_surface.csv",
-                         "history_mid.csv",  "history.h5",       "xt.h5"};
+                         "history_mid.csv", "history.h5",        "xt.h5"};
   for (size_t k = 0; k < sizeof files / sizeof files[0]; ++k) {
     if (!out_exists(dir, files[k])) printf("missing %s\n", files[k]);
     assert_true(out_exists(dir, files[k]));
@@ -286,11 +286,14 @@ static void test_si_units(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_zero_cells),          cmocka_unit_test(test_overlapping_layers),
-      cmocka_unit_test(test_cfl_not_below_one),   cmocka_unit_test(test_unknown_material),
-      cmocka_unit_test(test_history_not_monotone), cmocka_unit_test(test_errors_collected),
-      cmocka_unit_test(test_good_deck_runs),      cmocka_unit_test(test_unstable_run_stops),
-      cmocka_unit_test(test_si_units)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_zero_cells),
+                                     cmocka_unit_test(test_overlapping_layers),
+                                     cmocka_unit_test(test_cfl_not_below_one),
+                                     cmocka_unit_test(test_unknown_material),
+                                     cmocka_unit_test(test_history_not_monotone),
+                                     cmocka_unit_test(test_errors_collected),
+                                     cmocka_unit_test(test_good_deck_runs),
+                                     cmocka_unit_test(test_unstable_run_stops),
+                                     cmocka_unit_test(test_si_units)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,12 +12,17 @@
 
 static const double t_end = 0.6; /* shock at r = t/3 = 0.2 */
 
-static void run_noh(cont_geometry geo, long NCELLS, double rho_exact, double rho_tol, double *rho_mean,
-                    double *r_shock) {
+static void run_noh(cont_geometry geo, long NCELLS, double rho_exact, double rho_tol,
+                    double *rho_mean, double *r_shock) {
   eos_t *gas = eos_create_ideal_gas(5.0 / 3.0, 1.0);
   assert_non_null(gas);
-  cont_layer_spec layer = {.name = "gas", .eos = gas, .thickness = 1.0, .rho = 1.0, .u = -1.0,
-                           .e = 1e-9, .ncells = NCELLS};
+  cont_layer_spec layer = {.name = "gas",
+                           .eos = gas,
+                           .thickness = 1.0,
+                           .rho = 1.0,
+                           .u = -1.0,
+                           .e = 1e-9,
+                           .ncells = NCELLS};
   /* e0 = 1e-9 instead of 0 (p0 ~ 7e-10, negligible against the post-shock p = 4/3 or more):
    * the ideal-gas EOS is undefined for e < 0, and round-off in a perfectly cold gas could
    * produce e = −1e-40. */
@@ -58,7 +63,9 @@ static void run_noh(cont_geometry geo, long NCELLS, double rho_exact, double rho
   *r_shock = rs;
   printf("noh %s: %d cells, post-shock density %.4f (exact %.0f), shock radius %.4f (exact 0.2), "
          "steps %ld\n",
-         geo == CONT_PLANAR ? "planar" : geo == CONT_CYLINDRICAL ? "cylindrical" : "spherical",
+         geo == CONT_PLANAR        ? "planar"
+         : geo == CONT_CYLINDRICAL ? "cylindrical"
+                                   : "spherical",
          (int)NCELLS, *rho_mean, rho_exact, rs, cont_grid_steps(g));
   assert_true(fabs(*rho_mean - rho_exact) < rho_tol * rho_exact);
   /* Shock speed 1/3: the front is resolved to ~2 post-shock cells; the initial cell size is

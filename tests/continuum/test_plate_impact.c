@@ -79,8 +79,7 @@ static void test_symmetric_al_impact(void **state) {
   rm /= (double)n;
   printf("plate impact Al/Al %.1f km/s: u = %.6f (exact %.6f), P = %.4f GPa (Hugoniot %.4f, "
          "%+.3f %%), Us = %.4f km/s (Hugoniot %.4f, %+.3f %%), rho = %.4f (Hugoniot %.4f)\n",
-         v_imp, um, up, pm, h.p, 100 * (pm / h.p - 1), us, h.us, 100 * (us / h.us - 1), rm,
-         h.rho);
+         v_imp, um, up, pm, h.p, 100 * (pm / h.p - 1), us, h.us, 100 * (us / h.us - 1), rm, h.rho);
   /* Symmetry makes the contact move at exactly v/2; round-off in the lab frame (u = 2 vs 0 is
    * not bit-symmetric) allows ~1e-13 after 10³ steps; the plateau mean carries the small
    * post-shock ringing, 1e-3 of up. */

@@ -1,4 +1,4 @@
-/* The rod problem of paper 000 §5.1/§6.1: linear-elastic rod 0 < X < 2L (L = 1, ρ = 7.85,
+/* The rod problem of [Sofronov] §5.1/§6.1: linear-elastic rod 0 < X < 2L (L = 1, ρ = 7.85,
  * E = 200, ν = 0), triangular initial displacement w = εX / ε(2L − X), ε = 1e-3, fixed ends,
  * run to t = 250 L/c. The amplitude of w(L/2, t) over 240 < tc/L < 250 is compared with the
  * exact solution (d'Alembert form of the series in §5.1). The paper reports ~5× amplitude loss
@@ -29,7 +29,10 @@ static double w_exact(double x, double t, double c) {
   return 0.5 * (w_initial_odd(x - c * t) + w_initial_odd(x + c * t));
 }
 
-typedef struct rod_result { double amp_ratio, rms_error; long steps; } rod_result;
+typedef struct rod_result {
+  double amp_ratio, rms_error;
+  long steps;
+} rod_result;
 
 static rod_result run_rod(long ncells, double q_quad, double q_lin) {
   /* In 1D uniaxial strain with ν = 0 the longitudinal modulus is E, so the 1D EOS
@@ -38,11 +41,16 @@ static rod_result run_rod(long ncells, double q_quad, double q_lin) {
   assert_non_null(rod);
   const double c = sqrt(E / rho0), t_end = 250.0 * L / c;
   /* Deformed initial grid: strain +ε on the left half (tension), −ε on the right. */
-  cont_layer_spec layers[2] = {
-      {.name = "left", .eos = rod, .thickness = L * (1 + eps), .rho = rho0 / (1 + eps),
-       .ncells = ncells / 2},
-      {.name = "right", .eos = rod, .thickness = L * (1 - eps), .rho = rho0 / (1 - eps),
-       .ncells = ncells / 2}};
+  cont_layer_spec layers[2] = {{.name = "left",
+                                .eos = rod,
+                                .thickness = L * (1 + eps),
+                                .rho = rho0 / (1 + eps),
+                                .ncells = ncells / 2},
+                               {.name = "right",
+                                .eos = rod,
+                                .thickness = L * (1 - eps),
+                                .rho = rho0 / (1 - eps),
+                                .ncells = ncells / 2}};
   cont_tag_spec tag = {.name = "quarter", .node = (size_t)(ncells / 4)}; /* X = L/2 */
   cont_setup s;
   cont_setup_defaults(&s);

@@ -1,5 +1,5 @@
 /* Second-order accuracy on smooth flow, and of the tagged-node histories: the smooth rod of
- * paper 000 §5.1 (standing wave w = εL sin(πX/2L) cos(πct/2L), fixed ends), without artificial
+ * [Sofronov] §5.1 (standing wave w = εL sin(πX/2L) cos(πct/2L), fixed ends), without artificial
  * viscosity. The history x(t), u(t) of the node at X = L/2 is compared with the exact solution
  * at every recorded time; both errors must converge at second order in the cell size (time
  * step ∝ cell size), which is what "positions and velocities correctly time-centred" means for
@@ -30,8 +30,8 @@ static void run_smooth(long n, double *err_w, double *err_u) {
     double X0 = (double)i * dX, X1 = X0 + dX;
     double w0 = eps * L * sin(pi * X0 / (2 * L)), w1 = eps * L * sin(pi * X1 / (2 * L));
     double dx = dX + (w1 - w0);
-    layers[i] = (cont_layer_spec){.name = "cell", .eos = rod, .thickness = dx,
-                                  .rho = rho0 * dX / dx, .ncells = 1};
+    layers[i] = (cont_layer_spec){
+        .name = "cell", .eos = rod, .thickness = dx, .rho = rho0 * dX / dx, .ncells = 1};
   }
   cont_tag_spec tag = {.name = "quarter", .node = (size_t)(n / 4)}; /* X = L/2 */
   cont_setup s;
@@ -56,7 +56,8 @@ static void run_smooth(long n, double *err_w, double *err_u) {
     *err_u = fmax(*err_u, fabs(h.u[k] - ue) / amp_u);
   }
   printf("smooth rod: %4ld cells, %6ld steps: max error of w(L/2,t) %.3e, of u(L/2,t) %.3e "
-         "(relative to amplitude)\n", n, cont_grid_steps(g), *err_w, *err_u);
+         "(relative to amplitude)\n",
+         n, cont_grid_steps(g), *err_w, *err_u);
   cont_grid_destroy(g);
   free(layers);
   eos_destroy(rod);

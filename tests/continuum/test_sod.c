@@ -15,11 +15,20 @@ static const double gam = 1.4, t_end = 0.2, x0 = 0.5;
 
 /* L1 errors ∫|f − f_exact| dx of ρ, u, p over [0, 1] at t_end with n cells (n/2 per side). */
 static void sod_errors(long n, const eos_t *gas, double err[3]) {
-  cont_layer_spec layers[2] = {
-      {.name = "left", .eos = gas, .thickness = 0.5, .rho = 1.0, .e_from_p = true, .p = 1.0,
-       .ncells = n / 2},
-      {.name = "right", .eos = gas, .thickness = 0.5, .rho = 0.125, .e_from_p = true, .p = 0.1,
-       .ncells = n / 2}};
+  cont_layer_spec layers[2] = {{.name = "left",
+                                .eos = gas,
+                                .thickness = 0.5,
+                                .rho = 1.0,
+                                .e_from_p = true,
+                                .p = 1.0,
+                                .ncells = n / 2},
+                               {.name = "right",
+                                .eos = gas,
+                                .thickness = 0.5,
+                                .rho = 0.125,
+                                .e_from_p = true,
+                                .p = 0.1,
+                                .ncells = n / 2}};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = layers;
@@ -68,8 +77,8 @@ static void test_sod_convergence(void **state) {
   double err[4][3];
   for (int k = 0; k < 4; ++k) {
     sod_errors(cells[k], gas, err[k]);
-    printf("sod: %4ld cells  L1(rho) = %.4e  L1(u) = %.4e  L1(p) = %.4e\n", cells[k],
-           err[k][0], err[k][1], err[k][2]);
+    printf("sod: %4ld cells  L1(rho) = %.4e  L1(u) = %.4e  L1(p) = %.4e\n", cells[k], err[k][0],
+           err[k][1], err[k][2]);
   }
   /* Order from a least-squares fit of log E against log N over the four resolutions. */
   const char *names[3] = {"rho", "u", "p"};
@@ -77,7 +86,10 @@ static void test_sod_convergence(void **state) {
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     for (int k = 0; k < 4; ++k) {
       double lx = log((double)cells[k]), ly = log(err[k][q]);
-      sx += lx; sy += ly; sxx += lx * lx; sxy += lx * ly;
+      sx += lx;
+      sy += ly;
+      sxx += lx * lx;
+      sxy += lx * ly;
     }
     double order = -(4 * sxy - sx * sy) / (4 * sxx - sx * sx);
     printf("sod: measured L1 order of %s = %.3f\n", names[q], order);

@@ -40,8 +40,8 @@ static void test_values_and_positions(void **state) {
   assert_true(dk_read_bool(&e, doc, b, "flag", true, false, &flag));
   assert_true(dk_read_string(&e, doc, b, "name", true, NULL, &name));
   assert_true(dk_read_double_list(&e, doc, b, "list", MS_DIM_NONE, true, &list, &nl));
-  assert_true(dk_read_double(&e, doc, b, "gamma", MS_DIM_NONE, false, 1.4, 1.0, 3.0,
-                             &missing_default));
+  assert_true(
+      dk_read_double(&e, doc, b, "gamma", MS_DIM_NONE, false, 1.4, 1.0, 3.0, &missing_default));
   dk_report_unused(&e, doc);
   dump(&e);
   assert_int_equal(e.n, 0);
@@ -57,11 +57,11 @@ static void test_values_and_positions(void **state) {
 /* Every problem is reported at its own line and column, not only the first one. */
 static void test_all_errors_with_lines(void **state) {
   (void)state;
-  const char *text = "block:\n"           /* line 1 */
-                     "  rho: -2.7\n"      /* line 2: negative density */
-                     "  n: twelve\n"      /* line 3: not an integer */
-                     "  rh0: 1\n"         /* line 4: typo (c0 is the missing key) */
-                     "  kind: squre\n";   /* line 5: not one of the choices */
+  const char *text = "block:\n"         /* line 1 */
+                     "  rho: -2.7\n"    /* line 2: negative density */
+                     "  n: twelve\n"    /* line 3: not an integer */
+                     "  rh0: 1\n"       /* line 4: typo (c0 is the missing key) */
+                     "  kind: squre\n"; /* line 5: not one of the choices */
   dk_errors e;
   dk_errors_init(&e);
   dk_doc *doc = dk_load_string(text, "bad.yaml", &e);
@@ -178,9 +178,11 @@ static void test_resolved_deck(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_values_and_positions), cmocka_unit_test(test_all_errors_with_lines),
-      cmocka_unit_test(test_syntax_error_position), cmocka_unit_test(test_alias_bomb),
-      cmocka_unit_test(test_si_units), cmocka_unit_test(test_resolved_deck)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_values_and_positions),
+                                     cmocka_unit_test(test_all_errors_with_lines),
+                                     cmocka_unit_test(test_syntax_error_position),
+                                     cmocka_unit_test(test_alias_bomb),
+                                     cmocka_unit_test(test_si_units),
+                                     cmocka_unit_test(test_resolved_deck)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

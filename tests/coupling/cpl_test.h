@@ -43,8 +43,7 @@ static inline void cpl_test_read(cpl_test_run *r, const char *text, const char *
   dk_report_unused(&r->e, r->doc);
 }
 
-static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *files,
-                                         size_t nfiles) {
+static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *files, size_t nfiles) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ctx.quiet = true;
@@ -55,8 +54,7 @@ static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *fil
   const ms_status st = cpl_problem_run(&ctx, r->p);
   for (size_t k = 0; k < nfiles && st == MS_OK; k++) {
     char *path = ms_out_path(&ctx, files[k]);
-    if (access(path, R_OK))
-      fail_msg("missing output %s", path);
+    if (access(path, R_OK)) fail_msg("missing output %s", path);
     free(path);
   }
   ms_ctx_close(&ctx);

@@ -50,10 +50,9 @@ static const char *const GRID =
     "  drive: {tag: %s, free_surface_tag: free_surface}\n";
 
 /* Outputs every one-way run must write. */
-static const char *const RUN_FILES[] = {"spectrum.csv",      "fragments.csv",
-                                        "ejecta_mass.csv",   "free_surface.csv",
-                                        "particles_0001.h5", "particles_0001.xmf",
-                                        "history_drive.csv"};
+static const char *const RUN_FILES[] = {
+    "spectrum.csv",      "fragments.csv",      "ejecta_mass.csv",  "free_surface.csv",
+    "particles_0001.h5", "particles_0001.xmf", "history_drive.csv"};
 #define RUN_NFILES (sizeof RUN_FILES / sizeof *RUN_FILES)
 
 static char *deck(const char *viscosity, const char *drive_x, const char *drive_tag,
@@ -144,8 +143,7 @@ static void test_grooved_ejecta(void **state) {
       "  fragments: {every: 100}\n"
       "  transport: {detector: 0.2, end: 1.0, windows: 20}\n";
   cpl_test_run r;
-  cpl_test_run_deck(&r, deck("1.8e-9", "0.18", "drive", rest), "test.yaml", RUN_FILES,
-                    RUN_NFILES);
+  cpl_test_run_deck(&r, deck("1.8e-9", "0.18", "drive", rest), "test.yaml", RUN_FILES, RUN_NFILES);
   const cpl_run_summary *s = cpl_problem_summary(r.p);
   printf("grooved surface: %zu particles, %zu fragments, ejected %.4g g, %zu of %zu transported "
          "fragments at the detector\n",
@@ -159,7 +157,7 @@ static void test_grooved_ejecta(void **state) {
   assert_true(s->ejected_mass > 0);
   assert_true(s->transported >= 1);
   assert_int_equal(s->arrived, s->transported);
-  /* the same groove given as its amplitude (half the depth: paper 002's a0) cuts the same
+  /* the same groove given as its amplitude (half the depth: [Davydov]'s a0) cuts the same
    * lattice: the same particle count (a particle phase cut short, no transport, suffices; read
    * as a depth of 20 µm it would keep more particles) */
   const char *rest_amp =
@@ -281,9 +279,10 @@ static void test_two_way_gas(void **state) {
       "  drag: {gas_return: true}\n"
       "  transport: {detector: 0.1, end: 0.3, windows: 50}\n";
   /* the grid's outputs, as in a one-way (or grid-only) run, and the ejecta outputs */
-  const char *const files[] = {"profile_0000.csv", "profile_final.csv", "history_drive.csv",
-                               "xt.h5",            "interface.csv",     "ejecta_mass.csv",
-                               "fragments.csv",    "arrivals.csv",      "spectrum_detector.csv"};
+  const char *const files[] = {
+      "profile_0000.csv",     "profile_final.csv", "history_drive.csv", "xt.h5",
+      "interface.csv",        "ejecta_mass.csv",   "fragments.csv",     "arrivals.csv",
+      "spectrum_detector.csv"};
   cpl_test_run r;
   cpl_test_run_deck(&r, text, "twogas.yaml", files, sizeof files / sizeof *files);
   const cpl_run_summary *s = cpl_problem_summary(r.p);
@@ -309,10 +308,8 @@ static void test_two_way_gas(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_deck_errors),
-      cmocka_unit_test(test_symmetric_flat),
-      cmocka_unit_test(test_grooved_ejecta),
-      cmocka_unit_test(test_two_way),
+      cmocka_unit_test(test_deck_errors),    cmocka_unit_test(test_symmetric_flat),
+      cmocka_unit_test(test_grooved_ejecta), cmocka_unit_test(test_two_way),
       cmocka_unit_test(test_two_way_gas),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -123,8 +123,7 @@ static void rk4_reference(const uniform_gas *g, double d, double m, double t_end
     double k[4][6], tmp[6];
     for (int st = 0; st < 4; st++) {
       const double c = st == 0 ? 0 : st == 3 ? 1 : 0.5;
-      for (int a = 0; a < 6; a++)
-        tmp[a] = y[a] + (st ? c * h * k[st - 1][a] : 0.0);
+      for (int a = 0; a < 6; a++) tmp[a] = y[a] + (st ? c * h * k[st - 1][a] : 0.0);
       /* the SN force written out here, independently of the library */
       double vr[3] = {g->g.u[0] - tmp[3], g->g.u[1] - tmp[4], g->g.u[2] - tmp[5]};
       double w = sqrt(vr[0] * vr[0] + vr[1] * vr[1] + vr[2] * vr[2]);
@@ -135,8 +134,7 @@ static void rk4_reference(const uniform_gas *g, double d, double m, double t_end
         k[st][3 + a] = w > 0 ? 0.5 * g->g.rho * cd * PI * d * d / 4 * w * vr[a] / m : 0.0;
       }
     }
-    for (int a = 0; a < 6; a++)
-      y[a] += h / 6 * (k[0][a] + 2 * k[1][a] + 2 * k[2][a] + k[3][a]);
+    for (int a = 0; a < 6; a++) y[a] += h / 6 * (k[0][a] + 2 * k[1][a] + 2 * k[2][a] + k[3][a]);
   }
 }
 
@@ -214,8 +212,7 @@ static void test_detector_arrivals(void **state) {
   double beyond[3] = {2.5, 0, 0}, vb[3] = {0.1, 0, 0}; /* starts past the plane */
   size_t ib = cpl_transport_add(tr, 1e-9, beyond, vb, 0.0);
   /* many short windows, as a coupling loop would call it */
-  for (int w = 1; w <= 200; w++)
-    assert_int_equal(cpl_transport_advance(tr, 0.05 * w), MS_OK);
+  for (int w = 1; w <= 200; w++) assert_int_equal(cpl_transport_advance(tr, 0.05 * w), MS_OK);
   for (int i = 0; i < 5; i++) {
     cpl_flight f = cpl_transport_get(tr, (size_t)i);
     double tau = cpl_stokes_time(RHO_PB, ds[i], MU_AIR);
@@ -240,8 +237,7 @@ static void test_detector_arrivals(void **state) {
   int rows = 0;
   bool header = false;
   while (fgets(line, sizeof line, t)) {
-    if (line[0] == '#')
-      continue;
+    if (line[0] == '#') continue;
     if (!header) {
       assert_string_equal(line, "id,mass,d,t_arrival,vx,vy,vz\n");
       header = true;
@@ -265,8 +261,7 @@ static void tally_return(void *user, const double x[3], double t0, double t1, co
   (void)x;
   tally *s = user;
   assert_true(t1 > t0);
-  for (int a = 0; a < 3; a++)
-    s->dp[a] += dp[a];
+  for (int a = 0; a < 3; a++) s->dp[a] += dp[a];
   s->de += de;
   s->calls++;
 }
@@ -280,15 +275,13 @@ static void test_gas_return(void **state) {
   double d = 5e-4, m = sphere_mass(RHO_PB, d);
   double x0[3] = {0, 0, 0}, v0[3] = {2.0, 0.5, 0};
   cpl_transport_add(tr, m, x0, v0, 0.0);
-  for (int w = 1; w <= 10; w++)
-    assert_int_equal(cpl_transport_advance(tr, 5.0 * w), MS_OK);
+  for (int w = 1; w <= 10; w++) assert_int_equal(cpl_transport_advance(tr, 5.0 * w), MS_OK);
   cpl_flight f = cpl_transport_get(tr, 0);
   assert_true(s.calls == f.steps); /* one report per internal step */
   double ke0 = 0.5 * m * (v0[0] * v0[0] + v0[1] * v0[1]);
   double ke1 = 0.5 * m * (f.v[0] * f.v[0] + f.v[1] * f.v[1] + f.v[2] * f.v[2]);
   /* telescoping sums: equal up to round-off of the step count */
-  for (int a = 0; a < 3; a++)
-    assert_double_equal(s.dp[a], m * (f.v[a] - v0[a]), 1e-12 * m);
+  for (int a = 0; a < 3; a++) assert_double_equal(s.dp[a], m * (f.v[a] - v0[a]), 1e-12 * m);
   assert_double_equal(s.de, ke1 - ke0, 1e-12 * ke0);
   /* the fragment slowed towards the gas: it gave momentum to the gas along y */
   assert_true(s.dp[1] < 0 && s.de < 0);

@@ -42,21 +42,17 @@ static size_t brute_force(const cpl_particles *p, const cpl_fragment_opts *o, in
   uint8_t *adj = calloc(n * n + 1, 1);
   for (size_t i = 0; i < n; i++)
     for (size_t k = i + 1; k < n; k++) {
-      if (p->skip && (p->skip[i] || p->skip[k]))
-        continue;
+      if (p->skip && (p->skip[i] || p->skip[k])) continue;
       double dx = frag_min_image(p->x[k] - p->x[i], o->box.period[0]);
       double dy = frag_min_image(p->y[k] - p->y[i], o->box.period[1]);
       double dz = frag_min_image((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
-      if (dx * dx + dy * dy + dz * dz <= L2)
-        adj[i * n + k] = adj[k * n + i] = 1;
+      if (dx * dx + dy * dy + dz * dz <= L2) adj[i * n + k] = adj[k * n + i] = 1;
     }
   size_t *queue = calloc(n + 1, sizeof *queue);
-  for (size_t i = 0; i < n; i++)
-    id[i] = -1;
+  for (size_t i = 0; i < n; i++) id[i] = -1;
   size_t nfrag = 0;
   for (size_t s = 0; s < n; s++) {
-    if (id[s] >= 0 || (p->skip && p->skip[s]))
-      continue;
+    if (id[s] >= 0 || (p->skip && p->skip[s])) continue;
     size_t head = 0, tail = 0;
     queue[tail++] = s;
     id[s] = (int64_t)nfrag;
@@ -83,8 +79,7 @@ static void check_against_brute_force(const cpl_particles *p, const cpl_fragment
   int64_t *ref = calloc(p->n + 1, sizeof *ref);
   size_t nref = brute_force(p, o, ref);
   assert_int_equal(f.n, nref);
-  for (size_t i = 0; i < p->n; i++)
-    assert_int_equal(f.id[i], ref[i]); /* identical partition */
+  for (size_t i = 0; i < p->n; i++) assert_int_equal(f.id[i], ref[i]); /* identical partition */
   /* spectrum from the reference labels */
   int64_t *cnt = calloc(nref + 1, sizeof *cnt);
   double *mass = calloc(nref + 1, sizeof *mass);
@@ -103,16 +98,13 @@ static void check_against_brute_force(const cpl_particles *p, const cpl_fragment
   int64_t total = 0;
   for (size_t r = 0; r < s.n; r++) {
     int64_t c = 0;
-    for (size_t k = 0; k < nref; k++)
-      c += cnt[k] == s.g[r];
+    for (size_t k = 0; k < nref; k++) c += cnt[k] == s.g[r];
     assert_int_equal(s.count[r], c);
     total += s.g[r] * s.count[r];
-    if (r)
-      assert_true(s.g[r] > s.g[r - 1]);
+    if (r) assert_true(s.g[r] > s.g[r - 1]);
   }
   size_t active = 0;
-  for (size_t i = 0; i < p->n; i++)
-    active += !(p->skip && p->skip[i]);
+  for (size_t i = 0; i < p->n; i++) active += !(p->skip && p->skip[i]);
   assert_int_equal(total, (int64_t)active);
   cpl_spectrum_free(&s);
 
@@ -126,14 +118,12 @@ static void check_against_brute_force(const cpl_particles *p, const cpl_fragment
   for (size_t i = 0; i < n; i++) {
     start[i] = m;
     for (size_t k = 0; k < n; k++) {
-      if (k == i)
-        continue;
+      if (k == i) continue;
       double dx = frag_min_image(p->x[k] - p->x[i], o->box.period[0]);
       double dy = frag_min_image(p->y[k] - p->y[i], o->box.period[1]);
       double dz = frag_min_image((p->z ? p->z[k] : 0.0) - (p->z ? p->z[i] : 0.0), o->box.period[2]);
       if (dx * dx + dy * dy + dz * dz <= R * R) {
-        if (m == cap)
-          nbr = realloc(nbr, (cap *= 2) * sizeof *nbr);
+        if (m == cap) nbr = realloc(nbr, (cap *= 2) * sizeof *nbr);
         nbr[m++] = (int32_t)k;
       }
     }
@@ -143,8 +133,7 @@ static void check_against_brute_force(const cpl_particles *p, const cpl_fragment
   cpl_fragments_init(&g);
   assert_int_equal(cpl_fragments_find_csr(&g, p, o, start, nbr), MS_OK);
   assert_int_equal(g.n, nref);
-  for (size_t i = 0; i < n; i++)
-    assert_int_equal(g.id[i], ref[i]);
+  for (size_t i = 0; i < n; i++) assert_int_equal(g.id[i], ref[i]);
   cpl_fragments_free(&g);
   free(start);
   free(nbr);
@@ -174,8 +163,7 @@ static void test_union_find(void **state) {
   memset(&uf, 0, sizeof uf);
   cpl_uf_init(&uf, n);
   size_t *label = malloc(n * sizeof *label);
-  for (size_t i = 0; i < n; i++)
-    label[i] = i;
+  for (size_t i = 0; i < n; i++) label[i] = i;
   for (int step = 0; step < 400; step++) {
     size_t a = (size_t)(urand() * n), b = (size_t)(urand() * n);
     bool merged = cpl_uf_union(&uf, a, b);
@@ -183,8 +171,7 @@ static void test_union_find(void **state) {
     if (label[a] != label[b]) {
       size_t from = label[b], to = label[a];
       for (size_t i = 0; i < n; i++)
-        if (label[i] == from)
-          label[i] = to;
+        if (label[i] == from) label[i] = to;
     }
     if (step % 50 == 0)
       for (size_t i = 0; i < n; i++)
@@ -194,8 +181,7 @@ static void test_union_find(void **state) {
   /* set sizes at the roots match the label counts */
   for (size_t i = 0; i < n; i++) {
     size_t c = 0;
-    for (size_t k = 0; k < n; k++)
-      c += label[k] == label[i];
+    for (size_t k = 0; k < n; k++) c += label[k] == label[i];
     assert_int_equal(uf.size[cpl_uf_find(&uf, i)], c);
   }
   free(label);
@@ -214,8 +200,7 @@ static void test_random_sets(void **state) {
     for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++)
       for (size_t bi = 0; bi < sizeof bonds / sizeof *bonds; bi++) {
         size_t n = sizes[si];
-        if (n > 1000 && bi % 2)
-          continue; /* keep the O(n²) reference within seconds */
+        if (n > 1000 && bi % 2) continue; /* keep the O(n²) reference within seconds */
         rng_state = 1000 * dim + 10 * si + bi;
         cloud c;
         frag_points_alloc(&c, n);
@@ -246,8 +231,7 @@ static void test_random_periodic(void **state) {
     for (size_t bi = 0; bi < 3; bi++)
       for (int mask = 1; mask < 8; mask += 3) { /* periodic axes: x; x,y; x,y,z */
         double side = sides[si];
-        if (2 * bonds[bi] >= side)
-          continue;
+        if (2 * bonds[bi] >= side) continue;
         size_t n = (size_t)(side * side * side);
         rng_state = 99 + 7 * si + 3 * bi + (uint64_t)mask;
         cloud c;
@@ -321,11 +305,9 @@ static void test_chains(void **state) {
   assert_int_equal(f.first[0], 0);
   assert_int_equal(find_n(&c, opts(1.6, a), &f), 1);
   assert_int_equal(find_n(&c, opts(0.99, a), &f), n);
-  for (size_t i = 0; i < n; i++)
-    assert_int_equal(f.id[i], (int64_t)i);
+  for (size_t i = 0; i < n; i++) assert_int_equal(f.id[i], (int64_t)i);
   /* skipping the particle at pos 50 cuts the first part at 50 */
-  for (size_t i = 0; i < n; i++)
-    c.skip[i] = (i * 73) % n == 50;
+  for (size_t i = 0; i < n; i++) c.skip[i] = (i * 73) % n == 50;
   assert_int_equal(find_n(&c, opts(1.01, a), &f), 3);
   /* numbered by smallest index: index 0 (pos 0) → pos 0..49; index 1 (pos 73) → 51..119 */
   assert_int_equal(f.count[0], 50);
@@ -341,8 +323,7 @@ static void test_rings_and_isolated(void **state) {
   (void)state;
   const size_t sizes[] = {3, 7, 7, 40};
   size_t niso = 25, n = niso;
-  for (size_t r = 0; r < 4; r++)
-    n += sizes[r];
+  for (size_t r = 0; r < 4; r++) n += sizes[r];
   cloud c;
   frag_points_alloc(&c, n);
   double a = 1.0;
@@ -506,8 +487,7 @@ static void test_gid_numbering(void **state) {
     frag_points_alloc(&s, n);
     cpl_fragment_opts o = opts(0.8, 1.0); /* ~1.8 bonds per particle: below percolation */
     o.rho0 = 2.0;
-    for (int a = 0; a < 3 && per; a++)
-      o.box.period[a] = a < 2 ? side : 0.0;
+    for (int a = 0; a < 3 && per; a++) o.box.period[a] = a < 2 ? side : 0.0;
     for (size_t i = 0; i < n; i++) {
       c.x[i] = side * urand();
       c.y[i] = side * urand();
@@ -520,8 +500,7 @@ static void test_gid_numbering(void **state) {
     }
     size_t *perm = calloc(n, sizeof *perm); /* Fisher–Yates */
     int64_t *gid = calloc(n, sizeof *gid);
-    for (size_t i = 0; i < n; i++)
-      perm[i] = i;
+    for (size_t i = 0; i < n; i++) perm[i] = i;
     for (size_t i = n - 1; i > 0; i--) {
       size_t j = (size_t)(urand() * (double)(i + 1)), t = perm[i];
       perm[i] = perm[j];
@@ -541,11 +520,11 @@ static void test_gid_numbering(void **state) {
     cpl_fragments_init(&g);
     assert_int_equal(cpl_fragments_find(&f, &pc, &o), MS_OK);
     assert_int_equal(cpl_fragments_find(&g, &ps, &o), MS_OK);
-    printf("gid numbering (%s): %zu fragments of %zu particles\n", per ? "periodic" : "open", f.n, n);
+    printf("gid numbering (%s): %zu fragments of %zu particles\n", per ? "periodic" : "open", f.n,
+           n);
     assert_true(f.n > 20 && f.n < n / 2); /* a mix of clusters, not all singletons */
     assert_int_equal(g.n, f.n);
-    for (size_t j = 0; j < n; j++)
-      assert_int_equal(g.id[j], f.id[perm[j]]);
+    for (size_t j = 0; j < n; j++) assert_int_equal(g.id[j], f.id[perm[j]]);
     /* sums in another order: round-off of a few ulps of the largest term */
     for (size_t k = 0; k < f.n; k++) {
       assert_int_equal(g.count[k], f.count[k]);
@@ -572,8 +551,7 @@ static void test_bad_input(void **state) {
   (void)state;
   cloud c;
   frag_points_alloc(&c, 3);
-  for (int i = 0; i < 3; i++)
-    c.m[i] = 1;
+  for (int i = 0; i < 3; i++) c.m[i] = 1;
   c.x[1] = NAN;
   cpl_particles p = view(&c, false, true);
   cpl_fragments f;
@@ -627,8 +605,7 @@ static void test_csv_outputs(void **state) {
   char *s = slurp(t);
   fclose(t);
   const char *body = s;
-  while (*body == '#')
-    body = strchr(body, '\n') + 1; /* skip comment lines */
+  while (*body == '#') body = strchr(body, '\n') + 1; /* skip comment lines */
   assert_non_null(strstr(s, "# units: g [clusters], count [fragments], mass [g]"));
   assert_string_equal(body, "g,count,mass\n1,5,5\n2,1,2\n3,1,3\n");
   free(s);

@@ -23,8 +23,12 @@ static const double RHO_AIR = 1.2e-3, P_AIR = 1.01325e-4, MU_AIR = 1.8e-9, RHO_P
 
 /* An air column [0, L] between walls, n cells, at rest. */
 static cont_grid *air_column(eos_t *air, double L, long n) {
-  cont_layer_spec layer = {.name = "air", .eos = air, .thickness = L, .rho = RHO_AIR,
-                           .e = P_AIR / (0.4 * RHO_AIR), .ncells = n};
+  cont_layer_spec layer = {.name = "air",
+                           .eos = air,
+                           .thickness = L,
+                           .rho = RHO_AIR,
+                           .e = P_AIR / (0.4 * RHO_AIR),
+                           .ncells = n};
   cont_setup s;
   cont_setup_defaults(&s);
   s.layers = &layer;
@@ -49,8 +53,7 @@ static void test_cell_source(void **state) {
   /* both nodes of the cell move together; nothing else moves */
   assert_true(v.u[4] > 0 && v.u[4] == v.u[5]);
   for (size_t j = 0; j < v.nnodes; j++)
-    if (j != 4 && j != 5)
-      assert_true(v.u[j] == 0.0);
+    if (j != 4 && j != 5) assert_true(v.u[j] == 0.0);
   /* the sums receive exactly dp and de (round-off of a few additions) */
   assert_double_equal(b1.momentum - b0.momentum, dp, 1e-15);
   assert_double_equal(b1.internal + b1.kinetic - b0.internal - b0.kinetic, de, 1e-15);
@@ -81,8 +84,7 @@ static bool column_gas(void *user, const double x[3], double t, cpl_gas *out) {
   (void)t;
   const column *c = user;
   cont_sample s;
-  if (!cont_grid_sample(c->g, x[0], &s))
-    return false;
+  if (!cont_grid_sample(c->g, x[0], &s)) return false;
   out->rho = s.rho;
   out->u[0] = s.u;
   out->u[1] = out->u[2] = 0;
@@ -102,7 +104,7 @@ static void column_deposit(void *user, const double x[3], double t0, double t1, 
 }
 
 typedef struct totals {
-  double p, e;            /* fragments + gas − what the walls delivered */
+  double p, e;             /* fragments + gas − what the walls delivered */
   double frag_p, gas_heat; /* fragments' momentum; gas internal energy (× area) */
 } totals;
 
@@ -124,7 +126,7 @@ static totals sum_up(const column *c, const cpl_transport *tr) {
 
 enum { NFRAG = 5 };
 static const double FRAG_D[NFRAG] = {2e-4, 5e-4, 1e-3, 2e-3, 3e-3}; /* cm */
-static const double FRAG_V[NFRAG] = {2.0, 1.8, 1.5, 1.2, 1.0};       /* km/s */
+static const double FRAG_V[NFRAG] = {2.0, 1.8, 1.5, 1.2, 1.0};      /* km/s */
 static double frag_mass(int k) { return RHO_PB * PI * pow(FRAG_D[k], 3) / 6; }
 
 /* Five Pb fragments of 2–30 µm at 1–2 km/s cross a 4 cm air column towards a detector at
@@ -139,8 +141,7 @@ static totals fly(bool with_return, totals *start) {
   o.rho_p = RHO_PB;
   o.det_x = 3.5;
   cpl_transport *tr = cpl_transport_create(&o, column_gas, &c);
-  if (with_return)
-    cpl_transport_set_return(tr, column_deposit, &c);
+  if (with_return) cpl_transport_set_return(tr, column_deposit, &c);
   for (int k = 0; k < NFRAG; k++) {
     double x0[3] = {0.3 + 0.05 * k, 0, 0}, v0[3] = {FRAG_V[k], 0, 0};
     cpl_transport_add(tr, frag_mass(k), x0, v0, 0.0);
@@ -159,8 +160,8 @@ static totals fly(bool with_return, totals *start) {
     arrived += cpl_transport_get(tr, i).state == CPL_ARRIVED;
   printf("%s return: %zu of %d arrived; fragment momentum %.6g -> %.6g g*km/s, total momentum "
          "%.12g -> %.12g, total energy %.12g -> %.12g kJ, gas heat +%.4g kJ\n",
-         with_return ? "with" : "without", arrived, (int)NFRAG, start->frag_p, end.frag_p, start->p, end.p,
-         start->e, end.e, end.gas_heat - start->gas_heat);
+         with_return ? "with" : "without", arrived, (int)NFRAG, start->frag_p, end.frag_p, start->p,
+         end.p, start->e, end.e, end.gas_heat - start->gas_heat);
   assert_true(arrived >= 3); /* the flight is long enough for drag to matter, short enough to end */
   cpl_transport_free(tr);
   cont_grid_destroy(c.g);
@@ -181,10 +182,10 @@ static void test_fragments_in_gas(void **state) {
    * fragments' kinetic energy) over ~10⁴ steps. */
   assert_double_equal(t1.p, t0.p, 1e-9 * lost_p);
   double frag_ke0 = 0;
-  for (int k = 0; k < NFRAG; k++)
-    frag_ke0 += 0.5 * frag_mass(k) * FRAG_V[k] * FRAG_V[k];
+  for (int k = 0; k < NFRAG; k++) frag_ke0 += 0.5 * frag_mass(k) * FRAG_V[k] * FRAG_V[k];
   printf("balance: momentum %.2e of the exchanged momentum, energy %.2e of the fragments' "
-         "initial kinetic energy\n", (t1.p - t0.p) / lost_p, (t1.e - t0.e) / frag_ke0);
+         "initial kinetic energy\n",
+         (t1.p - t0.p) / lost_p, (t1.e - t0.e) / frag_ke0);
   assert_double_equal(t1.e, t0.e, 1e-9 * frag_ke0);
   /* drag dissipates: the gas got hotter (its internal energy rose by part of the energy lost) */
   assert_true(t1.gas_heat > t0.gas_heat);

@@ -1,4 +1,4 @@
-/* Rz80 / Rz20 at reduced size (paper 002 §4.2; docs/coupling.md §9), CI-sized: the decks
+/* Rz80 / Rz20 at reduced size ([Davydov] §4.2; docs/coupling.md §9), CI-sized: the decks
  * inputs/coupled-rz80.yaml and inputs/coupled-rz20.yaml as documented, with the particle phase
  * cut to t = 0.10 (1 µs, ~0.7 µs after breakout) and no transport. The measure is the run's
  * own split of the detached material (cpl_ejecta_classify): every fragment but the bulk (the one
@@ -29,8 +29,7 @@ static char *load_deck(void) {
   char path[1024];
   snprintf(path, sizeof path, "%s/inputs/coupled-%s.yaml", src ? src : ".", which);
   FILE *f = fopen(path, "rb");
-  if (!f)
-    fail_msg("cannot open %s (set MSCALE_SOURCE_DIR)", path);
+  if (!f) fail_msg("cannot open %s (set MSCALE_SOURCE_DIR)", path);
   static char buf[16384];
   size_t n = fread(buf, 1, sizeof buf - 1, f);
   fclose(f);
@@ -70,8 +69,7 @@ static void test_rz(void **state) {
 }
 
 int main(int argc, char **argv) {
-  if (argc > 1)
-    which = argv[1];
+  if (argc > 1) which = argv[1];
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_rz)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

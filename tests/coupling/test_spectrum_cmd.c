@@ -23,8 +23,7 @@ int cmd_spectrum(int argc, char **argv);
 int app_wants_help(int argc, char **argv);
 int app_wants_help(int argc, char **argv) {
   for (int i = 1; i < argc; i++)
-    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help"))
-      return 1;
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) return 1;
   return 0;
 }
 
@@ -39,8 +38,7 @@ static const char *tmp_name(const char *stem) {
 
 static char *read_all(const char *path) {
   FILE *f = fopen(path, "r");
-  if (!f)
-    return calloc(1, 1);
+  if (!f) return calloc(1, 1);
   fseek(f, 0, SEEK_END);
   long n = ftell(f);
   rewind(f);
@@ -120,23 +118,19 @@ typedef enum defect {
 static void write_snapshot(const char *path, defect d) {
   double xyz[3 * NPART], vel[3 * NPART], mass[NPART];
   make_particles(xyz, vel, mass);
-  if (d == NAN_POSITION)
-    xyz[3 * 7 + 1] = NAN;
-  if (d == NEGATIVE_MASS)
-    mass[3] = -1;
+  if (d == NAN_POSITION) xyz[3 * 7 + 1] = NAN;
+  if (d == NEGATIVE_MASS) mass[3] = -1;
   ms_h5 *h = ms_h5_create(path);
   assert_non_null(h);
   if (d == X_WRONG_SHAPE)
     assert_int_equal(ms_h5_write_doubles(h, "particles/x", 3 * NPART, 1, xyz, "cm"), MS_OK);
-  else
-    assert_int_equal(ms_h5_write_doubles(h, "particles/x", NPART, 3, xyz, "cm"), MS_OK);
+  else assert_int_equal(ms_h5_write_doubles(h, "particles/x", NPART, 3, xyz, "cm"), MS_OK);
   assert_int_equal(ms_h5_write_doubles(h, "particles/v", NPART, 3, vel, "km/s"), MS_OK);
   if (d != NO_MASS)
     assert_int_equal(
         ms_h5_write_doubles(h, "particles/mass", d == MASS_SHORT ? NPART - 1 : NPART, 1, mass, "g"),
         MS_OK);
-  if (d != NO_SPACING)
-    assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
+  if (d != NO_SPACING) assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
   assert_int_equal(ms_h5_attr_double(h, "particles", "time", 0.5), MS_OK);
   assert_int_equal(ms_h5_close(h), MS_OK);
 }
@@ -167,8 +161,7 @@ static char *expected_rows(double bond) {
 }
 
 static const char *body_of(const char *csv) {
-  while (*csv == '#')
-    csv = strchr(csv, '\n') + 1;
+  while (*csv == '#') csv = strchr(csv, '\n') + 1;
   return csv;
 }
 
@@ -272,15 +265,13 @@ static void write_ordered(const char *path, bool reverse, bool with_gid, bool re
     m2[j] = mass[i];
     gid[j] = repeat_gid && j == 1 ? 7 : i + 100; /* ids need not start at 0 */
   }
-  if (repeat_gid)
-    gid[0] = 7;
+  if (repeat_gid) gid[0] = 7;
   ms_h5 *h = ms_h5_create(path);
   assert_non_null(h);
   assert_int_equal(ms_h5_write_doubles(h, "particles/x", NPART, 3, x2, "cm"), MS_OK);
   assert_int_equal(ms_h5_write_doubles(h, "particles/v", NPART, 3, v2, "km/s"), MS_OK);
   assert_int_equal(ms_h5_write_doubles(h, "particles/mass", NPART, 1, m2, "g"), MS_OK);
-  if (with_gid)
-    assert_int_equal(ms_h5_write_ints(h, "particles/gid", NPART, gid), MS_OK);
+  if (with_gid) assert_int_equal(ms_h5_write_ints(h, "particles/gid", NPART, gid), MS_OK);
   assert_int_equal(ms_h5_attr_double(h, "particles", "r0", A), MS_OK);
   assert_int_equal(ms_h5_close(h), MS_OK);
 }
@@ -405,10 +396,8 @@ static void test_snapshot_writer(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_good_snapshot),
-      cmocka_unit_test(test_bad_snapshots),
-      cmocka_unit_test(test_usage),
-      cmocka_unit_test(test_snapshot_writer),
+      cmocka_unit_test(test_good_snapshot), cmocka_unit_test(test_bad_snapshots),
+      cmocka_unit_test(test_usage),         cmocka_unit_test(test_snapshot_writer),
       cmocka_unit_test(test_gid_order),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

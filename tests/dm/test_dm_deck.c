@@ -51,18 +51,17 @@ static void unload(loaded *L) {
 static void test_errors_collected(void **state) {
   (void)state;
   loaded L;
-  load(&L,
-       "discrete_model:\n"
-       "  dimension: 2\n"
-       "  spacing: 0.3\n"
-       "  domain: {lo: [0, 0], hi: [1.0, 0.9]}\n"     /* 1.0 is not a multiple of 0.3 */
-       "  boundaries: {x_lo: periodic, x_hi: wall}\n" /* periodic on one face only */
-       "  layers:\n"
-       "    - {material: stel}\n"                      /* unknown material */
-       "  initial: {profile: rod_triangle, amplitude: 0.001, length: 1}\n" /* 1D profile */
-       "  integrator: leapfrog\n"                      /* unknown scheme */
-       "  t_end: 1.0\n"
-       "  horizon: 0.5\n");                            /* below 1 spacing */
+  load(&L, "discrete_model:\n"
+           "  dimension: 2\n"
+           "  spacing: 0.3\n"
+           "  domain: {lo: [0, 0], hi: [1.0, 0.9]}\n"     /* 1.0 is not a multiple of 0.3 */
+           "  boundaries: {x_lo: periodic, x_hi: wall}\n" /* periodic on one face only */
+           "  layers:\n"
+           "    - {material: stel}\n" /* unknown material */
+           "  initial: {profile: rod_triangle, amplitude: 0.001, length: 1}\n" /* 1D profile */
+           "  integrator: leapfrog\n"                                          /* unknown scheme */
+           "  t_end: 1.0\n"
+           "  horizon: 0.5\n"); /* below 1 spacing */
   assert_null(L.p);
   dk_errors_print(&L.e, stderr);
   assert_true(L.e.n >= 6);
@@ -88,16 +87,15 @@ static ms_status run(loaded *L) {
 static void test_unstable_dt_refused(void **state) {
   (void)state;
   loaded L;
-  load(&L,
-       "discrete_model:\n"
-       "  spacing: 0.05\n"
-       "  domain: {lo: [0], hi: [2]}\n"
-       "  boundaries: {x_lo: wall, x_hi: wall}\n"
-       "  layers: [{material: steel}]\n"
-       "  initial: {profile: rod_sine, amplitude: 0.001, length: 1}\n"
-       "  integrator: sia4\n"
-       "  courant: 1.8\n" /* SIA4's limit is ω dt < 1.573, i.e. courant < 1.57 here */
-       "  t_end: 1.0\n");
+  load(&L, "discrete_model:\n"
+           "  spacing: 0.05\n"
+           "  domain: {lo: [0], hi: [2]}\n"
+           "  boundaries: {x_lo: wall, x_hi: wall}\n"
+           "  layers: [{material: steel}]\n"
+           "  initial: {profile: rod_sine, amplitude: 0.001, length: 1}\n"
+           "  integrator: sia4\n"
+           "  courant: 1.8\n" /* SIA4's limit is ω dt < 1.573, i.e. courant < 1.57 here */
+           "  t_end: 1.0\n");
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_INPUT);
   unload(&L);
@@ -107,13 +105,12 @@ static void test_unstable_dt_refused(void **state) {
 static void test_singular_geometry_refused(void **state) {
   (void)state;
   loaded L;
-  load(&L,
-       "discrete_model:\n"
-       "  dimension: 3\n"
-       "  spacing: 0.1\n"
-       "  domain: {lo: [0, 0, 0], hi: [1, 1, 0.1]}\n"
-       "  layers: [{material: steel}]\n"
-       "  steps: 1\n");
+  load(&L, "discrete_model:\n"
+           "  dimension: 3\n"
+           "  spacing: 0.1\n"
+           "  domain: {lo: [0, 0, 0], hi: [1, 1, 0.1]}\n"
+           "  layers: [{material: steel}]\n"
+           "  steps: 1\n");
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_INPUT);
   unload(&L);

@@ -1,4 +1,4 @@
-/* Hamiltonian discrete model (DESIGN.md §5.2): force = −∇H, conservation laws, bounded energy,
+/* Hamiltonian discrete model (docs/design.md §5.2): force = −∇H, conservation laws, bounded energy,
  * linear-field exactness, detection of singular shape matrices, thread-count independence. */
 #include <math.h>
 #include <omp.h>
@@ -77,8 +77,8 @@ static void check_fd(int dim, int nx, int ny, int nz, double hourglass) {
       double fd = -(Hp - Hm) / (2 * delta);
       errmax = fmax(errmax, fabs(fd - F[3 * i + a]));
     }
-  printf("dim %d, %zu particles, %zu bonds, hourglass %g: max|F_fd - F|/max|F| = %.2e\n", dim,
-         s.n, m->nbonds, hourglass, errmax / fbig);
+  printf("dim %d, %zu particles, %zu bonds, hourglass %g: max|F_fd - F|/max|F| = %.2e\n", dim, s.n,
+         m->nbonds, hourglass, errmax / fbig);
   assert_true(fbig > 0.0);
   assert_true(errmax / fbig < 1e-6);
   free(F);
@@ -96,7 +96,7 @@ static void test_force_is_minus_grad_H(void **state) {
   check_fd(1, 12, 1, 1, 1.0);
 }
 
-/* The model reproduces any linear displacement field exactly (paper 000 §1, after eq. 2) —
+/* The model reproduces any linear displacement field exactly ([Sofronov] §1, after eq. 2) —
  * on every particle, including the boundary ones with one-sided families — and the forces of
  * a homogeneous strain vanish on interior particles. */
 static void test_linear_field_exact(void **state) {
@@ -106,8 +106,8 @@ static void test_linear_field_exact(void **state) {
   const double Cb[9] = {1e-3, 2e-4, -3e-4, 5e-4, -2e-3, 1e-4, -4e-4, 3e-4, 7e-4};
   for (size_t i = 0; i < s.n; ++i)
     for (int a = 0; a < 3; ++a)
-      s.w[3 * i + a] = Cb[3 * a] * s.X[3 * i] + Cb[3 * a + 1] * s.X[3 * i + 1] +
-                       Cb[3 * a + 2] * s.X[3 * i + 2];
+      s.w[3 * i + a] =
+          Cb[3 * a] * s.X[3 * i] + Cb[3 * a + 1] * s.X[3 * i + 1] + Cb[3 * a + 2] * s.X[3 * i + 2];
   dm_options opt = {.horizon = 1.8, .hourglass = 1.0};
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
@@ -161,9 +161,10 @@ static void test_momenta_conserved(void **state) {
       assert_int_equal(rkn_step(ig, step * dt, dt, s.w, s.u, dm_accel, dm_constrain, m), MS_OK);
     dm_momenta(&s, P, J);
     double dP = 0, dJ = 0;
-    for (int a = 0; a < 3; ++a) dP = fmax(dP, fabs(P[a] - P0[a])), dJ = fmax(dJ, fabs(J[a] - J0[a]));
-    printf("%-15s |dP|/sum m|u| = %.2e, |dJ|/scale = %.2e\n", rkn_scheme_get(k)->name,
-           dP / pscale, dJ / jscale);
+    for (int a = 0; a < 3; ++a)
+      dP = fmax(dP, fabs(P[a] - P0[a])), dJ = fmax(dJ, fabs(J[a] - J0[a]));
+    printf("%-15s |dP|/sum m|u| = %.2e, |dJ|/scale = %.2e\n", rkn_scheme_get(k)->name, dP / pscale,
+           dJ / jscale);
     assert_true(dP / pscale < 1e-12);
     assert_true(dJ / jscale < 1e-12);
     rkn_destroy(ig);
@@ -332,7 +333,8 @@ static void test_rkn_order_on_dm(void **state) {
     }
     double mx = 0, my = 0, sxy = 0, sxx = 0;
     for (int j = 0; j < 4; ++j) mx += lx[j] / 4, my += ly[j] / 4;
-    for (int j = 0; j < 4; ++j) sxy += (lx[j] - mx) * (ly[j] - my), sxx += (lx[j] - mx) * (lx[j] - mx);
+    for (int j = 0; j < 4; ++j)
+      sxy += (lx[j] - mx) * (ly[j] - my), sxx += (lx[j] - mx) * (lx[j] - mx);
     const rkn_scheme *sc = rkn_scheme_get((rkn_kind)k);
     printf("DM chain: %-15s measured order %.3f (expected %d)\n", sc->name, sxy / sxx, sc->order);
     assert_true(fabs(sxy / sxx - sc->order) < 0.2);
@@ -341,12 +343,9 @@ static void test_rkn_order_on_dm(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_force_is_minus_grad_H),
-      cmocka_unit_test(test_linear_field_exact),
-      cmocka_unit_test(test_momenta_conserved),
-      cmocka_unit_test(test_energy_no_drift),
-      cmocka_unit_test(test_singular_shape_detected),
-      cmocka_unit_test(test_periodic_and_threads),
+      cmocka_unit_test(test_force_is_minus_grad_H),   cmocka_unit_test(test_linear_field_exact),
+      cmocka_unit_test(test_momenta_conserved),       cmocka_unit_test(test_energy_no_drift),
+      cmocka_unit_test(test_singular_shape_detected), cmocka_unit_test(test_periodic_and_threads),
       cmocka_unit_test(test_rkn_order_on_dm),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,4 +1,4 @@
-/* Paper 000 §6 with the Hamiltonian discrete model, through the `discrete_model` deck problem
+/* [Sofronov] §6 with the Hamiltonian discrete model, through the `discrete_model` deck problem
  * (decks in inputs/dm-*.yaml; numbers recorded in docs/validation.md):
  *   §6.1 rod, triangle data, 200 particles, t = 250 L/c: amplitude error < 5 %;
  *   §6.1 rod, smooth data: < 1 % error over 60 periods; ≥ 20 particles per wavelength;
@@ -100,9 +100,12 @@ static void test_rod_sine(void **state) {
   printf("rod sine mode 1 (400 particles/wavelength): rms error %.3f %%, peak %+.3f %%\n",
          100 * s.rms_err, 100 * s.peak_err);
   assert_true(s.rms_err < 0.01);
-  const char *const mode20[] = {"profile: rod_triangle", "profile: rod_sine, mode: 20",
-                                "t_end: 49.529470 ", "t_end: 2.3774146 ", /* 60 periods */
-                                "probes: [0.5]", "probes: [0.55]",        /* an antinode */
+  const char *const mode20[] = {"profile: rod_triangle",
+                                "profile: rod_sine, mode: 20",
+                                "t_end: 49.529470 ",
+                                "t_end: 2.3774146 ", /* 60 periods */
+                                "probes: [0.5]",
+                                "probes: [0.55]", /* an antinode */
                                 NULL};
   s = run_deck("dm-rod-triangle.yaml", mode20);
   printf("rod sine mode 20 (20 particles/wavelength): peak amplitude error %+.3f %%\n",
@@ -119,14 +122,14 @@ static void test_rod_sine(void **state) {
 static void test_contact(void **state) {
   (void)state;
   dm_run_summary s = run_deck("dm-contact-fe-be.yaml", NULL);
-  printf("contact: L1 %.4f L2 %.4f max %.4f, hourglass max %.4f\n", s.err_l1, s.err_l2,
-         s.err_max, s.hourglass_max);
+  printf("contact: L1 %.4f L2 %.4f max %.4f, hourglass max %.4f\n", s.err_l1, s.err_l2, s.err_max,
+         s.hourglass_max);
   assert_true(s.err_l1 < 0.01);
   assert_true(s.err_l2 < 0.03);
   const char *const off[] = {"hourglass: 1.0", "hourglass: 0.0", NULL};
   dm_run_summary u = run_deck("dm-contact-fe-be.yaml", off);
-  printf("contact without stabilisation: L1 %.4f L2 %.4f, hourglass max %.4f\n", u.err_l1,
-         u.err_l2, u.hourglass_max);
+  printf("contact without stabilisation: L1 %.4f L2 %.4f, hourglass max %.4f\n", u.err_l1, u.err_l2,
+         u.hourglass_max);
   assert_true(u.err_l2 < 0.03);
   assert_true(u.hourglass_max > 10.0 * s.hourglass_max);
 }
@@ -152,8 +155,8 @@ static void test_hourglass_fixed_layers(void **state) {
 static void test_sphere_coarse(void **state) {
   (void)state;
   dm_run_summary s = run_deck("dm-sphere-coarse.yaml", NULL);
-  printf("sphere coarse: w L1 %.4f L2 %.4f max %.4f; u L2 %.4f; hourglass max %.3f\n",
-         s.err_l1, s.err_l2, s.err_max, s.err_u_l2, s.hourglass_max);
+  printf("sphere coarse: w L1 %.4f L2 %.4f max %.4f; u L2 %.4f; hourglass max %.3f\n", s.err_l1,
+         s.err_l2, s.err_max, s.err_u_l2, s.hourglass_max);
   assert_true(s.err_l2 < 0.05);
   assert_true(s.err_u_l2 < 0.03);
 }

@@ -1,11 +1,11 @@
-/* Analytic EOS kinds and the tabulated cold curve of paper 002 (docs/eos.md):
- * Table 1 of paper 002 reproduced, f = −dE/dr, ε_x vs ∫P_x, sound speed vs the isentrope. */
+/* Analytic EOS kinds and the tabulated cold curve of [Davydov] (docs/eos.md):
+ * Table 1 of [Davydov] reproduced, f = −dE/dr, ε_x vs ∫P_x, sound speed vs the isentrope. */
 #include <math.h>
 
 #include "eos_impl.h"
 #include "eos_test_util.h"
 
-/* ---- Table 1 of paper 002 ---------------------------------------------------------------- */
+/* ---- Table 1 of [Davydov] ---------------------------------------------------------------- */
 
 /* The printed E(r) [J] and f(r) [N] columns for r/r0 = 0.75 ... 1.30 (r0 = 5 µm). */
 static const double table1_r[] = {0.75, 0.8, 0.85, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2, 1.25, 1.3};
@@ -27,7 +27,7 @@ static eos_t *load_al_osa(void) {
   return eos;
 }
 
-/* Pair potential of DESIGN.md §5.1 in SI: E(r) = (√2 ρ0 r0³/12) ε_x((r0/r)³),
+/* Pair potential of docs/design.md §5.1 in SI: E(r) = (√2 ρ0 r0³/12) ε_x((r0/r)³),
  * f(r) = (√2/4) r² P_x((r0/r)³); ρ0 kg/m³, ε_x J/kg (= 1e6 kJ/g... 1 kJ/g = 1e6 J/kg),
  * P_x Pa (1 GPa = 1e9 Pa). */
 static double pair_energy_si(const eos_t *eos, double r, double r0) {
@@ -92,7 +92,8 @@ static void test_table1_nodes(void **state) {
  * smooth, so away from nodes the error is O(h²) ≈ 1e-10 relative for h = 1e-5 r0; 1e-6 leaves
  * room for round-off in E ~ 1e-7 J differences). */
 static void check_force_is_minus_dE(const eos_t *eos, double r0, double rlo, double rhi) {
-  double fscale = fmax(fabs(pair_force_si(eos, rlo * r0, r0)), fabs(pair_force_si(eos, rhi * r0, r0)));
+  double fscale =
+      fmax(fabs(pair_force_si(eos, rlo * r0, r0)), fabs(pair_force_si(eos, rhi * r0, r0)));
   for (int k = 0; k < 200; ++k) {
     double x = rlo + (rhi - rlo) * (k + 0.37) / 200.0, r = x * r0, h = 1e-5 * r0;
     double dE = (pair_energy_si(eos, r + h, r0) - pair_energy_si(eos, r - h, r0)) / (2 * h);
@@ -126,7 +127,7 @@ static double integrate_cold_energy(const eos_t *eos, double delta) {
 
 static void test_mg_cold_energy_is_integral(void **state) {
   (void)state;
-  /* Paper 002 parameters: Pb, B4C, h-BN (DESIGN.md §3). */
+  /* [Davydov] parameters: Pb, B4C, h-BN (docs/design.md §3). */
   const double par[3][3] = {{11.34, 1.972, 3.0}, {2.51, 9.06, 3.13}, {2.29, 3.19, 10.41}};
   const double deltas[] = {0.6, 0.8, 0.95, 1.05, 1.3, 1.7, 2.2};
   for (int m = 0; m < 3; ++m) {
@@ -176,7 +177,8 @@ static void test_mg_linear_cold_curve(void **state) {
     double h = 1e-5;
     double de = (eos_cold_energy(al, d + h) - eos_cold_energy(al, d - h)) / (2 * h);
     double p = eos_cold_pressure(al, d), p_fd = 2.703 * d * d * de;
-    if (fabs(p - p_fd) > 1e-6 * (fabs(p) + 1.0)) fail_msg("delta %g: P_x %.12g, fd %.12g", d, p, p_fd);
+    if (fabs(p - p_fd) > 1e-6 * (fabs(p) + 1.0))
+      fail_msg("delta %g: P_x %.12g, fd %.12g", d, p, p_fd);
   }
   /* The cold curve lies below the Hugoniot: e_H(ρ) ≥ ε_x at the same ρ (entropy rises). */
   for (double d = 1.05; d < 2.0; d += 0.1) {
@@ -191,7 +193,7 @@ static void test_mg_linear_cold_curve(void **state) {
 /* Linear elastic: P = K(1 − ρ0/ρ), ε_x = Kθ²/(2ρ0), c² = Kρ0/ρ² (docs/eos.md). */
 static void test_linear_elastic(void **state) {
   (void)state;
-  const double rho0 = 7.85, K = 200.0 / 3.0; /* paper 000 rod: E = 200, ν = 0 */
+  const double rho0 = 7.85, K = 200.0 / 3.0; /* [Sofronov] rod: E = 200, ν = 0 */
   eos_t *s = eos_create_linear_elastic(rho0, K);
   assert_non_null(s);
   assert_true(fabs(eos_c0(s) - sqrt(K / rho0)) < 1e-14);
@@ -319,7 +321,7 @@ static void test_eval_array(void **state) {
 static void test_temperature(void **state) {
   (void)state;
   eos_t *pb = eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false);
-  assert_true(isnan(eos_temperature(pb, 11.34, 0.1))); /* no cv given */
+  assert_true(isnan(eos_temperature(pb, 11.34, 0.1)));          /* no cv given */
   assert_int_equal(eos_set_heat_capacity(pb, 0.129e-3), MS_OK); /* lead: 129 J/(kg K) */
   assert_int_equal(eos_set_heat_capacity(pb, -1.0), MS_ERR_INPUT);
   for (double d = 0.9; d < 1.5; d += 0.1) {

@@ -1,5 +1,5 @@
 /* `mscale hugoniot` through the built binary ($MSCALE_BINARY): CSV format, values, mixtures,
- * and exit codes with FILE:LINE:COL messages for broken decks (DESIGN.md §8). */
+ * and exit codes with FILE:LINE:COL messages for broken decks (docs/design.md §8). */
 #include <math.h>
 #include <sys/wait.h>
 

@@ -7,9 +7,10 @@
 static void jump_residuals(const eos_t *eos, double rho0, double e0, const eos_hugoniot_point *h,
                            double res[3]) {
   double p0 = eos_pressure(eos, rho0, e0), p = eos_pressure(eos, h->rho, h->e);
-  res[0] = fabs(rho0 * h->us - h->rho * (h->us - h->up)) / (rho0 * h->us);            /* mass */
-  res[1] = fabs(p - p0 - rho0 * h->us * h->up) / fabs(p - p0);                         /* momentum */
-  res[2] = fabs(h->e - e0 - 0.5 * (p + p0) * (1 / rho0 - 1 / h->rho)) / fabs(h->e - e0); /* energy */
+  res[0] = fabs(rho0 * h->us - h->rho * (h->us - h->up)) / (rho0 * h->us); /* mass */
+  res[1] = fabs(p - p0 - rho0 * h->us * h->up) / fabs(p - p0);             /* momentum */
+  res[2] =
+      fabs(h->e - e0 - 0.5 * (p + p0) * (1 / rho0 - 1 / h->rho)) / fabs(h->e - e0); /* energy */
 }
 
 /* Linear Us–up form: the Hugoniot from (ρ0, 0) is the reference curve itself, so the solver
@@ -36,7 +37,7 @@ static void test_linear_us_up(void **state) {
   eos_destroy(al);
 }
 
-/* Cold-curve form (paper 002's materials, both Grüneisen models): all three jump conditions
+/* Cold-curve form ([Davydov]'s materials, both Grüneisen models): all three jump conditions
  * hold to 1e-10 (the solver converges the EOS residual to ~1e-14; mass and energy are built
  * into the parametrisation). Also from a pre-heated initial state (e0 > 0, P0 > 0). */
 static void test_cold_form_jump_conditions(void **state) {
@@ -138,12 +139,14 @@ static void test_table_hugoniot_converges(void **state) {
   double max1 = 0, max2 = 0, maxp = 0, sum1 = 0, sum2 = 0;
   for (int i = 0; i < N; ++i) {
     max1 = fmax(max1, fabs(coarse[i].us - exact[i].us) / exact[i].us);
-    sum1 += fabs(coarse[i].us - exact[i].us) / exact[i].us, sum2 += fabs(fine[i].us - exact[i].us) / exact[i].us;
+    sum1 += fabs(coarse[i].us - exact[i].us) / exact[i].us,
+        sum2 += fabs(fine[i].us - exact[i].us) / exact[i].us;
     max2 = fmax(max2, fabs(fine[i].us - exact[i].us) / exact[i].us);
     maxp = fmax(maxp, fabs(coarse[i].p - exact[i].p) / exact[i].p);
   }
   print_message("table Hugoniot: max |dUs|/Us %.3e (h = 0.02), %.3e (h/2), ratio %.2f; "
-                "max |dP|/P %.3e (h)\n", max1, max2, max1 / max2, maxp);
+                "max |dP|/P %.3e (h)\n",
+                max1, max2, max1 / max2, maxp);
   print_message("mean error ratio h/(h/2): %.3f\n", sum1 / sum2);
   assert_true(max1 < 2e-4 && maxp < 5e-4);
   assert_true(sum1 / sum2 > 3.0 && sum1 / sum2 < 6.0);
@@ -157,10 +160,10 @@ static void test_table_hugoniot_converges(void **state) {
   eos_destroy(al);
 }
 
-/* Paper 002 builds its aluminium clusters from the OSA cold curve of Table 1 and compares the
+/* [Davydov] builds its aluminium clusters from the OSA cold curve of Table 1 and compares the
  * resulting Hugoniot with experiment (its Figs. 1-2). Here: the tabulated cold curve with a
  * Mie–Grüneisen thermal part (Γρ = Γ0ρ0, Γ0 = 2) against the experimental fit
- * Us = 5.35 + 1.34 up (DESIGN.md §3) for 0.5 ≤ up ≤ 4 km/s. Measured: within 0.28 %; the fit
+ * Us = 5.35 + 1.34 up (docs/design.md §3) for 0.5 ≤ up ≤ 4 km/s. Measured: within 0.28 %; the fit
  * itself represents scattered data to about 1 %, so 0.5 % is asserted. */
 static void test_al_osa_table_hugoniot(void **state) {
   (void)state;
@@ -186,14 +189,14 @@ static void test_al_osa_table_hugoniot(void **state) {
   dk_errors_free(&e);
 }
 
-/* Kuropatenko rule, paper 002 §1.2: 1/(D − u) = Σ α_i/(D_i − u_i), components at the common
+/* Kuropatenko rule, [Davydov] §1.2: 1/(D − u) = Σ α_i/(D_i − u_i), components at the common
  * pressure on their own Hugoniots, p = ρ0 D u, ρ0 = Σ α_i ρ0_i. */
 static void test_kuropatenko(void **state) {
   (void)state;
   eos_t *b4c = eos_create_mg_cold(2.51, 9.06, 3.13, 1.5, false);
   eos_t *bn = eos_create_mg_cold(2.29, 3.19, 10.41, 1.5, false);
   const eos_t *comp[2] = {b4c, bn};
-  /* 72 % BN by mass (paper 002) -> volume fractions. */
+  /* 72 % BN by mass ([Davydov]) -> volume fractions. */
   double vb = 0.28 / 2.51, vn = 0.72 / 2.29;
   double alpha[2] = {vb / (vb + vn), vn / (vb + vn)}, rho0 = alpha[0] * 2.51 + alpha[1] * 2.29;
   double us[4] = {0.5, 1.0, 2.0, 3.0};

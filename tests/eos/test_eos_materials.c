@@ -149,44 +149,55 @@ typedef struct bad_deck {
 #define HEAD "materials:\n  - name: al\n    eos:\n" /* lines 1-3 */
 
 static const bad_deck bad_decks[] = {
-    {"negative density", HEAD "      type: mg_linear\n      rho0: -2.7\n      c0: 5.35\n"
-                              "      s: 1.34\n      gamma0: 2\n",
+    {"negative density",
+     HEAD "      type: mg_linear\n      rho0: -2.7\n      c0: 5.35\n"
+          "      s: 1.34\n      gamma0: 2\n",
      5, "rho0: expected a number > 0, found -2.7"},
-    {"n <= 1", HEAD "      type: mg_cold\n      rho0: 11.34\n      c0: 1.972\n      n: 1.0\n"
-                    "      gamma0: 2\n",
+    {"n <= 1",
+     HEAD "      type: mg_cold\n      rho0: 11.34\n      c0: 1.972\n      n: 1.0\n"
+          "      gamma0: 2\n",
      7, "expected a number > 1, found 1"},
-    {"negative Grüneisen", HEAD "      type: mg_cold\n      rho0: 11.34\n      c0: 1.972\n"
-                                "      n: 3\n      gamma0: -0.5\n",
+    {"negative Grüneisen",
+     HEAD "      type: mg_cold\n      rho0: 11.34\n      c0: 1.972\n"
+          "      n: 3\n      gamma0: -0.5\n",
      8, "gamma0: expected a number >= 0, found -0.5"},
     {"unknown eos type", HEAD "      type: mie\n      rho0: 1\n", 4,
      "expected one of: mg_cold, mg_linear, ideal_gas, table_cold, table_full, linear_elastic"},
-    {"unknown key (typo)", HEAD "      type: mg_linear\n      rho0: 2.7\n      c00: 5.35\n"
-                                "      c0: 5.35\n      s: 1.34\n      gamma0: 2\n",
+    {"unknown key (typo)",
+     HEAD "      type: mg_linear\n      rho0: 2.7\n      c00: 5.35\n"
+          "      c0: 5.35\n      s: 1.34\n      gamma0: 2\n",
      6, "unknown key 'c00'"},
     {"missing key", HEAD "      type: mg_linear\n      rho0: 2.7\n      s: 1.34\n      gamma0: 2\n",
      3, "missing required key 'c0'"},
-    {"wrong value type", HEAD "      type: mg_linear\n      rho0: heavy\n      c0: 5.35\n"
-                              "      s: 1.34\n      gamma0: 2\n",
+    {"wrong value type",
+     HEAD "      type: mg_linear\n      rho0: heavy\n      c0: 5.35\n"
+          "      s: 1.34\n      gamma0: 2\n",
      5, "expected a number"},
-    {"duplicate name", "materials:\n  - name: al\n    eos: {type: ideal_gas, gamma: 1.4}\n"
-                       "  - name: al\n    eos: {type: ideal_gas, gamma: 1.6}\n",
+    {"duplicate name",
+     "materials:\n  - name: al\n    eos: {type: ideal_gas, gamma: 1.4}\n"
+     "  - name: al\n    eos: {type: ideal_gas, gamma: 1.6}\n",
      4, "duplicate material name 'al' (first defined on line 2)"},
-    {"nonexistent table file", HEAD "      type: table_cold\n      file: no_such_table.txt\n"
-                                    "      gamma0: 2\n",
+    {"nonexistent table file",
+     HEAD "      type: table_cold\n      file: no_such_table.txt\n"
+          "      gamma0: 2\n",
      5, "cannot open table file 'no_such_table.txt'"},
-    {"truncated table", HEAD "      type: table_cold\n      file: cold_truncated.txt\n"
-                             "      gamma0: 2\n",
+    {"truncated table",
+     HEAD "      type: table_cold\n      file: cold_truncated.txt\n"
+          "      gamma0: 2\n",
      5, "invalid cold-curve table"},
-    {"non-monotone table", HEAD "      type: table_cold\n      file: cold_nonmono.txt\n"
-                                "      gamma0: 2\n",
+    {"non-monotone table",
+     HEAD "      type: table_cold\n      file: cold_nonmono.txt\n"
+          "      gamma0: 2\n",
      5, "invalid cold-curve table"},
     {"ideal gas gamma <= 1", HEAD "      type: ideal_gas\n      gamma: 1.0\n", 5,
      "expected a number > 1, found 1"},
-    {"negative s", HEAD "      type: mg_linear\n      rho0: 2.7\n      c0: 5.35\n      s: -1\n"
-                        "      gamma0: 2\n",
+    {"negative s",
+     HEAD "      type: mg_linear\n      rho0: 2.7\n      c0: 5.35\n      s: -1\n"
+          "      gamma0: 2\n",
      7, "s: expected a number >= 0, found -1"},
-    {"zero bulk modulus", HEAD "      type: linear_elastic\n      rho0: 7.85\n      bulk_modulus: 0\n",
-     6, "bulk_modulus: expected a number > 0, found 0"},
+    {"zero bulk modulus",
+     HEAD "      type: linear_elastic\n      rho0: 7.85\n      bulk_modulus: 0\n", 6,
+     "bulk_modulus: expected a number > 0, found 0"},
     {"materials not a list", "materials:\n  al: {type: ideal_gas}\n", 2,
      "materials: expected a list"},
     {"no materials", "units: internal\n", 1, "missing required top-level key 'materials'"},
@@ -195,19 +206,22 @@ static const bad_deck bad_decks[] = {
      "missing required key 'eos'"},
     {"eos not a mapping", "materials:\n  - name: al\n    eos: mg_linear\n", 3,
      "expected a mapping"},
-    {"negative shear modulus", "materials:\n  - name: al\n    shear_modulus: -1\n"
-                               "    eos: {type: ideal_gas, gamma: 1.4}\n",
+    {"negative shear modulus",
+     "materials:\n  - name: al\n    shear_modulus: -1\n"
+     "    eos: {type: ideal_gas, gamma: 1.4}\n",
      3, "shear_modulus: expected a number >= 0, found -1"},
     {"cv not positive", HEAD "      type: ideal_gas\n      gamma: 1.4\n      cv: 0\n", 6,
      "cv: expected a number > 0, found 0"},
-    {"unknown key in a material", "materials:\n  - name: al\n    colour: grey\n"
-                                  "    eos: {type: ideal_gas, gamma: 1.4}\n",
+    {"unknown key in a material",
+     "materials:\n  - name: al\n    colour: grey\n"
+     "    eos: {type: ideal_gas, gamma: 1.4}\n",
      3, "unknown key 'colour'"},
-    {"mixture fractions", "materials:\n  - name: a\n    eos: {type: ideal_gas, gamma: 1.4}\n"
-                          "  - name: b\n    eos: {type: ideal_gas, gamma: 1.6}\n"
-                          "mixtures:\n  - name: m\n    components:\n"
-                          "      - {material: a, volume_fraction: 0.5}\n"
-                          "      - {material: b, volume_fraction: 0.6}\n",
+    {"mixture fractions",
+     "materials:\n  - name: a\n    eos: {type: ideal_gas, gamma: 1.4}\n"
+     "  - name: b\n    eos: {type: ideal_gas, gamma: 1.6}\n"
+     "mixtures:\n  - name: m\n    components:\n"
+     "      - {material: a, volume_fraction: 0.5}\n"
+     "      - {material: b, volume_fraction: 0.6}\n",
      9, "fractions must add up to 1"},
     {"mixture of an unknown material",
      "materials:\n  - name: a\n    eos: {type: ideal_gas, gamma: 1.4}\n"
@@ -227,15 +241,12 @@ static void test_bad_decks(void **state) {
     dk_doc *doc;
     char path[512], where[600];
     eos_materials *m = read_deck(b->text, &e, &doc, path, sizeof path);
-    if (b->line > 0)
-      snprintf(where, sizeof where, "%s:%d:", path, b->line);
-    else
-      snprintf(where, sizeof where, "%s:", path);
+    if (b->line > 0) snprintf(where, sizeof where, "%s:%d:", path, b->line);
+    else snprintf(where, sizeof where, "%s:", path);
     if (getenv("EOS_TEST_VERBOSE")) eos_test_dump(&e);
     if (e.n == 0 || !has_error(&e, where) || !has_error(&e, b->needle)) {
       eos_test_dump(&e);
-      fail_msg("bad deck '%s': expected an error at %s containing '%s'", b->what, where,
-               b->needle);
+      fail_msg("bad deck '%s': expected an error at %s containing '%s'", b->what, where, b->needle);
     }
     eos_materials_free(m);
     dk_free(doc);

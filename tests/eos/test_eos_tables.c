@@ -25,13 +25,12 @@ static void tmp_path(char *buf, size_t n, const char *name) {
 
 /* A small valid cold table: δ increasing, with a δ = 1 row, consistent with the MG cold form of
  * B4C (values computed from it, 8 digits). */
-static const char *good_cold =
-    "# test cold curve\n"
-    "delta rho eps_x P_x\n"
-    "0.9 2.259 0.43890007 -18.491141\n"
-    "1.0 2.51 0 0\n"
-    "1.1 2.761 0.38720588 22.880114\n"
-    "1.2 3.012 1.4717684 50.648186\n";
+static const char *good_cold = "# test cold curve\n"
+                               "delta rho eps_x P_x\n"
+                               "0.9 2.259 0.43890007 -18.491141\n"
+                               "1.0 2.51 0 0\n"
+                               "1.1 2.761 0.38720588 22.880114\n"
+                               "1.2 3.012 1.4717684 50.648186\n";
 
 /* Returns the cold-table EOS for `text` (NULL on error) and leaves the messages in *e. */
 static eos_t *cold_from_text(const char *name, const char *text, dk_errors *e, char *path,
@@ -83,26 +82,31 @@ static void test_cold_table_good_and_broken(void **state) {
                     "1.1 2.761 0.38720588 22.880114\n",
                     4, "not strictly monotone");
   /* non-monotone P_x */
-  expect_cold_error("pmono.txt",
-                    "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.761 0.38720588 22.880114\n"
-                    "1.2 3.012 1.4717684 21.0\n",
-                    4, "P_x is not monotone");
+  expect_cold_error(
+      "pmono.txt",
+      "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.761 0.38720588 22.880114\n"
+      "1.2 3.012 1.4717684 21.0\n",
+      4, "P_x is not monotone");
   /* a word where a number belongs */
-  expect_cold_error("word.txt", "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 zero 0\n1.1 2.761 0.92 23\n",
-                    2, "expected a finite number, found 'zero'");
+  expect_cold_error("word.txt",
+                    "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 zero 0\n1.1 2.761 0.92 23\n", 2,
+                    "expected a finite number, found 'zero'");
   /* no reference row δ = 1 */
-  expect_cold_error("noref.txt", "0.9 2.259 0.43890007 -18.491141\n1.1 2.761 0.38720588 22.880114\n"
-                                 "1.2 3.012 1.4717684 50.648186\n",
+  expect_cold_error("noref.txt",
+                    "0.9 2.259 0.43890007 -18.491141\n1.1 2.761 0.38720588 22.880114\n"
+                    "1.2 3.012 1.4717684 50.648186\n",
                     3, "no reference row");
   /* δ and ρ/ρ0 disagree */
-  expect_cold_error("mismatch.txt",
-                    "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.861 0.38720588 22.880114\n"
-                    "1.2 3.012 1.4717684 50.648186\n",
-                    3, "does not match delta");
+  expect_cold_error(
+      "mismatch.txt",
+      "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.861 0.38720588 22.880114\n"
+      "1.2 3.012 1.4717684 50.648186\n",
+      3, "does not match delta");
   /* negative density */
-  expect_cold_error("negrho.txt",
-                    "0.9 -2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.761 0.38720588 22.880114\n", 1,
-                    "rho must be > 0");
+  expect_cold_error(
+      "negrho.txt",
+      "0.9 -2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.761 0.38720588 22.880114\n", 1,
+      "rho must be > 0");
   /* ε_x inconsistent with P_x: the interpolated P_x overshoots */
   expect_cold_error("inconsistent.txt",
                     "0.9 2.259 0.43890007 -18.491141\n1.0 2.51 0 0\n1.1 2.761 3.0 22.880114\n"
@@ -176,7 +180,8 @@ static void test_full_table_interpolation(void **state) {
   print_message("full table h_rho = 0.02: max rel. error P %.2e, c %.2e\n", pmax_err, cmax_err);
   assert_true(pmax_err < 1e-3 && cmax_err < 1e-3);
   /* outside: NaN and MS_ERR_UNSTABLE */
-  assert_true(isnan(eos_pressure(t, 6.5, 1.0)) && isnan(eos_pressure(t, 2.1, 1.0)) && isnan(eos_pressure(t, 3.0, 9.5)));
+  assert_true(isnan(eos_pressure(t, 6.5, 1.0)) && isnan(eos_pressure(t, 2.1, 1.0)) &&
+              isnan(eos_pressure(t, 3.0, 9.5)));
   double rho[2] = {3.0, 7.0}, e[2] = {1.0, 1.0}, p[2];
   size_t bad = 9;
   assert_int_equal(eos_eval(t, 2, rho, e, p, NULL, &bad), MS_ERR_UNSTABLE);
@@ -252,8 +257,9 @@ static void test_full_table_broken(void **state) {
       const double *rho, *P;
       size_t pr;
       const char *needle;
-    } cases[] = {{"h5_shape.h5", rho3, P4, 2, "inconsistent table shapes"},
-                 {"h5_axis.h5", rho_bad, P6, 3, "rho axis must be positive and strictly increasing"}};
+    } cases[] = {
+        {"h5_shape.h5", rho3, P4, 2, "inconsistent table shapes"},
+        {"h5_axis.h5", rho_bad, P6, 3, "rho axis must be positive and strictly increasing"}};
     for (int k = 0; k < 2; ++k) {
       tmp_path(path, sizeof path, cases[k].name);
       ms_h5 *h = ms_h5_create(path);

@@ -21,8 +21,8 @@ static cd_sim *cd_test_create(ptl_state *p, const cd_box *box, const cd_config *
   cd_sim *s = cd_sim_create(p, box, cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
   const double r0 = cfg->r0;
-  if (!t || cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, r0, 0, 1.2 * r0, 0.5 * r0, 1.0, 0) !=
-                MS_OK)
+  if (!t ||
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, r0, 0, 1.2 * r0, 0.5 * r0, 1.0, 0) != MS_OK)
     abort();
   cd_sim_set_pair(s, 0, 0, t);
   return s;

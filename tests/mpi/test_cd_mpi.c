@@ -34,11 +34,11 @@ static int my_rank = 0;
 typedef enum { CASE_PISTON, CASE_REBALANCE, CASE_BONDED, CASE_RKN } case_kind;
 
 typedef struct result {
-  size_t n;          /* global particle count */
-  double *x, *v;     /* [n][3] by gid */
+  size_t n;      /* global particle count */
+  double *x, *v; /* [n][3] by gid */
   cd_energy e;
-  double D;          /* shock speed from the front positions (piston cases) */
-  long broken;       /* broken bonds (bonded case) */
+  double D;    /* shock speed from the front positions (piston cases) */
+  long broken; /* broken bonds (bonded case) */
   long rebalances;
   long rebuilds;
 } result;
@@ -63,11 +63,15 @@ static cd_sim *make_case(case_kind kind, const eos_t *eos, bool distributed) {
   for (size_t i = 0; i < p->n; i++)
     for (int c = 0; c < 3; c++) v[c][i] = i < npiston ? (c == 2 ? UP : 0.0) : v[c][i] - mean[c];
   for (size_t i = 0; i < npiston; i++) p->flags[i] = PTL_DRIVEN;
-  cd_box box = {.lo = {0, 0, 0}, .hi = {nx * a, nx * a, nz * a},
+  cd_box box = {.lo = {0, 0, 0},
+                .hi = {nx * a, nx * a, nz * a},
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, piston ? CD_BC_FREE : CD_BC_PERIODIC}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0,
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = 0.02 * R0 / C0,
                    .cutoff = piston ? CD_CUTOFF_PLAIN : CD_CUTOFF_BONDED,
-                   .damping_gamma = piston ? 0.0 : 0.05 * C0 / R0, .lattice = CD_LATTICE_FCC,
+                   .damping_gamma = piston ? 0.0 : 0.05 * C0 / R0,
+                   .lattice = CD_LATTICE_FCC,
                    .integrator = kind == CASE_RKN ? CD_INT_RKN4 : CD_INT_VELOCITY_VERLET};
   cd_sim *s = cd_test_create(p, &box, &cfg, eos, distributed);
   if (piston) {
@@ -79,7 +83,8 @@ static cd_sim *make_case(case_kind kind, const eos_t *eos, bool distributed) {
                             .rebalance_threshold = kind == CASE_REBALANCE ? 1.05 : 0.0,
                             .rebalance_interval = 1};
   cd_test_init(s, distributed ? &mc : NULL);
-  if (kind == CASE_BONDED) CHECK(cd_sim_affine(s, (double[3]){1.15, 1.15, 1.15}) == MS_OK, "affine");
+  if (kind == CASE_BONDED)
+    CHECK(cd_sim_affine(s, (double[3]){1.15, 1.15, 1.15}) == MS_OK, "affine");
   return s;
 }
 
@@ -91,7 +96,8 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
     for (size_t i = 0; i < s->p->nlocal; i++) {
       double x[3] = {s->p->x[i], s->p->y[i], s->p->z[i]};
       if (!cd_sim_owns_position(s, x)) {
-        CHECK(false, "owned particle %zu (gid %ld) outside the rank's cells", i, (long)s->p->gid[i]);
+        CHECK(false, "owned particle %zu (gid %ld) outside the rank's cells", i,
+              (long)s->p->gid[i]);
         break;
       }
     }
@@ -115,7 +121,8 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
   /* D: least-squares slope of the front positions over the second half of the run */
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int m = 0;
-  for (int k = nf / 2; k < nf; k++, m++) sx += tf[k], sy += zf[k], sxx += tf[k] * tf[k], sxy += tf[k] * zf[k];
+  for (int k = nf / 2; k < nf; k++, m++)
+    sx += tf[k], sy += zf[k], sxx += tf[k] * tf[k], sxy += tf[k] * zf[k];
   res.D = m > 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : NAN;
   /* global state by gid: each owned particle contributes once, the sum over ranks fills it */
   const ptl_state *p = s->p;
@@ -191,7 +198,8 @@ static void compare(const char *name, case_kind kind, const eos_t *eos, long ste
     CHECK(fabs(dis.D - ser.D) < 1e-6 * ser.D, "%s: D %.9f vs serial %.9f", name, dis.D, ser.D);
   } else {
     CHECK(ser.broken > 0, "%s: no bond broke (the case tests nothing)", name);
-    CHECK(dis.broken == ser.broken, "%s: %ld broken bonds, serial %ld", name, dis.broken, ser.broken);
+    CHECK(dis.broken == ser.broken, "%s: %ld broken bonds, serial %ld", name, dis.broken,
+          ser.broken);
   }
   if (kind == CASE_REBALANCE && par_size() > 1)
     CHECK(dis.rebalances >= 1, "%s: no rebalance happened", name);
@@ -210,7 +218,8 @@ int main(int argc, char **argv) {
   compare("piston, RKN4", CASE_RKN, eos, 400);
   eos_destroy(eos);
   int all = (int)par_sum_long(failures);
-  if (my_rank == 0) printf("%s (%d failures over %d ranks)\n", all ? "FAILED" : "OK", all, ctx.size);
+  if (my_rank == 0)
+    printf("%s (%d failures over %d ranks)\n", all ? "FAILED" : "OK", all, ctx.size);
   ms_ctx_close(&ctx);
   par_finalize();
   return all ? 1 : 0;

@@ -22,14 +22,14 @@
 
 static int failures = 0;
 static int my_rank = 0;
-#define CHECK(cond, ...)                                                                      \
-  do {                                                                                        \
-    if (!(cond)) {                                                                            \
-      fprintf(stderr, "FAIL rank %d %s:%d: ", my_rank, __FILE__, __LINE__);                   \
-      fprintf(stderr, __VA_ARGS__);                                                           \
-      fputc('\n', stderr);                                                                    \
-      failures++;                                                                             \
-    }                                                                                         \
+#define CHECK(cond, ...)                                                                           \
+  do {                                                                                             \
+    if (!(cond)) {                                                                                 \
+      fprintf(stderr, "FAIL rank %d %s:%d: ", my_rank, __FILE__, __LINE__);                        \
+      fprintf(stderr, __VA_ARGS__);                                                                \
+      fputc('\n', stderr);                                                                         \
+      failures++;                                                                                  \
+    }                                                                                              \
   } while (0)
 
 static const char *block_deck =
@@ -131,8 +131,8 @@ static void same_run(const loaded *a, const loaded *b, const char *what) {
   CHECK(bad == 0, "%s: %zu components differ (first: particle %zu, w %.17g vs %.17g)", what, bad,
         first / 3, wa[first], wb[first]);
   const dm_run_summary *sa = dm_problem_summary(a->p), *sb = dm_problem_summary(b->p);
-#define SAME(f)                                                                                \
-  CHECK(sa->f == sb->f || (isnan(sa->f) && isnan(sb->f)), "%s: " #f " %.17g vs %.17g", what,    \
+#define SAME(f)                                                                                    \
+  CHECK(sa->f == sb->f || (isnan(sa->f) && isnan(sb->f)), "%s: " #f " %.17g vs %.17g", what,       \
         (double)sa->f, (double)sb->f)
   CHECK(sa->particles == sb->particles && sa->real_particles == sb->real_particles &&
             sa->bonds == sb->bonds && sa->steps == sb->steps,

@@ -18,13 +18,13 @@
 #include "cd_mpi_test.h"
 #include "cpl.h"
 
-#define R0 5.0e-4
-#define C0 5.35
-#define NCELL 6         /* fcc cells per side: 864 particles */
-#define V_EXPAND 2.5    /* km/s, radial velocity at the block's faces */
-#define V_RANDOM 0.4    /* km/s, random amplitude */
-#define STEPS 500
-#define BOND 1.2        /* fragments: |r_i − r_k| ≤ 1.2 r0 */
+#define R0       5.0e-4
+#define C0       5.35
+#define NCELL    6   /* fcc cells per side: 864 particles */
+#define V_EXPAND 2.5 /* km/s, radial velocity at the block's faces */
+#define V_RANDOM 0.4 /* km/s, random amplitude */
+#define STEPS    500
+#define BOND     1.2 /* fragments: |r_i − r_k| ≤ 1.2 r0 */
 
 static cd_sim *make_block(const eos_t *eos, bool distributed) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
@@ -38,13 +38,17 @@ static cd_sim *make_block(const eos_t *eos, bool distributed) {
       v[c][i] = V_EXPAND * x[c][i] / half +
                 V_RANDOM * (2.0 * ptl_splitmix64_uniform(5, 3 * i + (uint64_t)c) - 1.0);
   /* free box three times the block: the fragments stay inside for the run */
-  cd_box box = {.lo = {-3 * half, -3 * half, -3 * half}, .hi = {3 * half, 3 * half, 3 * half},
+  cd_box box = {.lo = {-3 * half, -3 * half, -3 * half},
+                .hi = {3 * half, 3 * half, 3 * half},
                 .bc = {CD_BC_FREE, CD_BC_FREE, CD_BC_FREE}};
-  cd_config cfg = {.r0 = R0, .skin = 0.2 * R0, .dt = 0.05 * R0 / C0, .cutoff = CD_CUTOFF_PLAIN,
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.2 * R0,
+                   .dt = 0.05 * R0 / C0,
+                   .cutoff = CD_CUTOFF_PLAIN,
                    .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_test_create(p, &box, &cfg, eos, distributed);
-  const cd_mpi_config mc = {.partition = CD_PART_METIS, .rebalance_threshold = 1.05,
-                            .rebalance_interval = 1};
+  const cd_mpi_config mc = {
+      .partition = CD_PART_METIS, .rebalance_threshold = 1.05, .rebalance_interval = 1};
   cd_test_init(s, distributed ? &mc : NULL);
   for (long k = 0; k < STEPS; k++)
     if (cd_sim_step(s) != MS_OK) {
@@ -111,13 +115,12 @@ int main(int argc, char **argv) {
     const double L = 6 * NCELL * sqrt(2.0) * R0; /* position scale: the box */
     for (size_t k = 0; k < f.n && f.n == ref.n; k++) {
       CHECK(f.count[k] == ref.count[k] && f.first[k] == ref.first[k], "fragment %zu count", k);
-      bool ok = close_to(f.mass[k], ref.mass[k], 1e-12 * ref.mass[k]) &&
-                close_to(f.cx[k], ref.cx[k], 1e-9 * L) && close_to(f.cy[k], ref.cy[k], 1e-9 * L) &&
-                close_to(f.cz[k], ref.cz[k], 1e-9 * L) &&
-                close_to(f.vx[k], ref.vx[k], 1e-9 * V_EXPAND) &&
-                close_to(f.vy[k], ref.vy[k], 1e-9 * V_EXPAND) &&
-                close_to(f.vz[k], ref.vz[k], 1e-9 * V_EXPAND) &&
-                close_to(f.rg[k], ref.rg[k], 1e-9 * L);
+      bool ok =
+          close_to(f.mass[k], ref.mass[k], 1e-12 * ref.mass[k]) &&
+          close_to(f.cx[k], ref.cx[k], 1e-9 * L) && close_to(f.cy[k], ref.cy[k], 1e-9 * L) &&
+          close_to(f.cz[k], ref.cz[k], 1e-9 * L) && close_to(f.vx[k], ref.vx[k], 1e-9 * V_EXPAND) &&
+          close_to(f.vy[k], ref.vy[k], 1e-9 * V_EXPAND) &&
+          close_to(f.vz[k], ref.vz[k], 1e-9 * V_EXPAND) && close_to(f.rg[k], ref.rg[k], 1e-9 * L);
       CHECK(ok, "fragment %zu: mass %.17g/%.17g cx %.17g/%.17g vx %.17g/%.17g rg %.17g/%.17g", k,
             f.mass[k], ref.mass[k], f.cx[k], ref.cx[k], f.vx[k], ref.vx[k], f.rg[k], ref.rg[k]);
     }

@@ -25,7 +25,7 @@ static const double PI = 3.14159265358979323846;
 /* ---- global particle sets (identical on every rank) ---- */
 typedef struct gset {
   const char *name;
-  frag_points p;        /* gid = global index until a set shuffles them */
+  frag_points p; /* gid = global index until a set shuffles them */
   cpl_fragment_opts o;
   double lo[3], ext[3]; /* region for the decompositions */
 } gset;
@@ -213,7 +213,9 @@ static void mark_neighbourhood(const cells *c, size_t b, uint8_t *mark) {
           if (c->per[k]) q[k] = (q[k] + c->nc[k]) % c->nc[k];
           else ok = false;
         }
-        if (ok) mark[(size_t)q[0] + (size_t)c->nc[0] * ((size_t)q[1] + (size_t)c->nc[1] * (size_t)q[2])] = 1;
+        if (ok)
+          mark[(size_t)q[0] + (size_t)c->nc[0] * ((size_t)q[1] + (size_t)c->nc[1] * (size_t)q[2])] =
+              1;
       }
 }
 
@@ -320,12 +322,12 @@ static void run_case(const gset *g, decomp how) {
     if (me == 0)
       printf("%-18s %-12s np %d: %zu particles, %zu fragments, %d label rounds\n", g->name, dname,
              ctx.size, g->p.n, f.n, f.rounds);
-    CHECK(f.n == ref.n && f.n_particles == no, "%s / %s: %zu fragments, serial %zu", g->name,
-          dname, f.n, ref.n);
+    CHECK(f.n == ref.n && f.n_particles == no, "%s / %s: %zu fragments, serial %zu", g->name, dname,
+          f.n, ref.n);
     /* ids: the reference labels the global particle index (gid is a permutation of it there) */
     for (size_t l = 0; l < no; ++l)
-      CHECK(f.id[l] == ref.id[src[l]], "%s / %s: particle gid %lld: id %lld, serial %lld",
-            g->name, dname, (long long)gid[l], (long long)f.id[l], (long long)ref.id[src[l]]);
+      CHECK(f.id[l] == ref.id[src[l]], "%s / %s: particle gid %lld: id %lld, serial %lld", g->name,
+            dname, (long long)gid[l], (long long)f.id[l], (long long)ref.id[src[l]]);
     double side = fmax(g->ext[0], fmax(g->ext[1], g->ext[2]));
     for (size_t k = 0; k < f.n && f.n == ref.n; ++k) {
       CHECK(f.count[k] == ref.count[k] && f.first[k] == ref.first[k], "%s: fragment %zu count",
@@ -335,7 +337,8 @@ static void run_case(const gset *g, decomp how) {
                 close_rel(f.vx[k], ref.vx[k], 1) && close_rel(f.vy[k], ref.vy[k], 1) &&
                 close_rel(f.vz[k], ref.vz[k], 1) && close_rel(f.rg[k], ref.rg[k], side) &&
                 close_rel(f.diameter[k], ref.diameter[k], 0);
-      CHECK(ok, "%s / %s: fragment %zu table differs (mass %.17g/%.17g cx %.17g/%.17g rg %.17g/%.17g)",
+      CHECK(ok,
+            "%s / %s: fragment %zu table differs (mass %.17g/%.17g cx %.17g/%.17g rg %.17g/%.17g)",
             g->name, dname, k, f.mass[k], ref.mass[k], f.cx[k], ref.cx[k], f.rg[k], ref.rg[k]);
     }
     cpl_spectrum s1 = {0}, s2 = {0};
@@ -382,7 +385,8 @@ int main(int argc, char **argv) {
     frag_points_free(&sets[s].p);
   }
   int total = (int)par_sum_long(failures);
-  if (ctx.rank == 0) printf("%s: %d failure(s) on %d rank(s)\n", total ? "FAILED" : "passed", total, ctx.size);
+  if (ctx.rank == 0)
+    printf("%s: %d failure(s) on %d rank(s)\n", total ? "FAILED" : "passed", total, ctx.size);
   par_finalize();
   return total ? 1 : 0;
 }

@@ -103,8 +103,9 @@ int main(int argc, char **argv) {
   free(rows);
   free(ids);
   int all_failures = (int)par_sum_long(failures);
-  if (r == 0) printf("%s: %d rank%s, %d failure%s\n", all_failures ? "FAILED" : "passed", p,
-                     p == 1 ? "" : "s", all_failures, all_failures == 1 ? "" : "s");
+  if (r == 0)
+    printf("%s: %d rank%s, %d failure%s\n", all_failures ? "FAILED" : "passed", p,
+           p == 1 ? "" : "s", all_failures, all_failures == 1 ? "" : "s");
   ms_ctx_close(&ctx);
   par_finalize();
   return all_failures ? 1 : 0;

@@ -1,5 +1,5 @@
 /* Symplectic RKN integrators: coefficient conditions, measured convergence order, bounded
- * energy error (DESIGN.md §5.2, paper 000 §2). */
+ * energy error (docs/design.md §5.2, [Sofronov] §2). */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -37,7 +37,7 @@ static void integrate(rkn_kind kind, double dt, double T, double q[2], double u[
 }
 
 /* Order conditions of RKN methods up to order 4 with b = γ, c = α, a_lk = γ_k(α_l − α_k)
- * (paper 000 §2; the β conditions follow from β = γ(1 − α) for symplectic schemes):
+ * ([Sofronov] §2; the β conditions follow from β = γ(1 − α) for symplectic schemes):
  * Σb = 1, Σbc = ½, Σbc² = ⅓, Σbc³ = ¼, Σ b_l a_lk = 1/6, Σ b_l c_l a_lk = 1/8,
  * Σ b_l a_lk c_k = 1/24. Residuals are pure round-off of O(1) sums: < 1e-14. */
 static void test_coefficients(void **state) {
@@ -82,14 +82,16 @@ static void test_convergence_order(void **state) {
     for (int j = 0; j < 4; ++j) {
       double dt = dt0 / pow(2.0, j), q[2], u[2];
       integrate((rkn_kind)k, dt, T, q, u);
-      double err = hypot(hypot(q[0] - qref[0], q[1] - qref[1]), hypot(u[0] - uref[0], u[1] - uref[1]));
+      double err =
+          hypot(hypot(q[0] - qref[0], q[1] - qref[1]), hypot(u[0] - uref[0], u[1] - uref[1]));
       lx[j] = log(dt);
       ly[j] = log(err);
     }
     double mx = 0, my = 0;
     for (int j = 0; j < 4; ++j) mx += lx[j] / 4, my += ly[j] / 4;
     double sxy = 0, sxx = 0;
-    for (int j = 0; j < 4; ++j) sxy += (lx[j] - mx) * (ly[j] - my), sxx += (lx[j] - mx) * (lx[j] - mx);
+    for (int j = 0; j < 4; ++j)
+      sxy += (lx[j] - mx) * (ly[j] - my), sxx += (lx[j] - mx) * (lx[j] - mx);
     double order = sxy / sxx;
     printf("%-15s measured order %.3f (expected %d)\n", s->name, order, s->order);
     assert_true(fabs(order - s->order) < 0.2);

@@ -72,7 +72,8 @@ static void test_resolved_deck_round_trip(void **state) {
     const char *v1 = dk_scalar(dk_map_value(r1, i)), *v2 = dk_scalar(dk_map_value(r2, i));
     if (v1) assert_string_equal(v1, v2);
   }
-  const dk_node *n1 = dk_get(dk_get(r1, "nested"), "k: v"), *n2 = dk_get(dk_get(r2, "nested"), "k: v");
+  const dk_node *n1 = dk_get(dk_get(r1, "nested"), "k: v"),
+                *n2 = dk_get(dk_get(r2, "nested"), "k: v");
   assert_int_equal(dk_seq_len(n2), 3);
   assert_string_equal(dk_scalar(dk_seq_at(n1, 1)), dk_scalar(dk_seq_at(n2, 1)));
   assert_string_equal(dk_map_key(dk_seq_at(n2, 2), 0), "");
@@ -209,14 +210,15 @@ static void test_deck_number_out_of_range(void **state) {
   (void)state;
   dk_errors e;
   dk_errors_init(&e);
-  dk_doc *doc = dk_load_string("units: si\nbig: 1e999\ntiny: 1e-400\nlong: 1e305\nok: 2e-5\n",
-                               "r.yaml", &e);
+  dk_doc *doc =
+      dk_load_string("units: si\nbig: 1e999\ntiny: 1e-400\nlong: 1e305\nok: 2e-5\n", "r.yaml", &e);
   assert_non_null(doc);
   dk_read_units(doc, &e);
   double v;
   const dk_node *root = dk_root(doc);
   assert_false(dk_read_double(&e, doc, root, "big", MS_DIM_NONE, true, 0, -INFINITY, INFINITY, &v));
-  assert_false(dk_read_double(&e, doc, root, "tiny", MS_DIM_NONE, true, 0, -INFINITY, INFINITY, &v));
+  assert_false(
+      dk_read_double(&e, doc, root, "tiny", MS_DIM_NONE, true, 0, -INFINITY, INFINITY, &v));
   assert_false(dk_read_positive(&e, doc, root, "long", MS_DIM_TIME, true, 0, &v));
   assert_true(dk_read_positive(&e, doc, root, "ok", MS_DIM_TIME, true, 0, &v));
   assert_true(fabs(v - 2.0) < 1e-12); /* 2e-5 s = 2 x 10 us */

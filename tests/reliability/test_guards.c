@@ -24,13 +24,18 @@ static cd_sim *block(eos_t *eos) {
   ptl_state *p = ptl_state_create((size_t)4 * NCELL * NCELL * NCELL, 3);
   double sh[3] = {0.25, 0.25, 0.25}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, NCELL, NCELL, NCELL, sh, o, R0, m, 0);
-  cd_box box = {.lo = {0, 0, 0}, .hi = {NCELL * a, NCELL * a, NCELL * a},
+  cd_box box = {.lo = {0, 0, 0},
+                .hi = {NCELL * a, NCELL * a, NCELL * a},
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_WALL}};
-  cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = CD_CUTOFF_BONDED,
+  cd_config cfg = {.r0 = R0,
+                   .skin = 0.1 * R0,
+                   .dt = 0.02 * R0 / C0,
+                   .cutoff = CD_CUTOFF_BONDED,
                    .lattice = CD_LATTICE_FCC};
   cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
   cd_pair_table *t = calloc(1, sizeof *t);
-  assert_int_equal(cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
+  assert_int_equal(
+      cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
   assert_int_equal(cd_sim_init(s), MS_OK);
   for (int k = 0; k < CD_GUARD_EVERY; k++) assert_int_equal(cd_sim_step(s), MS_OK);

@@ -62,7 +62,7 @@ static void test_ranks_share_the_estimate(void **state) {
   dk_doc *doc = dk_load_string("n: 1\n", "r.yaml", &e);
   ms_mem_estimate m;
   ms_mem_init(&m);
-  ms_mem_add(&m, NULL, "particles", 1e9, 100); /* 93.1 GiB in total */
+  ms_mem_add(&m, NULL, "particles", 1e9, 100);              /* 93.1 GiB in total */
   assert_true(ms_mem_check(&m, 100 * GiB, 1, 1, &e, doc));  /* fits on one node */
   assert_false(ms_mem_check(&m, 32 * GiB, 1, 1, &e, doc));  /* does not */
   assert_true(ms_mem_check(&m, 32 * GiB, 16, 4, &e, doc));  /* 23.3 GiB per node */
