@@ -3,7 +3,7 @@
 # Every dependency is a Debian package; nothing is downloaded from anywhere else.
 set -euo pipefail
 packages=(
-  gcc make cmake pkg-config            # toolchain
+  gcc make cmake pkg-config clang-format   # toolchain; clang-format: the format test
   libopenmpi-dev openmpi-bin           # MPI
   libhdf5-openmpi-dev hdf5-tools       # parallel HDF5 (snapshots, tables), h5dump
   libsundials-dev                      # KINSOL (Hugoniot), CVODE (ejecta transport)
