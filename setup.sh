@@ -11,6 +11,7 @@ packages=(
   libyaml-dev                          # input decks
   libcmocka-dev                        # unit tests
   python3 python3-numpy python3-h5py python3-matplotlib   # post-processing and plots
+  python3-ase                          # the export test reads extended XYZ back with ASE
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -10,6 +10,7 @@ int cmd_run(int argc, char **argv);
 int cmd_check(int argc, char **argv);
 int cmd_hugoniot(int argc, char **argv);
 int cmd_spectrum(int argc, char **argv);
+int cmd_export(int argc, char **argv);
 
 /* A deck read completely: the tree, the materials and the problem the deck describes. */
 typedef struct app_deck {

@@ -12,6 +12,8 @@ static void usage(FILE *f) {
           "  mscale check DECK                                 validate a deck only\n"
           "  mscale hugoniot DECK --material NAME --up LIST    shock Hugoniot as CSV\n"
           "  mscale spectrum SNAPSHOT.h5 [--bond B]            fragment spectrum as CSV\n"
+          "  mscale export SNAPSHOT.h5... --format extxyz|lammps-dump [-o FILE]\n"
+          "                                                    snapshots for OVITO, ASE\n"
           "  mscale --version | --help\n\n"
           "Every subcommand takes --help. Internal units: g, cm, 10 us (velocity km/s,\n"
           "pressure GPa, density g/cm^3, specific energy kJ/g).\n"
@@ -46,7 +48,8 @@ int main(int argc, char **argv) {
   } commands[] = {{"run", cmd_run},
                   {"check", cmd_check},
                   {"hugoniot", cmd_hugoniot},
-                  {"spectrum", cmd_spectrum}};
+                  {"spectrum", cmd_spectrum},
+                  {"export", cmd_export}};
   for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
     if (!strcmp(cmd, commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
   fprintf(stderr, "mscale: unknown command '%s'\n\n", cmd);

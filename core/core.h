@@ -299,6 +299,16 @@ ms_status ms_h5_read_attr_string(ms_h5r *h, const char *obj, const char *attr, c
 ms_status ms_h5_read_attr_double(ms_h5r *h, const char *obj, const char *attr, double *v,
                                  dk_errors *e);
 void ms_h5_close_read(ms_h5r *h);
+/* The numeric 1D/2D datasets directly under `group`, in name order (for tools that take every
+ * per-particle field of a snapshot, e.g. `mscale export`); *items malloc'd, freed with
+ * ms_h5_entries_free. MS_ERR_INPUT naming the file if the group is missing. */
+typedef struct ms_h5_entry {
+  char *name;        /* the dataset's name inside the group */
+  bool is_int;       /* integer class (read with ms_h5_read_ints_rows), else float */
+  size_t rows, cols; /* cols = 1 for 1D */
+} ms_h5_entry;
+ms_status ms_h5_list(ms_h5r *h, const char *group, ms_h5_entry **items, size_t *n, dk_errors *e);
+void ms_h5_entries_free(ms_h5_entry *items, size_t n);
 
 /* XDMF sidecar describing datasets in an HDF5 file so ParaView can open it.
  * Points (particles): positions dataset `coords` with dims [n][dim], dim 2 or 3; attributes

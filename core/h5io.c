@@ -463,3 +463,55 @@ void ms_h5_close_read(ms_h5r *h) {
   free(h->path);
   free(h);
 }
+
+/* One member of a group, if it is a numeric 1D/2D dataset. H5Gget_info + H5Lget_name_by_idx +
+ * H5Oopen/H5Iget_type: the same calls in the HDF5 1.10 and 1.12+ APIs. */
+static bool list_one(hid_t g, const char *name, ms_h5_entry *it) {
+  hid_t obj = H5Oopen(g, name, H5P_DEFAULT);
+  if (obj < 0) return false;
+  bool ok = false;
+  if (H5Iget_type(obj) == H5I_DATASET) {
+    hid_t sp = H5Dget_space(obj), ty = H5Dget_type(obj);
+    hsize_t dims[2] = {0, 1};
+    int rank = H5Sget_simple_extent_ndims(sp);
+    H5T_class_t cls = H5Tget_class(ty);
+    if ((rank == 1 || rank == 2) && (cls == H5T_FLOAT || cls == H5T_INTEGER)) {
+      H5Sget_simple_extent_dims(sp, dims, NULL);
+      it->name = ms_strdup(name);
+      it->is_int = cls == H5T_INTEGER;
+      it->rows = (size_t)dims[0];
+      it->cols = rank == 2 ? (size_t)dims[1] : 1;
+      ok = true;
+    }
+    H5Tclose(ty);
+    H5Sclose(sp);
+  }
+  H5Oclose(obj);
+  return ok;
+}
+
+ms_status ms_h5_list(ms_h5r *h, const char *group, ms_h5_entry **items, size_t *n, dk_errors *e) {
+  *items = NULL;
+  *n = 0;
+  hid_t g = ms_h5_exists(h, group) ? H5Gopen2(h->file, group, H5P_DEFAULT) : -1;
+  H5G_info_t info;
+  if (g < 0 || H5Gget_info(g, &info) < 0) {
+    dk_error_at(e, h->path, 0, 0, "group '%s' is missing", group);
+    if (g >= 0) H5Gclose(g);
+    return MS_ERR_INPUT;
+  }
+  *items = ms_calloc(info.nlinks ? info.nlinks : 1, sizeof **items);
+  for (hsize_t k = 0; k < info.nlinks; k++) {
+    char name[256];
+    ssize_t len =
+        H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, k, name, sizeof name, H5P_DEFAULT);
+    if (len > 0 && (size_t)len < sizeof name && list_one(g, name, &(*items)[*n])) ++*n;
+  }
+  H5Gclose(g);
+  return MS_OK;
+}
+
+void ms_h5_entries_free(ms_h5_entry *items, size_t n) {
+  for (size_t k = 0; k < n && items; k++) free(items[k].name);
+  free(items);
+}
