@@ -323,6 +323,9 @@ typedef struct ms_xdmf_attr {
 ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
                                size_t npoints, int dim, double time, size_t nattr,
                                const ms_xdmf_attr *attr);
+/* DIR/SERIES_NAME: a temporal collection of every DIR/PREFIX*.xmf (name order) but itself, so
+ * ParaView opens a whole run as one time series. Call it again after each new snapshot. */
+ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *series_name);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Checkpoints (core/checkpoint.c, docs/mpi.md): collective HDF5 files under a temporary name,  *

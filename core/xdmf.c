@@ -1,7 +1,10 @@
 /* XDMF sidecar so ParaView opens the HDF5 snapshots (Polyvertex topology). */
 #include "core.h"
 
+#include <dirent.h>
 #include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
 
 ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
                                size_t npoints, int dim, double time, size_t nattr,
@@ -58,4 +61,47 @@ ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const 
   }
   fprintf(f, "  </Grid>\n </Domain>\n</Xdmf>\n");
   return ms_afile_commit(&af);
+}
+
+static int compare_names(const void *a, const void *b) {
+  return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* A temporal collection of the snapshots' own sidecars by XInclude (XDMF 3; ParaView's
+ * Xdmf3 reader resolves it), so that one file opens the whole run as a time series. */
+ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *series_name) {
+  DIR *d = opendir(dir);
+  if (!d) return MS_ERR_IO;
+  size_t n = 0, cap = 0, plen = strlen(prefix);
+  char **names = NULL;
+  for (struct dirent *ent; (ent = readdir(d));) {
+    size_t len = strlen(ent->d_name);
+    if (len <= plen + 4 || strncmp(ent->d_name, prefix, plen) ||
+        strcmp(ent->d_name + len - 4, ".xmf") || !strcmp(ent->d_name, series_name))
+      continue;
+    if (n == cap) names = ms_realloc(names, cap = cap ? 2 * cap : 16, sizeof *names);
+    names[n++] = ms_strdup(ent->d_name);
+  }
+  closedir(d);
+  qsort(names, n, sizeof *names, compare_names);
+  char *path = ms_calloc(strlen(dir) + strlen(series_name) + 2, 1);
+  sprintf(path, "%s/%s", dir, series_name);
+  ms_afile af;
+  ms_status s = ms_afile_open(&af, path);
+  if (s == MS_OK) {
+    fprintf(af.f,
+            "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\" "
+            "xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n <Domain>\n"
+            "  <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+            prefix);
+    for (size_t k = 0; k < n; k++)
+      fprintf(af.f, "   <xi:include href=\"%s\" xpointer=\"xpointer(//Xdmf/Domain/Grid)\"/>\n",
+              names[k]);
+    fprintf(af.f, "  </Grid>\n </Domain>\n</Xdmf>\n");
+    s = ms_afile_commit(&af);
+  }
+  for (size_t k = 0; k < n; k++) free(names[k]);
+  free(names);
+  free(path);
+  return s;
 }
