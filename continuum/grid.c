@@ -165,18 +165,19 @@ void cont_layer_sizes(const cont_layer_spec *L, double *dx) {
 
 static double *alloc_doubles(size_t n) { return ms_aligned_alloc(n, sizeof(double)); }
 
-cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
+/* The set-up's own consistency; the cell count, or 0 with *err set. */
+static size_t setup_cells(const cont_setup *s, char *err, size_t errlen) {
   if (s->nlayers == 0) {
     set_err(err, errlen, "no layers");
-    return NULL;
+    return 0;
   }
   if (!(s->cfl > 0.0 && s->cfl < 1.0)) {
     set_err(err, errlen, "cfl = %g must lie in (0, 1)", s->cfl);
-    return NULL;
+    return 0;
   }
   if (s->geometry != CONT_PLANAR && s->x_left < 0.0) {
     set_err(err, errlen, "x_left = %g < 0 in curvilinear geometry", s->x_left);
-    return NULL;
+    return 0;
   }
   size_t ncells = 0;
   for (size_t k = 0; k < s->nlayers; ++k) {
@@ -184,11 +185,15 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
     if (L->ncells <= 0 || !(L->thickness > 0.0) || !(L->rho > 0.0) || !L->eos) {
       set_err(err, errlen, "layer %zu (%s): needs cells > 0, thickness > 0, density > 0, an EOS", k,
               L->name ? L->name : "?");
-      return NULL;
+      return 0;
     }
     ncells += (size_t)L->ncells;
   }
+  return ncells;
+}
 
+/* The grid's arrays, sized once for ncells cells. */
+static cont_grid *grid_alloc(const cont_setup *s, size_t ncells) {
   cont_grid *g = ms_calloc(1, sizeof *g);
   g->geometry = s->geometry;
   g->area_power = (int)s->geometry;
@@ -222,10 +227,12 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   g->regions = ms_calloc(s->nlayers, sizeof(cont_region));
   for (size_t j = 0; j < Nn; ++j) g->ext_velocity[j] = NAN;
   g->land_time = NAN;
+  return g;
+}
 
-  /* Node positions and cell states, layer by layer. Node velocities: a node inside a layer
-   * takes the layer's velocity; a contact node takes the mass-weighted mean of its two cells
-   * (momentum of the initial state is then exactly Σ m_i u_i). */
+/* Node positions and cell states, layer by layer; false with *err set. */
+static bool place_layers(cont_grid *g, const cont_setup *s, char *err, size_t errlen) {
+  size_t N = g->ncells;
   double *dx = ms_calloc(N, sizeof(double));
   size_t i0 = 0;
   double xpos = s->x_left;
@@ -239,8 +246,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
       set_err(err, errlen, "layer %zu (%s): no energy gives pressure %g at density %g", k,
               L->name ? L->name : "?", L->p, L->rho);
       free(dx);
-      cont_grid_destroy(g);
-      return NULL;
+      return false;
     }
     g->regions[k] = (cont_region){.first = i0, .n = n, .eos = L->eos, .material = L->material};
     for (size_t i = i0; i < i0 + n; ++i) {
@@ -255,7 +261,14 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   }
   /* The last node lands on the exact layer end within round-off; the first on x_left. */
   free(dx);
+  return true;
+}
 
+/* Cell masses and lumped node masses and velocities. A node inside a layer takes the layer's
+ * velocity; a contact node the mass-weighted mean of its two cells (the initial momentum is then
+ * exactly Σ m_i u_i). False with *err set. */
+static bool node_masses(cont_grid *g, const cont_setup *s, char *err, size_t errlen) {
+  size_t N = g->ncells, Nn = g->nnodes;
   double *node_mass = ms_calloc(Nn, sizeof(double));
   double *node_mom = ms_calloc(Nn, sizeof(double));
   for (size_t i = 0; i < N; ++i) {
@@ -278,9 +291,20 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
     if (!(g->mass[i] > 0.0)) {
       set_err(err, errlen, "cell %zu has mass %g (layers too thin for their cell count?)", i,
               g->mass[i]);
-      cont_grid_destroy(g);
-      return NULL;
+      return false;
     }
+  }
+  return true;
+}
+
+cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
+  size_t ncells = setup_cells(s, err, errlen);
+  if (ncells == 0) return NULL;
+  cont_grid *g = grid_alloc(s, ncells);
+  size_t N = ncells, Nn = ncells + 1;
+  if (!place_layers(g, s, err, errlen) || !node_masses(g, s, err, errlen)) {
+    cont_grid_destroy(g);
+    return NULL;
   }
 
   cont_fn_copy(&g->left.fn, &s->left.fn);
