@@ -46,6 +46,18 @@ void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi);
  * generator started from `seed` (bench/cd_lammps, bench/problems/cd_lammps.md). */
 double ptl_splitmix64_uniform(uint64_t seed, uint64_t k);
 
+/* === Graph partition (ptl_partition.c): the one METIS wrapper of the particle models === */
+
+/* k-way partition of a graph of nv vertices in CSR form (xadj[nv + 1], adj[xadj[nv]]; C
+ * numbering) into nparts parts: METIS_PartGraphKway with a fixed seed (12345), so every rank
+ * and every run computes the same map from the same input on one build. vwgt: vertex weights
+ * (NULL: unit); adjw: edge weights beside adj (NULL: unit); ufactor: allowed imbalance above
+ * the mean part weight in 1/1000 (0: METIS's default, 30). part[v] in [0, nparts).
+ * MS_ERR_INTERNAL if METIS fails (its code in *code, if code is not NULL). */
+ms_status ptl_partition_kway(int32_t nv, const int32_t *xadj, const int32_t *adj,
+                             const int32_t *vwgt, const int32_t *adjw, int nparts, int ufactor,
+                             int32_t *part, int *code);
+
 
 /* === Symplectic RKN integrators (rkn_) === */
 
