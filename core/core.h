@@ -8,8 +8,9 @@
  *     collect every error, unknown-key detection, defaults written back for the resolved deck);
  *   - output writers that never leave a truncated file under a final name (CSV with a units
  *     header, HDF5 with an XDMF sidecar), run directories, progress with ETA;
- *   - the MPI layer (`par_*`): core/par.c is the only file that includes <mpi.h>
- *     (core/h5io.c includes <hdf5.h>, which in the parallel build pulls it in too).
+ *   - the MPI layer (`par_*`): core/par.c is the only file that calls MPI and names
+ *     MPI_COMM_WORLD; core/h5io.c takes the communicator's MPI handle from core/par_mpi.h for
+ *     HDF5's MPI-IO driver and reduces through par_comm_*.
  */
 #ifndef MSCALE_CORE_H
 #define MSCALE_CORE_H
@@ -51,8 +52,12 @@ char *ms_strdup(const char *s);
 
 typedef enum ms_log_level { MS_LOG_ERROR = 0, MS_LOG_WARN, MS_LOG_INFO, MS_LOG_DEBUG } ms_log_level;
 
+/* The communicator a run's ranks share (opaque; core/par.c). */
+typedef struct ms_comm ms_comm;
+
 typedef struct ms_ctx {
-  int rank, size;         /* MPI rank and size (0, 1 in a serial run) */
+  const ms_comm *comm;    /* the run's communicator (par_init); NULL in a serial context */
+  int rank, size;         /* rank and size in comm (0, 1 in a serial run) */
   ms_log_level verbosity; /* messages above this level are dropped */
   FILE *log_file;         /* run.log in the output directory, or NULL */
   char *outdir;           /* output directory ("" = none: tests, tools) */
@@ -346,9 +351,23 @@ ms_status ms_ckpt_restore_afile(const ms_ctx *ctx, ms_h5r *h, const char *name, 
                                 dk_errors *e);
 
 /* ------------------------------------------------------------------------------------------ */
-/* MPI layer (core/par.c). Serial builds and tests use the same calls on one rank.            */
+/* MPI layer (core/par.c). Serial builds and tests use the same calls on one rank.            *
+ *                                                                                            *
+ * par_init starts MPI (if nobody has) and puts the run's communicator into ctx->comm; the     *
+ * par_* calls below without a communicator argument act on that communicator (serially, on   *
+ * one rank, before par_init and after par_finalize). The par_comm_* calls take it explicitly  *
+ * (NULL: serial, no communication).                                                          */
 
 ms_status par_init(int *argc, char ***argv, ms_ctx *ctx);
+/* The run's communicator while MPI is running (the one par_init gave the context), else NULL. */
+const ms_comm *par_comm(void);
+int par_comm_rank(const ms_comm *c);
+int par_comm_min_int(const ms_comm *c, int v);
+int par_comm_max_int(const ms_comm *c, int v);
+void par_comm_bcast_int(const ms_comm *c, int *v, int root);
+uint64_t par_comm_sum_u64(const ms_comm *c, uint64_t v);
+/* Sum of v over the lower ranks (0 on rank 0). */
+uint64_t par_comm_exscan_u64(const ms_comm *c, uint64_t v);
 void par_finalize(void);
 void par_barrier(void);
 double par_sum_double(double v);
@@ -384,7 +403,7 @@ int64_t par_max_int64(int64_t v);
 void par_allgather_long(long v, long *all);
 void par_allgatherv_doubles(const double *send, int n, double *recv, const int *counts,
                             const int *displs);
-/* Rank and size of MPI_COMM_WORLD (0 and 1 when MPI is not running). */
+/* Rank and size in the run's communicator (0 and 1 when MPI is not running). */
 int par_rank(void);
 int par_size(void);
 /* In-place element-wise sum over ranks of v[0..n) (exact: integers). */

@@ -1,5 +1,6 @@
 /* HDF5 output (temporary name + rename) and input for post-processing. */
 #include "core.h"
+#include "par_mpi.h"
 
 #include <hdf5.h>
 #include <stdlib.h>
@@ -9,7 +10,7 @@
 struct ms_h5 {
   hid_t file;
   char *path, *tmp_path;
-  bool collective; /* opened by every rank with MPI-IO (ms_h5_create_collective) */
+  const ms_comm *comm; /* collective: opened by every rank of comm with MPI-IO; else NULL */
 };
 
 struct ms_h5r {
@@ -19,21 +20,20 @@ struct ms_h5r {
 
 static void quiet_hdf5(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
 
-static ms_h5 *create_file(const char *path, bool collective) {
+static ms_h5 *create_file(const char *path, const ms_comm *comm) {
   quiet_hdf5();
   ms_h5 *h = ms_calloc(1, sizeof *h);
   h->path = ms_strdup(path);
   h->tmp_path = ms_calloc(strlen(path) + 6, 1);
   sprintf(h->tmp_path, "%s.part", path);
-  h->collective = collective;
+  h->comm = comm;
   hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (collective) H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL);
+  if (comm) H5Pset_fapl_mpio(fapl, par_comm_mpi(comm), MPI_INFO_NULL);
   h->file = H5Fcreate(h->tmp_path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   H5Pclose(fapl);
-  if (collective) {
+  if (comm) {
     /* every rank must agree that the file exists before anyone writes */
-    int ok = h->file >= 0, all = 0;
-    MPI_Allreduce(&ok, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    const int all = par_comm_min_int(comm, h->file >= 0);
     if (!all && h->file >= 0) {
       H5Fclose(h->file);
       h->file = -1;
@@ -49,13 +49,9 @@ static ms_h5 *create_file(const char *path, bool collective) {
   return h;
 }
 
-ms_h5 *ms_h5_create(const char *path) { return create_file(path, false); }
+ms_h5 *ms_h5_create(const char *path) { return create_file(path, NULL); }
 
-ms_h5 *ms_h5_create_collective(const char *path) {
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  return create_file(path, initialized != 0);
-}
+ms_h5 *ms_h5_create_collective(const char *path) { return create_file(path, par_comm()); }
 
 static hid_t link_props(void) {
   hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
@@ -117,16 +113,13 @@ ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *
 static ms_status write_rows_dist(ms_h5 *h, const char *name, size_t n_local, size_t ncomp,
                                  hid_t memtype, hid_t filetype, const void *data,
                                  const char *units) {
-  if (!h->collective) {
+  if (!h->comm) {
     hsize_t dims[2] = {n_local, ncomp};
     return write_dataset(h, name, ncomp > 1 ? 2 : 1, dims, memtype, filetype, data, units);
   }
-  unsigned long long mine = n_local, offset = 0, total = 0;
-  MPI_Exscan(&mine, &offset, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  if (rank == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
-  MPI_Allreduce(&mine, &total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  const uint64_t offset = par_comm_exscan_u64(h->comm, n_local);
+  const uint64_t total = par_comm_sum_u64(h->comm, n_local);
+  const int rank = par_comm_rank(h->comm);
   int rank_dims = ncomp > 1 ? 2 : 1;
   hsize_t gdims[2] = {total, ncomp}, start[2] = {offset, 0}, count[2] = {n_local, ncomp};
   hid_t fspace = H5Screate_simple(rank_dims, gdims, NULL);
@@ -151,9 +144,7 @@ static ms_status write_rows_dist(ms_h5 *h, const char *name, size_t n_local, siz
   }
   H5Pclose(lcpl);
   H5Sclose(fspace);
-  int bad = rc < 0, any = 0;
-  MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  if (any) {
+  if (par_comm_max_int(h->comm, rc < 0)) {
     if (rank == 0)
       fprintf(stderr, "mscale: cannot write dataset '%s' to '%s'\n", name, h->tmp_path);
     return MS_ERR_IO;
@@ -215,15 +206,13 @@ ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const c
 ms_status ms_h5_close(ms_h5 *h) {
   if (!h) return MS_ERR_IO;
   ms_status s = H5Fclose(h->file) < 0 ? MS_ERR_IO : MS_OK;
-  if (h->collective) {
+  if (h->comm) {
     /* the file is complete only when every rank has closed it; then one rank renames it */
-    int bad = s != MS_OK, any = 0, rank = 0;
-    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    if (any) s = MS_ERR_IO;
+    const int rank = par_comm_rank(h->comm);
+    if (par_comm_max_int(h->comm, s != MS_OK)) s = MS_ERR_IO;
     int renamed = 1;
     if (!s && rank == 0) renamed = rename(h->tmp_path, h->path) == 0;
-    MPI_Bcast(&renamed, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    par_comm_bcast_int(h->comm, &renamed, 0);
     if (!renamed) s = MS_ERR_IO;
     if (s && rank != 0) { /* only rank 0 reports and cleans up */
       free(h->path);

@@ -46,6 +46,58 @@ void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi);
  * generator started from `seed` (bench/cd_lammps, bench/problems/cd_lammps.md). */
 double ptl_splitmix64_uniform(uint64_t seed, uint64_t k);
 
+/* === Particle snapshots (ptl_snapshot.c): the one HDF5 + XDMF particle writer === */
+
+/* A dataset of a snapshot beyond x, v and mass: [n][ncomp] doubles, or n int64 when d is NULL. */
+typedef struct ptl_snapshot_data {
+  const char *name; /* path in the file, e.g. "particles/sigma_u" */
+  const double *d;
+  const int64_t *i;
+  int ncomp;
+  const char *units; /* doubles only (NULL: no units attribute) */
+} ptl_snapshot_data;
+
+typedef struct ptl_snapshot_attr {
+  const char *name; /* attribute of the /particles group */
+  double value;
+} ptl_snapshot_attr;
+
+/* What a snapshot holds. Datasets, in this order: particles/x [n][3] (z NULL: 0), particles/v
+ * [n][3] (a NULL component: 0), particles/mass [n], then data[0..ndata); then the attributes
+ * attr[0..nattr) of /particles, in order. The sidecar (PATH with .h5 replaced by .xmf, naming
+ * the file by its base name) shows xdmf[0..nxdmf) at `time`. Collective when dist: every rank
+ * gives its own n particles, stored in rank order (docs/mpi.md). */
+typedef struct ptl_snapshot {
+  size_t n;
+  const double *x, *y, *z;
+  const double *vx, *vy, *vz;
+  const double *mass;
+  size_t ndata;
+  const ptl_snapshot_data *data;
+  size_t nattr;
+  const ptl_snapshot_attr *attr;
+  size_t nxdmf;
+  const ms_xdmf_attr *xdmf;
+  double time;
+  bool dist;
+} ptl_snapshot;
+
+/* Writes the snapshot to path (and its sidecar, rank 0's under MPI). dist: every rank calls it
+ * and gets the same status. */
+ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *snap);
+
+/* === Graph partition (ptl_partition.c): the one METIS wrapper of the particle models === */
+
+/* k-way partition of a graph of nv vertices in CSR form (xadj[nv + 1], adj[xadj[nv]]; C
+ * numbering) into nparts parts: METIS_PartGraphKway with a fixed seed (12345), so every rank
+ * and every run computes the same map from the same input on one build. vwgt: vertex weights
+ * (NULL: unit); adjw: edge weights beside adj (NULL: unit); ufactor: allowed imbalance above
+ * the mean part weight in 1/1000 (0: METIS's default, 30). part[v] in [0, nparts).
+ * MS_ERR_INTERNAL if METIS fails (its code in *code, if code is not NULL). */
+ms_status ptl_partition_kway(int32_t nv, const int32_t *xadj, const int32_t *adj,
+                             const int32_t *vwgt, const int32_t *adjw, int nparts, int ufactor,
+                             int32_t *part, int *code);
+
 
 /* === Symplectic RKN integrators (rkn_) === */
 

@@ -149,67 +149,53 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
   const size_t n = p->nlocal; /* MPI: each rank writes its owned particles (collective file) */
   const double *w = particle_virials(s);
   const double v0 = cd_cluster_volume(s->cfg.lattice, s->cfg.r0, s->cfg.thickness);
-  double *xyz = ms_calloc(3 * n + 1, sizeof *xyz), *vel = ms_calloc(3 * n + 1, sizeof *vel);
   double *su = ms_calloc(n + 1, sizeof *su), *pr = ms_calloc(n + 1, sizeof *pr);
   int64_t *mat = ms_calloc(n + 1, sizeof *mat);
   for (size_t i = 0; i < n; i++) {
-    xyz[3 * i] = p->x[i];
-    xyz[3 * i + 1] = p->y[i];
-    xyz[3 * i + 2] = p->z[i];
-    vel[3 * i] = p->vx[i];
-    vel[3 * i + 1] = p->vy[i];
-    vel[3 * i + 2] = p->vz[i];
     double t[6];
     for (int c = 0; c < 6; c++) t[c] = w[6 * i + c] / v0;
     su[i] = cd_von_mises(t);
     pr[i] = (s->p->dim == 2 ? (t[0] + t[1]) / 2.0 : (t[0] + t[1] + t[2]) / 3.0);
     mat[i] = p->mat[i];
   }
-  ms_status st = MS_ERR_IO;
-  ms_h5 *h = s->dd ? ms_h5_create_collective(path) : ms_h5_create(path);
-  if (h) {
-    st = ms_h5_write_doubles_dist(h, "particles/x", n, 3, xyz, "cm");
-    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
-    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, p->mass, "g");
-    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/sigma_u", n, 1, su, "GPa");
-    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/pressure", n, 1, pr, "GPa");
-    if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/material", n, mat);
-    if (st == MS_OK) st = ms_h5_write_ints_dist(h, "particles/gid", n, p->gid);
-    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", s->t);
-    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)s->step);
-    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "r0", s->cfg.r0);
-    /* periodic axes as the coupling snapshots name them (`mscale spectrum` reads them) */
-    static const char *const pname[3] = {"period_x", "period_y", "period_z"};
-    static const char *const lname[3] = {"lo_x", "lo_y", "lo_z"};
-    for (int a = 0; a < s->p->dim && st == MS_OK; a++)
-      if (s->box.bc[a] == CD_BC_PERIODIC) {
-        st = ms_h5_attr_double(h, "particles", pname[a], s->box.hi[a] - s->box.lo[a]);
-        if (st == MS_OK) st = ms_h5_attr_double(h, "particles", lname[a], s->box.lo[a]);
-      }
-    if (st == MS_OK) st = ms_h5_close(h);
-    else ms_h5_abort(h);
-  }
-  const size_t nglobal = s->dd ? (size_t)par_sum_long((long)n) : n;
-  if (st == MS_OK && (!s->dd || par_rank() == 0)) {
-    /* sidecar next to the .h5, referring to it by its base name */
-    size_t len = strlen(path);
-    char *xmf = ms_calloc(len + 8, 1);
-    memcpy(xmf, path, len);
-    if (len > 3 && strcmp(path + len - 3, ".h5") == 0) len -= 3;
-    strcpy(xmf + len, ".xmf");
-    const char *base = strrchr(path, '/');
-    base = base ? base + 1 : path;
-    ms_xdmf_attr attr[] = {{"velocity", "particles/v", 3, false},
-                           {"sigma_u", "particles/sigma_u", 1, false},
-                           {"pressure", "particles/pressure", 1, false},
-                           {"mass", "particles/mass", 1, false}};
-    st = ms_xdmf_write_points(xmf, base, "particles/x", nglobal, 3, s->t, 4, attr);
-    free(xmf);
-  }
-  free(xyz);
-  free(vel);
+  const ptl_snapshot_data data[] = {{"particles/sigma_u", su, NULL, 1, "GPa"},
+                                    {"particles/pressure", pr, NULL, 1, "GPa"},
+                                    {"particles/material", NULL, mat, 1, NULL},
+                                    {"particles/gid", NULL, p->gid, 1, NULL}};
+  ptl_snapshot_attr attr[3 + 2 * 3] = {
+      {"time", s->t}, {"step", (double)s->step}, {"r0", s->cfg.r0}};
+  size_t nattr = 3;
+  /* periodic axes as the coupling snapshots name them (`mscale spectrum` reads them) */
+  static const char *const pname[3] = {"period_x", "period_y", "period_z"};
+  static const char *const lname[3] = {"lo_x", "lo_y", "lo_z"};
+  for (int a = 0; a < s->p->dim; a++)
+    if (s->box.bc[a] == CD_BC_PERIODIC) {
+      attr[nattr++] = (ptl_snapshot_attr){pname[a], s->box.hi[a] - s->box.lo[a]};
+      attr[nattr++] = (ptl_snapshot_attr){lname[a], s->box.lo[a]};
+    }
+  const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
+                               {"sigma_u", "particles/sigma_u", 1, false},
+                               {"pressure", "particles/pressure", 1, false},
+                               {"mass", "particles/mass", 1, false}};
+  const ptl_snapshot snap = {.n = n,
+                             .x = p->x,
+                             .y = p->y,
+                             .z = p->z,
+                             .vx = p->vx,
+                             .vy = p->vy,
+                             .vz = p->vz,
+                             .mass = p->mass,
+                             .ndata = 4,
+                             .data = data,
+                             .nattr = nattr,
+                             .attr = attr,
+                             .nxdmf = 4,
+                             .xdmf = xdmf,
+                             .time = s->t,
+                             .dist = s->dd != NULL};
+  const ms_status st = ptl_write_snapshot(path, &snap);
   free(su);
   free(pr);
   free(mat);
-  return s->dd ? par_agree_status(st) : st;
+  return st;
 }

@@ -25,8 +25,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <metis.h>
-
 /* The distinct neighbours of cell (ix, iy, iz) in the 26-neighbour stencil, periodic axes
  * wrapped, the cell itself excluded (a periodic axis of 1 or 2 cells maps several offsets onto
  * the same cell). Returns the count (≤ 26), neighbours in stencil order. */
@@ -56,15 +54,15 @@ static int cell_neighbours(const int ncell[3], const bool periodic[3], int ix, i
 
 /* The 26-neighbour graph in CSR form (METIS's xadj/adjncy). */
 typedef struct cell_graph {
-  idx_t nv;
-  idx_t *xadj, *adj;
+  int32_t nv;
+  int32_t *xadj, *adj;
 } cell_graph;
 
 static void graph_build(const int ncell[3], const bool periodic[3], cell_graph *g) {
   const int64_t nv = (int64_t)ncell[0] * ncell[1] * ncell[2];
-  g->nv = (idx_t)nv;
-  g->xadj = ms_calloc((size_t)nv + 1, sizeof(idx_t));
-  g->adj = ms_calloc((size_t)nv * 26 + 1, sizeof(idx_t));
+  g->nv = (int32_t)nv;
+  g->xadj = ms_calloc((size_t)nv + 1, sizeof(int32_t));
+  g->adj = ms_calloc((size_t)nv * 26 + 1, sizeof(int32_t));
   int64_t nb[26];
   size_t na = 0;
   for (int iz = 0; iz < ncell[2]; ++iz)
@@ -72,8 +70,8 @@ static void graph_build(const int ncell[3], const bool periodic[3], cell_graph *
       for (int ix = 0; ix < ncell[0]; ++ix) {
         int64_t c = ix + (int64_t)ncell[0] * (iy + (int64_t)ncell[1] * iz);
         int k = cell_neighbours(ncell, periodic, ix, iy, iz, nb);
-        for (int m = 0; m < k; ++m) g->adj[na++] = (idx_t)nb[m];
-        g->xadj[c + 1] = (idx_t)na;
+        for (int m = 0; m < k; ++m) g->adj[na++] = (int32_t)nb[m];
+        g->xadj[c + 1] = (int32_t)na;
       }
 }
 
@@ -117,31 +115,22 @@ static void slab_partition(const int ncell[3], const int64_t *weight, int nparts
 
 static ms_status metis_partition(const cell_graph *g, const int64_t *weight, int nparts,
                                  int32_t *owner) {
-  const idx_t nv = g->nv;
+  const int32_t nv = g->nv;
   if (nparts >= nv) { /* no balancing possible: one cell per part, the rest empty */
-    for (idx_t c = 0; c < nv; ++c) owner[c] = (int32_t)c;
+    for (int32_t c = 0; c < nv; ++c) owner[c] = c;
     return MS_OK;
   }
-  /* vertex weights w + 1 in idx_t; if their sum would overflow a 32-bit idx_t, the weights
-   * are scaled down (rounded) so the total stays below 2^30 */
+  /* vertex weights w + 1 in 32 bits; if their sum would overflow METIS's 32-bit index, the
+   * weights are scaled down (rounded) so the total stays below 2^30 */
   double total = 0;
-  for (idx_t c = 0; c < nv; ++c) total += (double)weight[c] + 1;
+  for (int32_t c = 0; c < nv; ++c) total += (double)weight[c] + 1;
   const double limit = 1073741824.0; /* 2^30 */
   const double scale = total > limit ? (limit - (double)nv) / (total - (double)nv) : 1.0;
-  idx_t *vwgt = ms_calloc((size_t)nv, sizeof(idx_t));
-  for (idx_t c = 0; c < nv; ++c) vwgt[c] = (idx_t)llround((double)weight[c] * scale) + 1;
-  idx_t *part = ms_calloc((size_t)nv, sizeof(idx_t));
-  idx_t ncon = 1, np = nparts, objval = 0, nvtx = nv;
-  idx_t opts[METIS_NOPTIONS];
-  METIS_SetDefaultOptions(opts);
-  opts[METIS_OPTION_SEED] = 12345; /* fixed: every rank computes the same map */
-  opts[METIS_OPTION_NUMBERING] = 0;
-  int rc = METIS_PartGraphKway(&nvtx, &ncon, g->xadj, g->adj, vwgt, NULL, NULL, &np, NULL, NULL,
-                               opts, &objval, part);
-  for (idx_t c = 0; c < nv; ++c) owner[c] = (int32_t)part[c];
+  int32_t *vwgt = ms_calloc((size_t)nv, sizeof *vwgt);
+  for (int32_t c = 0; c < nv; ++c) vwgt[c] = (int32_t)llround((double)weight[c] * scale) + 1;
+  const ms_status s = ptl_partition_kway(nv, g->xadj, g->adj, vwgt, NULL, nparts, 0, owner, NULL);
   free(vwgt);
-  free(part);
-  return rc == METIS_OK ? MS_OK : MS_ERR_INTERNAL;
+  return s;
 }
 
 /* Cost of a ghost particle relative to an owned one in the load model (ptl.h): an owned fcc
@@ -157,13 +146,13 @@ static void partition_stats(const cell_graph *g, const int64_t *weight, int npar
   double *pw = ms_calloc(2 * (size_t)nparts, sizeof(double)), *hw = pw + nparts;
   double total = 0, wmax = 0, lmax = 0;
   long cut = 0, halo = 0;
-  for (idx_t c = 0; c < g->nv; ++c) {
+  for (int32_t c = 0; c < g->nv; ++c) {
     pw[owner[c]] += (double)weight[c];
     total += (double)weight[c];
     /* cell c is a halo cell of every other part owning one of its neighbours */
     int32_t seen[26];
     int ns = 0;
-    for (idx_t e = g->xadj[c]; e < g->xadj[c + 1]; ++e) {
+    for (int32_t e = g->xadj[c]; e < g->xadj[c + 1]; ++e) {
       int32_t q = owner[g->adj[e]];
       if (q == owner[c]) continue;
       ++cut;
@@ -193,7 +182,7 @@ static ms_status check_grid(const int ncell[3], const bool periodic[3], const in
     if (ncell[a] < 1) return MS_ERR_INPUT;
     nv *= ncell[a];
   }
-  /* METIS indexes the 26 nv adjacency entries with a 32-bit idx_t */
+  /* METIS indexes the 26 nv adjacency entries with a 32-bit index (ptl_partition_kway) */
   if (nv * 26 > 2147483647.0) return MS_ERR_INPUT;
   for (int64_t c = 0; c < (int64_t)nv; ++c)
     if (weight[c] < 0) return MS_ERR_INPUT;

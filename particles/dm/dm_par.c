@@ -29,7 +29,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <metis.h>
 
 struct dm_dist {
   int rank, size;
@@ -65,7 +64,7 @@ static uint32_t vertex_particle(const dm_state *s, size_t i) {
 
 /* Cut bonds and weight imbalance of a particle partition. */
 static void partition_quality(const dm_model *m, const int32_t *part, int nparts,
-                              const idx_t *wvert, long *cut, double *imbalance) {
+                              const int32_t *wvert, long *cut, double *imbalance) {
   long c = 0;
   for (size_t i = 0; i < m->s->n; ++i)
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b)
@@ -90,7 +89,7 @@ static int cmp_slab(const void *a, const void *b, void *xs) {
 
 /* The plain slab decomposition along x (equal bond weight per slab, mirrors with their
  * partners), for the comparison in the log. */
-static void slab_partition(const dm_model *m, int nparts, const idx_t *wvert, int32_t *part) {
+static void slab_partition(const dm_model *m, int nparts, const int32_t *wvert, int32_t *part) {
   const dm_state *s = m->s;
   uint32_t *ord = ms_calloc(s->n ? s->n : 1, sizeof(uint32_t));
   double *wv = ms_calloc(s->n ? s->n : 1, sizeof(double)); /* mirrors weigh on their partner */
@@ -117,17 +116,17 @@ static void slab_partition(const dm_model *m, int nparts, const idx_t *wvert, in
 
 /* METIS k-way partition of the contracted bond graph into nparts; part[] for every particle.
  * wpart[i]: the particle's work weight (its bonds), summed over contracted mirrors. */
-static ms_status metis_partition(const dm_model *m, int nparts, idx_t *wvert, int32_t *part,
+static ms_status metis_partition(const dm_model *m, int nparts, int32_t *wvert, int32_t *part,
                                  const ms_ctx *ctx) {
   const dm_state *s = m->s;
   const size_t n = s->n;
   /* vertices: non-mirror particles, numbered in index order */
-  idx_t *vid = ms_calloc(n, sizeof(idx_t));
-  idx_t nv = 0;
+  int32_t *vid = ms_calloc(n, sizeof(int32_t));
+  int32_t nv = 0;
   for (size_t i = 0; i < n; ++i) vid[i] = s->bc[i] == DM_MIRROR ? -1 : nv++;
-  idx_t *vwgt = ms_calloc((size_t)nv, sizeof(idx_t));
+  int32_t *vwgt = ms_calloc((size_t)nv, sizeof(int32_t));
   for (size_t i = 0; i < n; ++i) vwgt[vid[vertex_particle(s, i)]] += wvert[i];
-  for (idx_t v = 0; v < nv; ++v)
+  for (int32_t v = 0; v < nv; ++v)
     if (vwgt[v] < 1) vwgt[v] = 1;
   /* directed edges (v << 32 | u), v != u, then merged into weights */
   uint64_t *e = ms_calloc(m->nbonds ? m->nbonds : 1, sizeof(uint64_t));
@@ -140,31 +139,26 @@ static ms_status metis_partition(const dm_model *m, int nparts, idx_t *wvert, in
     }
   }
   qsort(e, ne, sizeof(uint64_t), cmp_u64);
-  idx_t *xadj = ms_calloc((size_t)nv + 1, sizeof(idx_t));
-  idx_t *adj = ms_calloc(ne ? ne : 1, sizeof(idx_t)), *adjw = ms_calloc(ne ? ne : 1, sizeof(idx_t));
+  int32_t *xadj = ms_calloc((size_t)nv + 1, sizeof(int32_t));
+  int32_t *adj = ms_calloc(ne ? ne : 1, sizeof(int32_t)),
+          *adjw = ms_calloc(ne ? ne : 1, sizeof(int32_t));
   size_t na = 0;
   for (size_t k = 0; k < ne;) {
     size_t j = k;
     while (j < ne && e[j] == e[k]) ++j;
-    idx_t v = (idx_t)(e[k] >> 32);
-    adj[na] = (idx_t)(e[k] & 0xffffffffu);
-    adjw[na++] = (idx_t)(j - k);
+    int32_t v = (int32_t)(e[k] >> 32);
+    adj[na] = (int32_t)(e[k] & 0xffffffffu);
+    adjw[na++] = (int32_t)(j - k);
     xadj[v + 1]++;
     k = j;
   }
-  for (idx_t v = 0; v < nv; ++v) xadj[v + 1] += xadj[v];
-  idx_t *vpart = ms_calloc((size_t)nv ? (size_t)nv : 1, sizeof(idx_t));
-  idx_t ncon = 1, np = nparts, objval = 0;
-  idx_t opts[METIS_NOPTIONS];
-  METIS_SetDefaultOptions(opts);
-  opts[METIS_OPTION_SEED] = 12345; /* fixed: the same partition on every run */
-  opts[METIS_OPTION_NUMBERING] = 0;
-  opts[METIS_OPTION_UFACTOR] = 10; /* at most 1 % above the mean weight (default 3 %) */
-  int rc = METIS_OK;
-  if (nparts > 1 && nv > 0)
-    rc = METIS_PartGraphKway(&nv, &ncon, xadj, adj, vwgt, NULL, adjw, &np, NULL, NULL, opts,
-                             &objval, vpart);
-  if (rc != METIS_OK)
+  for (int32_t v = 0; v < nv; ++v) xadj[v + 1] += xadj[v];
+  int32_t *vpart = ms_calloc((size_t)nv ? (size_t)nv : 1, sizeof(int32_t));
+  int rc = 0;
+  ms_status st = MS_OK;
+  if (nparts > 1 && nv > 0) /* at most 1 % above the mean weight (METIS's default: 3 %) */
+    st = ptl_partition_kway(nv, xadj, adj, vwgt, adjw, nparts, 10, vpart, &rc);
+  if (st != MS_OK)
     ms_log(ctx, MS_LOG_ERROR, "discrete model: METIS partitioning failed (code %d)", rc);
   for (size_t i = 0; i < n; ++i) part[i] = (int32_t)vpart[vid[vertex_particle(s, i)]];
   free(vid);
@@ -174,7 +168,7 @@ static ms_status metis_partition(const dm_model *m, int nparts, idx_t *wvert, in
   free(adj);
   free(adjw);
   free(vpart);
-  return rc == METIS_OK ? MS_OK : MS_ERR_INTERNAL;
+  return st;
 }
 
 /* ---- local model ------------------------------------------------------------------------ */
@@ -350,8 +344,8 @@ dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status) 
   const size_t n = s->n;
   d->n_global = n;
   d->part = ms_calloc(n ? n : 1, sizeof(int32_t));
-  idx_t *wvert = ms_calloc(n ? n : 1, sizeof(idx_t));
-  for (size_t i = 0; i < n; ++i) wvert[i] = (idx_t)(global->start[i + 1] - global->start[i]) + 1;
+  int32_t *wvert = ms_calloc(n ? n : 1, sizeof(int32_t));
+  for (size_t i = 0; i < n; ++i) wvert[i] = (int32_t)(global->start[i + 1] - global->start[i]) + 1;
   ms_status st = MS_OK;
   double t0 = ms_wall_time();
   if (d->size > 1) {

@@ -267,14 +267,6 @@ static const dm_layer *layer_at(const dm_problem *p, double x) {
   return &p->layers[p->nlayers - 1];
 }
 
-static double splitmix_uniform(uint64_t *state) {
-  uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return (double)(z >> 11) * 0x1p-53;
-}
-
 /* Thickness (cells) of the particle layer added outside a face. */
 static long face_layers(const dm_problem *p, int f) {
   long hz = (long)ceil(p->horizon - 1e-9);
@@ -356,7 +348,7 @@ static double rod_wave_speed(const dm_problem *p) {
 
 static void set_initial(dm_problem *p, dm_state *s, size_t nreal) {
   const double L = p->length, eps = p->amplitude;
-  uint64_t rng = (uint64_t)p->seed;
+  uint64_t rng_k = 0; /* the next output of the generator started from p->seed */
   for (size_t i = 0; i < nreal; ++i) {
     double x = s->X[3 * i];
     switch (p->profile) {
@@ -371,7 +363,8 @@ static void set_initial(dm_problem *p, dm_state *s, size_t nreal) {
       break;
     case PROF_RANDOM_VELOCITY: /* as bench/lammps/gen_inputs.py: u = A(2ξ − 1), ξ the (3i+c)-th */
       for (int c = 0; c < 3; ++c)
-        s->u[3 * i + c] = p->amplitude * (2.0 * splitmix_uniform(&rng) - 1.0);
+        s->u[3 * i + c] =
+            p->amplitude * (2.0 * ptl_splitmix64_uniform((uint64_t)p->seed, rng_k++) - 1.0);
       break;
     default:
       break;
@@ -435,11 +428,12 @@ static double omega_max(dm_dist *d, const dm_state *gs) {
   double al[64], be[64];
   { /* the start vector in global particle order, the same for every rank count */
     double *g = calloc(3 * gs->n, sizeof(double));
-    uint64_t rng = 7;
+    uint64_t rng_k = 0; /* the generator started from seed 7 */
     for (size_t i = 0; i < gs->n; ++i)
       for (int c = 0; c < 3; ++c)
-        g[3 * i + c] =
-            (gs->bc[i] == DM_FREE && c < gs->dim) ? 2.0 * splitmix_uniform(&rng) - 1.0 : 0.0;
+        g[3 * i + c] = (gs->bc[i] == DM_FREE && c < gs->dim)
+                           ? 2.0 * ptl_splitmix64_uniform(7, rng_k++) - 1.0
+                           : 0.0;
     dm_dist_scatter(d, g, 3, q);
     free(g);
   }

@@ -16,18 +16,18 @@
 #include <cmocka.h>
 
 #include "cpl_test.h"
+#include "ptl.h"
 #include "frag_points.h"
 
 /* ---- helpers ---------------------------------------------------------------------------- */
 
-static uint64_t rng_state;
-static double urand(void) { /* splitmix64 → [0, 1) */
-  uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  z ^= z >> 31;
-  return (double)(z >> 11) * 0x1.0p-53;
+/* splitmix64 → [0, 1): the outputs of ptl's generator started from the seed rng_seed set */
+static uint64_t rng_seed_, rng_k;
+static void rng_seed(uint64_t seed) {
+  rng_seed_ = seed;
+  rng_k = 0;
 }
+static double urand(void) { return ptl_splitmix64_uniform(rng_seed_, rng_k++); }
 
 typedef frag_points cloud;
 
@@ -157,7 +157,7 @@ static cpl_fragment_opts opts(double bond, double a) {
 /* Random unions against naive relabelling (every element carries its set label). */
 static void test_union_find(void **state) {
   (void)state;
-  rng_state = 7;
+  rng_seed(7);
   size_t n = 500;
   cpl_uf uf;
   memset(&uf, 0, sizeof uf);
@@ -201,7 +201,7 @@ static void test_random_sets(void **state) {
       for (size_t bi = 0; bi < sizeof bonds / sizeof *bonds; bi++) {
         size_t n = sizes[si];
         if (n > 1000 && bi % 2) continue; /* keep the O(n²) reference within seconds */
-        rng_state = 1000 * dim + 10 * si + bi;
+        rng_seed(1000 * dim + 10 * si + bi);
         cloud c;
         frag_points_alloc(&c, n);
         double side = dim == 3 ? cbrt((double)n) : sqrt((double)n);
@@ -233,7 +233,7 @@ static void test_random_periodic(void **state) {
         double side = sides[si];
         if (2 * bonds[bi] >= side) continue;
         size_t n = (size_t)(side * side * side);
-        rng_state = 99 + 7 * si + 3 * bi + (uint64_t)mask;
+        rng_seed(99 + 7 * si + 3 * bi + (uint64_t)mask);
         cloud c;
         frag_points_alloc(&c, n);
         cpl_fragment_opts o = opts(bonds[bi], 1.0);
@@ -258,7 +258,7 @@ static void test_random_periodic(void **state) {
  * coarsen (memory O(n)) and still find every bond. */
 static void test_sparse_spread(void **state) {
   (void)state;
-  rng_state = 5;
+  rng_seed(5);
   cloud c;
   frag_points_alloc(&c, 600);
   for (size_t i = 0; i < c.n; i++) {
@@ -417,7 +417,7 @@ static void test_periodic_wrap(void **state) {
 /* Per-fragment statistics against direct sums over the reference partition (open box). */
 static void test_statistics(void **state) {
   (void)state;
-  rng_state = 31;
+  rng_seed(31);
   size_t n = 300;
   cloud c;
   frag_points_alloc(&c, n);
@@ -481,7 +481,7 @@ static void test_gid_numbering(void **state) {
   for (int per = 0; per < 2; per++) {
     const size_t n = 600;
     const double side = 9.0;
-    rng_state = 4242 + (uint64_t)per;
+    rng_seed(4242 + (uint64_t)per);
     cloud c, s;
     frag_points_alloc(&c, n);
     frag_points_alloc(&s, n);

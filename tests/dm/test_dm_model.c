@@ -13,14 +13,8 @@
 
 #include "dm.h"
 
-static uint64_t rng_state = 12345;
-static double urand(void) { /* splitmix64 → [0, 1) */
-  uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  z ^= z >> 31;
-  return (double)(z >> 11) * 0x1p-53;
-}
+static uint64_t rng_k; /* outputs drawn so far from the generator started from seed 12345 */
+static double urand(void) { return ptl_splitmix64_uniform(12345, rng_k++); } /* [0, 1) */
 
 /* Simple-cubic block nx×ny×nz (spacing h) in `dim` dimensions, reference positions perturbed by
  * up to ±jitter·h, random moduli (so that interfaces between unlike particles are exercised). */

@@ -1,0 +1,64 @@
+/* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c) and
+ * of the coupled problem's fragment snapshots (coupling/snapshot.c): positions, velocities and
+ * masses as [n][3] and [n] datasets, the caller's extra datasets and attributes, an XDMF
+ * sidecar that ParaView opens. Under MPI one collective file, rows in rank order. */
+#include "ptl.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *xyz,
+                                const double *vel) {
+  const size_t n = sn->n;
+  ms_status st = ms_h5_write_doubles_dist(h, "particles/x", n, 3, xyz, "cm");
+  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
+  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, sn->mass, "g");
+  for (size_t k = 0; k < sn->ndata && st == MS_OK; k++) {
+    const ptl_snapshot_data *d = &sn->data[k];
+    st = d->d ? ms_h5_write_doubles_dist(h, d->name, n, (size_t)d->ncomp, d->d, d->units)
+              : ms_h5_write_ints_dist(h, d->name, n, d->i);
+  }
+  for (size_t k = 0; k < sn->nattr && st == MS_OK; k++)
+    st = ms_h5_attr_double(h, "particles", sn->attr[k].name, sn->attr[k].value);
+  return st;
+}
+
+/* The sidecar next to the .h5, referring to it by its base name. */
+static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t nglobal) {
+  size_t len = strlen(path);
+  char *xmf = ms_calloc(len + 8, 1);
+  memcpy(xmf, path, len);
+  if (len > 3 && strcmp(path + len - 3, ".h5") == 0) len -= 3;
+  strcpy(xmf + len, ".xmf");
+  const char *base = strrchr(path, '/');
+  base = base ? base + 1 : path;
+  const ms_status st =
+      ms_xdmf_write_points(xmf, base, "particles/x", nglobal, 3, sn->time, sn->nxdmf, sn->xdmf);
+  free(xmf);
+  return st;
+}
+
+ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *sn) {
+  const size_t n = sn->n;
+  double *xyz = ms_calloc(3 * n + 1, sizeof *xyz), *vel = ms_calloc(3 * n + 1, sizeof *vel);
+  for (size_t i = 0; i < n; i++) {
+    xyz[3 * i] = sn->x[i];
+    xyz[3 * i + 1] = sn->y[i];
+    xyz[3 * i + 2] = sn->z ? sn->z[i] : 0.0;
+    vel[3 * i] = sn->vx ? sn->vx[i] : 0.0;
+    vel[3 * i + 1] = sn->vy ? sn->vy[i] : 0.0;
+    vel[3 * i + 2] = sn->vz ? sn->vz[i] : 0.0;
+  }
+  ms_status st = MS_ERR_IO;
+  ms_h5 *h = sn->dist ? ms_h5_create_collective(path) : ms_h5_create(path);
+  if (h) {
+    st = write_datasets(h, sn, xyz, vel);
+    if (st == MS_OK) st = ms_h5_close(h);
+    else ms_h5_abort(h);
+  }
+  free(xyz);
+  free(vel);
+  const size_t nglobal = sn->dist ? (size_t)par_sum_long((long)n) : n;
+  if (st == MS_OK && (!sn->dist || par_rank() == 0)) st = write_sidecar(path, sn, nglobal);
+  return sn->dist ? par_agree_status(st) : st; /* the sidecar is rank 0's */
+}
