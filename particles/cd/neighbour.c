@@ -90,7 +90,7 @@ static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, 
               : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
     const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-    CD_EXTENT_UPDATE(dx, dy, dz);
+    cd_extent_update(dx, dy, dz, &d2max, &hx, &hy, &hz, &lx, &ly, &lz, &nan_seen);
   }
   cd_extents_finish(ext, d2max, hx, hy, hz, lx, ly, lz, nan_seen);
 }
