@@ -8,9 +8,9 @@
  *     collect every error, unknown-key detection, defaults written back for the resolved deck);
  *   - output writers that never leave a truncated file under a final name (CSV with a units
  *     header, HDF5 with an XDMF sidecar), run directories, progress with ETA;
- *   - the MPI layer (`par_*`): core/par.c is the only file that calls MPI and names
- *     MPI_COMM_WORLD; core/h5io.c takes the communicator's MPI handle from core/par_mpi.h for
- *     HDF5's MPI-IO driver and reduces through par_comm_*.
+ *   - the MPI layer (`par_*`): core/par.c is the only file that calls MPI and names the world
+ *     communicator; the run's communicator travels in ms_ctx.comm; core/h5io.c takes its MPI
+ *     handle from core/par_mpi.h for HDF5's MPI-IO driver and reduces through par_comm_*.
  */
 #ifndef MSCALE_CORE_H
 #define MSCALE_CORE_H

@@ -23,35 +23,21 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
   if (p->gid) data[ndata++] = (ptl_snapshot_data){"particles/gid", NULL, p->gid, 1, NULL};
   data[ndata++] = (ptl_snapshot_data){"particles/fragment", NULL, id, 1, NULL};
   data[ndata++] = (ptl_snapshot_data){"particles/fragment_id", fid, NULL, 1, "1"};
-  ptl_snapshot_attr attr[3 + 2 * 3] = {{"time", info->time}, {"r0", info->spacing}};
-  size_t nattr = 2;
-  if (info->rho0 > 0) attr[nattr++] = (ptl_snapshot_attr){"rho0", info->rho0};
-  static const char *const pn[3] = {"period_x", "period_y", "period_z"};
-  static const char *const ln[3] = {"lo_x", "lo_y", "lo_z"};
-  for (int k = 0; k < 3; k++)
-    if (info->box.period[k] > 0) {
-      attr[nattr++] = (ptl_snapshot_attr){pn[k], info->box.period[k]};
-      attr[nattr++] = (ptl_snapshot_attr){ln[k], info->box.lo[k]};
-    }
   const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
                                {"mass", "particles/mass", 1, false},
                                {"fragment", "particles/fragment_id", 1, false}};
-  const ptl_snapshot snap = {.n = n,
-                             .x = p->x,
-                             .y = p->y,
-                             .z = p->z,
-                             .vx = p->vx,
-                             .vy = p->vy,
-                             .vz = p->vz,
-                             .mass = p->mass,
-                             .ndata = ndata,
-                             .data = data,
-                             .nattr = nattr,
-                             .attr = attr,
-                             .nxdmf = 3,
-                             .xdmf = xdmf,
-                             .time = info->time,
-                             .dist = par_size() > 1};
+  const double *const x[3] = {p->x, p->y, p->z}, *const v[3] = {p->vx, p->vy, p->vz};
+  ptl_snapshot snap = ptl_snapshot_of(n, x, v, p->mass, info->time, par_size() > 1);
+  snap.ndata = ndata;
+  snap.data = data;
+  snap.nxdmf = 3;
+  snap.xdmf = xdmf;
+  ptl_snapshot_attr_add(&snap, "time", info->time);
+  ptl_snapshot_attr_add(&snap, "r0", info->spacing);
+  if (info->rho0 > 0) ptl_snapshot_attr_add(&snap, "rho0", info->rho0);
+  for (int k = 0; k < 3; k++)
+    if (info->box.period[k] > 0)
+      ptl_snapshot_period_add(&snap, k, info->box.period[k], info->box.lo[k]);
   const ms_status st = ptl_write_snapshot(path, &snap);
   free(fid);
   free(id);

@@ -62,25 +62,37 @@ typedef struct ptl_snapshot_attr {
   double value;
 } ptl_snapshot_attr;
 
-/* What a snapshot holds. Datasets, in this order: particles/x [n][3] (z NULL: 0), particles/v
- * [n][3] (a NULL component: 0), particles/mass [n], then data[0..ndata); then the attributes
+enum { PTL_SNAPSHOT_MAX_ATTR = 16 };
+
+/* What a snapshot holds. Datasets, in this order: particles/x [n][3] from x[0..2] (x[2] NULL:
+ * 0), particles/v [n][3] from v[0..2] (a NULL component: 0), particles/mass [n], then data[0..ndata); then the attributes
  * attr[0..nattr) of /particles, in order. The sidecar (PATH with .h5 replaced by .xmf, naming
  * the file by its base name) shows xdmf[0..nxdmf) at `time`. Collective when dist: every rank
  * gives its own n particles, stored in rank order (docs/mpi.md). */
 typedef struct ptl_snapshot {
   size_t n;
-  const double *x, *y, *z;
-  const double *vx, *vy, *vz;
+  const double *x[3], *v[3];
   const double *mass;
   size_t ndata;
   const ptl_snapshot_data *data;
   size_t nattr;
-  const ptl_snapshot_attr *attr;
+  ptl_snapshot_attr attr[PTL_SNAPSHOT_MAX_ATTR];
   size_t nxdmf;
   const ms_xdmf_attr *xdmf;
   double time;
   bool dist;
 } ptl_snapshot;
+
+/* A snapshot of n particles at positions x[0..2], velocities v[0..2] and masses at `time`
+ * (no extra datasets, attributes or sidecar attributes yet); of particles [0, n) of p. */
+ptl_snapshot ptl_snapshot_of(size_t n, const double *const x[3], const double *const v[3],
+                             const double *mass, double time, bool dist);
+ptl_snapshot ptl_snapshot_of_state(const ptl_state *p, size_t n, double time, bool dist);
+/* Appends the attribute name = v to /particles (at most PTL_SNAPSHOT_MAX_ATTR: more aborts). */
+void ptl_snapshot_attr_add(ptl_snapshot *snap, const char *name, double v);
+/* The attributes of periodic axis `axis` (0, 1, 2) that `mscale spectrum` reads: period_x|y|z
+ * = period, then lo_x|y|z = lo. */
+void ptl_snapshot_period_add(ptl_snapshot *snap, int axis, double period, double lo);
 
 /* Writes the snapshot to path (and its sidecar, rank 0's under MPI). dist: every rank calls it
  * and gets the same status. */

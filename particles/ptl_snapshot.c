@@ -7,6 +7,37 @@
 #include <stdlib.h>
 #include <string.h>
 
+ptl_snapshot ptl_snapshot_of(size_t n, const double *const x[3], const double *const v[3],
+                             const double *mass, double time, bool dist) {
+  ptl_snapshot snap = {.n = n, .mass = mass, .time = time, .dist = dist};
+  for (int a = 0; a < 3; a++) {
+    snap.x[a] = x[a];
+    snap.v[a] = v[a];
+  }
+  return snap;
+}
+
+ptl_snapshot ptl_snapshot_of_state(const ptl_state *p, size_t n, double time, bool dist) {
+  const double *const x[3] = {p->x, p->y, p->z}, *const v[3] = {p->vx, p->vy, p->vz};
+  return ptl_snapshot_of(n, x, v, p->mass, time, dist);
+}
+
+void ptl_snapshot_attr_add(ptl_snapshot *snap, const char *name, double v) {
+  if (snap->nattr >= PTL_SNAPSHOT_MAX_ATTR) {
+    fprintf(stderr, "mscale: internal error: more than %d snapshot attributes\n",
+            PTL_SNAPSHOT_MAX_ATTR);
+    abort();
+  }
+  snap->attr[snap->nattr++] = (ptl_snapshot_attr){name, v};
+}
+
+void ptl_snapshot_period_add(ptl_snapshot *snap, int axis, double period, double lo) {
+  static const char *const pname[3] = {"period_x", "period_y", "period_z"};
+  static const char *const lname[3] = {"lo_x", "lo_y", "lo_z"};
+  ptl_snapshot_attr_add(snap, pname[axis], period);
+  ptl_snapshot_attr_add(snap, lname[axis], lo);
+}
+
 static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *xyz,
                                 const double *vel) {
   const size_t n = sn->n;
@@ -41,14 +72,11 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
 ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *sn) {
   const size_t n = sn->n;
   double *xyz = ms_calloc(3 * n + 1, sizeof *xyz), *vel = ms_calloc(3 * n + 1, sizeof *vel);
-  for (size_t i = 0; i < n; i++) {
-    xyz[3 * i] = sn->x[i];
-    xyz[3 * i + 1] = sn->y[i];
-    xyz[3 * i + 2] = sn->z ? sn->z[i] : 0.0;
-    vel[3 * i] = sn->vx ? sn->vx[i] : 0.0;
-    vel[3 * i + 1] = sn->vy ? sn->vy[i] : 0.0;
-    vel[3 * i + 2] = sn->vz ? sn->vz[i] : 0.0;
-  }
+  for (size_t i = 0; i < n; i++)
+    for (int a = 0; a < 3; a++) {
+      xyz[3 * i + a] = sn->x[a] ? sn->x[a][i] : 0.0;
+      vel[3 * i + a] = sn->v[a] ? sn->v[a][i] : 0.0;
+    }
   ms_status st = MS_ERR_IO;
   ms_h5 *h = sn->dist ? ms_h5_create_collective(path) : ms_h5_create(path);
   if (h) {

@@ -162,37 +162,22 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
                                     {"particles/pressure", pr, NULL, 1, "GPa"},
                                     {"particles/material", NULL, mat, 1, NULL},
                                     {"particles/gid", NULL, p->gid, 1, NULL}};
-  ptl_snapshot_attr attr[3 + 2 * 3] = {
-      {"time", s->t}, {"step", (double)s->step}, {"r0", s->cfg.r0}};
-  size_t nattr = 3;
+  ptl_snapshot snap = ptl_snapshot_of_state(p, n, s->t, s->dd != NULL);
+  ptl_snapshot_attr_add(&snap, "time", s->t);
+  ptl_snapshot_attr_add(&snap, "step", (double)s->step);
+  ptl_snapshot_attr_add(&snap, "r0", s->cfg.r0);
   /* periodic axes as the coupling snapshots name them (`mscale spectrum` reads them) */
-  static const char *const pname[3] = {"period_x", "period_y", "period_z"};
-  static const char *const lname[3] = {"lo_x", "lo_y", "lo_z"};
   for (int a = 0; a < s->p->dim; a++)
-    if (s->box.bc[a] == CD_BC_PERIODIC) {
-      attr[nattr++] = (ptl_snapshot_attr){pname[a], s->box.hi[a] - s->box.lo[a]};
-      attr[nattr++] = (ptl_snapshot_attr){lname[a], s->box.lo[a]};
-    }
+    if (s->box.bc[a] == CD_BC_PERIODIC)
+      ptl_snapshot_period_add(&snap, a, s->box.hi[a] - s->box.lo[a], s->box.lo[a]);
   const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
                                {"sigma_u", "particles/sigma_u", 1, false},
                                {"pressure", "particles/pressure", 1, false},
                                {"mass", "particles/mass", 1, false}};
-  const ptl_snapshot snap = {.n = n,
-                             .x = p->x,
-                             .y = p->y,
-                             .z = p->z,
-                             .vx = p->vx,
-                             .vy = p->vy,
-                             .vz = p->vz,
-                             .mass = p->mass,
-                             .ndata = 4,
-                             .data = data,
-                             .nattr = nattr,
-                             .attr = attr,
-                             .nxdmf = 4,
-                             .xdmf = xdmf,
-                             .time = s->t,
-                             .dist = s->dd != NULL};
+  snap.ndata = 4;
+  snap.data = data;
+  snap.nxdmf = 4;
+  snap.xdmf = xdmf;
   const ms_status st = ptl_write_snapshot(path, &snap);
   free(su);
   free(pr);

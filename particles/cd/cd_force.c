@@ -7,17 +7,14 @@
  * Loops run over the layers of the neighbour structure (cd_impl.h): the layers of one phase in
  * parallel (each writes only itself and the next layer), the phases one after the other, so
  * every sum has an order independent of the number of threads. The fast path on full lists
- * (layer_forces_fit) needs no phases: no particle writes another's force.
+ * (cd_layer_forces_fit, cd_force_fit.h) needs no phases: no particle writes another's force.
  */
-#include "cd_impl.h"
+#include "cd_force_fit.h"
 
 #include <math.h>
 #include <string.h>
 #if defined(_OPENMP)
 #include <omp.h>
-#endif
-#if defined(__AVX512F__)
-#include <immintrin.h>
 #endif
 
 /* Hot path: one table, plain cutoff, forces only (the benchmark's model). The table has one
@@ -118,278 +115,6 @@ static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_ta
   }
 }
 
-/* F/r at s (same arithmetic as pair_fast) and optionally the energy (cd_potential.c). */
-static inline double tab_force(const cd_pair_table *t, double s, double *e) {
-  double w, fr;
-  int m = 0;
-  if (s >= t->s_lo) {
-    const double u = (s - t->s_lo) * t->inv_h;
-    m = (int)u;
-    w = u - m;
-    const double *c = t->fcoef + 4 * m;
-    fr = fma(w, fma(w, c[2], c[1]), c[0]);
-  } else { /* below r_min: linear F/r, quadratic E (cd_potential.c) */
-    w = (s - t->s_lo) * t->inv_h;
-    fr = fma(w, t->fcoef[1], t->fcoef[0]);
-  }
-  if (e) {
-    const double *ec = t->ecoef + 4 * m;
-    *e = s >= t->s_lo ? fma(w, fma(w, fma(w, ec[3], ec[2]), ec[1]), ec[0])
-                      : fma(w, fma(w, ec[2], ec[1]), ec[0]);
-  }
-  return fr;
-}
-
-/* ---- the fit kernel: full lists, F/r from the fit (cd_potential.c), forces only ----
- *
- * Each pair is computed under both of its particles with the same arithmetic (s is the same
- * bitwise from d and −d), so the two forces are exact opposites and Newton's third law holds
- * up to the rounding of the sums (momentum is conserved to round-off: test_cd_dynamics). No
- * particle writes another's force: no colouring phases, no read-modify-write of f_j, every
- * layer in parallel, results independent of the thread count. With AVX-512 the plain
- * entries are taken eight at a time (gathers of x_j; segment coefficients by register
- * permutes); entries with an image shift (particles at a periodic boundary) one at a time. */
-
-/* F/r of one pair inside R_c: the fit, or below its range (r < R_c/2, a rare compression) the
- * table's value. */
-static inline double fit_force(const cd_pair_table *t, double s) {
-  return s >= t->fit_slo ? cd_fit_eval(t, s) : tab_force(t, s, NULL);
-}
-
-#if defined(__AVX512F__)
-/* F/r at eight s (lanes of `in` inside R_c; others are 0): cd_pair_fit_eval lane by lane. */
-static inline __m512d fit_force8(const cd_pair_table *t, const __m512d (*cf)[2], __m512d s,
-                                 __mmask8 in) {
-  const __m512i bs = _mm512_castpd_si512(s);
-  const __m512i k = _mm512_srli_epi64(bs, CD_FIT_SHIFT);
-  /* centre of the segment: (bits & ~low) | half, one ternary-logic op (A & B) | C */
-  const __m512d c = _mm512_castsi512_pd(_mm512_ternarylogic_epi64(
-      bs, _mm512_set1_epi64((long long)~((UINT64_C(1) << CD_FIT_SHIFT) - 1)),
-      _mm512_set1_epi64((long long)(UINT64_C(1) << (CD_FIT_SHIFT - 1))), 0xEA));
-  const __m512d tt = _mm512_sub_pd(s, c);
-#define CF(q) _mm512_permutex2var_pd(cf[q][0], k, cf[q][1])
-  /* Estrin's scheme (a short dependency chain), the same as cd_pair_fit_eval */
-  const __m512d t2 = _mm512_mul_pd(tt, tt), t4 = _mm512_mul_pd(t2, t2), t8 = _mm512_mul_pd(t4, t4);
-  const __m512d p01 = _mm512_fmadd_pd(CF(1), tt, CF(0)), p23 = _mm512_fmadd_pd(CF(3), tt, CF(2)),
-                p45 = _mm512_fmadd_pd(CF(5), tt, CF(4)), p67 = _mm512_fmadd_pd(CF(7), tt, CF(6)),
-                p89 = _mm512_fmadd_pd(CF(9), tt, CF(8));
-#undef CF
-  const __m512d q03 = _mm512_fmadd_pd(p23, t2, p01), q47 = _mm512_fmadd_pd(p67, t2, p45);
-  __m512d acc = _mm512_fmadd_pd(p89, t8, _mm512_fmadd_pd(q47, t4, q03));
-  const __mmask8 below = _mm512_mask_cmp_pd_mask(in, s, _mm512_set1_pd(t->fit_slo), _CMP_LT_OQ);
-  if (below) { /* rare: lanes under the fit's range take the table */
-    double sv[8], fv[8];
-    _mm512_storeu_pd(sv, s);
-    _mm512_storeu_pd(fv, acc);
-    for (int l = 0; l < 8; l++)
-      if (below & (1u << l)) fv[l] = tab_force(t, sv[l], NULL);
-    acc = _mm512_loadu_pd(fv);
-  }
-  return _mm512_maskz_mov_pd(in, acc);
-}
-#endif
-
-/* Adds to f_i the forces of the image entries of position pos (one at a time). */
-static inline void image_forces(const cd_neigh *nl, const ptl_state *p, const cd_pair_table *t,
-                                int layer, int32_t pos, double *fxi, double *fyi, double *fzi) {
-  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
-  const int32_t i = nl->sorted[pos];
-  const int32_t *img = cd_image_list(nl, layer, pos);
-  for (int k = 0; k < nl->nimg[pos]; k++) {
-    const int32_t j = img[2 * k];
-    const double *sh = nl->shift[img[2 * k + 1]];
-    const double dx = x[i] - (x[j] + sh[0]), dy = y[i] - (y[j] + sh[1]), dz = z[i] - (z[j] + sh[2]);
-    const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-    if (s < t->rc2) {
-      const double fr = fit_force(t, s);
-      *fxi = fma(fr, dx, *fxi);
-      *fyi = fma(fr, dy, *fyi);
-      *fzi = fma(fr, dz, *fzi);
-    }
-  }
-}
-
-#if defined(__AVX512F__)
-/* a[j[0..7]] as a vector by scalar loads: faster than vgatherdpd on Zen 4 (docs/benchmarks.md);
- * padding entries are 0, a valid index */
-static inline __m512d load8(const double *restrict a, const int32_t *restrict j) {
-  const __m128d v01 = _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]);
-  const __m128d v23 = _mm_loadh_pd(_mm_load_sd(a + j[2]), a + j[3]);
-  const __m128d v45 = _mm_loadh_pd(_mm_load_sd(a + j[4]), a + j[5]);
-  const __m128d v67 = _mm_loadh_pd(_mm_load_sd(a + j[6]), a + j[7]);
-  const __m256d lo = _mm256_insertf128_pd(_mm256_castpd128_pd256(v01), v23, 1);
-  const __m256d hi = _mm256_insertf128_pd(_mm256_castpd128_pd256(v45), v67, 1);
-  return _mm512_insertf64x4(_mm512_castpd256_pd512(lo), hi, 1);
-}
-#endif
-
-#if defined(__AVX512F__)
-/* counts[0 .. 7] of the lanes in `lanes` as int32 lanes, 0 elsewhere (nothing read there). */
-static inline __m256i load_counts8(const uint16_t *counts, __mmask8 lanes) {
-#if defined(__AVX512BW__) && defined(__AVX512VL__)
-  return _mm256_cvtepu16_epi32(_mm_maskz_loadu_epi16(lanes, counts));
-#else
-  int32_t c[8] = {0};
-  for (int l = 0; l < 8; l++)
-    if (lanes & (1u << l)) c[l] = counts[l];
-  return _mm256_loadu_si256((const __m256i *)(const void *)c);
-#endif
-}
-
-/* The largest of eight int32 lanes. */
-static inline int hmax8(__m256i v) {
-  v = _mm256_max_epi32(v, _mm256_permute2x128_si256(v, v, 1));
-  v = _mm256_max_epi32(v, _mm256_shuffle_epi32(v, 0x4E));
-  v = _mm256_max_epi32(v, _mm256_shuffle_epi32(v, 0xB1));
-  return _mm256_cvtsi256_si32(v);
-}
-
-/* Eight pairs at separations d (lanes of `live`): the lanes inside R_c add F/r·d to a. */
-static inline void add_pairs8(const cd_pair_table *t, const __m512d (*cf)[2], __m512d vrc2,
-                              __m512d dx, __m512d dy, __m512d dz, __mmask8 live, __m512d *ax,
-                              __m512d *ay, __m512d *az) {
-  const __m512d s = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
-  const __mmask8 in = _mm512_mask_cmp_pd_mask(live, s, vrc2, _CMP_LT_OQ);
-  const __m512d fr = fit_force8(t, cf, s, in);
-  *ax = _mm512_fmadd_pd(fr, dx, *ax);
-  *ay = _mm512_fmadd_pd(fr, dy, *ay);
-  *az = _mm512_fmadd_pd(fr, dz, *az);
-}
-#endif
-
-/* The force on i is final once its list is done (no other particle writes it), so the
- * velocity-Verlet closing kick v += (Δt/2) f/m can follow at once (hdt > 0; the same arithmetic
- * as vv_step's kick loop), saving a pass over v, f and m. */
-static inline void add_force(ptl_state *p, int32_t i, double fxi, double fyi, double fzi,
-                             double hdt) {
-  p->fx[i] += fxi;
-  p->fy[i] += fyi;
-  p->fz[i] += fzi;
-  if (hdt > 0.0) {
-    const double c = hdt / p->mass[i];
-    p->vx[i] += c * p->fx[i];
-    p->vy[i] += c * p->fy[i];
-    p->vz[i] += c * p->fz[i];
-  }
-}
-
-static void layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer,
-                             double hdt) {
-  const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
-  const int32_t ls = nl->layer_start[layer], le = nl->layer_start[layer + 1];
-#if defined(__AVX512F__)
-  /* the particles of a group of CD_GROUP positions are the lanes; entry k of every lane's
-   * list is one contiguous load (cd_impl.h) */
-  __m512d cf[CD_FIT_MAXDEG + 1][2];
-  for (int q = 0; q <= CD_FIT_MAXDEG; q++) {
-    cf[q][0] = _mm512_loadu_pd(t->fit_coef[q]);
-    cf[q][1] = _mm512_loadu_pd(t->fit_coef[q] + 8);
-  }
-  const __m512d(*ccf)[2] = (const __m512d(*)[2])cf;
-  const __m512d vrc2 = _mm512_set1_pd(t->rc2), zero = _mm512_setzero_pd();
-  const __m256i lane_no = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  for (int32_t g0 = ls; g0 < le; g0 += CD_GROUP) {
-    const int nlane = le - g0 < CD_GROUP ? le - g0 : CD_GROUP;
-    const __mmask8 lanes = (__mmask8)((1u << nlane) - 1u);
-    /* lanes past the layer's end: particle 0, never used */
-    const __m256i ivv = _mm256_maskz_loadu_epi32(lanes, nl->sorted + g0);
-    int32_t iv[CD_GROUP];
-    _mm256_storeu_si256((__m256i *)(void *)iv, ivv);
-    const int32_t i0 = iv[0];
-    /* a whole group of consecutive particles (the usual case after a renumbering build):
-     * vector loads and, below, the closing in vector form */
-    const bool run =
-        nlane == CD_GROUP &&
-        _mm256_cmpeq_epi32_mask(ivv, _mm256_add_epi32(_mm256_set1_epi32(i0), lane_no)) == 0xff;
-    const __m512d xi = run ? _mm512_loadu_pd(x + i0) : load8(x, iv),
-                  yi = run ? _mm512_loadu_pd(y + i0) : load8(y, iv),
-                  zi = run ? _mm512_loadu_pd(z + i0) : load8(z, iv);
-    const __m256i vcnt = load_counts8(nl->nplain + g0, lanes);
-    const int kmax = hmax8(vcnt);
-    const int32_t *blk = nl->buf[layer] + nl->first[g0] - (size_t)CD_GROUP * kmax;
-    __m512d ax = zero, ay = zero, az = zero;
-    for (int k = 0; k < kmax; k++) {
-      const __mmask8 live = _mm256_cmpgt_epi32_mask(vcnt, _mm256_set1_epi32(k));
-      const int32_t *jk = blk + CD_GROUP * k;
-      add_pairs8(t, ccf, vrc2, _mm512_sub_pd(xi, load8(x, jk)), _mm512_sub_pd(yi, load8(y, jk)),
-                 _mm512_sub_pd(zi, load8(z, jk)), live, &ax, &ay, &az);
-    }
-    /* the image entries (particles near a periodic face), entry m of every lane's image list
-     * as one vector: per lane the same operations, in the same order, as image_forces */
-    const __m256i vnimg = load_counts8(nl->nimg + g0, lanes);
-    const int mmax = hmax8(vnimg);
-    const int32_t *imgrow[CD_GROUP];
-    int32_t nimg[CD_GROUP];
-    if (mmax > 0) {
-      _mm256_storeu_si256((__m256i *)(void *)nimg, vnimg);
-      for (int l = 0; l < nlane; l++) imgrow[l] = cd_image_list(nl, layer, g0 + l);
-    }
-    for (int m = 0; m < mmax; m++) {
-      int32_t jl[CD_GROUP] = {0};
-      double sxl[CD_GROUP] = {0}, syl[CD_GROUP] = {0}, szl[CD_GROUP] = {0};
-      __mmask8 live = 0;
-      for (int l = 0; l < nlane; l++) {
-        if (m >= nimg[l]) continue;
-        const int32_t *img = imgrow[l] + 2 * m;
-        const double *sh = nl->shift[img[1]];
-        jl[l] = img[0];
-        sxl[l] = sh[0];
-        syl[l] = sh[1];
-        szl[l] = sh[2];
-        live |= (__mmask8)(1u << l);
-      }
-      const __m512d xj = _mm512_add_pd(load8(x, jl), _mm512_loadu_pd(sxl)),
-                    yj = _mm512_add_pd(load8(y, jl), _mm512_loadu_pd(syl)),
-                    zj = _mm512_add_pd(load8(z, jl), _mm512_loadu_pd(szl));
-      add_pairs8(t, ccf, vrc2, _mm512_sub_pd(xi, xj), _mm512_sub_pd(yi, yj), _mm512_sub_pd(zi, zj),
-                 live, &ax, &ay, &az);
-    }
-    if (run) { /* the closing in vector form, the same arithmetic as add_force */
-      const __m512d fxv = _mm512_add_pd(_mm512_loadu_pd(p->fx + i0), ax),
-                    fyv = _mm512_add_pd(_mm512_loadu_pd(p->fy + i0), ay),
-                    fzv = _mm512_add_pd(_mm512_loadu_pd(p->fz + i0), az);
-      _mm512_storeu_pd(p->fx + i0, fxv);
-      _mm512_storeu_pd(p->fy + i0, fyv);
-      _mm512_storeu_pd(p->fz + i0, fzv);
-      if (hdt > 0.0) {
-        const __m512d c = _mm512_div_pd(_mm512_set1_pd(hdt), _mm512_loadu_pd(p->mass + i0));
-        double *v[3] = {p->vx + i0, p->vy + i0, p->vz + i0};
-        const __m512d fv[3] = {fxv, fyv, fzv};
-        for (int a = 0; a < 3; a++)
-          _mm512_storeu_pd(v[a], _mm512_add_pd(_mm512_loadu_pd(v[a]), _mm512_mul_pd(c, fv[a])));
-      }
-      continue;
-    }
-    double fxl[CD_GROUP], fyl[CD_GROUP], fzl[CD_GROUP];
-    _mm512_storeu_pd(fxl, ax);
-    _mm512_storeu_pd(fyl, ay);
-    _mm512_storeu_pd(fzl, az);
-    for (int l = 0; l < nlane; l++) add_force(p, nl->sorted[g0 + l], fxl[l], fyl[l], fzl[l], hdt);
-  }
-#else
-  for (int32_t pos = ls; pos < le; pos++) {
-    const int32_t i = nl->sorted[pos];
-    const double xi = x[i], yi = y[i], zi = z[i];
-    double fxi = 0.0, fyi = 0.0, fzi = 0.0;
-    int stride;
-    const int32_t *lst = cd_plain_list(nl, layer, pos, &stride);
-    for (int k = 0; k < nl->nplain[pos]; k++) {
-      const int32_t j = lst[stride * k];
-      const double dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-      const double s = fma(dx, dx, fma(dy, dy, dz * dz));
-      if (s < t->rc2) {
-        const double fr = fit_force(t, s);
-        fxi = fma(fr, dx, fxi);
-        fyi = fma(fr, dy, fyi);
-        fzi = fma(fr, dz, fzi);
-      }
-    }
-    image_forces(nl, p, t, layer, pos, &fxi, &fyi, &fzi);
-    add_force(p, i, fxi, fyi, fzi, hdt);
-  }
-#endif
-}
-
 /* Bonded mode: drop bond (i, j) from both partner rows. */
 static void break_bond(int32_t *partners, int32_t i, int32_t j) {
   int32_t *pi = partners + (size_t)i * CD_MAX_PARTNERS,
@@ -440,7 +165,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
       double fr, e = 0.0;
       if (!bonded) {
         if (r2 >= t->rc2) continue;
-        fr = tab_force(t, r2, sum ? &e : NULL);
+        fr = cd_tab_force(t, r2, sum ? &e : NULL);
         if (sum && books_pair(p, i, j)) sum->inside[mi * CD_MAX_MATERIALS + mj]++;
       } else if (*entry & CD_NB_BONDED) {
         if (r2 >= t->rc2) {
@@ -449,7 +174,7 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
            * hard truncation the force does work only up to R_c, so the energy lost is E(R_c):
            * evaluate there (r2 itself may lie far beyond the end of the table). */
           double eb;
-          tab_force(t, t->rc2, &eb);
+          cd_tab_force(t, t->rc2, &eb);
           *entry &= ~CD_NB_BONDED;
           break_bond(s->partners, i, j);
           if (sum && books_pair(p, i, j)) {
@@ -458,10 +183,10 @@ static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *
           }
           continue;
         }
-        fr = tab_force(t, r2, sum ? &e : NULL);
+        fr = cd_tab_force(t, r2, sum ? &e : NULL);
       } else {
         if (r2 >= r02) continue; /* non-bonded: compressive branch only */
-        fr = tab_force(t, r2, sum ? &e : NULL);
+        fr = cd_tab_force(t, r2, sum ? &e : NULL);
       }
       if (wf) {
         fxi = fma(fr, dx, fxi);
@@ -540,7 +265,7 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
     {
       int ka, kb;
       thread_layers(nl, NULL, 0, nl->nlayer, &ka, &kb);
-      for (int l = ka; l < kb; l++) layer_forces_fit(nl, p, s->pair[0][0], l, s->kick_hdt);
+      for (int l = ka; l < kb; l++) cd_layer_forces_fit(nl, p, s->pair[0][0], l, s->kick_hdt);
     }
     return;
   }

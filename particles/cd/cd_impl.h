@@ -154,21 +154,22 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
 bool cd_neigh_holds(const cd_neigh *nl, const ptl_state *p, long n, double bound, double reach,
                     bool dd, const double *known_ext);
 /* The displacement extents of cd_neigh_holds, taken in a loop over particles: one displacement
- * (dx, dy, dz) into the locals d2max, hx, hy, hz, lx, ly, lz (−min, so that all are maxima)
- * and nan_seen of an OpenMP max-reduction over them (a macro: the loops stay vectorised); then
- * cd_extents_finish. */
-#define CD_EXTENT_UPDATE(dx, dy, dz)                                                               \
-  do {                                                                                             \
-    const double d2_ = (dx) * (dx) + (dy) * (dy) + (dz) * (dz);                                    \
-    nan_seen = d2_ == d2_ ? nan_seen : 1;                                                          \
-    d2max = d2_ > d2max ? d2_ : d2max;                                                             \
-    hx = (dx) > hx ? (dx) : hx;                                                                    \
-    hy = (dy) > hy ? (dy) : hy;                                                                    \
-    hz = (dz) > hz ? (dz) : hz;                                                                    \
-    lx = -(dx) > lx ? -(dx) : lx;                                                                  \
-    ly = -(dy) > ly ? -(dy) : ly;                                                                  \
-    lz = -(dz) > lz ? -(dz) : lz;                                                                  \
-  } while (0)
+ * (dx, dy, dz) into the running maxima *d2max, *hx, *hy, *hz, *lx, *ly, *lz (−min, so that all
+ * are maxima) and *nan_seen. Callers keep them in locals of an OpenMP max-reduction (the loops
+ * stay vectorised once this is inlined), then cd_extents_finish. */
+static inline void cd_extent_update(double dx, double dy, double dz, double *d2max, double *hx,
+                                    double *hy, double *hz, double *lx, double *ly, double *lz,
+                                    int *nan_seen) {
+  const double d2 = dx * dx + dy * dy + dz * dz;
+  *nan_seen = d2 == d2 ? *nan_seen : 1;
+  *d2max = d2 > *d2max ? d2 : *d2max;
+  *hx = dx > *hx ? dx : *hx;
+  *hy = dy > *hy ? dy : *hy;
+  *hz = dz > *hz ? dz : *hz;
+  *lx = -dx > *lx ? -dx : *lx;
+  *ly = -dy > *ly ? -dy : *ly;
+  *lz = -dz > *lz ? -dz : *lz;
+}
 static inline void cd_extents_finish(double ext[7], double d2max, double hx, double hy, double hz,
                                      double lx, double ly, double lz, int nan_seen) {
   const double e[7] = {d2max, hx, hy, hz, lx, ly, lz};

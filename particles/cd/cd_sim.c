@@ -521,6 +521,24 @@ static ms_status rkn_step_cd(cd_sim *s) {
   return end_step(s);
 }
 
+/* vv_step's fused loop, particle i: kick v by (Δt/2)·f/m, zero f, drift x by Δt·v; returns
+ * the new |v|². */
+static inline double kick_drift_zero(long i, double hdt, double dt, const double *restrict m,
+                                     double *restrict x, double *restrict y, double *restrict z,
+                                     double *restrict vx, double *restrict vy, double *restrict vz,
+                                     double *restrict fx, double *restrict fy,
+                                     double *restrict fz) {
+  const double c = hdt / m[i];
+  vx[i] += c * fx[i];
+  vy[i] += c * fy[i];
+  vz[i] += c * fz[i];
+  fx[i] = fy[i] = fz[i] = 0.0;
+  x[i] += dt * vx[i];
+  y[i] += dt * vy[i];
+  z[i] += dt * vz[i];
+  return vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+}
+
 /* One velocity-Verlet step (the header comment). */
 static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
@@ -563,32 +581,24 @@ static ms_status vv_step(cd_sim *s) {
   double d2max = 0.0, hx = -INFINITY, hy = -INFINITY, hz = -INFINITY;
   double lx = -INFINITY, ly = -INFINITY, lz = -INFINITY; /* −min, so that all are maxima */
   int nan_seen = 0;
-#define KICK_DRIFT_ZERO(i)                                                                         \
-  const double c = hdt / m[i];                                                                     \
-  vx[i] += c * fx[i];                                                                              \
-  vy[i] += c * fy[i];                                                                              \
-  vz[i] += c * fz[i];                                                                              \
-  fx[i] = fy[i] = fz[i] = 0.0;                                                                     \
-  x[i] += dt * vx[i];                                                                              \
-  y[i] += dt * vy[i];                                                                              \
-  z[i] += dt * vz[i];                                                                              \
-  const double v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];                                 \
-  vmax2 = v2 > vmax2 ? v2 : vmax2;
   if (!track) {
 #pragma omp parallel for simd schedule(static) reduction(max : vmax2) if (CD_PAR(n))
-    for (long i = 0; i < n; i++) { KICK_DRIFT_ZERO(i) }
+    for (long i = 0; i < n; i++) {
+      const double v2 = kick_drift_zero(i, hdt, dt, m, x, y, z, vx, vy, vz, fx, fy, fz);
+      vmax2 = v2 > vmax2 ? v2 : vmax2;
+    }
   } else {
     const float *restrict xb = s->nl->xb, *restrict yb = s->nl->yb, *restrict zb = s->nl->zb;
 #pragma omp parallel for simd schedule(static) if (CD_PAR(n))                                      \
     reduction(max                                                                                  \
               : vmax2, d2max, hx, hy, hz, lx, ly, lz, nan_seen)
     for (long i = 0; i < n; i++) {
-      KICK_DRIFT_ZERO(i)
+      const double v2 = kick_drift_zero(i, hdt, dt, m, x, y, z, vx, vy, vz, fx, fy, fz);
+      vmax2 = v2 > vmax2 ? v2 : vmax2;
       const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-      CD_EXTENT_UPDATE(dx, dy, dz);
+      cd_extent_update(dx, dy, dz, &d2max, &hx, &hy, &hz, &lx, &ly, &lz, &nan_seen);
     }
   }
-#undef KICK_DRIFT_ZERO
   if (!(vmax2 < INFINITY)) vmax2 = INFINITY; /* NaN: the exact test, which rebuilds */
   if (s->dd) vmax2 = par_max_double(vmax2);  /* the serial run's bound on every rank */
   s->vmax_last = sqrt(vmax2);

@@ -9,27 +9,11 @@
  * rebuild until its particles move relative to the rest.
  */
 #include "cd_impl.h"
+#include "neighbour_select.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__AVX512F__) && defined(__AVX512VL__)
-#include <immintrin.h>
-#elif defined(__AVX2__) && defined(__FMA__)
-#include <immintrin.h>
-#define CD_SELECT_AVX2 1
-/* compress_lut[m]: the positions of the set bits of the 8-bit mask m, in order (the lanes an
- * AVX2 compress keeps, by a permute); filled once by cd_neigh_create */
-static uint8_t compress_lut[256][8];
-static void fill_compress_lut(void) {
-  for (int m = 0; m < 256; m++) {
-    int k = 0;
-    for (int l = 0; l < 8; l++)
-      if (m & (1 << l)) compress_lut[m][k++] = (uint8_t)l;
-    while (k < 8) compress_lut[m][k++] = 0;
-  }
-}
-#endif
 
 cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   cd_neigh *nl = ms_calloc(1, sizeof *nl);
@@ -106,7 +90,7 @@ static void displacement_extent(const cd_neigh *nl, const ptl_state *p, long n, 
               : d2max, hx, hy, hz, lx, ly, lz, nan_seen) if (CD_PAR(n))
   for (long i = 0; i < n; i++) {
     const double dx = x[i] - xb[i], dy = y[i] - yb[i], dz = z[i] - zb[i];
-    CD_EXTENT_UPDATE(dx, dy, dz);
+    cd_extent_update(dx, dy, dz, &d2max, &hx, &hy, &hz, &lx, &ly, &lz, &nan_seen);
   }
   cd_extents_finish(ext, d2max, hx, hy, hz, lx, ly, lz, nan_seen);
 }
@@ -165,78 +149,6 @@ static bool is_partner(const int32_t *partners, int32_t i, int32_t j) {
 /* candidates inside r_list per particle: far above any packing (fcc: 12 within 1.3 r0 even
  * at δ = 2 with the second shell; 50 would mean near-overlapping particles) */
 #define CD_MAX_CAND 510
-
-/* The candidates at sorted positions q0 .. q1 − 1 inside r_list of (xi, yi, zi), with the
- * image shift sv (NULL: none) added to their positions: their indices sorted[q] are appended to
- * out in order; returns how many. out needs 16 spare entries (whole vectors are stored).
- * Positions come from the sorted-order float copies xs/ys/zs, so the loads are contiguous and
- * sixteen candidates go in one instruction; rl2 is widened by the float rounding (build_layer),
- * so every pair inside r_list is taken (and a few just beyond it, which every kernel skips as
- * beyond R_c). */
-static int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float *sv, float xi,
-                        float yi, float zi, float rl2, int32_t *restrict out) {
-  const float *restrict xs = nl->xs, *restrict ys = nl->ys, *restrict zs = nl->zs;
-  const int32_t *restrict sorted = nl->sorted;
-  int nc = 0;
-#if defined(__AVX512F__) && defined(__AVX512VL__)
-  const __m512 vxi = _mm512_set1_ps(xi), vyi = _mm512_set1_ps(yi), vzi = _mm512_set1_ps(zi),
-               vrl2 = _mm512_set1_ps(rl2);
-  const __m512 sx = _mm512_set1_ps(sv ? sv[0] : 0.0f), sy = _mm512_set1_ps(sv ? sv[1] : 0.0f),
-               sz = _mm512_set1_ps(sv ? sv[2] : 0.0f);
-  for (int32_t q = q0; q < q1; q += 16) {
-    const __mmask16 live = q1 - q >= 16 ? 0xffff : (__mmask16)((1u << (q1 - q)) - 1u);
-    __m512 xj = _mm512_maskz_loadu_ps(live, xs + q), yj = _mm512_maskz_loadu_ps(live, ys + q),
-           zj = _mm512_maskz_loadu_ps(live, zs + q);
-    if (sv) {
-      xj = _mm512_add_ps(xj, sx);
-      yj = _mm512_add_ps(yj, sy);
-      zj = _mm512_add_ps(zj, sz);
-    }
-    const __m512 dx = _mm512_sub_ps(vxi, xj), dy = _mm512_sub_ps(vyi, yj),
-                 dz = _mm512_sub_ps(vzi, zj);
-    const __m512 d2 = _mm512_fmadd_ps(dx, dx, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dz, dz)));
-    const __mmask16 take = _mm512_mask_cmp_ps_mask(live, d2, vrl2, _CMP_LT_OQ);
-    /* no branch on `take` (unpredictable); compress in a register and store the whole vector:
-     * compress-to-memory is slow on Zen 4 */
-    const __m512i j = _mm512_maskz_loadu_epi32(live, sorted + q);
-    _mm512_storeu_si512((void *)(out + nc), _mm512_maskz_compress_epi32(take, j));
-    nc += __builtin_popcount(take);
-  }
-#elif defined(CD_SELECT_AVX2)
-  /* eight candidates per instruction; the taken indices are compressed by a permute from
-   * compress_lut and stored as a whole vector (out has the spare entries) */
-  const __m256 vxi = _mm256_set1_ps(xi), vyi = _mm256_set1_ps(yi), vzi = _mm256_set1_ps(zi),
-               vrl2 = _mm256_set1_ps(rl2);
-  const __m256 sx = _mm256_set1_ps(sv ? sv[0] : 0.0f), sy = _mm256_set1_ps(sv ? sv[1] : 0.0f),
-               sz = _mm256_set1_ps(sv ? sv[2] : 0.0f);
-  for (int32_t q = q0; q < q1; q += 8) { /* lanes past q1 are read (padding) and dropped */
-    __m256 xj = _mm256_loadu_ps(xs + q), yj = _mm256_loadu_ps(ys + q), zj = _mm256_loadu_ps(zs + q);
-    if (sv) {
-      xj = _mm256_add_ps(xj, sx);
-      yj = _mm256_add_ps(yj, sy);
-      zj = _mm256_add_ps(zj, sz);
-    }
-    const __m256 dx = _mm256_sub_ps(vxi, xj), dy = _mm256_sub_ps(vyi, yj),
-                 dz = _mm256_sub_ps(vzi, zj);
-    const __m256 d2 = _mm256_fmadd_ps(dx, dx, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dz, dz)));
-    int take = _mm256_movemask_ps(_mm256_cmp_ps(d2, vrl2, _CMP_LT_OQ));
-    if (q1 - q < 8) take &= (1 << (q1 - q)) - 1;
-    const __m256i perm =
-        _mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)compress_lut[take]));
-    const __m256i j = _mm256_loadu_si256((const __m256i *)(const void *)(sorted + q));
-    _mm256_storeu_si256((__m256i *)(void *)(out + nc), _mm256_permutevar8x32_epi32(j, perm));
-    nc += __builtin_popcount((unsigned)take);
-  }
-#else
-  for (int32_t q = q0; q < q1; q++) { /* branchless: store every candidate, advance on a take */
-    const float dx = xi - (sv ? xs[q] + sv[0] : xs[q]), dy = yi - (sv ? ys[q] + sv[1] : ys[q]),
-                dz = zi - (sv ? zs[q] + sv[2] : zs[q]);
-    out[nc] = sorted[q];
-    nc += dx * dx + dy * dy + dz * dz < rl2;
-  }
-#endif
-  return nc;
-}
 
 /* One range of a cell's stencil: sorted positions q0 .. q1 − 1 with their image code; `same`
  * ranges (same layer, or no colouring) keep only q > p (cd_impl.h). */

@@ -14,7 +14,9 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "cd_impl.h" /* cd_compute_forces, the list layout */
+#include "cd_force_fit.h"     /* the fit kernel: scalar reference and AVX-512 */
+#include "cd_impl.h"          /* cd_compute_forces, the list layout */
+#include "neighbour_select.h" /* the list builder's candidate selection: scalar and SIMD */
 
 #define R0 5.0e-4
 #define C0 5.35
@@ -489,6 +491,86 @@ static void test_integrator_nve(void **state) {
   eos_destroy(eos);
 }
 
+/* The SIMD kernels against their scalar references (cd_force_fit.h, neighbour_select.h), which
+ * do the same operations per particle in the same order: forces and kicked velocities of every
+ * layer, and the candidates of ranges of sorted positions, must be equal (==: exact; the one
+ * freedom, the sign of a zero, does not count). Compared after some steps of a hot periodic
+ * block, so that images and unordered groups are exercised. */
+static void test_kernels_vs_scalar(void **state) {
+  (void)state;
+  eos_t *eos = al();
+  cd_sim *s = hot_block(eos, 5, 0.5, 0.0, 0.02, CD_CUTOFF_PLAIN);
+  for (int k = 0; k < 10; k++) assert_int_equal(cd_sim_step(s), MS_OK);
+  ptl_state *p = s->p;
+  const cd_neigh *nl = s->nl;
+  const size_t n = p->n;
+#if defined(__AVX512F__)
+  assert_true(nl->full); /* lists live ~25 steps (test_fit_path_vs_table): still the first */
+  const cd_pair_table *t = s->pair[0][0];
+  double *f0 = malloc(6 * n * sizeof *f0), *v0 = malloc(3 * n * sizeof *v0);
+  double *arr[6] = {p->fx, p->fy, p->fz, p->vx, p->vy, p->vz};
+  for (size_t i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++) v0[3 * i + c] = arr[3 + c][i];
+  long compared = 0;
+  for (int pass = 0; pass < 2; pass++) { /* hdt = 0: forces only; hdt > 0: the closing kick */
+    const double hdt = pass ? 0.5 * s->cfg.dt : 0.0;
+    for (int kernel = 0; kernel < 2; kernel++) {
+      for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+          arr[c][i] = 0.0;
+          arr[3 + c][i] = v0[3 * i + c];
+        }
+      for (int l = 0; l < nl->nlayer; l++) {
+        if (kernel == 0) cd_layer_forces_fit_scalar(nl, p, t, l, hdt);
+        else cd_layer_forces_fit_avx512(nl, p, t, l, hdt);
+      }
+      for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 6; c++) {
+          if (kernel == 0) f0[6 * i + c] = arr[c][i];
+          else assert_true(arr[c][i] == f0[6 * i + c]);
+        }
+    }
+    compared += (long)n;
+  }
+  double fmax_ = 0.0;
+  for (size_t i = 0; i < 3 * n; i++) fmax_ = fmax(fmax_, fabs(f0[i]));
+  assert_true(fmax_ > 0.0); /* a hot block: the forces are not all zero */
+  printf("fit kernels: AVX-512 == scalar on %ld particle evaluations\n", compared);
+  free(f0);
+  free(v0);
+#endif
+#if defined(CD_SELECT_AVX2)
+  fill_compress_lut(); /* this file's copy of the table (neighbour_select_simd.h) */
+#endif
+  /* candidate selection: random ranges of sorted positions (cells are contiguous in them),
+   * queried from a particle in the range, with and without an image shift, against the scalar
+   * reference */
+  const int32_t npos = nl->layer_start[nl->nlayer];
+  int32_t *a = malloc((size_t)(npos + 16) * sizeof *a),
+          *b = malloc((size_t)(npos + 16) * sizeof *b);
+  const float rl2 = (float)(nl->rlist * nl->rlist), shift[3] = {(float)(5 * sqrt(2.0) * R0), 0, 0};
+  long taken = 0;
+  for (int k = 0; k < 500; k++) {
+    const int32_t q = (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)k) * npos);
+    const int32_t len = 1 + (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)k + 1) * 60);
+    const int32_t q0 = q, q1 = q + len < npos ? q + len : npos;
+    const int32_t i = nl->sorted[q0 + (q1 - q0) / 2]; /* a query among the candidates */
+    const float *sv = k % 2 ? shift : NULL;
+    const float xi = (float)p->x[i], yi = (float)p->y[i], zi = (float)p->z[i];
+    const int na = cd_select_range_scalar(nl, q0, q1, sv, xi, yi, zi, rl2, a);
+    const int nb = select_range(nl, q0, q1, sv, xi, yi, zi, rl2, b);
+    assert_int_equal(na, nb);
+    for (int m = 0; m < na; m++) assert_int_equal(a[m], b[m]);
+    taken += na;
+  }
+  assert_true(taken > 0);
+  printf("candidate selection: the build's kernel == scalar on 500 ranges (%ld taken)\n", taken);
+  free(a);
+  free(b);
+  cd_sim_free(s);
+  eos_destroy(eos);
+}
+
 /* Piston (1 km/s, bonded cutoff) with every scheme: the same shock speed as velocity Verlet and
  * a closed balance (work quadrature of each scheme: trapezoid for velocity Verlet, the stage
  * weights γ_l for RKN). The run starts from a perfect lattice at rest, so the schemes differ
@@ -517,6 +599,7 @@ int main(int argc, char **argv) {
                                     cmocka_unit_test(test_lists_vs_brute_force),
                                     cmocka_unit_test(test_lists_moving_block),
                                     cmocka_unit_test(test_fit_path_vs_table),
+                                    cmocka_unit_test(test_kernels_vs_scalar),
                                     cmocka_unit_test(test_threads_bitwise),
                                     cmocka_unit_test(test_piston_balance)};
   const struct CMUnitTest integrators[] = {cmocka_unit_test(test_integrator_order),

@@ -30,6 +30,23 @@ int main(int argc, char **argv) {
   CHECK(par_agree_status(r == p - 1 ? MS_ERR_UNSTABLE : MS_OK) == MS_ERR_UNSTABLE,
         "the failing rank's status must reach every rank");
 
+  /* the context holds the run's communicator; the calls on an explicit one (core/h5io.c's) */
+  CHECK(ctx.comm != NULL && ctx.comm == par_comm(), "par_init gives the context the communicator");
+  CHECK(par_comm_rank(ctx.comm) == r, "rank in the context's communicator");
+  CHECK(par_comm_min_int(ctx.comm, r + 5) == 5 && par_comm_max_int(ctx.comm, r) == p - 1,
+        "min/max int");
+  CHECK(par_comm_sum_u64(ctx.comm, (uint64_t)r + 1) == (uint64_t)p * (uint64_t)(p + 1) / 2,
+        "sum u64");
+  CHECK(par_comm_exscan_u64(ctx.comm, (uint64_t)r + 1) == (uint64_t)r * (uint64_t)(r + 1) / 2,
+        "exscan: the sum over the lower ranks (0 on rank 0)");
+  int root_value = r == 0 ? 42 : -1;
+  par_comm_bcast_int(ctx.comm, &root_value, 0);
+  CHECK(root_value == 42, "broadcast from rank 0");
+  /* a NULL communicator is a serial one: nothing is exchanged */
+  CHECK(par_comm_rank(NULL) == 0 && par_comm_sum_u64(NULL, 7) == 7 &&
+            par_comm_exscan_u64(NULL, 7) == 0 && par_comm_max_int(NULL, r) == r,
+        "NULL communicator");
+
   /* fixed-order sum: rank r's element j is a value whose sums round (1/(r+3) scaled by j), so
    * the order matters; the result must be ((v_0 + v_1) + v_2) ... computed here from every
    * rank's values, bit for bit, on every rank. 100 000 elements: more than one chunk (2^17/P) on
