@@ -55,6 +55,9 @@ typedef struct c2d_setup {
    * ζ = (q_gamma + 1)/4; ψ the limiter (use_limiter). */
   double q1, q2, q_gamma;
   bool use_limiter;
+  /* r–z form: false = control volume (f = P ∂V/∂x, V the per-radian volume; pdV-consistent,
+   * momentum in z conserved), true = area-weighted (f = r̃_p P ∂A/∂x; docs/continuum2d.md §2). */
+  bool rz_area_weighted;
   double hg_coef;    /* sub-zonal pressure coefficient [CS98], 0 = off */
   double cfl;        /* 0 < cfl < 1 */
   double dv_max;     /* max relative volume change per step */

@@ -61,7 +61,7 @@ struct c2d_grid {
   c2d_run *runs;
   c2d_bc bc[4];
   double q1, q2, zeta, hg;
-  bool limiter;
+  bool limiter, area_weighted;
   double cfl, dv_max, dt_max, dt_min, dt_growth, dt_next;
   double t, work;
   long step;
@@ -111,6 +111,24 @@ static inline double quad_rvol(const double X[4], const double Y[4]) {
 
 static inline double poly_volume(c2d_geometry geo, const double X[4], const double Y[4]) {
   return geo == C2D_RZ ? quad_rvol(X, Y) : quad_area(X, Y);
+}
+
+/* ∂V/∂x_k of a 4-vertex polygon: planar area ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1}); in r–z the
+ * per-radian volume V = (1/6) Σ (r_k + r_{k+1})(r_k z_{k+1} − r_{k+1} z_k) differentiated. */
+static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y[4], double gx[4],
+                             double gy[4]) {
+  for (int k = 0; k < 4; ++k) {
+    int kn = (k + 1) & 3, kp = (k + 3) & 3;
+    if (geo == C2D_RZ) {
+      gx[k] = ((X[kp] * Y[k] - X[k] * Y[kp]) - (X[kp] + X[k]) * Y[kp] +
+               (X[k] * Y[kn] - X[kn] * Y[k]) + (X[k] + X[kn]) * Y[kn]) /
+              6.0;
+      gy[k] = ((X[kp] + X[k]) * X[kp] - (X[k] + X[kn]) * X[kn]) / 6.0;
+    } else {
+      gx[k] = 0.5 * (Y[kn] - Y[kp]);
+      gy[k] = 0.5 * (X[kp] - X[kn]);
+    }
+  }
 }
 
 /* Corner quad of corner k: node, midpoint to next, centre, midpoint from previous. */
@@ -195,34 +213,39 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
     gather(g, z, pu, pv, U, V);
     double *f = g->fc + 8 * z;
     const double P = pz[z];
-    for (int k = 0; k < 4; ++k) {
-      int kn = (k + 1) & 3, kp = (k + 3) & 3;
-      f[2 * k] = P * 0.5 * (Y[kn] - Y[kp]);
-      f[2 * k + 1] = P * 0.5 * (X[kp] - X[kn]);
-    }
-    double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
-    if (g->hg > 0.0 || g->geo == C2D_RZ) {
-      double dpc[4];
+    double gvx[4], gvy[4];
+    const c2d_geometry fg = g->area_weighted ? C2D_XY : g->geo; /* geometry of the gradients */
+    poly_grad(fg, X, Y, gvx, gvy);
+    if (g->area_weighted)
       for (int k = 0; k < 4; ++k) {
         double CX[4], CY[4];
-        corner_quad(X, Y, xc, yc, k, CX, CY);
-        double ac = quad_area(CX, CY);
-        g->ma[4 * z + k] = rz[z] * ac;
-        if (g->hg > 0.0) {
+        corner_quad(X, Y, 0.25 * (X[0] + X[1] + X[2] + X[3]), 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]), k,
+                    CX, CY);
+        g->ma[4 * z + k] = rz[z] * quad_area(CX, CY);
+      }
+    for (int k = 0; k < 4; ++k) {
+      f[2 * k] = P * gvx[k];
+      f[2 * k + 1] = P * gvy[k];
+    }
+    double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
+    {
+      double dpc[4];
+      if (g->hg > 0.0) {
+        for (int k = 0; k < 4; ++k) {
+          double CX[4], CY[4];
+          corner_quad(X, Y, xc, yc, k, CX, CY);
           double vc = poly_volume(g->geo, CX, CY);
           dpc[k] = vc > 0.0 ? g->hg * cz[z] * cz[z] * (g->mc[4 * z + k] / vc - rz[z]) : 0.0;
         }
-      }
-      if (g->hg > 0.0) {
-        /* f_q += Σ_c δp_c ∂A_c/∂x_q through the corner vertices (node, midpoints, centre). */
+        /* f_q += Σ_c δp_c ∂V_c/∂x_q through the corner vertices (node, midpoints, centre). */
         for (int k = 0; k < 4; ++k) {
           double CX[4], CY[4];
           corner_quad(X, Y, xc, yc, k, CX, CY);
           double gx[4], gy[4];
+          poly_grad(fg, CX, CY, gx, gy);
           for (int a = 0; a < 4; ++a) {
-            int an = (a + 1) & 3, ap = (a + 3) & 3;
-            gx[a] = dpc[k] * 0.5 * (CY[an] - CY[ap]);
-            gy[a] = dpc[k] * 0.5 * (CX[ap] - CX[an]);
+            gx[a] *= dpc[k];
+            gy[a] *= dpc[k];
           }
           int kn = (k + 1) & 3, kp = (k + 3) & 3;
           f[2 * k] += gx[0] + 0.5 * (gx[1] + gx[3]);
@@ -253,7 +276,10 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
       double a = g->q2 * g->zeta * adu;
       double q = rz[z] * (1.0 - psi) * adu * (a + sqrt(a * a + g->q1 * g->q1 * cz[z] * cz[z]));
       double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
-      double s = q * sqrt(sx * sx + sy * sy) / adu;
+      /* the median's surface: length |S| (planar), |S| × the radius of its midpoint (r–z) */
+      double sa = sqrt(sx * sx + sy * sy);
+      if (fg == C2D_RZ) sa *= 0.5 * (0.5 * (X[k] + X[kn]) + xc);
+      double s = q * sa / adu;
       f[2 * k] += s * du;
       f[2 * k + 1] += s * dv;
       f[2 * kn] -= s * du;
@@ -299,7 +325,7 @@ static void node_gather(c2d_grid *g) {
     }
     g->fx[n] = sx;
     g->fy[n] = sy;
-    g->rf[n] = g->geo == C2D_RZ ? g->M[n] / sa : 1.0;
+    g->rf[n] = g->area_weighted ? g->M[n] / sa : 1.0;
   }
 }
 
@@ -457,6 +483,7 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   g->q2 = s->q2;
   g->zeta = 0.25 * (s->q_gamma + 1.0);
   g->limiter = s->use_limiter;
+  g->area_weighted = s->geometry == C2D_RZ && s->rz_area_weighted;
   g->hg = s->hg_coef;
   g->cfl = s->cfl;
   g->dv_max = s->dv_max > 0 ? s->dv_max : 0.1;
