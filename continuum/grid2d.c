@@ -48,12 +48,15 @@ struct c2d_grid {
   /* nodes */
   double *x, *y, *u, *v, *M;
   double *xh, *yh, *uh, *vh; /* half-step positions, û */
-  double *fx, *fy, *rf;      /* summed planar force, radius factor r̃ */
+  double *fx, *fy, *rf;      /* summed scaled corner force, radius factor r̃ */
+  double *qx, *qy;           /* summed unscaled part (axis nodes: viscosity, sub-zonal) */
+  unsigned char *axis;       /* r–z control-volume form: node on the axis (area-weighted) */
   double *rx0;               /* radial piston: unit direction at t = 0 (x, y interleaved) */
   /* zones */
   double *m, *rho, *e, *p, *c, *vol, *eh, *rhoh, *ph, *ch, *vol_old;
   double *mc;    /* 4 per zone: corner masses */
-  double *fc;    /* 8 per zone: planar corner forces (x, y) */
+  double *fc;    /* 8 per zone: corner forces (x, y), scaled by r̃ at the node */
+  double *fq;    /* 8 per zone: unscaled corner forces (axis nodes) */
   double *ma;    /* 4 per zone: ρ_z A_c (r–z area mass) */
   double *dumax; /* per zone: largest compressive |Δu| (time step) */
   int *material;
@@ -216,17 +219,29 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
     double gvx[4], gvy[4];
     const c2d_geometry fg = g->area_weighted ? C2D_XY : g->geo; /* geometry of the gradients */
     poly_grad(fg, X, Y, gvx, gvy);
-    if (g->area_weighted)
+    size_t nd[4];
+    zone_nodes(g, z, nd);
+    if (g->geo == C2D_RZ)
       for (int k = 0; k < 4; ++k) {
         double CX[4], CY[4];
         corner_quad(X, Y, 0.25 * (X[0] + X[1] + X[2] + X[3]), 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]), k,
                     CX, CY);
         g->ma[4 * z + k] = rz[z] * quad_area(CX, CY);
       }
+    if (fg == C2D_RZ) { /* axis nodes: the area-weighted pressure force (docs/continuum2d.md §2) */
+      double pgx[4], pgy[4];
+      poly_grad(C2D_XY, X, Y, pgx, pgy);
+      for (int k = 0; k < 4; ++k)
+        if (g->axis[nd[k]]) {
+          gvx[k] = pgx[k];
+          gvy[k] = pgy[k];
+        }
+    }
     for (int k = 0; k < 4; ++k) {
       f[2 * k] = P * gvx[k];
       f[2 * k + 1] = P * gvy[k];
     }
+    double ex[8] = {0, 0, 0, 0, 0, 0, 0, 0}; /* sub-zonal pressure and viscosity */
     double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
     {
       double dpc[4];
@@ -248,15 +263,15 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
             gy[a] *= dpc[k];
           }
           int kn = (k + 1) & 3, kp = (k + 3) & 3;
-          f[2 * k] += gx[0] + 0.5 * (gx[1] + gx[3]);
-          f[2 * k + 1] += gy[0] + 0.5 * (gy[1] + gy[3]);
-          f[2 * kn] += 0.5 * gx[1];
-          f[2 * kn + 1] += 0.5 * gy[1];
-          f[2 * kp] += 0.5 * gx[3];
-          f[2 * kp + 1] += 0.5 * gy[3];
+          ex[2 * k] += gx[0] + 0.5 * (gx[1] + gx[3]);
+          ex[2 * k + 1] += gy[0] + 0.5 * (gy[1] + gy[3]);
+          ex[2 * kn] += 0.5 * gx[1];
+          ex[2 * kn + 1] += 0.5 * gy[1];
+          ex[2 * kp] += 0.5 * gx[3];
+          ex[2 * kp + 1] += 0.5 * gy[3];
           for (int q = 0; q < 4; ++q) {
-            f[2 * q] += 0.25 * gx[2];
-            f[2 * q + 1] += 0.25 * gy[2];
+            ex[2 * q] += 0.25 * gx[2];
+            ex[2 * q + 1] += 0.25 * gy[2];
           }
         }
       }
@@ -280,12 +295,20 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
       double sa = sqrt(sx * sx + sy * sy);
       if (fg == C2D_RZ) sa *= 0.5 * (0.5 * (X[k] + X[kn]) + xc);
       double s = q * sa / adu;
-      f[2 * k] += s * du;
-      f[2 * k + 1] += s * dv;
-      f[2 * kn] -= s * du;
-      f[2 * kn + 1] -= s * dv;
+      ex[2 * k] += s * du;
+      ex[2 * k + 1] += s * dv;
+      ex[2 * kn] -= s * du;
+      ex[2 * kn + 1] -= s * dv;
     }
     g->dumax[z] = dumax;
+    double *fq = g->fq + 8 * z;
+    for (int k = 0; k < 4; ++k) {
+      bool ax = g->axis[nd[k]];
+      for (int d = 0; d < 2; ++d) {
+        fq[2 * k + d] = ax ? ex[2 * k + d] : 0.0;
+        if (!ax) f[2 * k + d] += ex[2 * k + d];
+      }
+    }
   }
 }
 
@@ -297,35 +320,45 @@ static void node_gather(c2d_grid *g) {
 #endif
   for (size_t n = 0; n < g->nn; ++n) {
     size_t i = n % w, j = n / w;
-    double sx = 0.0, sy = 0.0, sa = 0.0;
+    double sx = 0.0, sy = 0.0, sa = 0.0, qx = 0.0, qy = 0.0;
     /* zone (i, j) corner 0, (i−1, j) corner 1, (i−1, j−1) corner 2, (i, j−1) corner 3 */
     if (i < ni && j < nj) {
       size_t z = i + ni * j;
       sx += g->fc[8 * z];
       sy += g->fc[8 * z + 1];
+      qx += g->fq[8 * z + 0];
+      qy += g->fq[8 * z + 1];
       sa += g->ma[4 * z];
     }
     if (i > 0 && j < nj) {
       size_t z = i - 1 + ni * j;
       sx += g->fc[8 * z + 2];
       sy += g->fc[8 * z + 3];
+      qx += g->fq[8 * z + 2];
+      qy += g->fq[8 * z + 3];
       sa += g->ma[4 * z + 1];
     }
     if (i > 0 && j > 0) {
       size_t z = i - 1 + ni * (j - 1);
       sx += g->fc[8 * z + 4];
       sy += g->fc[8 * z + 5];
+      qx += g->fq[8 * z + 4];
+      qy += g->fq[8 * z + 5];
       sa += g->ma[4 * z + 2];
     }
     if (i < ni && j > 0) {
       size_t z = i + ni * (j - 1);
       sx += g->fc[8 * z + 6];
       sy += g->fc[8 * z + 7];
+      qx += g->fq[8 * z + 6];
+      qy += g->fq[8 * z + 7];
       sa += g->ma[4 * z + 3];
     }
     g->fx[n] = sx;
     g->fy[n] = sy;
-    g->rf[n] = g->area_weighted ? g->M[n] / sa : 1.0;
+    g->qx[n] = qx;
+    g->qy[n] = qy;
+    g->rf[n] = g->area_weighted || g->axis[n] ? g->M[n] / sa : 1.0;
   }
 }
 
@@ -472,6 +505,10 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   g->mc = xcalloc(4 * nz, sizeof(double));
   g->ma = xcalloc(4 * nz, sizeof(double));
   g->fc = xcalloc(8 * nz, sizeof(double));
+  g->fq = xcalloc(8 * nz, sizeof(double));
+  g->qx = xcalloc(nn, sizeof(double));
+  g->qy = xcalloc(nn, sizeof(double));
+  g->axis = xcalloc(nn, 1);
   g->material = xcalloc(nz, sizeof(int));
   g->runs = xcalloc(nz, sizeof(c2d_run));
   g->nthreads = 1;
@@ -509,6 +546,15 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
     if (r > 0) {
       g->rx0[2 * n] = g->x[n] / r;
       g->rx0[2 * n + 1] = g->y[n] / r;
+    }
+    if (g->geo == C2D_RZ && !g->area_weighted && g->x[n] == 0.0) {
+      /* on the axis: a wall side with normal along r (or a fixed side) */
+      size_t i = n % (g->ni + 1), j = n / (g->ni + 1);
+      bool on[4] = {i == 0, i == g->ni, j == 0, j == g->nj};
+      for (int k = 0; k < 4; ++k)
+        if (on[k] && ((g->bc[k].kind == C2D_BC_WALL && fabs(g->bc[k].normal[0]) == 1.0) ||
+                      g->bc[k].kind == C2D_BC_FIXED))
+          g->axis[n] = 1;
     }
     if (g->geo == C2D_RZ && g->x[n] < 0.0) {
       snprintf(err, errlen, "r–z grid: node %zu (i = %zu, j = %zu) has r = %.6g < 0", n,
@@ -585,13 +631,15 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
 
 void c2d_grid_destroy(c2d_grid *g) {
   if (!g) return;
-  double *arr[] = {g->x,    g->y,  g->u,   g->v,       g->M,   g->xh, g->yh, g->uh,   g->vh,  g->fx,
-                   g->fy,   g->rf, g->rx0, g->m,       g->rho, g->e,  g->p,  g->c,    g->vol, g->eh,
-                   g->rhoh, g->ph, g->ch,  g->vol_old, g->mc,  g->ma, g->fc, g->dumax};
+  double *arr[] = {g->x,  g->y,  g->u,   g->v,     g->M,    g->xh, g->yh,  g->uh,
+                   g->vh, g->fx, g->fy,  g->rf,    g->rx0,  g->m,  g->rho, g->e,
+                   g->p,  g->c,  g->vol, g->eh,    g->rhoh, g->ph, g->ch,  g->vol_old,
+                   g->mc, g->ma, g->fc,  g->dumax, g->fq,   g->qx, g->qy};
   for (size_t k = 0; k < sizeof arr / sizeof arr[0]; ++k) free(arr[k]);
   for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
   free(g->material);
   free(g->runs);
+  free(g->axis);
   free(g);
 }
 
@@ -602,18 +650,20 @@ static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *a
     *ax = *ay = 0.0;
     return;
   }
-  double s = g->rf[n] / M;
-  *ax = s * g->fx[n];
-  *ay = s * g->fy[n];
+  *ax = (g->rf[n] * g->fx[n] + g->qx[n]) / M;
+  *ay = (g->rf[n] * g->fy[n] + g->qy[n]) / M;
 }
 
 /* Work rate −Σ_c r̃ f_c·w of zone z with node velocities (wu, wv). */
 static inline double zone_work(const c2d_grid *g, size_t z, const double *wu, const double *wv) {
   size_t nd[4];
   zone_nodes(g, z, nd);
-  const double *f = g->fc + 8 * z;
+  const double *f = g->fc + 8 * z, *q = g->fq + 8 * z;
   double s = 0.0;
-  for (int k = 0; k < 4; ++k) s += g->rf[nd[k]] * (f[2 * k] * wu[nd[k]] + f[2 * k + 1] * wv[nd[k]]);
+  for (int k = 0; k < 4; ++k) {
+    double r = g->rf[nd[k]];
+    s += (r * f[2 * k] + q[2 * k]) * wu[nd[k]] + (r * f[2 * k + 1] + q[2 * k + 1]) * wv[nd[k]];
+  }
   return s;
 }
 
@@ -665,7 +715,8 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     double ub = 0.5 * (g->u[n] + u1), vb = 0.5 * (g->v[n] + v1);
     /* Reaction work at constrained nodes: ΔKE minus the work of the grid's own forces. */
     g->xh[n] = con ? g->M[n] * ((u1 - g->u[n]) * ub + (v1 - g->v[n]) * vb) -
-                         dt * g->rf[n] * (g->fx[n] * ub + g->fy[n] * vb)
+                         dt * ((g->rf[n] * g->fx[n] + g->qx[n]) * ub +
+                               (g->rf[n] * g->fy[n] + g->qy[n]) * vb)
                    : 0.0;
     g->uh[n] = ub;
     g->vh[n] = vb;

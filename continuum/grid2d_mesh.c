@@ -30,7 +30,9 @@ void c2d_mesh_polar(size_t ni, size_t nj, double r0, double r1, double th0, doub
       size_t n = i + (ni + 1) * j;
       double r = r0 + (r1 - r0) * (double)i / (double)ni;
       double th = th0 + (th1 - th0) * (double)j / (double)nj;
-      x[n] = r * cos(th);
-      y[n] = r * sin(th);
+      double cs = cos(th), sn = sin(th);
+      /* exact zeros on the axes (cos(π/2) ≈ 6e-17 would put an "axis" node off the axis) */
+      x[n] = fabs(cs) < 1e-15 ? 0.0 : r * cs;
+      y[n] = fabs(sn) < 1e-15 ? 0.0 : r * sn;
     }
 }
