@@ -119,4 +119,19 @@ void c2d_mesh_saltzman(size_t ni, size_t nj, double *x, double *y);
 void c2d_mesh_polar(size_t ni, size_t nj, double r0, double r1, double th0, double th1, double *x,
                     double *y);
 
+/* ------------------------------------------------------------------------------------------ */
+/* The deck problem (`problem: grid2d`, docs/continuum2d.md §8; continuum/grid2d_deck.c)        */
+
+typedef struct c2d_problem c2d_problem;
+/* Reads the `grid2d:` section and builds the grid; every problem (including a tangled or
+ * inverted mesh and r < 0 in r–z, located at the mesh entry) goes to *e. NULL on error. */
+c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                              dk_errors *e);
+/* Runs to time.end writing HDF5 snapshots grid2d_NNNN.h5 and the XDMF temporal collection
+ * grid2d.xmf (ParaView opens the run as one series) into ctx->outdir; an inverted zone or EOS
+ * failure stops the run with the zone and the step in the log and a last snapshot. */
+ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p);
+void c2d_problem_free(c2d_problem *p);
+c2d_grid *c2d_problem_grid(c2d_problem *p);
+
 #endif /* MSCALE_CONT2D_H */
