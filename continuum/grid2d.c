@@ -286,6 +286,7 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k];
       if (du * dx + dv * dy >= 0.0) continue;
       double adu = sqrt(du * du + dv * dv);
+      if (!(adu > 1e-150)) continue; /* |Δu|² underflows: no viscosity (and no 0/0 below) */
       if (adu > dumax) dumax = adu;
       double psi = g->limiter ? edge_limiter(g, px, py, pu, pv, li[k], lj[k], li[kn], lj[kn]) : 0.0;
       double a = g->q2 * g->zeta * adu;

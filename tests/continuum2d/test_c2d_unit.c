@@ -105,9 +105,54 @@ static void test_bad_mesh(void **state) {
   eos_destroy(gas);
 }
 
+/* OpenMP: the same Saltzman-like run with 1 and 2 threads gives bitwise equal states (zones
+ * write only their own corners, nodes gather in a fixed order, sums are serial). */
+static void test_threads(void **state) {
+  (void)state;
+  eos_t *gas = eos_create_ideal_gas(5.0 / 3.0, 1.0);
+  double *rho[2], *x[2];
+  for (int t = 0; t < 2; ++t) {
+    c2d_fixture f;
+    fixture_init(&f, 40, 8, gas);
+    c2d_mesh_saltzman(40, 8, f.x, f.y);
+    for (size_t z = 0; z < 320; ++z) {
+      f.rho[z] = 1.0;
+      f.e[z] = 1e-9;
+    }
+    c2d_setup s;
+    c2d_setup_defaults(&s);
+    fixture_setup(&f, &s);
+    s.hg_coef = 1.0;
+    s.bc[C2D_ILO].kind = C2D_BC_PISTON;
+    s.bc[C2D_ILO].dir[0] = 1.0;
+    s.bc[C2D_ILO].fn.kind = CONT_FN_CONST;
+    s.bc[C2D_ILO].fn.value = 1.0;
+    s.bc[C2D_IHI].kind = s.bc[C2D_JLO].kind = s.bc[C2D_JHI].kind = C2D_BC_WALL;
+    char msg[256];
+    c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+    assert_non_null(g);
+    c2d_grid_set_threads(g, t + 1);
+    assert_int_equal(c2d_grid_run_to(g, 0.3), MS_OK);
+    c2d_view v = c2d_grid_view(g);
+    rho[t] = malloc(v.nzones * sizeof(double));
+    x[t] = malloc(v.nnodes * sizeof(double));
+    memcpy(rho[t], v.rho, v.nzones * sizeof(double));
+    memcpy(x[t], v.x, v.nnodes * sizeof(double));
+    c2d_grid_destroy(g);
+    fixture_free(&f);
+  }
+  assert_memory_equal(rho[0], rho[1], 320 * sizeof(double));
+  assert_memory_equal(x[0], x[1], 41 * 9 * sizeof(double));
+  for (int t = 0; t < 2; ++t) {
+    free(rho[t]);
+    free(x[t]);
+  }
+  eos_destroy(gas);
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_uniform_rest),
-                                     cmocka_unit_test(test_energy_random),
-                                     cmocka_unit_test(test_bad_mesh)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_uniform_rest), cmocka_unit_test(test_energy_random),
+      cmocka_unit_test(test_bad_mesh), cmocka_unit_test(test_threads)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
