@@ -49,14 +49,11 @@ struct c2d_grid {
   double *x, *y, *u, *v, *M;
   double *xh, *yh, *uh, *vh; /* half-step positions, û */
   double *fx, *fy, *rf;      /* summed scaled corner force, radius factor r̃ */
-  double *qx, *qy;           /* summed unscaled part (axis nodes: viscosity, sub-zonal) */
-  unsigned char *axis;       /* r–z control-volume form: node on the axis (area-weighted) */
   double *rx0;               /* radial piston: unit direction at t = 0 (x, y interleaved) */
   /* zones */
   double *m, *rho, *e, *p, *c, *vol, *eh, *rhoh, *ph, *ch, *vol_old;
   double *mc;    /* 4 per zone: corner masses */
   double *fc;    /* 8 per zone: corner forces (x, y), scaled by r̃ at the node */
-  double *fq;    /* 8 per zone: unscaled corner forces (axis nodes) */
   double *ma;    /* 4 per zone: ρ_z A_c (r–z area mass) */
   double *dumax; /* per zone: largest compressive |Δu| (time step) */
   int *material;
@@ -202,6 +199,40 @@ static double edge_limiter(const c2d_grid *g, const double *px, const double *py
   return psi > 0.0 ? psi : 0.0;
 }
 
+/* Bilinear shape-function integrals over a quad (2 × 2 Gauss points, exact here):
+ * mr[k] = ∫ N_k r dA and ma[k] = ∫ N_k dA (r = X). */
+static void fe_lumped(const double X[4], const double Y[4], double mr[4], double ma[4]) {
+  const double gp[2] = {-0.57735026918962576, 0.57735026918962576};
+  for (int k = 0; k < 4; ++k) mr[k] = ma[k] = 0.0;
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      double xi = gp[a], et = gp[b];
+      double N[4] = {0.25 * (1 - xi) * (1 - et), 0.25 * (1 + xi) * (1 - et),
+                     0.25 * (1 + xi) * (1 + et), 0.25 * (1 - xi) * (1 + et)};
+      double dxi[4] = {-0.25 * (1 - et), 0.25 * (1 - et), 0.25 * (1 + et), -0.25 * (1 + et)};
+      double det[4] = {-0.25 * (1 - xi), -0.25 * (1 + xi), 0.25 * (1 + xi), 0.25 * (1 - xi)};
+      double r = 0, xx = 0, xe = 0, yx = 0, ye = 0;
+      for (int q = 0; q < 4; ++q) {
+        r += N[q] * X[q];
+        xx += dxi[q] * X[q];
+        xe += det[q] * X[q];
+        yx += dxi[q] * Y[q];
+        ye += det[q] * Y[q];
+      }
+      double J = xx * ye - xe * yx;
+      for (int q = 0; q < 4; ++q) {
+        mr[q] += N[q] * r * J;
+        ma[q] += N[q] * J;
+      }
+    }
+}
+
+static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
+  double mr[4], ma[4];
+  fe_lumped(X, Y, mr, ma);
+  for (int k = 0; k < 4; ++k) rb[k] = ma[k] > 0 ? mr[k] / ma[k] : 0.0;
+}
+
 /* Zone pass: planar corner forces (pressure pz, sub-zonal pressure, edge viscosity) at positions
  * (px, py) and velocities (pu, pv); densities rz, sound speeds cz. */
 static void zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
@@ -228,15 +259,6 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
                     CX, CY);
         g->ma[4 * z + k] = rz[z] * quad_area(CX, CY);
       }
-    if (fg == C2D_RZ) { /* axis nodes: the area-weighted pressure force (docs/continuum2d.md §2) */
-      double pgx[4], pgy[4];
-      poly_grad(C2D_XY, X, Y, pgx, pgy);
-      for (int k = 0; k < 4; ++k)
-        if (g->axis[nd[k]]) {
-          gvx[k] = pgx[k];
-          gvy[k] = pgy[k];
-        }
-    }
     for (int k = 0; k < 4; ++k) {
       f[2 * k] = P * gvx[k];
       f[2 * k + 1] = P * gvy[k];
@@ -279,7 +301,7 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
     /* Edge viscosity, compression only. */
     long i = (long)z % ni, j = (long)z / ni;
     const long li[4] = {i, i + 1, i + 1, i}, lj[4] = {j, j, j + 1, j + 1};
-    double dumax = 0.0;
+    double dumax = 0.0, vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int k = 0; k < 4; ++k) {
       int kn = (k + 1) & 3;
       double du = U[kn] - U[k], dv = V[kn] - V[k];
@@ -294,22 +316,26 @@ static void zone_forces(c2d_grid *g, const double *px, const double *py, const d
       double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
       /* the median's surface: length |S| (planar), |S| × the radius of its midpoint (r–z) */
       double sa = sqrt(sx * sx + sy * sy);
-      if (fg == C2D_RZ) sa *= 0.5 * (0.5 * (X[k] + X[kn]) + xc);
       double s = q * sa / adu;
-      ex[2 * k] += s * du;
-      ex[2 * k + 1] += s * dv;
-      ex[2 * kn] -= s * du;
-      ex[2 * kn + 1] -= s * dv;
+      vx[2 * k] += s * du;
+      vx[2 * k + 1] += s * dv;
+      vx[2 * kn] -= s * du;
+      vx[2 * kn + 1] -= s * dv;
     }
-    g->dumax[z] = dumax;
-    double *fq = g->fq + 8 * z;
-    for (int k = 0; k < 4; ++k) {
-      bool ax = g->axis[nd[k]];
-      for (int d = 0; d < 2; ++d) {
-        fq[2 * k + d] = ax ? ex[2 * k + d] : 0.0;
-        if (!ax) f[2 * k + d] += ex[2 * k + d];
+    if (fg == C2D_RZ) {
+      /* r–z: the planar viscous corner force times r̄_c = ∫N_k r dA / ∫N_k dA, the radius of
+       * node k's lumped mass in this zone, so that q accelerates the nodes consistently with
+       * their masses (a flow along z stays uniform across r). */
+      double rb[4];
+      fe_radii(X, Y, rb);
+      for (int k = 0; k < 4; ++k) {
+        vx[2 * k] *= rb[k];
+        vx[2 * k + 1] *= rb[k];
       }
     }
+    for (int k = 0; k < 8; ++k) ex[k] += vx[k];
+    g->dumax[z] = dumax;
+    for (int k = 0; k < 8; ++k) f[k] += ex[k];
   }
 }
 
@@ -321,45 +347,35 @@ static void node_gather(c2d_grid *g) {
 #endif
   for (size_t n = 0; n < g->nn; ++n) {
     size_t i = n % w, j = n / w;
-    double sx = 0.0, sy = 0.0, sa = 0.0, qx = 0.0, qy = 0.0;
+    double sx = 0.0, sy = 0.0, sa = 0.0;
     /* zone (i, j) corner 0, (i−1, j) corner 1, (i−1, j−1) corner 2, (i, j−1) corner 3 */
     if (i < ni && j < nj) {
       size_t z = i + ni * j;
       sx += g->fc[8 * z];
       sy += g->fc[8 * z + 1];
-      qx += g->fq[8 * z + 0];
-      qy += g->fq[8 * z + 1];
       sa += g->ma[4 * z];
     }
     if (i > 0 && j < nj) {
       size_t z = i - 1 + ni * j;
       sx += g->fc[8 * z + 2];
       sy += g->fc[8 * z + 3];
-      qx += g->fq[8 * z + 2];
-      qy += g->fq[8 * z + 3];
       sa += g->ma[4 * z + 1];
     }
     if (i > 0 && j > 0) {
       size_t z = i - 1 + ni * (j - 1);
       sx += g->fc[8 * z + 4];
       sy += g->fc[8 * z + 5];
-      qx += g->fq[8 * z + 4];
-      qy += g->fq[8 * z + 5];
       sa += g->ma[4 * z + 2];
     }
     if (i < ni && j > 0) {
       size_t z = i + ni * (j - 1);
       sx += g->fc[8 * z + 6];
       sy += g->fc[8 * z + 7];
-      qx += g->fq[8 * z + 6];
-      qy += g->fq[8 * z + 7];
       sa += g->ma[4 * z + 3];
     }
     g->fx[n] = sx;
     g->fy[n] = sy;
-    g->qx[n] = qx;
-    g->qy[n] = qy;
-    g->rf[n] = g->area_weighted || g->axis[n] ? g->M[n] / sa : 1.0;
+    g->rf[n] = g->area_weighted ? g->M[n] / sa : 1.0;
   }
 }
 
@@ -506,10 +522,6 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   g->mc = xcalloc(4 * nz, sizeof(double));
   g->ma = xcalloc(4 * nz, sizeof(double));
   g->fc = xcalloc(8 * nz, sizeof(double));
-  g->fq = xcalloc(8 * nz, sizeof(double));
-  g->qx = xcalloc(nn, sizeof(double));
-  g->qy = xcalloc(nn, sizeof(double));
-  g->axis = xcalloc(nn, 1);
   g->material = xcalloc(nz, sizeof(int));
   g->runs = xcalloc(nz, sizeof(c2d_run));
   g->nthreads = 1;
@@ -547,15 +559,6 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
     if (r > 0) {
       g->rx0[2 * n] = g->x[n] / r;
       g->rx0[2 * n + 1] = g->y[n] / r;
-    }
-    if (g->geo == C2D_RZ && !g->area_weighted && g->x[n] == 0.0) {
-      /* on the axis: a wall side with normal along r (or a fixed side) */
-      size_t i = n % (g->ni + 1), j = n / (g->ni + 1);
-      bool on[4] = {i == 0, i == g->ni, j == 0, j == g->nj};
-      for (int k = 0; k < 4; ++k)
-        if (on[k] && ((g->bc[k].kind == C2D_BC_WALL && fabs(g->bc[k].normal[0]) == 1.0) ||
-                      g->bc[k].kind == C2D_BC_FIXED))
-          g->axis[n] = 1;
     }
     if (g->geo == C2D_RZ && g->x[n] < 0.0) {
       snprintf(err, errlen, "r–z grid: node %zu (i = %zu, j = %zu) has r = %.6g < 0", n,
@@ -602,7 +605,19 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
     g->m[z] = mz;
     size_t nd[4];
     zone_nodes(g, z, nd);
-    for (int k = 0; k < 4; ++k) g->M[nd[k]] += g->mc[4 * z + k];
+    if (g->geo == C2D_RZ && !g->area_weighted) {
+      /* r–z control-volume form: node masses lumped with the bilinear shape functions,
+       * M_p += ρ0 ∫_z N_p r dA (2 × 2 Gauss points, exact for this integrand), the partition
+       * that matches the force P ∂V/∂x_p: a flow along z stays uniform across r (the median
+       * corner masses make the axis nodes 4/3 too light for their force — axis jetting). */
+      double mf[4], maf[4];
+      fe_lumped(X, Y, mf, maf);
+      /* scale so that Σ_p M_p = Σ_z m_z exactly (the quadrature is exact up to round-off) */
+      double sm = mf[0] + mf[1] + mf[2] + mf[3];
+      for (int k = 0; k < 4; ++k) g->M[nd[k]] += mz * mf[k] / sm;
+    } else {
+      for (int k = 0; k < 4; ++k) g->M[nd[k]] += g->mc[4 * z + k];
+    }
     if (g->nruns == 0 || g->runs[g->nruns - 1].eos != s->eos[z]) {
       g->runs[g->nruns].first = z;
       g->runs[g->nruns].eos = s->eos[z];
@@ -632,15 +647,13 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
 
 void c2d_grid_destroy(c2d_grid *g) {
   if (!g) return;
-  double *arr[] = {g->x,  g->y,  g->u,   g->v,     g->M,    g->xh, g->yh,  g->uh,
-                   g->vh, g->fx, g->fy,  g->rf,    g->rx0,  g->m,  g->rho, g->e,
-                   g->p,  g->c,  g->vol, g->eh,    g->rhoh, g->ph, g->ch,  g->vol_old,
-                   g->mc, g->ma, g->fc,  g->dumax, g->fq,   g->qx, g->qy};
+  double *arr[] = {g->x,    g->y,  g->u,   g->v,       g->M,   g->xh, g->yh, g->uh,   g->vh,  g->fx,
+                   g->fy,   g->rf, g->rx0, g->m,       g->rho, g->e,  g->p,  g->c,    g->vol, g->eh,
+                   g->rhoh, g->ph, g->ch,  g->vol_old, g->mc,  g->ma, g->fc, g->dumax};
   for (size_t k = 0; k < sizeof arr / sizeof arr[0]; ++k) free(arr[k]);
   for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
   free(g->material);
   free(g->runs);
-  free(g->axis);
   free(g);
 }
 
@@ -651,19 +664,19 @@ static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *a
     *ax = *ay = 0.0;
     return;
   }
-  *ax = (g->rf[n] * g->fx[n] + g->qx[n]) / M;
-  *ay = (g->rf[n] * g->fy[n] + g->qy[n]) / M;
+  *ax = g->rf[n] * g->fx[n] / M;
+  *ay = g->rf[n] * g->fy[n] / M;
 }
 
 /* Work rate −Σ_c r̃ f_c·w of zone z with node velocities (wu, wv). */
 static inline double zone_work(const c2d_grid *g, size_t z, const double *wu, const double *wv) {
   size_t nd[4];
   zone_nodes(g, z, nd);
-  const double *f = g->fc + 8 * z, *q = g->fq + 8 * z;
+  const double *f = g->fc + 8 * z;
   double s = 0.0;
   for (int k = 0; k < 4; ++k) {
     double r = g->rf[nd[k]];
-    s += (r * f[2 * k] + q[2 * k]) * wu[nd[k]] + (r * f[2 * k + 1] + q[2 * k + 1]) * wv[nd[k]];
+    s += r * (f[2 * k] * wu[nd[k]] + f[2 * k + 1] * wv[nd[k]]);
   }
   return s;
 }
@@ -716,8 +729,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     double ub = 0.5 * (g->u[n] + u1), vb = 0.5 * (g->v[n] + v1);
     /* Reaction work at constrained nodes: ΔKE minus the work of the grid's own forces. */
     g->xh[n] = con ? g->M[n] * ((u1 - g->u[n]) * ub + (v1 - g->v[n]) * vb) -
-                         dt * ((g->rf[n] * g->fx[n] + g->qx[n]) * ub +
-                               (g->rf[n] * g->fy[n] + g->qy[n]) * vb)
+                         dt * g->rf[n] * (g->fx[n] * ub + g->fy[n] * vb)
                    : 0.0;
     g->uh[n] = ub;
     g->vh[n] = vb;
