@@ -136,7 +136,146 @@ static void test_sod2d(void **state) {
   eos_destroy(gas);
 }
 
+/* r–z, flow along z on a mesh that touches the axis (4 × 200 zones, r ≤ 0.1): the columns stay
+ * equal (the lumped-mass / control-volume pairing, docs/continuum2d.md §2) and the L1 errors
+ * are those of the planar run. */
+static void test_sod_rz_along_z(void **state) {
+  (void)state;
+  eos_t *gas = eos_create_ideal_gas(gam, 1.0);
+  const size_t ni = 4, nj = 200;
+  c2d_fixture f;
+  fixture_init(&f, ni, nj, gas);
+  c2d_mesh_rect(ni, nj, 0.0, 0.1, 0.0, 1.0, f.x, f.y);
+  for (size_t z = 0; z < ni * nj; ++z) {
+    bool lo = z / ni < nj / 2;
+    f.rho[z] = lo ? 1.0 : 0.125;
+    f.e[z] = (lo ? 1.0 : 0.1) / ((gam - 1.0) * f.rho[z]);
+  }
+  c2d_setup s;
+  c2d_setup_defaults(&s);
+  fixture_setup(&f, &s);
+  s.geometry = C2D_RZ;
+  s.q_gamma = gam;
+  for (int k = 0; k < 4; ++k) s.bc[k].kind = C2D_BC_WALL;
+  s.bc[C2D_ILO].normal[0] = 1.0; /* the axis */
+  s.bc[C2D_IHI].normal[0] = 1.0;
+  char msg[256];
+  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  assert_non_null(g);
+  double e0 = energy_total(g);
+  assert_int_equal(c2d_grid_run_to(g, t_end), MS_OK);
+  c2d_view v = c2d_grid_view(g);
+  double d = 0, ur = 0;
+  for (size_t j = 0; j < nj; ++j)
+    for (size_t i = 1; i < ni; ++i)
+      d = fmax(d, fabs(v.rho[i + ni * j] - v.rho[ni * j]) / v.rho[ni * j]);
+  for (size_t n = 0; n < v.nnodes; ++n) ur = fmax(ur, fabs(v.u[n]));
+  /* column 0 as a 1D profile along z */
+  double *zn = malloc((nj + 1) * sizeof(double)), *wn = malloc((nj + 1) * sizeof(double)),
+         *rc = malloc(nj * sizeof(double)), *pc = malloc(nj * sizeof(double)), err[3], e1[3];
+  for (size_t j = 0; j <= nj; ++j) {
+    zn[j] = v.y[(ni + 1) * j];
+    wn[j] = v.v[(ni + 1) * j];
+  }
+  for (size_t j = 0; j < nj; ++j) {
+    rc[j] = v.rho[ni * j];
+    pc[j] = v.p[ni * j];
+  }
+  l1_errors(nj, zn, wn, rc, pc, err);
+  run_1d(nj, gas, e1);
+  double drift = energy_drift(g, e0, 0.0);
+  printf("sod r-z along z: %zu x %zu zones: L1(rho) %.4e L1(u) %.4e L1(p) %.4e (1D planar %.4e "
+         "%.4e %.4e), max column difference %.2e, max |u_r| %.2e, energy drift %.2e\n",
+         ni, nj, err[0], err[1], err[2], e1[0], e1[1], e1[2], d, ur, drift);
+  /* Round-off only: the r–z forces and the lumped masses give every node of a row the same
+   * acceleration for a flow along z. */
+  assert_true(d < 1e-12 && ur < 1e-12);
+  for (int q = 0; q < 3; ++q) assert_true(err[q] < 1.1 * e1[q]); /* as the x–y case */
+  assert_true(drift < 1e-12);
+  free(zn);
+  free(wn);
+  free(rc);
+  free(pc);
+  c2d_grid_destroy(g);
+  fixture_free(&f);
+  eos_destroy(gas);
+}
+
+/* r–z, radial Sod (diaphragm at r = 0.5, 200 × 2 zones, walls at r = 1 and top/bottom) against
+ * the 1D cylindrical grid at the same 200 cells. */
+static void test_sod_rz_radial(void **state) {
+  (void)state;
+  eos_t *gas = eos_create_ideal_gas(gam, 1.0);
+  const size_t ni = 200, nj = 2;
+  c2d_fixture f;
+  fixture_init(&f, ni, nj, gas);
+  c2d_mesh_rect(ni, nj, 0.0, 1.0, 0.0, 0.01, f.x, f.y);
+  for (size_t z = 0; z < ni * nj; ++z) {
+    bool in = z % ni < ni / 2;
+    f.rho[z] = in ? 1.0 : 0.125;
+    f.e[z] = (in ? 1.0 : 0.1) / ((gam - 1.0) * f.rho[z]);
+  }
+  c2d_setup s;
+  c2d_setup_defaults(&s);
+  fixture_setup(&f, &s);
+  s.geometry = C2D_RZ;
+  s.q_gamma = gam;
+  for (int k = 0; k < 4; ++k) s.bc[k].kind = C2D_BC_WALL;
+  char msg[256];
+  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  assert_non_null(g);
+  double e0 = energy_total(g);
+  assert_int_equal(c2d_grid_run_to(g, t_end), MS_OK);
+  c2d_view v = c2d_grid_view(g);
+  cont_layer_spec layers[2] = {{.name = "in",
+                                .eos = gas,
+                                .thickness = 0.5,
+                                .rho = 1.0,
+                                .e_from_p = true,
+                                .p = 1.0,
+                                .ncells = (long)ni / 2},
+                               {.name = "out",
+                                .eos = gas,
+                                .thickness = 0.5,
+                                .rho = 0.125,
+                                .e_from_p = true,
+                                .p = 0.1,
+                                .ncells = (long)ni / 2}};
+  cont_setup s1;
+  cont_setup_defaults(&s1);
+  s1.geometry = CONT_CYLINDRICAL;
+  s1.layers = layers;
+  s1.nlayers = 2;
+  cont_grid *g1 = cont_grid_create(&s1, msg, sizeof msg);
+  assert_non_null(g1);
+  assert_int_equal(cont_grid_run_to(g1, t_end), MS_OK);
+  /* L1 difference of the density profiles over r ∈ [0, 1], the 1D solution sampled at the 2D
+   * zone centres (linear between its cell centres). */
+  double diff = 0;
+  for (size_t i = 0; i < ni; ++i) {
+    double rc = 0.5 * (v.x[i] + v.x[i + 1]), dr = v.x[i + 1] - v.x[i];
+    cont_sample smp;
+    assert_true(cont_grid_sample(g1, rc, &smp));
+    diff += fabs(v.rho[i] - smp.rho) * dr;
+  }
+  double drift = energy_drift(g, e0, 0.0);
+  printf("sod r-z radial: %zu x %zu zones vs the 1D cylindrical grid (200 cells): L1(rho "
+         "difference) %.4e, energy drift %.2e\n",
+         ni, nj, diff, drift);
+  /* Both are first-order at the discontinuities with planar L1 errors ≈ 2.6e-3 against the
+   * exact solution at this resolution (test_sod2d); their viscosities differ, so their difference
+   * is of that size: we require less than twice it. */
+  assert_true(diff < 5e-3);
+  assert_true(drift < 1e-12);
+  cont_grid_destroy(g1);
+  c2d_grid_destroy(g);
+  fixture_free(&f);
+  eos_destroy(gas);
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_sod2d)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_sod2d),
+                                     cmocka_unit_test(test_sod_rz_along_z),
+                                     cmocka_unit_test(test_sod_rz_radial)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
