@@ -31,7 +31,8 @@ typedef enum c2d_bc_kind {
   C2D_BC_FREE = 0, /* p = 0 outside */
   C2D_BC_WALL,     /* symmetry plane / rigid wall: velocity component along `normal` is 0 */
   C2D_BC_PISTON, /* prescribed node velocity fn(t)·dir (radial: fn(t)·x̂_p, x̂_p = x_p/|x_p| at t=0) */
-  C2D_BC_FIXED /* both components 0 (e.g. the degenerate centre of a polar mesh) */
+  C2D_BC_FIXED,   /* both components 0 (e.g. the degenerate centre of a polar mesh) */
+  C2D_BC_PRESSURE /* outside pressure fn(t) on the side's edges */
 } c2d_bc_kind;
 
 typedef struct c2d_bc {
@@ -39,7 +40,7 @@ typedef struct c2d_bc {
   double normal[2]; /* wall: unit normal (set by c2d_grid_create from the side if both are 0) */
   double dir[2];    /* piston: direction of the velocity (unit vector) */
   bool radial;      /* piston: along x_p/|x_p| instead of dir */
-  cont_fn fn;       /* piston speed history (copied) */
+  cont_fn fn;       /* piston speed or outside pressure history (copied) */
 } c2d_bc;
 
 typedef struct c2d_setup {

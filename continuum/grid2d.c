@@ -49,7 +49,9 @@ struct c2d_grid {
   double *x, *y, *u, *v, *M;
   double *xh, *yh, *uh, *vh; /* half-step positions, û */
   double *fx, *fy, *rf;      /* summed scaled corner force, radius factor r̃ */
-  double *rx0;               /* radial piston: unit direction at t = 0 (x, y interleaved) */
+  double *ex, *ey;           /* outside-pressure force on boundary nodes */
+  bool has_pressure;
+  double *rx0; /* radial piston: unit direction at t = 0 (x, y interleaved) */
   /* zones */
   double *m, *rho, *e, *p, *c, *vol, *eh, *rhoh, *ph, *ch, *vol_old;
   double *mc;    /* 4 per zone: corner masses */
@@ -379,6 +381,53 @@ static void node_gather(c2d_grid *g) {
   }
 }
 
+/* Outside pressure p(t) on the edges of C2D_BC_PRESSURE sides at positions (px, py): edge a → b
+ * (counter-clockwise in its zone, outward normal ∝ (y_b − y_a, x_a − x_b)) pushes its nodes with
+ * −p n ∫ N r ds: L/2 each in x–y, L(2r_a + r_b)/6 in r–z (the boundary part of ∂V/∂x, so a
+ * matching outside pressure is in exact equilibrium). Serial: boundary nodes only. */
+static void boundary_pressure(c2d_grid *g, const double *px, const double *py, double t) {
+  if (!g->has_pressure) return;
+  const size_t ni = g->ni, nj = g->nj, w = ni + 1;
+  for (int s = 0; s < 4; ++s) {
+    size_t ne = s < 2 ? nj : ni;
+    for (size_t k = 0; k <= ne; ++k) {
+      size_t n = s == 0 ? w * k : s == 1 ? ni + w * k : s == 2 ? k : k + w * nj;
+      g->ex[n] = g->ey[n] = 0.0;
+    }
+  }
+  for (int s = 0; s < 4; ++s) {
+    if (g->bc[s].kind != C2D_BC_PRESSURE) continue;
+    double p = cont_fn_eval(&g->bc[s].fn, t);
+    size_t ne = s < 2 ? nj : ni;
+    for (size_t k = 0; k < ne; ++k) {
+      size_t a, b;
+      if (s == 0) { /* ILO: (0, k+1) → (0, k) */
+        a = w * (k + 1);
+        b = w * k;
+      } else if (s == 1) { /* IHI: (ni, k) → (ni, k+1) */
+        a = ni + w * k;
+        b = ni + w * (k + 1);
+      } else if (s == 2) { /* JLO: (k, 0) → (k+1, 0) */
+        a = k;
+        b = k + 1;
+      } else { /* JHI: (k+1, nj) → (k, nj) */
+        a = k + 1 + w * nj;
+        b = k + w * nj;
+      }
+      double nx = py[b] - py[a], ny = px[a] - px[b]; /* outward normal × L */
+      double wa = 0.5, wb = 0.5;
+      if (g->geo == C2D_RZ) {
+        wa = (2.0 * px[a] + px[b]) / 6.0;
+        wb = (px[a] + 2.0 * px[b]) / 6.0;
+      }
+      g->ex[a] -= p * nx * wa;
+      g->ey[a] -= p * ny * wa;
+      g->ex[b] -= p * nx * wb;
+      g->ey[b] -= p * ny * wb;
+    }
+  }
+}
+
 /* Boundary conditions of node n at time t on the velocity (u, v). Returns true if the node is
  * constrained (its reaction does work). */
 static bool apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
@@ -407,6 +456,8 @@ static bool apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v
     } else if (g->bc[s].kind == C2D_BC_FIXED) {
       *u = *v = 0.0;
       con = true;
+    } else if (g->bc[s].kind == C2D_BC_PRESSURE) {
+      con = true; /* the outside pressure does work (booked like a reaction) */
     }
   }
   return con;
@@ -516,6 +567,8 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
                    &g->yh, &g->uh, &g->vh, &g->fx, &g->fy, &g->rf};
   for (size_t k = 0; k < sizeof na / sizeof na[0]; ++k) *na[k] = xcalloc(nn, sizeof(double));
   g->rx0 = xcalloc(2 * nn, sizeof(double));
+  g->ex = xcalloc(nn, sizeof(double));
+  g->ey = xcalloc(nn, sizeof(double));
   double **za[] = {&g->m,  &g->rho,  &g->e,  &g->p,  &g->c,       &g->vol,
                    &g->eh, &g->rhoh, &g->ph, &g->ch, &g->vol_old, &g->dumax};
   for (size_t k = 0; k < sizeof za / sizeof za[0]; ++k) *za[k] = xcalloc(nz, sizeof(double));
@@ -543,6 +596,7 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   const double side_normal[4][2] = {{1, 0}, {1, 0}, {0, 1}, {0, 1}};
   for (int k = 0; k < 4; ++k) {
     g->bc[k] = s->bc[k];
+    if (g->bc[k].kind == C2D_BC_PRESSURE) g->has_pressure = true;
     cont_fn_copy(&g->bc[k].fn, &s->bc[k].fn);
     if (g->bc[k].kind == C2D_BC_WALL && g->bc[k].normal[0] == 0.0 && g->bc[k].normal[1] == 0.0) {
       g->bc[k].normal[0] = side_normal[k][0];
@@ -652,6 +706,8 @@ void c2d_grid_destroy(c2d_grid *g) {
                    g->rhoh, g->ph, g->ch,  g->vol_old, g->mc,  g->ma, g->fc, g->dumax};
   for (size_t k = 0; k < sizeof arr / sizeof arr[0]; ++k) free(arr[k]);
   for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
+  free(g->ex);
+  free(g->ey);
   free(g->material);
   free(g->runs);
   free(g);
@@ -664,8 +720,8 @@ static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *a
     *ax = *ay = 0.0;
     return;
   }
-  *ax = g->rf[n] * g->fx[n] / M;
-  *ay = g->rf[n] * g->fy[n] / M;
+  *ax = (g->rf[n] * g->fx[n] + g->ex[n]) / M;
+  *ay = (g->rf[n] * g->fy[n] + g->ey[n]) / M;
 }
 
 /* Work rate −Σ_c r̃ f_c·w of zone z with node velocities (wu, wv). */
@@ -694,6 +750,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   /* Predictor. */
   zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
   node_gather(g);
+  boundary_pressure(g, g->x, g->y, g->t);
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(g->nthreads) schedule(static)
 #endif
@@ -717,6 +774,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   /* Corrector. */
   zone_forces(g, g->xh, g->yh, g->uh, g->vh, g->ph, g->rhoh, g->ch);
   node_gather(g);
+  boundary_pressure(g, g->xh, g->yh, g->t + 0.5 * dt);
   double work = 0.0;
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(g->nthreads) schedule(static)

@@ -41,7 +41,7 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *k
   const dk_node *n = bcs ? dk_get(bcs, key) : NULL;
   if (!n) return; /* free */
   if (!dk_expect_map(e, doc, n, key)) return;
-  static const char *const kinds[] = {"free", "wall", "piston", "fixed", NULL};
+  static const char *const kinds[] = {"free", "wall", "piston", "fixed", "pressure", NULL};
   int k = 0;
   dk_read_enum(e, doc, n, "type", true, 0, kinds, &k);
   bc->kind = (c2d_bc_kind)k;
@@ -49,6 +49,11 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *k
   if (bc->kind == C2D_BC_WALL) read_range(e, doc, n, "normal", MS_DIM_NONE, false, 0, 0, nv);
   bc->normal[0] = nv[0];
   bc->normal[1] = nv[1];
+  if (bc->kind == C2D_BC_PRESSURE) {
+    bc->fn.kind = CONT_FN_CONST;
+    dk_read_double(e, doc, n, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY,
+                   &bc->fn.value);
+  }
   if (bc->kind == C2D_BC_PISTON) {
     double sp = 0, dir[2] = {1, 0};
     dk_read_double(e, doc, n, "velocity", MS_DIM_VELOCITY, true, 0, -INFINITY, INFINITY, &sp);
