@@ -106,6 +106,21 @@ void c2d_grid_hourglass(const c2d_grid *g, double *hg_rms, double *rho_spread);
 /* Smallest zone area (planar) now; ≤ 0 means a tangled zone (whose index goes to *zone). */
 double c2d_grid_min_area(const c2d_grid *g, size_t *zone);
 
+/* Tagged node lines: the nodes (i, index), i = 0..ni (along_i) or (index, j), j = 0..nj,
+ * recorded (t, x, y, u, v of every node) at creation of the tag and after every step (storage
+ * grows by doubling). Returns the tag's index. */
+size_t c2d_grid_add_tag_line(c2d_grid *g, const char *name, bool along_i, size_t index);
+size_t c2d_grid_ntag_lines(const c2d_grid *g);
+typedef struct c2d_line_history {
+  const char *name;
+  size_t nnodes;               /* nodes in the line */
+  const size_t *node;          /* their indices */
+  size_t n;                    /* records */
+  const double *t;             /* n */
+  const double *x, *y, *u, *v; /* n × nnodes, row k = record k */
+} c2d_line_history;
+c2d_line_history c2d_grid_line_history(const c2d_grid *g, size_t tag);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Mesh builders (continuum/grid2d_mesh.c): fill x, y of (ni+1)(nj+1) nodes.                   */
 

@@ -37,6 +37,13 @@
 #include <omp.h>
 #endif
 
+typedef struct c2d_tagline {
+  char *name;
+  size_t nnodes, *node;
+  size_t n, cap;
+  double *t, *x, *y, *u, *v;
+} c2d_tagline;
+
 typedef struct c2d_run {
   size_t first, n;
   const eos_t *eos;
@@ -67,6 +74,8 @@ struct c2d_grid {
   double cfl, dv_max, dt_max, dt_min, dt_growth, dt_next;
   double t, work;
   long step;
+  size_t ntags, tag_cap;
+  c2d_tagline *tags;
   int nthreads;
   char err[512];
 };
@@ -708,6 +717,17 @@ void c2d_grid_destroy(c2d_grid *g) {
   for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
   free(g->ex);
   free(g->ey);
+  for (size_t k = 0; k < g->ntags; ++k) {
+    c2d_tagline *tl = &g->tags[k];
+    free(tl->name);
+    free(tl->node);
+    free(tl->t);
+    free(tl->x);
+    free(tl->y);
+    free(tl->u);
+    free(tl->v);
+  }
+  free(g->tags);
   free(g->material);
   free(g->runs);
   free(g);
@@ -735,6 +755,69 @@ static inline double zone_work(const c2d_grid *g, size_t z, const double *wu, co
     s += r * (f[2 * k] * wu[nd[k]] + f[2 * k + 1] * wv[nd[k]]);
   }
   return s;
+}
+
+static void tag_record(const c2d_grid *g, c2d_tagline *tl) {
+  if (tl->n + 1 > tl->cap) {
+    size_t cap = tl->cap ? 2 * tl->cap : 256;
+    tl->t = ms_realloc(tl->t, cap, sizeof(double));
+    double **cols[] = {&tl->x, &tl->y, &tl->u, &tl->v};
+    for (int c = 0; c < 4; ++c) *cols[c] = ms_realloc(*cols[c], cap * tl->nnodes, sizeof(double));
+    tl->cap = cap;
+  }
+  size_t r = tl->n * tl->nnodes;
+  tl->t[tl->n] = g->t;
+  for (size_t k = 0; k < tl->nnodes; ++k) {
+    size_t nd = tl->node[k];
+    tl->x[r + k] = g->x[nd];
+    tl->y[r + k] = g->y[nd];
+    tl->u[r + k] = g->u[nd];
+    tl->v[r + k] = g->v[nd];
+  }
+  tl->n++;
+}
+
+size_t c2d_grid_add_tag_line(c2d_grid *g, const char *name, bool along_i, size_t index) {
+  if (g->ntags == g->tag_cap) {
+    g->tag_cap = g->tag_cap ? 2 * g->tag_cap : 4;
+    g->tags = ms_realloc(g->tags, g->tag_cap, sizeof(c2d_tagline));
+  }
+  c2d_tagline *tl = &g->tags[g->ntags];
+  memset(tl, 0, sizeof *tl);
+  tl->name = ms_strdup(name ? name : "line");
+  size_t w = g->ni + 1;
+  if (along_i) {
+    if (index > g->nj) index = g->nj;
+    tl->nnodes = g->ni + 1;
+    tl->node = xcalloc(tl->nnodes, sizeof(size_t));
+    for (size_t i = 0; i <= g->ni; ++i) tl->node[i] = i + w * index;
+  } else {
+    if (index > g->ni) index = g->ni;
+    tl->nnodes = g->nj + 1;
+    tl->node = xcalloc(tl->nnodes, sizeof(size_t));
+    for (size_t j = 0; j <= g->nj; ++j) tl->node[j] = index + w * j;
+  }
+  tag_record(g, tl);
+  return g->ntags++;
+}
+
+size_t c2d_grid_ntag_lines(const c2d_grid *g) { return g->ntags; }
+
+c2d_line_history c2d_grid_line_history(const c2d_grid *g, size_t tag) {
+  c2d_line_history h;
+  memset(&h, 0, sizeof h);
+  if (tag >= g->ntags) return h;
+  const c2d_tagline *tl = &g->tags[tag];
+  h.name = tl->name;
+  h.nnodes = tl->nnodes;
+  h.node = tl->node;
+  h.n = tl->n;
+  h.t = tl->t;
+  h.x = tl->x;
+  h.y = tl->y;
+  h.u = tl->u;
+  h.v = tl->v;
+  return h;
 }
 
 ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
@@ -826,6 +909,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   for (size_t z = 0; z < nz; ++z)
     if (!isfinite(g->e[z]) || !isfinite(g->p[z]))
       return fail_zone(g, z, "non-finite energy or pressure", g->e[z]);
+  for (size_t k = 0; k < g->ntags; ++k) tag_record(g, &g->tags[k]);
   return MS_OK;
 }
 

@@ -141,6 +141,8 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   const dk_node *out = dk_get(sec, "output");
   if (out && dk_expect_map(e, doc, out, "output"))
     dk_read_int(e, doc, out, "snapshots", false, 10, 0, 100000, &nsnap);
+  const dk_node *tags = dk_get(sec, "tags");
+  if (tags) dk_expect_seq(e, doc, tags, "tags");
   if (e->n > nerr0 || !mat) return NULL;
 
   /* Build the arrays. */
@@ -230,6 +232,20 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     if (!g) {
       dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh entry */
     } else {
+      for (size_t k = 0; tags && k < dk_seq_len(tags); ++k) {
+        const dk_node *tg = dk_seq_at(tags, k);
+        if (!dk_expect_map(e, doc, tg, "tag")) continue;
+        const char *tn = NULL;
+        long ii = -1, jj = -1;
+        dk_read_string(e, doc, tg, "name", true, NULL, &tn);
+        if (dk_get(tg, "i")) dk_read_int(e, doc, tg, "i", true, 0, 0, ni, &ii);
+        if (dk_get(tg, "j")) dk_read_int(e, doc, tg, "j", true, 0, 0, nj, &jj);
+        if ((ii < 0) == (jj < 0)) {
+          dk_error(e, doc, tg, "tag: give exactly one of i (a line i = const) or j");
+          continue;
+        }
+        if (tn) c2d_grid_add_tag_line(g, tn, jj >= 0, (size_t)(jj >= 0 ? jj : ii));
+      }
       p = calloc(1, sizeof *p);
       p->grid = g;
       p->t_end = t_end;
@@ -371,6 +387,22 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     }
   }
   ms_progress_finish(&pr, c2d_grid_time(g), c2d_grid_steps(g));
+  for (size_t k = 0; out && k < c2d_grid_ntag_lines(g); ++k) {
+    c2d_line_history h = c2d_grid_line_history(g, k);
+    char name[256];
+    snprintf(name, sizeof name, "tag_%s.h5", h.name);
+    char *path = ms_out_path(ctx, name);
+    ms_h5 *f = ms_h5_create(path);
+    free(path);
+    ms_status sw = f ? MS_OK : MS_ERR_IO;
+    if (!sw) sw = ms_h5_write_doubles(f, "t", h.n, 1, h.t, "10us");
+    if (!sw) sw = ms_h5_write_doubles(f, "x", h.n, h.nnodes, h.x, "cm");
+    if (!sw) sw = ms_h5_write_doubles(f, "y", h.n, h.nnodes, h.y, "cm");
+    if (!sw) sw = ms_h5_write_doubles(f, "u", h.n, h.nnodes, h.u, "km/s");
+    if (!sw) sw = ms_h5_write_doubles(f, "v", h.n, h.nnodes, h.v, "km/s");
+    if (f) sw = sw ? (ms_h5_abort(f), sw) : ms_h5_close(f);
+    if (sw && !s) s = sw;
+  }
   free(times);
   return par_agree_status(s);
 }

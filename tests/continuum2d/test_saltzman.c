@@ -42,6 +42,7 @@ static void run_saltzman(double hg, double *hg_rms, double *spread) {
   assert_non_null(g);
   double h0, s0;
   c2d_grid_hourglass(g, &h0, &s0);
+  size_t tag = c2d_grid_add_tag_line(g, "piston", false, 0); /* the nodes (0, j) */
   double e0 = energy_total(g);
   /* Untangled: the step refuses a zone of non-positive area, and we check every 10 steps. */
   double amin = INFINITY;
@@ -82,6 +83,18 @@ static void run_saltzman(double hg, double *hg_rms, double *spread) {
   }
   double rho_pl = m / vol, drift = energy_drift(g, e0, energy_total(g));
   c2d_grid_hourglass(g, hg_rms, spread);
+  /* The tagged piston line: one record per step, x(t) = t and u = 1 exactly (the piston moves
+   * with ū = 1 from x = 0; the sum of dt's is t up to round-off). */
+  c2d_line_history h = c2d_grid_line_history(g, tag);
+  assert_int_equal(h.n, (size_t)c2d_grid_steps(g) + 1);
+  assert_int_equal(h.nnodes, nj + 1);
+  double dx = 0;
+  for (size_t k = 0; k < h.n; ++k)
+    for (size_t q = 0; q < h.nnodes; ++q) {
+      dx = fmax(dx, fabs(h.x[k * h.nnodes + q] - h.t[k]));
+      assert_true(h.u[k * h.nnodes + q] == 1.0 && h.v[k * h.nnodes + q] == 0.0);
+    }
+  assert_true(dx < 1e-13);
   printf("saltzman hg = %.1f: %ld steps, plateau density %.4f (exact 4, error %.2f %%), shock x "
          "%.4f..%.4f (exact 0.8), min zone area %.3e, hourglass rms %.4e (t = 0: %.4e), corner "
          "density spread %.4f (t = 0: %.2e), energy drift %.2e\n",
