@@ -7,6 +7,7 @@
 #include <string.h>
 #ifdef MSCALE_HAVE_CONTINUUM
 #include "cont.h"
+#include "cont2d.h"
 #endif
 #if defined(MSCALE_HAVE_PARTICLES_CD) || defined(MSCALE_HAVE_PARTICLES_DM)
 #include "cd.h"
@@ -40,6 +41,9 @@ static const problem_type problem_types[] = {
     {"continuum", "1D Lagrangian gas dynamics (cross scheme)", false,
      (problem_read_fn)cont_problem_read, (problem_run_fn)cont_problem_run,
      (problem_free_fn)cont_problem_free},
+    {"grid2d", "2D Lagrangian quad grid, compatible discretisation (x-y, r-z)", false,
+     (problem_read_fn)c2d_problem_read, (problem_run_fn)c2d_problem_run,
+     (problem_free_fn)c2d_problem_free},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_CD
     {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", true,
