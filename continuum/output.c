@@ -77,6 +77,12 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
                                  {"material", "cells/material", 1, true}};
     s = ms_xdmf_write_points(xmf_path, h5_name, "nodes/xyz", Nn, 3, g->t,
                              sizeof attr / sizeof attr[0], attr);
+    /* the run's profiles as one time series for ParaView (profile_final sorts last) */
+    const char *slash = strrchr(xmf_path, '/');
+    char *dir = slash ? ms_strdup(xmf_path) : ms_strdup(".");
+    if (slash) dir[slash - xmf_path] = '\0';
+    if (s == MS_OK) s = ms_xdmf_write_series(dir, "profile_", "profiles.xmf");
+    free(dir);
   }
   if (s == MS_OK) {
     ms_afile af;

@@ -328,6 +328,11 @@ typedef struct ms_xdmf_attr {
 ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
                                size_t npoints, int dim, double time, size_t nattr,
                                const ms_xdmf_attr *attr);
+/* The same with `vertex` (may be NULL), an int64 dataset [npoints] holding 0..npoints-1: the
+ * Polyvertex connectivity, so that ParaView makes one vertex cell per particle. */
+ms_status ms_xdmf_write_particles(const char *xmf_path, const char *h5_name, const char *coords,
+                                  const char *vertex, size_t npoints, int dim, double time,
+                                  size_t nattr, const ms_xdmf_attr *attr);
 /* DIR/SERIES_NAME: a temporal collection of every DIR/PREFIX*.xmf (name order) but itself, so
  * ParaView opens a whole run as one time series. Call it again after each new snapshot. */
 ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *series_name);

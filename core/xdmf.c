@@ -2,6 +2,7 @@
 #include "core.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,6 +10,12 @@
 ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const char *coords,
                                size_t npoints, int dim, double time, size_t nattr,
                                const ms_xdmf_attr *attr) {
+  return ms_xdmf_write_particles(xmf_path, h5_name, coords, NULL, npoints, dim, time, nattr, attr);
+}
+
+ms_status ms_xdmf_write_particles(const char *xmf_path, const char *h5_name, const char *coords,
+                                  const char *vertex, size_t npoints, int dim, double time,
+                                  size_t nattr, const ms_xdmf_attr *attr) {
   ms_afile af;
   ms_status s = ms_afile_open(&af, xmf_path);
   if (s) return s;
@@ -27,6 +34,15 @@ ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const 
             npoints - 1, npoints - 1);
     for (size_t i = 0; i + 1 < npoints; i++) fprintf(f, "%s%zu %zu", i % 8 ? " " : "\n", i, i + 1);
     fprintf(f, "\n    </DataItem>\n   </Topology>\n");
+  } else if (vertex) {
+    /* explicit connectivity: ParaView's Xdmf3 reader makes one vertex cell per particle only
+     * from it (without, it shows the points with no cells, and the default Surface view draws
+     * nothing) */
+    fprintf(f,
+            "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+            "NodesPerElement=\"1\">\n    <DataItem Dimensions=\"%zu\" NumberType=\"Int\" "
+            "Precision=\"8\" Format=\"HDF\">%s:%s</DataItem>\n   </Topology>\n",
+            npoints, npoints, h5_name, vertex);
   } else {
     fprintf(f,
             "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
@@ -63,27 +79,50 @@ ms_status ms_xdmf_write_points(const char *xmf_path, const char *h5_name, const 
   return ms_afile_commit(&af);
 }
 
-static int compare_names(const void *a, const void *b) {
-  return strcmp(*(const char *const *)a, *(const char *const *)b);
+typedef struct series_frame {
+  char *name;
+  double time;
+} series_frame;
+
+static int compare_frames(const void *a, const void *b) {
+  const series_frame *x = a, *y = b;
+  if (x->time != y->time) return x->time < y->time ? -1 : 1;
+  return strcmp(x->name, y->name);
 }
 
-/* A temporal collection of the snapshots' own sidecars by XInclude (XDMF 3; ParaView's
- * Xdmf3 reader resolves it), so that one file opens the whole run as a time series. */
+/* The Time Value of a sidecar we wrote (NAN if it has none). */
+static double sidecar_time(const char *dir, const char *name) {
+  char *path = ms_calloc(strlen(dir) + strlen(name) + 2, 1);
+  sprintf(path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "r");
+  free(path);
+  double t = NAN;
+  char line[256];
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, " <Time Value=\"%lf\"", &t) == 1) break;
+  if (f) fclose(f);
+  return t;
+}
+
 ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *series_name) {
   DIR *d = opendir(dir);
   if (!d) return MS_ERR_IO;
   size_t n = 0, cap = 0, plen = strlen(prefix);
-  char **names = NULL;
+  series_frame *fr = NULL;
   for (struct dirent *ent; (ent = readdir(d));) {
     size_t len = strlen(ent->d_name);
     if (len <= plen + 4 || strncmp(ent->d_name, prefix, plen) ||
         strcmp(ent->d_name + len - 4, ".xmf") || !strcmp(ent->d_name, series_name))
       continue;
-    if (n == cap) names = ms_realloc(names, cap = cap ? 2 * cap : 16, sizeof *names);
-    names[n++] = ms_strdup(ent->d_name);
+    double t = sidecar_time(dir, ent->d_name);
+    if (isnan(t)) continue;
+    if (n == cap) fr = ms_realloc(fr, cap = cap ? 2 * cap : 16, sizeof *fr);
+    fr[n++] = (series_frame){ms_strdup(ent->d_name), t};
   }
   closedir(d);
-  qsort(names, n, sizeof *names, compare_names);
+  /* in time order; a second sidecar of the same time (profile_final after the last regular
+   * profile) is left out: ParaView cannot show two grids at one time step */
+  qsort(fr, n, sizeof *fr, compare_frames);
   char *path = ms_calloc(strlen(dir) + strlen(series_name) + 2, 1);
   sprintf(path, "%s/%s", dir, series_name);
   ms_afile af;
@@ -92,16 +131,17 @@ ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *
     fprintf(af.f,
             "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\" "
             "xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n <Domain>\n"
-            "  <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-            prefix);
+            "  <Grid Name=\"%.*s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+            (int)strcspn(series_name, "."), series_name);
     for (size_t k = 0; k < n; k++)
-      fprintf(af.f, "   <xi:include href=\"%s\" xpointer=\"xpointer(//Xdmf/Domain/Grid)\"/>\n",
-              names[k]);
+      if (k == 0 || fr[k].time != fr[k - 1].time)
+        fprintf(af.f, "   <xi:include href=\"%s\" xpointer=\"xpointer(//Xdmf/Domain/Grid)\"/>\n",
+                fr[k].name);
     fprintf(af.f, "  </Grid>\n </Domain>\n</Xdmf>\n");
     s = ms_afile_commit(&af);
   }
-  for (size_t k = 0; k < n; k++) free(names[k]);
-  free(names);
+  for (size_t k = 0; k < n; k++) free(fr[k].name);
+  free(fr);
   free(path);
   return s;
 }

@@ -38,6 +38,23 @@ void ptl_snapshot_period_add(ptl_snapshot *snap, int axis, double period, double
   ptl_snapshot_attr_add(snap, lname[axis], lo);
 }
 
+/* particles/vertex: each particle's row in the file (0..N-1, rank order under MPI), the XDMF
+ * Polyvertex connectivity (ms_xdmf_write_particles). */
+static ms_status write_vertex_ids(ms_h5 *h, size_t n, bool dist) {
+  long offset = 0;
+  if (dist) {
+    long *all = ms_calloc((size_t)par_size(), sizeof *all);
+    par_allgather_long((long)n, all);
+    for (int r = 0; r < par_rank(); r++) offset += all[r];
+    free(all);
+  }
+  int64_t *ids = ms_calloc(n + 1, sizeof *ids);
+  for (size_t i = 0; i < n; i++) ids[i] = offset + (int64_t)i;
+  ms_status st = ms_h5_write_ints_dist(h, "particles/vertex", n, ids);
+  free(ids);
+  return st;
+}
+
 static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *xyz,
                                 const double *vel) {
   const size_t n = sn->n;
@@ -49,6 +66,7 @@ static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *
     st = d->d ? ms_h5_write_doubles_dist(h, d->name, n, (size_t)d->ncomp, d->d, d->units)
               : ms_h5_write_ints_dist(h, d->name, n, d->i);
   }
+  if (st == MS_OK) st = write_vertex_ids(h, n, sn->dist);
   for (size_t k = 0; k < sn->nattr && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "particles", sn->attr[k].name, sn->attr[k].value);
   return st;
@@ -63,9 +81,18 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
   strcpy(xmf + len, ".xmf");
   const char *base = strrchr(path, '/');
   base = base ? base + 1 : path;
-  const ms_status st =
-      ms_xdmf_write_points(xmf, base, "particles/x", nglobal, 3, sn->time, sn->nxdmf, sn->xdmf);
+  ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", "particles/vertex", nglobal, 3,
+                                         sn->time, sn->nxdmf, sn->xdmf);
   free(xmf);
+  /* the run's time series: every sidecar of this prefix (the name up to its number) */
+  size_t dirlen = (size_t)(base - path), plen = strcspn(base, "0123456789");
+  char *dir = ms_calloc(dirlen + 2, 1), *prefix = ms_calloc(plen + 1, 1);
+  memcpy(dir, path, dirlen);
+  if (dirlen == 0) strcpy(dir, ".");
+  memcpy(prefix, base, plen);
+  if (st == MS_OK) st = ms_xdmf_write_series(dir, prefix, "particles.xmf");
+  free(dir);
+  free(prefix);
   return st;
 }
 

@@ -7,8 +7,8 @@ Usage: /usr/bin/python3 tools/plot_coupled.py RUNDIR        # PNGs into RUNDIR/p
                          free-surface velocity of the grid vs the particles (free_surface.csv)
   interface.png          two-way runs: interface and free-surface velocities, interface
                          impulse and work as the grid gave and the particles received them
-  particles_NNNN.png     particle snapshots (particles_NNNN.h5) coloured by fragment, with the
-                         velocity along the drive axis in a second panel
+  particles_NNNN.png     particle snapshots (particles_NNNN.h5): the free-surface region
+                         coloured by velocity, and the ejecta's fragments in (x, vx)
 Also offers plot_run(outdir, plotdir) for tools/plot_run.py. Debian's numpy/h5py/matplotlib.
 """
 import glob
@@ -82,34 +82,85 @@ def plot_interface(outdir, plotdir):
     return [out]
 
 
+def time_label(t, unit="10us"):
+    """A time in microseconds for titles (the internal unit is 10 us)."""
+    return f"t = {10.0 * t:.3g} us" if unit == "10us" else f"t = {t:.4g} {unit}"
+
+
+def fragment_table(x, v, mass, frag):
+    """Per fragment (ids >= 0): mass, centre of mass, c.o.m. velocity along x; sorted by id."""
+    ids, inv = np.unique(frag[frag >= 0], return_inverse=True)
+    sel = frag >= 0
+    m = np.bincount(inv, weights=mass[sel])
+    cx = np.bincount(inv, weights=mass[sel] * x[sel, 0]) / m
+    cy = np.bincount(inv, weights=mass[sel] * x[sel, 1]) / m
+    vx = np.bincount(inv, weights=mass[sel] * v[sel, 0]) / m
+    return ids, inv, m, cx, cy, vx
+
+
 def plot_snapshot(path, out):
+    """Two panels: the free-surface region at equal aspect, a few y-periods wide, coloured by the
+    velocity along the drive; and the ejecta in (x, vx) phase space, one dot per fragment sized
+    and coloured by its mass, so jets (fast, light) and spall layers (slow, heavy) separate."""
     import h5py
+    from matplotlib.colors import LogNorm
 
     with h5py.File(path, "r") as f:
         x = f["particles/x"][...]
         v = f["particles/v"][...] if "particles/v" in f else np.zeros_like(x)
-        frag = f["particles/fragment"][...] if "particles/fragment" in f else np.zeros(len(x), int)
+        mass = f["particles/mass"][...]
+        frag = (f["particles/fragment"][...] if "particles/fragment" in f
+                else np.zeros(len(x), int)).astype(np.int64)
         t = f["particles"].attrs.get("time", np.nan)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(13, 5), sharey=True)
-    # fragment colours: the bulk (largest) grey, the others cycled through a qualitative map
-    ids, counts = np.unique(frag[frag >= 0], return_counts=True)
-    bulk = ids[np.argmax(counts)] if len(ids) else -2
-    col = np.where(frag == bulk, 0.0, (frag % 20 + 1) / 21.0)
-    cmap = plt.get_cmap("tab20").copy()
-    s = max(0.2, min(4.0, 2e4 / max(len(x), 1)))
-    a1.scatter(x[frag == bulk, 0], x[frag == bulk, 1], s=s, c="0.6", lw=0)
-    other = (frag != bulk) & (frag >= 0)
-    a1.scatter(x[other, 0], x[other, 1], s=s, c=col[other], cmap=cmap, vmin=0, vmax=1, lw=0)
-    a1.scatter(x[frag < 0, 0], x[frag < 0, 1], s=s, c="k", lw=0)
-    a1.set_title(f"t = {t:.4g} (10 us): {len(ids)} fragments (grey: bulk, black: piston)")
-    a1.set_xlabel("x [cm]")
-    a1.set_ylabel("y [cm]")
+        period = f["particles"].attrs.get("period_y", 0.0)
+        f_r0 = f["particles"].attrs.get("r0", 0.0)
+    ids, inv, m, cx, cy, vx = fragment_table(x, v, mass, frag)
+    bulk = ids[np.argmax(m)] if len(ids) else -2
+    in_bulk = frag == bulk
+    ymin, ymax = x[:, 1].min(), x[:, 1].max()
+    width = period if period > 0 else max(ymax - ymin, 1e-12)
+    r0 = f_r0 if f_r0 > 0 else width / 50
+    # the region around the bulk's free surface: one y-width behind it, 1.5 ahead; a periodic
+    # strip is drawn over two periods so the panel is not a sliver
+    fs = x[in_bulk, 0].max() if in_bulk.any() else x[:, 0].max()
+    lo, hi = fs - 1.0 * width, fs + 1.5 * width
+    copies = 2 if period > 0 else 1
+    fig = plt.figure(figsize=(13, 5.2))
+    gs = fig.add_gridspec(1, 2, width_ratios=[1.2, 1])
+    a1, a2 = fig.add_subplot(gs[0]), fig.add_subplot(gs[1])
+    near = (x[:, 0] >= lo) & (x[:, 0] <= hi)
+    # marker diameter ~ the particle spacing on the page (points; the panel is ~6 in wide)
+    s = max(0.3, (0.9 * r0 / (hi - lo) * 6.0 * 72) ** 2)
+    for k in range(copies):
+        sc = a1.scatter(1e4 * (x[near, 0] - fs), 1e4 * (x[near, 1] + k * period), s=s,
+                        c=v[near, 0], cmap="viridis", lw=0, vmin=v[:, 0].min(), vmax=v[:, 0].max())
+        piston = (frag < 0) & near
+        a1.scatter(1e4 * (x[piston, 0] - fs), 1e4 * (x[piston, 1] + k * period), s=s, c="k", lw=0)
+    a1.set_xlim(1e4 * (lo - fs), 1e4 * (hi - fs))
+    a1.set_ylim(1e4 * ymin, 1e4 * (ymin + copies * width))
     a1.set_aspect("equal")
-    sc = a2.scatter(x[:, 0], x[:, 1], s=s, c=v[:, 0], cmap="viridis", lw=0)
-    fig.colorbar(sc, ax=a2, label="vx [km/s]")
-    a2.set_title("velocity along the drive axis")
-    a2.set_xlabel("x [cm]")
-    a2.set_aspect("equal")
+    a1.set_xlabel("x − x_free surface [um]")
+    a1.set_ylabel("y [um]" + (" (periodic: two periods)" if copies > 1 else ""))
+    a1.set_title(f"{time_label(t)}: the free surface (black: driven layer)")
+    fig.colorbar(sc, ax=a1, label="vx [km/s]", fraction=0.046, pad=0.02)
+    det = ids != bulk
+    if det.any():
+        size = 8 + 120 * (m[det] / m[det].max()) ** (1 / 3)
+        pc = a2.scatter(1e4 * (cx[det] - fs), vx[det], s=size, c=m[det], cmap="plasma",
+                        norm=LogNorm(vmin=m[det].min(), vmax=max(m[det].max(), 1.0001 * m[det].min())),
+                        edgecolor="k", lw=0.3)
+        fig.colorbar(pc, ax=a2, label="fragment mass [g]", fraction=0.046, pad=0.02)
+        vb = vx[ids == bulk]
+        if len(vb):
+            a2.axhline(vb[0], color="0.5", ls="--", lw=1, label=f"bulk c.o.m. {vb[0]:.3g} km/s")
+            a2.legend(loc="lower right", fontsize=8)
+    else:
+        a2.text(0.5, 0.5, "no detached fragments yet", ha="center", transform=a2.transAxes)
+    a2.set_xlabel("fragment centre − x_free surface [um]")
+    a2.set_ylabel("fragment velocity vx [km/s]")
+    a2.set_title(f"ejecta: {int(det.sum())} detached fragments, "
+                 f"{m[det].sum() if det.any() else 0:.3g} g")
+    a2.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -7,7 +7,7 @@ Usage:
                                      # one CSV from `mscale spectrum SNAP.h5 > SPECTRUM.csv`
 
 In a run directory it looks for the coupling outputs by name (any that exist):
-  spectrum*.csv          g,count,mass             fragment spectrum N(g)
+  spectrum*.csv          g,count,mass             fragment spectra N(g): one overlay, spectra.png
   fragments*.csv         id,count,mass,d,...      per-fragment table
   cumulative*.csv        mass,N_ge,M_ge           cumulative N(>=m)
   mass_hist*.csv, diameter_hist*.csv  lo,hi,count,mass
@@ -75,6 +75,56 @@ def plot_spectrum_file(path, out):
     fig.savefig(out, dpi=120)
     plt.close(fig)
     return out
+
+
+def title_time(title):
+    """The time in a spectrum CSV's title ('... t = 0.29 (10us) ...'), in us; None if absent."""
+    import re
+
+    m = re.search(r"t = ([0-9.eE+-]+) \(10us\)", title)
+    return 10.0 * float(m.group(1)) if m else None
+
+
+def plot_spectra(outdir, plotdir):
+    """One picture of every spectrum of a run: N(g) at each snapshot time (colour = time), the
+    final one and the detector's; the mass in each size beside it."""
+    series = sorted(glob.glob(os.path.join(outdir, "spectrum_[0-9]*.csv")))
+    extra = [p for p in (os.path.join(outdir, "spectrum.csv"),
+                         os.path.join(outdir, "spectrum_detector.csv")) if os.path.exists(p)]
+    if not series and not extra:
+        return []
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    cmap = plt.get_cmap("viridis")
+    for k, path in enumerate(series):
+        c, u, title = read_csv(path)
+        if len(c["g"]) == 0:
+            continue
+        t = title_time(title)
+        col = cmap(k / max(len(series) - 1, 1))
+        lbl = f"t = {t:.3g} us" if t is not None else os.path.basename(path)
+        a1.plot(c["g"], c["count"], "o-", ms=3, lw=1, color=col, label=lbl)
+        a2.plot(c["g"], c["mass"], "o-", ms=3, lw=1, color=col)
+    for path, style, name in zip(extra, ("k--", "r:"), ("end of the particle phase",
+                                                         "at the detector")):
+        c, u, _ = read_csv(path)
+        if len(c["g"]):
+            a1.plot(c["g"], c["count"], style, lw=1.6, label=name)
+            a2.plot(c["g"], c["mass"], style, lw=1.6)
+    for ax in (a1, a2):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("fragment size g [particles]")
+        ax.grid(True, which="both", alpha=0.3)
+    a1.set_ylabel("number of fragments N(g)")
+    a1.set_title("fragment spectrum")
+    a1.legend(fontsize=7, ncol=2)
+    a2.set_ylabel("mass in fragments of size g [g]")
+    a2.set_title("mass by fragment size")
+    fig.tight_layout()
+    out = os.path.join(plotdir, "spectra.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]
 
 
 def first(outdir, pattern):
@@ -153,18 +203,22 @@ def plot_arrivals(outdir, plotdir):
         return []
     c, u, title = read_csv(ar)
     fig, axs = plt.subplots(1, 3, figsize=(15, 4))
-    if len(c["t_arrival"]):
-        axs[0].hist(c["t_arrival"], bins=40, weights=c["mass"], edgecolor="k", alpha=0.7)
-        sc = axs[1].scatter(c["t_arrival"], c["vx"], c=np.log10(c["d"] * 1e4), s=6, cmap="viridis")
-        fig.colorbar(sc, ax=axs[1], label="log10 d [um]")
-        axs[2].hist(c["d"] * 1e4, bins=np.logspace(np.log10(c["d"].min() * 1e4),
-                                                   np.log10(c["d"].max() * 1e4) + 1e-9, 30),
-                    edgecolor="k", alpha=0.7)
-        axs[2].set_xscale("log")
-    axs[0].set_xlabel(lab("t_arrival", u))
+    t_us, d_um = 10.0 * c["t_arrival"], 1e4 * c["d"]  # internal units: 10 us, cm
+    if len(t_us):
+        axs[0].hist(t_us, bins=min(40, max(5, len(t_us))), weights=c["mass"], edgecolor="k",
+                    alpha=0.7)
+        sc = axs[1].scatter(t_us, c["vx"], c=d_um, s=10, cmap="viridis")
+        fig.colorbar(sc, ax=axs[1], label="equivalent diameter [um]")
+        wide = d_um.max() > 10 * d_um.min()  # log axes only over more than a decade
+        bins = (np.logspace(np.log10(d_um.min()), np.log10(d_um.max()) + 1e-9, 30) if wide
+                else np.linspace(d_um.min() * 0.95, d_um.max() * 1.05 + 1e-12, 12))
+        axs[2].hist(d_um, bins=bins, edgecolor="k", alpha=0.7)
+        if wide:
+            axs[2].set_xscale("log")
+    axs[0].set_xlabel("arrival time [us]")
     axs[0].set_ylabel("mass per bin [g]")
-    axs[0].set_title("arrival-time distribution (mass)")
-    axs[1].set_xlabel(lab("t_arrival", u))
+    axs[0].set_title(f"arrivals at the detector: {len(t_us)} fragments, {c['mass'].sum():.3g} g")
+    axs[1].set_xlabel("arrival time [us]")
     axs[1].set_ylabel(lab("vx", u))
     axs[1].set_title("arrival velocity")
     axs[2].set_xlabel("equivalent diameter [um]")
@@ -179,11 +233,7 @@ def plot_arrivals(outdir, plotdir):
 
 def plot_run(outdir, plotdir):
     """Every coupling plot that the run directory has data for; returns the PNG paths."""
-    made = []
-    specs = sorted(glob.glob(os.path.join(outdir, "spectrum*.csv")))
-    for s in specs:
-        name = os.path.splitext(os.path.basename(s))[0]
-        made.append(plot_spectrum_file(s, os.path.join(plotdir, name + ".png")))
+    made = plot_spectra(outdir, plotdir)
     made += plot_distributions(outdir, plotdir)
     made += plot_ejecta(outdir, plotdir)
     made += plot_arrivals(outdir, plotdir)

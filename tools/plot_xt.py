@@ -20,7 +20,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
+from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
 
 
 def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
@@ -49,12 +49,26 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
     xb[0], xb[-1] = x[0], x[-1]
     T = np.repeat(tb[:, None], x.shape[1], axis=1)
 
+    # times in microseconds (the internal unit is 10 us)
+    tscale, tlabel = (10.0, "us") if tunit == "10us" else (1.0, tunit)
+    T = T * tscale
     fig, ax = plt.subplots(figsize=(8, 6))
-    norm = None
+    norm, cmap = None, "viridis"
     if a.log:
         pos = data[data > 0]
         norm = LogNorm(vmin=pos.min(), vmax=pos.max()) if pos.size else None
-    mesh = ax.pcolormesh(xb, T, data, shading="flat", cmap="viridis", norm=norm)
+    elif quantity == "pressure" and data.min() < 0 < data.max():
+        # signed pressure: a diverging map centred on zero, tension blue, compression red
+        norm, cmap = TwoSlopeNorm(vmin=data.min(), vcenter=0.0, vmax=data.max()), "RdBu_r"
+    mesh = ax.pcolormesh(xb, T, data, shading="flat", cmap=cmap, norm=norm)
+    # only the disturbed part of the grid: cells whose state ever left the initial one (the
+    # undisturbed gas ahead of the free surface is most of the picture otherwise)
+    moved = np.abs(data - data[0]).max(axis=0) > 1e-9 * max(np.abs(data).max(), 1e-300)
+    if moved.any():
+        cols = np.flatnonzero(moved)
+        x_lo, x_hi = x[:, cols[0]].min(), x[:, cols[-1] + 1].max()
+        pad = 0.05 * (x_hi - x_lo)
+        ax.set_xlim(max(x.min(), x_lo - pad), min(x.max(), x_hi + pad))
     label = "density [g/cm^3]" if quantity == "density" else "pressure [GPa]"
     fig.colorbar(mesh, ax=ax, label=label)
     if a.tags:
@@ -62,11 +76,11 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
         if os.path.exists(hpath):
             with h5py.File(hpath, "r") as h:
                 for name in h:
-                    ax.plot(h[name]["x"][()].ravel(), h[name]["t"][()].ravel(), lw=1.0,
-                            label=name)
+                    ax.plot(h[name]["x"][()].ravel(), tscale * h[name]["t"][()].ravel(),
+                            lw=1.2, color="k", ls="--" if "free" in name else "-", label=name)
             ax.legend(loc="upper left", fontsize=8)
     ax.set_xlabel("x [cm]")
-    ax.set_ylabel(f"t [{tunit}]")
+    ax.set_ylabel(f"t [{tlabel}]")
     ax.set_title(f"x–t diagram: {quantity}")
     out = a.output or os.path.join(a.outdir, f"xt_{quantity}.png")
     fig.tight_layout()
@@ -83,11 +97,11 @@ def plot_histories(outdir, output):
             return None
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
         for name in names:
-            t = h[name]["t"][()].ravel()
+            t = 10.0 * h[name]["t"][()].ravel()  # us
             ax1.plot(t, h[name]["u"][()].ravel(), label=name)
             ax2.plot(t, h[name]["x"][()].ravel(), label=name)
-    ax1.set_xlabel("t [10us]"); ax1.set_ylabel("u [km/s]"); ax1.set_title("Tagged nodes: U(t)")
-    ax2.set_xlabel("t [10us]"); ax2.set_ylabel("x [cm]"); ax2.set_title("Tagged nodes: x(t)")
+    ax1.set_xlabel("t [us]"); ax1.set_ylabel("u [km/s]"); ax1.set_title("Tagged nodes: U(t)")
+    ax2.set_xlabel("t [us]"); ax2.set_ylabel("x [cm]"); ax2.set_title("Tagged nodes: x(t)")
     ax1.legend(fontsize=8); ax2.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(output, dpi=120)

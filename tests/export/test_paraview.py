@@ -1,0 +1,60 @@
+"""ParaView (Debian's python3-paraview, run by pvpython offscreen) opens a run's temporal XDMF
+collections: the coupled problem's particles.xmf and a continuum run's profiles.xmf.
+
+    pvpython --force-offscreen-rendering tests/export/test_paraview.py MSCALE SOURCE_DIR WORKDIR
+
+Asserted against the HDF5 files themselves (h5py): the number of time steps, the points of each
+step, one vertex cell per particle (so ParaView's default Surface view draws them), and the range
+of one array. Exact comparisons: ParaView reads the same doubles.
+"""
+import glob
+import os
+import subprocess
+import sys
+
+import h5py
+from paraview import servermanager
+from paraview.simple import OpenDataFile
+
+mscale, src, work = sys.argv[1:4]
+
+
+def run(deck, out):
+    subprocess.run([mscale, "run", os.path.join(src, deck), "-o", out, "--force", "--quiet"],
+                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return out
+
+
+def check_series(xmf, h5files, coords, array, vertex_cells):
+    reader = OpenDataFile(os.path.abspath(xmf))  # the Xdmf3 reader wants an absolute path
+    times = list(reader.TimestepValues)
+    assert len(times) == len(h5files), f"{xmf}: {len(times)} time steps, {len(h5files)} files"
+    for t, h5 in zip(times, h5files):
+        reader.UpdatePipeline(t)
+        data = servermanager.Fetch(reader)
+        with h5py.File(h5, "r") as f:
+            npts = f[coords].shape[0]
+            lo, hi = f[array[1]][()].min(), f[array[1]][()].max()
+            group = f[coords.split("/")[0]]
+            t_file = f.attrs["time"] if "time" in f.attrs else group.attrs["time"]
+            assert t_file == t, (h5, t_file, t)
+        assert data.GetNumberOfPoints() == npts, (h5, data.GetNumberOfPoints(), npts)
+        if vertex_cells:
+            assert data.GetNumberOfCells() == npts, f"{h5}: {data.GetNumberOfCells()} cells"
+        else:
+            assert data.GetNumberOfCells() == npts - 1, f"{h5}: segments between nodes"
+        arr = data.GetPointData().GetArray(array[0]) or data.GetCellData().GetArray(array[0])
+        assert arr is not None, f"{h5}: no array {array[0]}"
+        assert arr.GetRange() == (lo, hi), (h5, arr.GetRange(), (lo, hi))
+    return len(times)
+
+
+cpl = run("tests/coupling/data/cpl_restart.yaml", os.path.join(work, "cpl"))
+snaps = sorted(glob.glob(os.path.join(cpl, "particles_[0-9]*.h5")))
+n1 = check_series(os.path.join(cpl, "particles.xmf"), snaps, "particles/x",
+                  ("mass", "particles/mass"), True)
+cont = run("inputs/continuum-sod.yaml", os.path.join(work, "sod"))
+profiles = sorted(glob.glob(os.path.join(cont, "profile_[0-9]*.h5")))
+n2 = check_series(os.path.join(cont, "profiles.xmf"), profiles, "nodes/xyz",
+                  ("rho", "cells/rho"), False)
+print(f"paraview: particles.xmf {n1} steps, profiles.xmf {n2} steps, as in the HDF5 files")
