@@ -533,8 +533,9 @@ static double stable_dt(const c2d_grid *g) {
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k], d2 = dx * dx + dy * dy;
       if (d2 > 0.0 && d2 < l2) l2 = d2;
     }
-    double d1 = hypot(X[2] - X[0], Y[2] - Y[0]), d2 = hypot(X[3] - X[1], Y[3] - Y[1]);
-    double h = 2.0 * quad_area(X, Y) / (d1 > d2 ? d1 : d2);
+    double a1 = X[2] - X[0], b1 = Y[2] - Y[0], a2 = X[3] - X[1], b2 = Y[3] - Y[1];
+    double dd = fmax(a1 * a1 + b1 * b1, a2 * a2 + b2 * b2); /* longest diagonal² */
+    double h = 2.0 * quad_area(X, Y) / sqrt(dd);
     double L = sqrt(l2);
     if (h < L) L = h;
     double U[4], V[4], dumax = 0.0;
