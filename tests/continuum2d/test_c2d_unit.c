@@ -134,8 +134,9 @@ static void test_pressure_bc(void **state) {
       for (size_t n = 0; n < v.nnodes; ++n) umax = fmax(umax, hypot(v.u[n], v.v[n]));
       c2d_balance b = c2d_grid_balance(g);
       double d = energy_drift(g, e0, 0.0);
-      printf("pressure boundary %s %s: max |u| %.2e, work %.4e, energy drift %.2e\n",
-             geo ? "r-z" : "x-y", squeeze ? "2 p_gas" : "p_gas", umax, b.work, d);
+      printf("pressure boundary %s %s: %ld steps, max |u| %.2e, work %.4e, energy drift %.2e\n",
+             geo ? "r-z" : "x-y", squeeze ? "2 p_gas" : "p_gas", c2d_grid_steps(g), umax, b.work,
+             d);
       if (!squeeze) assert_true(umax < 1e-12); /* round-off, as test_uniform_rest */
       if (squeeze) assert_true(b.work > 0.01); /* the box is compressed: work was done */
       assert_true(d < 1e-12);
