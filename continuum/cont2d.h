@@ -8,7 +8,8 @@
  * the zone's (corner's) area, and the edge viscosity of [CSW98]. The node accelerates with the
  * sum of its corner forces; the zone's internal energy changes by −Σ_p f_zp·ū_p dt with the same
  * forces and the time-centred velocity ū = ½(uⁿ + uⁿ⁺¹), so Σ m e + Σ ½ M u² − (boundary work)
- * is conserved to round-off. r–z uses the area-weighted form (docs/continuum2d.md §2).
+ * is conserved to round-off. r–z uses the control-volume form with node masses lumped by the
+ * bilinear shape functions (docs/continuum2d.md §1–2).
  *
  * Units as the 1D grid (g, cm, 10 µs; km/s, GPa, kJ/g). In r–z, masses, forces and energies are
  * per radian.

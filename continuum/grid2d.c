@@ -1,17 +1,19 @@
 /* grid2d.c — the 2D staggered Lagrangian quad grid with the compatible discretisation
  * ([CBSW98], docs/continuum2d.md). Public API in cont2d.h.
  *
- * Corner forces of zone z on its node p (k = 0..3 counter-clockwise):
- *   pressure      f_k = P_z ∂A_z/∂x_k = P_z · ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1})
- *   sub-zonal     f_k += Σ_c δp_c ∂A_c/∂x_k, δp_c = hg c_z² (ρ_c − ρ_z)  ([CS98]; A_c the corner
+ * Corner forces of zone z on its node p (k = 0..3 counter-clockwise), V the zone's area (x–y)
+ * or per-radian volume ∫ r dA (r–z):
+ *   pressure      f_k = P_z ∂V_z/∂x_k   (x–y: P_z · ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1}))
+ *   sub-zonal     f_k += Σ_c δp_c ∂V_c/∂x_k, δp_c = hg c_z² (ρ_c − ρ_z)  ([CS98]; V_c the corner
  *                 quad node – edge midpoint – centre – edge midpoint, ρ_c = m_c/V_c)
  *   viscosity     edge (k, k+1) in compression (Δu·Δx < 0): f_k += q |S| Δu/|Δu|,
  *                 f_{k+1} −= q |S| Δu/|Δu|, S the median from the zone centre to the edge
- *                 midpoint, q = ρ(1−ψ)|Δu|(q2 ζ|Δu| + sqrt(q2²ζ²|Δu|² + q1²c²)) ([CSW98])
- * In r–z (area-weighted form, docs/continuum2d.md §2) every corner force is multiplied by the
- * node's radius factor r̃_p = M_p / M^A_p (M^A_p = Σ_c ρ_z A_c the planar "area mass"), so the
- * acceleration is Σ_c f_c / M^A_p — a uniform pressure stays exactly in equilibrium — while the
- * momentum is M_p u_p with the constant true (per-radian) node mass M_p = Σ_c m_c.
+ *                 midpoint, q = ρ(1−ψ)|Δu|(q2 ζ|Δu| + sqrt(q2²ζ²|Δu|² + q1²c²)) ([CSW98]);
+ *                 r–z: times the radius of node k's lumped mass in the zone
+ * r–z (control-volume form, docs/continuum2d.md §1–2): node masses lumped with the bilinear
+ * shape functions, M_p = Σ_z ρ0 ∫ N_p r dA, which matches P ∂V/∂x (a flow along z stays uniform
+ * across r). Option rz_area_weighted: f multiplied by r̃_p = M_p / Σ_c ρ_z A_c on planar
+ * gradients (r̃ = 1 otherwise).
  *
  * Step tⁿ → tⁿ⁺¹ (predictor–corrector of [CBSW98], as the 1D scheme, continuum/step.c):
  *   predictor  Fⁿ from (xⁿ, uⁿ, pⁿ); u* = uⁿ + Δt Fⁿ/M (boundary conditions at tⁿ⁺¹);
@@ -533,8 +535,9 @@ static double stable_dt(const c2d_grid *g) {
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k], d2 = dx * dx + dy * dy;
       if (d2 > 0.0 && d2 < l2) l2 = d2;
     }
-    double d1 = hypot(X[2] - X[0], Y[2] - Y[0]), d2 = hypot(X[3] - X[1], Y[3] - Y[1]);
-    double h = 2.0 * quad_area(X, Y) / (d1 > d2 ? d1 : d2);
+    double a1 = X[2] - X[0], b1 = Y[2] - Y[0], a2 = X[3] - X[1], b2 = Y[3] - Y[1];
+    double dd = fmax(a1 * a1 + b1 * b1, a2 * a2 + b2 * b2); /* longest diagonal² */
+    double h = 2.0 * quad_area(X, Y) / sqrt(dd);
     double L = sqrt(l2);
     if (h < L) L = h;
     double U[4], V[4], dumax = 0.0;

@@ -143,7 +143,14 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     dk_read_int(e, doc, out, "snapshots", false, 10, 0, 100000, &nsnap);
   const dk_node *tags = dk_get(sec, "tags");
   if (tags) dk_expect_seq(e, doc, tags, "tags");
-  if (e->n > nerr0 || !mat) return NULL;
+  long nthreads = 1;
+  dk_read_int(e, doc, sec, "threads", false, 1, 1, 1024, &nthreads);
+  if (e->n > nerr0 || !mat) {
+    /* not read because of the errors above: not "unknown keys" either */
+    dk_mark_used(sec, "regions");
+    dk_mark_used(sec, "tags");
+    return NULL;
+  }
 
   /* Build the arrays. */
   size_t nn = (size_t)(ni + 1) * (size_t)(nj + 1), nz = (size_t)ni * (size_t)nj;
@@ -246,12 +253,14 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
         }
         if (tn) c2d_grid_add_tag_line(g, tn, jj >= 0, (size_t)(jj >= 0 ? jj : ii));
       }
+      c2d_grid_set_threads(g, (int)nthreads);
       p = calloc(1, sizeof *p);
       p->grid = g;
       p->t_end = t_end;
       p->nsnap = nsnap;
     }
   }
+  dk_mark_used(sec, "tags"); /* not read when the grid could not be built */
   for (int k = 0; k < 4; ++k) cont_fn_free(&s.bc[k].fn);
   free(x);
   free(y);

@@ -1,6 +1,6 @@
 /* Zone-steps per second of the 2D grid (issue 24): an aluminium block (Mie–Grüneisen, the
  * repository's `al`, docs/design.md §3) of N × N zones hit by a 1 km/s piston, walls elsewhere,
- * K steps. Usage: c2d_speed [N=1000] [K=20] [threads=1]. Not a test: prints one line. */
+ * K steps. Usage: c2d_speed [N=1000] [K=20] [threads=1] [limiter=1]. Not a test: prints one line. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -21,6 +21,7 @@ int main(int argc, char **argv) {
   c2d_setup s;
   c2d_setup_defaults(&s);
   fixture_setup(&f, &s);
+  if (argc > 4) s.use_limiter = atoi(argv[4]) != 0; /* 4th argument: limiter on/off */
   s.bc[C2D_ILO].kind = C2D_BC_PISTON;
   s.bc[C2D_ILO].dir[0] = 1.0;
   s.bc[C2D_ILO].fn.kind = CONT_FN_CONST;

@@ -134,14 +134,51 @@ static void test_pressure_bc(void **state) {
       for (size_t n = 0; n < v.nnodes; ++n) umax = fmax(umax, hypot(v.u[n], v.v[n]));
       c2d_balance b = c2d_grid_balance(g);
       double d = energy_drift(g, e0, 0.0);
-      printf("pressure boundary %s %s: max |u| %.2e, work %.4e, energy drift %.2e\n",
-             geo ? "r-z" : "x-y", squeeze ? "2 p_gas" : "p_gas", umax, b.work, d);
+      printf("pressure boundary %s %s: %ld steps, max |u| %.2e, work %.4e, energy drift %.2e\n",
+             geo ? "r-z" : "x-y", squeeze ? "2 p_gas" : "p_gas", c2d_grid_steps(g), umax, b.work,
+             d);
       if (!squeeze) assert_true(umax < 1e-12); /* round-off, as test_uniform_rest */
       if (squeeze) assert_true(b.work > 0.01); /* the box is compressed: work was done */
       assert_true(d < 1e-12);
       c2d_grid_destroy(g);
       fixture_free(&f);
     }
+  eos_destroy(gas);
+}
+
+/* A run that tangles (Saltzman mesh, no viscosity at all, a 5 km/s piston into cold gas) stops
+ * with MS_ERR_UNSTABLE and a message naming the step, the time and the zone (i, j). */
+static void test_runtime_inversion(void **state) {
+  (void)state;
+  eos_t *gas = eos_create_ideal_gas(5.0 / 3.0, 1.0);
+  c2d_fixture f;
+  fixture_init(&f, 40, 8, gas);
+  c2d_mesh_saltzman(40, 8, f.x, f.y);
+  for (size_t z = 0; z < 320; ++z) {
+    f.rho[z] = 1.0;
+    f.e[z] = 1e-9;
+  }
+  c2d_setup s;
+  c2d_setup_defaults(&s);
+  fixture_setup(&f, &s);
+  s.q1 = s.q2 = 0.0;
+  s.bc[C2D_ILO].kind = C2D_BC_PISTON;
+  s.bc[C2D_ILO].dir[0] = 1.0;
+  s.bc[C2D_ILO].fn.kind = CONT_FN_CONST;
+  s.bc[C2D_ILO].fn.value = 5.0;
+  s.bc[C2D_IHI].kind = s.bc[C2D_JLO].kind = s.bc[C2D_JHI].kind = C2D_BC_WALL;
+  char msg[256];
+  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  assert_non_null(g);
+  ms_status st = c2d_grid_run_to(g, 0.15);
+  printf("no viscosity: %s\n", st == MS_OK ? "ran (no inversion)" : c2d_grid_error(g));
+  assert_int_equal(st, MS_ERR_UNSTABLE);
+  const char *m = c2d_grid_error(g);
+  assert_non_null(strstr(m, "step "));
+  assert_non_null(strstr(m, "inverted"));
+  assert_non_null(strstr(m, "(i = "));
+  c2d_grid_destroy(g);
+  fixture_free(&f);
   eos_destroy(gas);
 }
 
@@ -193,7 +230,7 @@ static void test_threads(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_uniform_rest), cmocka_unit_test(test_energy_random),
-      cmocka_unit_test(test_bad_mesh), cmocka_unit_test(test_threads),
-      cmocka_unit_test(test_pressure_bc)};
+      cmocka_unit_test(test_bad_mesh),     cmocka_unit_test(test_threads),
+      cmocka_unit_test(test_pressure_bc),  cmocka_unit_test(test_runtime_inversion)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
