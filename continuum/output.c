@@ -143,8 +143,15 @@ ms_status cont_write_histories(const ms_ctx *ctx, const cont_grid *g, long strid
     bool last_extra = hs.n > 0 && (hs.n - 1) % (size_t)stride != 0;
     size_t nrow = nkeep + (last_extra ? 1 : 0);
     const double *cols[] = {hs.t, hs.x, hs.u, hs.p_left, hs.rho_left, hs.p_right, hs.rho_right};
+    /* a boundary node has a cell on one side only: the other side's columns are left out rather
+     * than written as NaN */
+    size_t keep[7], ncol = 0;
+    for (size_t c = 0; c < 7; ++c)
+      if (!((c == 3 || c == 4) && hs.node == 0) && !((c == 5 || c == 6) && hs.node == g->ncells))
+        keep[ncol++] = c;
     double *buf = ms_calloc(nrow ? nrow : 1, sizeof(double));
-    for (size_t c = 0; c < 7 && s == MS_OK; ++c) {
+    for (size_t k = 0; k < ncol && s == MS_OK; ++k) {
+      const size_t c = keep[k];
       for (size_t r = 0; r < nkeep; ++r) buf[r] = cols[c][r * (size_t)stride];
       if (last_extra) buf[nrow - 1] = cols[c][hs.n - 1];
       char ds[256];
@@ -170,12 +177,14 @@ ms_status cont_write_histories(const ms_ctx *ctx, const cont_grid *g, long strid
                "continuum history of tagged node '%s' (node %zu); x, u and cell states at the "
                "same time level",
                hs.name, hs.node);
-      ms_csv_header(af.f, title, 7, names, units);
+      const char *knames[7], *kunits[7];
+      for (size_t k = 0; k < ncol; ++k) knames[k] = names[keep[k]], kunits[k] = units[keep[k]];
+      ms_csv_header(af.f, title, ncol, knames, kunits);
       for (size_t r = 0; r < hs.n; ++r) {
         if (r % (size_t)stride != 0 && r != hs.n - 1) continue;
         double row[7];
-        for (size_t c = 0; c < 7; ++c) row[c] = cols[c][r];
-        ms_csv_row(af.f, 7, row);
+        for (size_t k = 0; k < ncol; ++k) row[k] = cols[keep[k]][r];
+        ms_csv_row(af.f, ncol, row);
       }
       s = ms_afile_commit(&af);
     }

@@ -1140,7 +1140,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
       if (p->front_u > 0) {
         double z = cd_front_position(prof, p->profile_bins, axis, p->front_u, 0.5);
         double row[2] = {s->t, z};
-        if (root) ms_csv_row(ff.f, 2, row);
+        if (root && isfinite(z)) ms_csv_row(ff.f, 2, row); /* no row (never NaN) before a front */
         if (isfinite(z) && nf < CD_MAX_FRONT) {
           front[2 * nf] = s->t;
           front[2 * nf++ + 1] = z;
