@@ -1128,7 +1128,7 @@ static ms_status run_finite(ms_ctx *ctx, dm_problem *p) {
       ms_log(ctx, MS_LOG_ERROR,
              "discrete model (response eos): step %ld, t = %.9g: particle %zu (X = %g %g %g): %s "
              "= %g; the run stops (no output of this state)",
-             f->step, t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
+             f->step + 1, t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
       break;
     }
   }
