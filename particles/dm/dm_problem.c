@@ -25,10 +25,17 @@ enum profile {
 static const char *const profile_names[] = {
     "none", "rod_triangle", "rod_sine", "contact_harmonic", "random_velocity", NULL};
 
+enum response { RESP_LINEAR = 0, RESP_EOS };
+static const char *const response_names[] = {"linear_elastic", "eos", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", NULL};
+
 typedef struct dm_layer {
   double x_max; /* particles with x < x_max (the last layer takes the rest) */
   double rho, K, G;
   const char *name;
+  int response, yield; /* enum response, dm_yield */
+  double Y0;           /* yield stress (GPa), elastic_plastic */
+  const eos_t *eos;    /* the material's EOS (response eos) */
 } dm_layer;
 
 struct dm_problem {
@@ -57,6 +64,11 @@ struct dm_problem {
   double *snapshot_times;
   size_t nsnapshot_times;
   long checkpoint_every; /* steps between checkpoints (0: none) */
+  int finite;            /* every layer has response: eos (dm_finite.c) */
+  double cq, cl;         /* viscosity coefficients */
+  int has_piston;
+  double piston_u;    /* km/s along +x */
+  long piston_layers; /* x layers of real particles driven */
   dm_run_summary sum;
   double *final_w, *final_u; /* global state at the end of the last run ([n][3]) */
   size_t final_n;
@@ -120,6 +132,43 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
       dk_read_positive(e, doc, it, "bulk_modulus", MS_DIM_PRESSURE, true, 0, &ly->K);
       dk_read_double(e, doc, it, "shear_modulus", MS_DIM_PRESSURE, true, 0, 0, INFINITY, &ly->G);
       ly->name = "direct";
+    }
+    dk_read_enum(e, doc, it, "response", false, RESP_LINEAR, response_names, &ly->response);
+    dk_read_enum(e, doc, it, "yield", false, DM_YIELD_NONE, yield_names, &ly->yield);
+    const eos_material *mm = mname && mats && ly->name && strcmp(ly->name, "direct")
+                                 ? eos_materials_find(mats, mname, NULL, doc, it)
+                                 : NULL;
+    if (ly->response == RESP_EOS) {
+      if (!mm || !mm->eos)
+        dk_error(e, doc, it,
+                 "discrete_model.layers: response: eos needs a material with an 'eos:' entry "
+                 "(give 'material: NAME')");
+      else {
+        ly->eos = mm->eos;
+        const double r0 = eos_rho0(mm->eos), c0 = eos_sound_speed(mm->eos, r0, eos_e0(mm->eos));
+        if (!(c0 > 0) || !isfinite(c0))
+          dk_error(e, doc, it, "discrete_model.layers: material '%s' has no sound speed at rho0",
+                   mm->name);
+      }
+    }
+    if (ly->yield != DM_YIELD_NONE) {
+      if (ly->response != RESP_EOS)
+        dk_error(e, doc, it, "discrete_model.layers: 'yield' needs response: eos");
+      if (ly->eos && eos_get_kind(ly->eos) == EOS_IDEAL_GAS)
+        dk_error(e, doc, it,
+                 "discrete_model.layers: a yield model on an ideal gas (material '%s') has no "
+                 "meaning",
+                 ly->name);
+      if (!(ly->G > 0))
+        dk_error(e, doc, it,
+                 "discrete_model.layers: yield: elastic_plastic needs the material's "
+                 "shear_modulus > 0 (GPa), got %g",
+                 ly->G);
+      if (!dk_get(it, "yield_stress"))
+        dk_error(e, doc, it, "discrete_model.layers: yield: elastic_plastic needs 'yield_stress'");
+      else dk_read_positive(e, doc, it, "yield_stress", MS_DIM_PRESSURE, true, 0, &ly->Y0);
+    } else if (dk_get(it, "yield_stress")) {
+      dk_error(e, doc, it, "discrete_model.layers: 'yield_stress' needs yield: elastic_plastic");
     }
   }
 }
@@ -228,11 +277,56 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   }
 
   dk_read_enum(e, doc, sec, "integrator", false, RKN_VERLET, rkn_scheme_names, &p->integrator);
+  const int courant_given = dk_get(sec, "courant") != NULL;
   if (dk_get(sec, "dt")) dk_read_positive(e, doc, sec, "dt", MS_DIM_TIME, true, 0, &p->dt);
   else dk_read_positive(e, doc, sec, "courant", MS_DIM_NONE, false, 0.5, &p->courant);
   if (dk_get(sec, "steps")) dk_read_int(e, doc, sec, "steps", true, 0, 1, LONG_MAX, &p->steps);
   else dk_read_positive(e, doc, sec, "t_end", MS_DIM_TIME, true, 0, &p->t_end);
-  dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, 0.0, 0.0, 100.0, &p->hourglass);
+  /* response: eos on every layer or on none (docs/input-dm.md) */
+  size_t neos = 0;
+  for (size_t i = 0; i < p->nlayers; ++i) neos += p->layers[i].response == RESP_EOS;
+  if (neos && neos != p->nlayers)
+    dk_error(e, doc, dk_get(sec, "layers"),
+             "discrete_model.layers: response: eos must be given on every layer or on none");
+  p->finite = neos > 0 && neos == p->nlayers;
+  /* the finite model's defaults: bond penalty on (c_s = 1), courant 0.4 (docs/input-dm.md) */
+  dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, p->finite ? 1.0 : 0.0, 0.0, 100.0,
+                 &p->hourglass);
+  if (p->finite && !courant_given) p->courant = 0.4;
+  if (p->finite && dk_get(sec, "dt"))
+    dk_error(e, doc, dk_get(sec, "dt"),
+             "discrete_model.dt: response: eos takes its step from the sound speed (give courant)");
+  p->cq = 2.0, p->cl = 0.5;
+  const dk_node *vis = dk_get(sec, "viscosity");
+  if (vis && dk_expect_map(e, doc, vis, "discrete_model.viscosity")) {
+    if (!p->finite) dk_error(e, doc, vis, "discrete_model.viscosity: needs response: eos");
+    dk_read_double(e, doc, vis, "quadratic", MS_DIM_NONE, false, 2.0, 0.0, 100.0, &p->cq);
+    dk_read_double(e, doc, vis, "linear", MS_DIM_NONE, false, 0.5, 0.0, 100.0, &p->cl);
+  }
+  const dk_node *pis = dk_get(sec, "piston");
+  if (pis && dk_expect_map(e, doc, pis, "discrete_model.piston")) {
+    if (!p->finite) dk_error(e, doc, pis, "discrete_model.piston: needs response: eos");
+    p->has_piston = 1;
+    dk_read_double(e, doc, pis, "velocity", MS_DIM_VELOCITY, true, 0, -INFINITY, INFINITY,
+                   &p->piston_u);
+    dk_read_int(e, doc, pis, "layers", false, 2, 1, LONG_MAX, &p->piston_layers);
+    if (p->piston_layers >= p->ncell[0])
+      dk_error(e, doc, pis,
+               "discrete_model.piston: layers (%ld) must be fewer than the %ld x cells",
+               p->piston_layers, p->ncell[0]);
+  }
+  if (p->finite) {
+    for (int f = 0; f < 2 * p->dim; ++f)
+      if (p->face[f] == FACE_WALL || p->face[f] == FACE_SYMMETRY)
+        dk_error(e, doc, bnd ? bnd : sec,
+                 "discrete_model.boundaries.%s: response: eos takes free, fixed or periodic "
+                 "faces (wall and symmetry ghosts are not implemented for it)",
+                 face_keys[f]);
+    if (p->profile != PROF_NONE && p->profile != PROF_RANDOM_VELOCITY)
+      dk_error(e, doc, ini ? ini : sec,
+               "discrete_model.initial: response: eos takes profile none or random_velocity");
+    if (p->has_source) dk_error(e, doc, src, "discrete_model.source: not with response: eos");
+  }
   dk_read_double(e, doc, sec, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
 
   const dk_node *out = dk_get(sec, "output");
@@ -251,6 +345,8 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
       dk_read_double_list(e, doc, out, "snapshot_times", MS_DIM_TIME, true, &p->snapshot_times,
                           &p->nsnapshot_times);
   }
+  if (p->finite && p->checkpoint_every > 0)
+    dk_error(e, doc, out, "discrete_model.output.checkpoint_every: not with response: eos yet");
   if (e->n > nerr0) {
     dm_problem_free(p);
     return NULL;
@@ -904,8 +1000,175 @@ static double cpu_time(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* response: eos — the finite-deformation model (dm_finite.c), one rank                        */
+
+/* Layer-averaged profile along x of the real particles (lattice order, x fastest). */
+static void write_fin_profile(const ms_ctx *ctx, const dm_problem *p, const dm_fin *f, size_t nreal,
+                              double t, int index, double *bins) {
+  if (!ctx->outdir || !ctx->outdir[0]) return;
+  const long nx = p->ncell[0];
+  const int nc = 11;
+  memset(bins, 0, (size_t)nx * nc * sizeof(double));
+  const dm_state *s = f->m->s;
+  for (size_t i = 0; i < nreal; ++i) {
+    double *r = &bins[nc * (long)(i % (size_t)nx)];
+    const double *sg = &f->sig[9 * i], *sd = &f->s[9 * i];
+    double ss = 0;
+    for (int a = 0; a < 9; ++a) ss += sd[a] * sd[a];
+    double v[11] = {s->X[3 * i], s->X[3 * i] + s->w[3 * i],
+                    s->u[3 * i], f->rho[i],
+                    f->p[i],     f->q[i],
+                    -sg[0],      f->e[i],
+                    f->eps_p[i], sqrt(1.5 * ss),
+                    f->J[i]};
+    for (int c = 0; c < nc; ++c) r[c] += v[c];
+  }
+  const double per = (double)nreal / (double)nx;
+  for (long j = 0; j < nx * nc; ++j) bins[j] /= per;
+  char name[64];
+  snprintf(name, sizeof name, "dm_fin_profile_%03d.csv", index);
+  char title[160];
+  snprintf(title, sizeof title,
+           "discrete model (response eos) profile along x at t = %.9g (10 us), averaged over each "
+           "x layer of particles",
+           t);
+  const char *nm[] = {"X", "x",     "u_x",     "rho", "p", "q", "minus_sigma_xx",
+                      "e", "eps_p", "sigma_u", "J"};
+  const char *un[] = {"cm", "cm", "km/s", "g/cm3", "GPa", "GPa", "GPa", "kJ/g", "1", "GPa", "1"};
+  write_series(ctx, name, title, nc, nm, un, bins, (size_t)nx);
+}
+
+static ms_status run_finite(ms_ctx *ctx, dm_problem *p) {
+  dm_run_summary *sum = &p->sum;
+  if (ctx->size > 1) {
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: response: eos runs on one rank (not distributed)");
+    return MS_ERR_INPUT;
+  }
+  if (ctx->restart) {
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: response: eos has no restart yet");
+    return MS_ERR_INPUT;
+  }
+  dm_state s;
+  build_particles(p, &s);
+  const size_t nreal = (size_t)(p->ncell[0] * p->ncell[1] * p->ncell[2]);
+  set_initial(p, &s, nreal);
+  if (p->has_piston)
+    for (size_t i = 0; i < nreal; ++i)
+      if ((long)(i % (size_t)p->ncell[0]) < p->piston_layers) {
+        s.bc[i] = DM_PRESCRIBED;
+        s.u[3 * i] = p->piston_u, s.u[3 * i + 1] = s.u[3 * i + 2] = 0.0;
+      }
+  for (size_t i = nreal; i < s.n; ++i) s.u[3 * i] = s.u[3 * i + 1] = s.u[3 * i + 2] = 0.0;
+  dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = 0.0};
+  for (int a = 0; a < p->dim; ++a)
+    if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
+  ms_status st;
+  dm_model *m = dm_create(&s, &opt, ctx, &st, NULL);
+  if (!m) {
+    dm_state_free(&s);
+    return st;
+  }
+  dm_fin_material *mat = ms_calloc(p->nlayers, sizeof *mat);
+  for (size_t l = 0; l < p->nlayers; ++l)
+    mat[l] = (dm_fin_material){.eos = p->layers[l].eos,
+                               .yield = p->layers[l].yield,
+                               .G = p->layers[l].G,
+                               .Y0 = p->layers[l].Y0};
+  uint8_t *imat = ms_calloc(s.n, 1);
+  for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(layer_at(p, s.X[3 * i]) - p->layers);
+  dm_fin_params par = {
+      .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
+  dm_fin *f = dm_fin_create(m, mat, imat, &par, &st);
+  if (!f) {
+    ms_log(ctx, MS_LOG_ERROR, "discrete model (response eos): the initial state is not valid");
+    free(mat), free(imat), dm_destroy(m), dm_state_free(&s);
+    return st;
+  }
+  sum->particles = s.n, sum->real_particles = nreal, sum->bonds = m->nbonds, sum->ranks = 1;
+  ms_log(ctx, MS_LOG_INFO,
+         "discrete model (response eos): %zu particles (%zu real), %zu bonds, dim %d, viscosity "
+         "C_q %.3g C_l %.3g, bond penalty c_s %.3g, courant %.3g, first dt %.6g%s",
+         s.n, nreal, m->nbonds, p->dim, p->cq, p->cl, p->hourglass, p->courant, f->dt_next,
+         p->has_piston ? ", piston" : "");
+  const long nx = p->ncell[0];
+  double *bins = ms_calloc((size_t)nx * 11, sizeof(double));
+  const size_t nemax = 4096;
+  double *eh = ms_calloc(nemax * 7, sizeof(double));
+  size_t ne = 0;
+  char *done = ms_calloc(p->nprofile_times + 1, 1);
+  double K, U, H;
+  dm_fin_energies(f, &K, &U, &H);
+  const double E0 = K + U + H;
+  double t = 0.0, dEmax = 0.0, wall = 0.0;
+  const double t_end = p->steps > 0 ? INFINITY : p->t_end;
+  long every = p->energy_every;
+  for (long step = 0;; ++step) {
+    dm_fin_energies(f, &K, &U, &H);
+    const double bal = K + U + H - f->work - E0;
+    dEmax = fmax(dEmax, fabs(bal));
+    const int last = (p->steps > 0 && step >= p->steps) || t >= t_end * (1 - 1e-12);
+    if ((step % every == 0 || last) && ne < nemax) {
+      double row[7] = {t, K, U, H, f->work, bal, 0};
+      memcpy(&eh[7 * ne++], row, sizeof row);
+    }
+    for (size_t q = 0; q < p->nprofile_times; ++q)
+      if (!done[q] && (t >= p->profile_times[q] * (1 - 1e-12) || last)) {
+        write_fin_profile(ctx, p, f, nreal, t, (int)q, bins);
+        done[q] = 1;
+      }
+    if (last) break;
+    if (t + f->dt_next > t_end) f->dt_next = t_end - t;
+    const double dt = f->dt_next, w0 = ms_wall_time();
+    st = dm_fin_step(f);
+    wall += ms_wall_time() - w0;
+    t += dt;
+    if (st != MS_OK) {
+      const double *X = &s.X[3 * f->bad];
+      ms_log(ctx, MS_LOG_ERROR,
+             "discrete model (response eos): step %ld, t = %.9g: particle %zu (X = %g %g %g): %s "
+             "= %g; the run stops (no output of this state)",
+             f->step + 1, t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
+      break;
+    }
+  }
+  sum->steps = f->step, sum->t_end = t, sum->wall_s = wall;
+  sum->particle_steps_per_s = wall > 0 ? (double)nreal * f->step / wall : 0;
+  sum->energy_err_max = f->work != 0 ? dEmax / fabs(f->work) : dEmax / fmax(fabs(E0), 1e-300);
+  sum->hourglass_last = f->work != 0 ? H / fabs(f->work) : NAN;
+  sum->kinetic_end = K, sum->potential_end = U;
+  ms_log(ctx, MS_LOG_INFO,
+         "discrete model (response eos): %ld steps to t = %.6g in %.3f s (%.4g particle-steps/s); "
+         "energy balance max |K + U + E_hg - W - E0| = %.3g of the piston work %.6g kJ; "
+         "bond-penalty energy / work = %.3g",
+         f->step, t, wall, sum->particle_steps_per_s, sum->energy_err_max, f->work,
+         sum->hourglass_last);
+  {
+    const char *nm[] = {"t",           "kinetic", "internal", "bond_penalty",
+                        "piston_work", "balance", "unused"};
+    const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ", "1"};
+    /* rows of 7 written as 6 columns: compact them first */
+    for (size_t r = 0; r < ne; ++r) memmove(&eh[6 * r], &eh[7 * r], 6 * sizeof(double));
+    write_series(ctx, "dm_fin_energy.csv",
+                 "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0",
+                 6, nm, un, eh, ne);
+  }
+  free(bins), free(eh), free(done), free(mat), free(imat);
+  dm_fin_free(f);
+  dm_destroy(m);
+  dm_state_free(&s);
+  return st;
+}
+
 ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p) {
   dm_run_summary *sum = &p->sum;
+  if (p->finite) {
+    *sum = (dm_run_summary){0};
+    sum->amp_err = sum->phase_err = sum->rms_err = sum->peak_err = NAN;
+    sum->err_l1 = sum->err_l2 = sum->err_max = sum->err_u_l2 = NAN;
+    sum->hourglass_first = sum->hourglass_max = NAN;
+    return run_finite(ctx, p);
+  }
   const double nan = NAN;
   *sum = (dm_run_summary){0};
   sum->amp_err = sum->phase_err = sum->rms_err = sum->peak_err = nan;

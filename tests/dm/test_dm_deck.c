@@ -147,12 +147,83 @@ static void test_small_runs(void **state) {
   }
 }
 
+
+/* response: eos / yield mistakes, each located: a yield model on an ideal gas (no G either), a
+ * negative and a missing yield stress, response eos on a layer without a material's eos. */
+static void test_finite_errors(void **state) {
+  (void)state;
+  static const char *deck =
+      "problem: discrete_model\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2.703, c0: 5.35, s: 1.34, gamma0: 2.0}\n"
+      "    shear_modulus: 27.6\n"
+      "  - name: gas\n"
+      "    eos: {type: ideal_gas, gamma: 1.4, rho0: 1.225e-3}\n"
+      "discrete_model:\n"
+      "  spacing: 0.1\n"
+      "  domain: {lo: [0], hi: [3.0]}\n"
+      "  layers:\n"
+      "    - {material: al, x_max: 1, response: eos, yield: elastic_plastic, yield_stress: -0.1}\n"
+      "    - {material: gas, x_max: 2, response: eos, yield: elastic_plastic}\n"
+      "    - {rho: 1, bulk_modulus: 1, response: eos}\n"
+      "  t_end: 1.0\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
+  dk_errors_print(&e, stderr);
+  assert_null(p);
+  assert_true(has_error(&e, "deck.yaml:12:"));     /* negative yield stress */
+  assert_true(has_error(&e, "ideal gas"));         /* line 13 */
+  assert_true(has_error(&e, "shear_modulus > 0")); /* the gas has no G */
+  assert_true(has_error(&e, "needs 'yield_stress'"));
+  assert_true(has_error(&e, "deck.yaml:14:"));
+  assert_true(has_error(&e, "needs a material with an 'eos:'"));
+  eos_materials_free(mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+/* A piston far beyond what the time step resolves (courant 20) inverts a family: the run stops
+ * with MS_ERR_UNSTABLE naming the particle, not with NaN. */
+static void test_finite_degenerate_stops(void **state) {
+  (void)state;
+  static const char *deck =
+      "problem: discrete_model\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2.703, c0: 5.35, s: 1.34, gamma0: 2.0}\n"
+      "discrete_model:\n"
+      "  spacing: 0.1\n"
+      "  domain: {lo: [0], hi: [3.0]}\n"
+      "  layers:\n"
+      "    - {material: al, response: eos}\n"
+      "  piston: {velocity: 5.0}\n"
+      "  courant: 20\n"
+      "  t_end: 0.5\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  loaded L = {.doc = doc, .mats = mats, .e = e};
+  L.p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &L.e);
+  assert_non_null(L.p);
+  assert_int_equal(run(&L), MS_ERR_UNSTABLE);
+  unload(&L);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_errors_collected),
-      cmocka_unit_test(test_unstable_dt_refused),
-      cmocka_unit_test(test_singular_geometry_refused),
-      cmocka_unit_test(test_small_runs),
+      cmocka_unit_test(test_errors_collected),          cmocka_unit_test(test_finite_errors),
+      cmocka_unit_test(test_finite_degenerate_stops),   cmocka_unit_test(test_unstable_dt_refused),
+      cmocka_unit_test(test_singular_geometry_refused), cmocka_unit_test(test_small_runs),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
