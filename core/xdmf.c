@@ -122,7 +122,7 @@ ms_status ms_xdmf_write_series(const char *dir, const char *prefix, const char *
   closedir(d);
   /* in time order; a second sidecar of the same time (profile_final after the last regular
    * profile) is left out: ParaView cannot show two grids at one time step */
-  qsort(fr, n, sizeof *fr, compare_frames);
+  if (n > 1) qsort(fr, n, sizeof *fr, compare_frames);
   char *path = ms_calloc(strlen(dir) + strlen(series_name) + 2, 1);
   sprintf(path, "%s/%s", dir, series_name);
   ms_afile af;
