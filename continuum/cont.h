@@ -139,6 +139,8 @@ double cont_grid_time(const cont_grid *g);
 long cont_grid_steps(const cont_grid *g);
 double cont_grid_last_dt(const cont_grid *g);
 size_t cont_grid_ncells(const cont_grid *g);
+/* Bytes the grid holds per cell (check-time memory estimates). */
+size_t cont_grid_bytes_per_cell(void);
 cont_geometry cont_grid_geometry(const cont_grid *g);
 
 /* Current state (arrays owned by the grid, valid until the next step). */

@@ -192,6 +192,10 @@ static size_t setup_cells(const cont_setup *s, char *err, size_t errlen) {
   return ncells;
 }
 
+/* grid_alloc's arrays per cell: 7 node and 7 cell arrays of doubles, 2 of ints (the CONT_WINDOW
+ * arrays do not grow with the grid). */
+size_t cont_grid_bytes_per_cell(void) { return 14 * sizeof(double) + 2 * sizeof(int); }
+
 /* The grid's arrays, sized once for ncells cells. */
 static cont_grid *grid_alloc(const cont_setup *s, size_t ncells) {
   cont_grid *g = ms_calloc(1, sizeof *g);

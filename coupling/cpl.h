@@ -7,8 +7,9 @@
  *   - gas drag on fragments (Schiller–Naumann, or pure Stokes for reference tests);
  *   - transport of detached fragments as point masses through a gas given by a callback, to a
  *     detector plane, integrated with SUNDIALS CVODE (BDF: small fragments make the ODE stiff);
- *   - the piston drive built from a tagged grid node's history (displacement-preserving), and the
- *     interfaces the one-way drive and two-way coupling expect from the grid and the particles.
+ *   - the piston drive built from a tagged grid node's history (displacement-preserving);
+ *   - the deck problem `coupled`, which reaches the grid through continuum/cont.h and the
+ *     particles through the particle-region interface particles/ptl_region.h.
  *
  * Units are internal (docs/design.md §2): g, cm, 10 µs; velocity km/s, viscosity g/(cm·10 µs),
  * force g·cm/(10 µs)², energy kJ.
@@ -325,53 +326,9 @@ bool cpl_free_surface_check(size_t n, const double *t, const double *u_grid,
                             const double *u_particles, double window, cpl_fs_check *out);
 
 /* ========================================================================================== */
-/* Interfaces expected from the grid and the particles (docs/coupling.md §Interfaces)           *
- *
- * The coupling layer talks to the other modules only through these callback tables, so that
- * it does not depend on their internals; the `coupled` problem fills them from cont_grid_* and
- * cd_sim_* calls.
- *
- * Grid side (continuum):                                                                      */
-typedef struct cpl_grid_ops {
-  void *grid;
-  double (*time)(void *grid);
-  /* Advance the grid to t_end exactly (sub-cycling inside the grid is its own business). */
-  ms_status (*advance_to)(void *grid, double t_end);
-  /* Tagged node: position and velocity now. */
-  void (*node_state)(void *grid, size_t node, double *x, double *u);
-  /* History of the tagged node so far (arrays owned by the grid). */
-  size_t (*node_history)(void *grid, size_t tag, const double **t, const double **x,
-                         const double **u);
-  /* Two-way: traction on the interface node (force per unit face area, + towards +x), kept
-   * until changed; and the momentum/energy the grid's boundaries have received so far. */
-  void (*set_node_traction)(void *grid, size_t node, double traction);
-  /* Gas state at a position (the ambient gas layer): the cpl_gas_fn of drag and transport. */
-  cpl_gas_fn gas;
-  /* Two-way transport: deposit momentum/energy into the gas cell containing x. */
-  cpl_gas_return_fn deposit;
-} cpl_grid_ops;
-
-/* Particle side (cluster dynamics or the discrete model): */
-typedef struct cpl_particle_ops {
-  void *sim;
-  double (*time)(void *sim);
-  /* Piston velocity along the drive axis as a function of time (the particle code keeps it). */
-  void (*set_piston)(void *sim, const cpl_piston *piston, const double dir[3]);
-  ms_status (*advance_to)(void *sim, double t_end);
-  /* Current particles (view valid until the next advance). */
-  cpl_particles (*view)(void *sim);
-  /* Lattice spacing a (cm). */
-  double (*spacing)(void *sim);
-  /* Two-way: force the particles exert on the piston layer over the last advance, averaged in
-   * time (so the impulse is exact), and the work it did. */
-  void (*piston_reaction)(void *sim, double *force, double *work);
-  /* Mean free-surface velocity along the drive axis (for the drive check). */
-  double (*free_surface_velocity)(void *sim);
-} cpl_particle_ops;
-
-/* ========================================================================================== */
-/* The deck problem `coupled` (docs/input-coupled.md): grid → tagged node U(t) → cluster-dynamics
- * piston → fragments, drag, transport to a detector (one-way drive).                          */
+/* The deck problem `coupled` (docs/input-coupled.md): grid → tagged node U(t) → the particle
+ * region's piston → fragments, drag, transport to a detector (one-way drive), or grid and
+ * particles in lock-step (two-way).                                                            */
 typedef struct cpl_problem cpl_problem;
 cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                               dk_errors *e);

@@ -1,7 +1,8 @@
 /* cpl_checkpoint.c — checkpoint/restart of the `coupled` run (docs/coupling.md §7b).
  *
  * OUTDIR/coupled_checkpoint.h5 (core/checkpoint.c: atomic, deck hash, rank count) holds
- *   /cd/...            the particle region (particles/cd_checkpoint.c);
+ *   /cd/...            the particle region (ptl_region_checkpoint_write; cluster dynamics:
+ *                      particles/cd/cd_checkpoint.c);
  *   /loop              attributes step, next_out, last_search, p_particles, returned_p,
  *                      returned_e and the two-way accumulators (gsteps, J_grid, J_particles,
  *                      W_grid, W_particles, owed, dtg_last, p_avg, w_before; 0 in one-way runs);
@@ -56,17 +57,20 @@ static const char *const loop_attrs[] = {"step",        "next_out",   "last_sear
                                          "J_particles", "W_grid",     "W_particles", "owed",
                                          "dtg_last",    "p_avg",      "w_before"};
 enum { N_TW = sizeof(cpl_two_way_acc) / sizeof(double) };
-enum { N_LOOP = sizeof loop_attrs / sizeof *loop_attrs, N_E0 = sizeof(cd_energy) / sizeof(double) };
+enum {
+  N_LOOP = sizeof loop_attrs / sizeof *loop_attrs,
+  N_E0 = sizeof(ptl_region_energy) / sizeof(double)
+};
 _Static_assert(N_LOOP == 6 + N_TW, "loop_attrs: 6 loop values, then cpl_two_way_acc in order");
 
-ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, ptl_region *region,
                                const cpl_loop_state *ls, ms_afile *const *csv, int ncsv) {
-  ms_status st = cd_sim_refresh(sim); /* what the restart repeats (cd_sim_init_restart) */
+  ms_status st = ptl_region_refresh(region); /* what the restart repeats (ptl_region_restore) */
   if (st != MS_OK) return st;
   ms_h5 *h = ms_ckpt_create(ctx, CPL_CHECKPOINT_NAME, CPL_CHECKPOINT_FORMAT, deck_hash);
   if (!h) return MS_ERR_IO;
   const bool root = ctx->rank == 0; /* replicated data: rank 0 writes it */
-  st = cd_checkpoint_write(h, ctx, sim);
+  st = ptl_region_checkpoint_write(region, h, ctx);
   double vals[N_LOOP] = {(double)ls->step, (double)ls->next_out, (double)ls->last_search,
                          ls->p_particles,  ls->returned_p,       ls->returned_e};
   memcpy(vals + N_LOOP - N_TW, &ls->tw, sizeof ls->tw);
@@ -107,14 +111,12 @@ static ms_status read_table(ms_h5r *h, const char *name, size_t ncol, size_t nma
 }
 
 /* Every rank reads (the run is replicated apart from the particles). */
-static ms_status restore(const ms_ctx *ctx, ms_h5r *h, cd_sim *sim, cpl_loop_state *ls,
+static ms_status restore(const ms_ctx *ctx, ms_h5r *h, ptl_region *region, cpl_loop_state *ls,
                          cont_grid *gas, ms_afile *const *csv, int ncsv, dk_errors *e) {
-  cd_restart *rs = cd_restart_read(h, ctx, sim->p->dim, sim->cfg.cutoff == CD_CUTOFF_BONDED, e);
-  if (!rs) return MS_ERR_INPUT;
-  ptl_state_free(sim->p); /* the lattice build_region made: the checkpoint's replaces it */
-  sim->p = cd_restart_take_particles(rs);
+  long region_step = 0;
+  ms_status st = ptl_region_restore(region, h, ctx, &region_step, e);
+  if (st != MS_OK) return st;
   double vals[N_LOOP];
-  ms_status st = MS_OK;
   for (int k = 0; k < N_LOOP && st == MS_OK; k++)
     st = ms_h5_read_attr_double(h, "/loop", loop_attrs[k], &vals[k], e);
   double *e0 = NULL, *fs = NULL, *log = NULL;
@@ -149,24 +151,22 @@ static ms_status restore(const ms_ctx *ctx, ms_h5r *h, cd_sim *sim, cpl_loop_sta
     snprintf(name, sizeof name, "/outputs/csv%d", k);
     st = ms_ckpt_restore_afile(ctx, h, name, csv[k], e);
   }
-  if (st == MS_OK) st = cd_sim_init_restart(sim, rs, e);
-  if (st == MS_OK && cd_restart_step(rs) != ls->step) {
-    dk_error_at(e, "checkpoint", 0, 0, "particle step %ld and loop step %ld disagree",
-                cd_restart_step(rs), ls->step);
+  if (st == MS_OK && region_step != ls->step) {
+    dk_error_at(e, "checkpoint", 0, 0, "particle step %ld and loop step %ld disagree", region_step,
+                ls->step);
     st = MS_ERR_INPUT;
   }
   free(e0), free(fs), free(log);
-  cd_restart_free(rs);
   return st;
 }
 
-ms_status cpl_checkpoint_restore(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+ms_status cpl_checkpoint_restore(const ms_ctx *ctx, uint64_t deck_hash, ptl_region *region,
                                  cpl_loop_state *ls, cont_grid *gas, ms_afile *const *csv,
                                  int ncsv) {
   dk_errors e;
   dk_errors_init(&e);
   ms_h5r *h = ms_ckpt_open(ctx->restart, CPL_CHECKPOINT_FORMAT, deck_hash, &e);
-  ms_status st = h ? restore(ctx, h, sim, ls, gas, csv, ncsv, &e) : MS_ERR_INPUT;
+  ms_status st = h ? restore(ctx, h, region, ls, gas, csv, ncsv, &e) : MS_ERR_INPUT;
   ms_h5_close_read(h);
   st = par_agree_status(st);
   if (st != MS_OK) {

@@ -5,7 +5,7 @@
 
 #include "cont.h"
 #include "cpl_impl.h"
-#include "cd.h"
+#include "ptl_region.h"
 
 /* What the particle phase did to the grids, in order: advance the gas grid to time t, a cell
  * source (drag.gas_return), and in two-way runs the gas grid's first-node velocity and the
@@ -38,7 +38,7 @@ typedef struct cpl_two_way_acc {
 typedef struct cpl_loop_state {
   long step, next_out, last_search;
   double p_particles;            /* transmitting piston: the particles' pressure, last step */
-  cd_energy e0;                  /* at the start of the particle phase */
+  ptl_region_energy e0;          /* at the start of the particle phase */
   double returned_p, returned_e; /* gas return so far */
   size_t fs_n, fs_cap;           /* drive-check samples (arrays owned by the run) */
   double *fs_t, *fs_ug, *fs_up;
@@ -48,16 +48,16 @@ typedef struct cpl_loop_state {
 
 #define CPL_CHECKPOINT_NAME "coupled_checkpoint.h5"
 
-/* Refresh the particles (cd_sim_refresh) and write OUTDIR/coupled_checkpoint.h5: particles,
+/* Refresh the particles (ptl_region_refresh) and write OUTDIR/coupled_checkpoint.h5: particles,
  * loop state, the gas log and the text so far of the streamed CSV files. Every rank. */
-ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, ptl_region *region,
                                const cpl_loop_state *ls, ms_afile *const *csv, int ncsv);
-/* Restart: replaces sim's particles by the checkpoint's and initialises sim from them
- * (cd_sim_init_restart), restores the loop state (ls->fs_* arrays must have room: fs_cap),
+/* Restart: replaces the region's particles by the checkpoint's and initialises it from them
+ * (ptl_region_restore), restores the loop state (ls->fs_* arrays must have room: fs_cap),
  * replays the gas log on `gas` (NULL: the caller replays ls->gaslog itself, as two-way runs do
  * step by step) and writes the CSV text back. Every rank; MS_ERR_INPUT with a message for
  * another deck or a damaged file. */
-ms_status cpl_checkpoint_restore(const ms_ctx *ctx, uint64_t deck_hash, cd_sim *sim,
+ms_status cpl_checkpoint_restore(const ms_ctx *ctx, uint64_t deck_hash, ptl_region *region,
                                  cpl_loop_state *ls, cont_grid *gas, ms_afile *const *csv,
                                  int ncsv);
 

@@ -7,6 +7,7 @@
 #define MSCALE_CD_H
 
 #include "ptl.h"
+#include "ptl_region.h"
 
 /* ---- lattices ---- */
 typedef enum cd_lattice { CD_LATTICE_FCC = 0, CD_LATTICE_TRI2D } cd_lattice;
@@ -408,6 +409,9 @@ long cd_restart_step(const cd_restart *r);
  * partners, accumulators, time and step, then builds lists and forces as cd_sim_refresh. */
 ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e);
 void cd_restart_free(cd_restart *r);
+
+/* Cluster dynamics as the coupled problem's particle region (cd_region.c, ptl_region.h). */
+const ptl_region_model *cd_region_model_get(void);
 
 /* ---- deck problem `cluster_dynamics` (docs/input-cd.md) ---- */
 typedef struct cd_problem cd_problem;

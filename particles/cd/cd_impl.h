@@ -29,6 +29,9 @@
 #include <string.h>
 
 /* Loops over fewer particles than this run serially (thread start-up would dominate). */
+/* Strict C11 + POSIX does not define M_PI. */
+#define CD_PI 3.14159265358979323846
+
 #define CD_PAR(n) ((long)(n) >= 8192)
 
 #define CD_NB_BONDED ((int32_t)0x40000000)
@@ -219,5 +222,24 @@ bool cd_dd_owns(const cd_dd *d, const double x[3]);
 const int32_t *cd_dd_owner(const cd_dd *d, size_t *ncells, long *builds_since);
 void cd_dd_set_builds_since(cd_dd *d, long builds_since);
 const cd_mpi_stats *cd_dd_stats(const cd_dd *d);
+
+/* ---- the model keys of a section (cd_model_keys.c), shared by cd_problem.c and cd_region.c ---- */
+typedef struct cd_model_keys {
+  double r0, thickness, rc, skin, courant, dt, r_min, damping_j;
+  int table_intervals;
+  cd_cutoff_mode mode;
+} cd_model_keys;
+typedef struct cd_model_defaults {
+  const char *where; /* section name in messages */
+  double courant;    /* Δt = courant r0/c0 unless dt is given */
+  double damping;    /* J of Γ = c0/(J r0); 0: no damping */
+} cd_model_defaults;
+/* notes (may be NULL: no aliases) collects the deprecation notes of the old key names
+ * (spacing, dt_factor, damping_j), at most cap bytes. */
+void cd_model_keys_read(dk_errors *e, dk_doc *doc, const dk_node *sec, int dim,
+                        const cd_model_defaults *d, cd_model_keys *k, char *notes, size_t cap);
+/* `key`, or its deprecated name `old` if the section uses that (noted in notes); both: an error. */
+const char *cd_key_or_alias(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
+                            const char *old, const char *where, char *notes, size_t cap);
 
 #endif /* MSCALE_CD_IMPL_H */

@@ -373,29 +373,13 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   dk_read_int(e, doc, sec, "dimension", false, 3, 2, 3, &dim);
   p->dim = (int)dim;
   p->lattice = dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC;
-  dk_read_positive(e, doc, sec, "r0", MS_DIM_LENGTH, true, 0, &p->r0);
-  if (dim == 2)
-    dk_read_positive(e, doc, sec, "thickness", MS_DIM_LENGTH, false, p->r0, &p->thickness);
-  else p->thickness = p->r0;
-  const dk_node *rcn = dk_get(sec, "cutoff");
-  dk_read_double(e, doc, sec, "cutoff", MS_DIM_NONE, false, 1.2, -INFINITY, INFINITY, &p->rc);
-  if (!(p->rc > 1.0))
-    dk_error(e, doc, rcn ? rcn : sec,
-             "cutoff R_c/r0 = %g must exceed 1 (the nearest-neighbour "
-             "distance): below it the lattice has no bonds",
-             p->rc);
-  int mode = CD_CUTOFF_BONDED;
-  dk_read_enum(e, doc, sec, "cutoff_mode", false, CD_CUTOFF_BONDED, mode_names, &mode);
-  p->mode = (cd_cutoff_mode)mode;
-  dk_read_double(e, doc, sec, "skin", MS_DIM_NONE, false, 0.1, 1e-3, 1.0, &p->skin);
-  dk_read_double(e, doc, sec, "courant", MS_DIM_NONE, false, 0.02, 1e-5, 0.2, &p->courant);
-  dk_read_double(e, doc, sec, "dt", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &p->dt);
+  const cd_model_defaults defaults = {"cluster_dynamics", 0.02, 0.0};
+  cd_model_keys k;
+  cd_model_keys_read(e, doc, sec, dim, &defaults, &k, NULL, 0);
+  p->r0 = k.r0, p->thickness = k.thickness, p->rc = k.rc, p->mode = k.mode, p->skin = k.skin;
+  p->courant = k.courant, p->dt = k.dt, p->r_min = k.r_min, p->damping_j = k.damping_j;
+  p->table_intervals = k.table_intervals;
   dk_read_positive(e, doc, sec, "t_end", MS_DIM_TIME, true, 0, &p->t_end);
-  dk_read_double(e, doc, sec, "r_min", MS_DIM_NONE, false, 0.5, 0.1, 0.95, &p->r_min);
-  long nint = 4096;
-  dk_read_int(e, doc, sec, "table_intervals", false, 4096, 64, 1 << 22, &nint);
-  p->table_intervals = (int)nint;
-  dk_read_double(e, doc, sec, "damping", MS_DIM_NONE, false, 0.0, 0.0, 1e6, &p->damping_j);
   int integ = CD_INT_VELOCITY_VERLET;
   dk_read_enum(e, doc, sec, "integrator", false, CD_INT_VELOCITY_VERLET, cd_integrator_names,
                &integ);

@@ -1,0 +1,11 @@
+/* regions.c — the particle models that implement ptl_region.h, by their deck names. */
+#include "cd.h"
+
+#include <string.h>
+
+const char *const ptl_region_model_names[] = {"cluster_dynamics", NULL};
+
+const ptl_region_model *ptl_region_model_find(const char *name) {
+  if (name && !strcmp(name, "cluster_dynamics")) return cd_region_model_get();
+  return NULL;
+}
