@@ -31,7 +31,7 @@ int main(int argc, char **argv) {
   eos_t *eos = eos_create_mg_cold(RHO0, C0, NEXP, 2.0, true);
   int nx = 0;
   cd_sim *s = cd_lammps_setup(probB, eos, &nx);
-  const size_t n = s->p->n;
+  const size_t n = cd_sim_particles(s)->n;
   const double a = sqrt(2.0) * R0;
   double tw0 = ms_wall_time();
   if (cd_sim_init(s) != MS_OK) {
@@ -60,14 +60,15 @@ int main(int argc, char **argv) {
       loop += ms_wall_time() - t0;
       cd_profile(s, 2, zlo, zhi, nbin, (nx * a) * (nx * a), prof);
       if (nfr < 64) {
-        tfr[nfr] = s->t;
+        tfr[nfr] = cd_sim_time(s);
         zfr1[nfr] = cd_front_position(prof, nbin, 2, UP, 0.1);
         zfr[nfr++] = cd_front_position(prof, nbin, 2, UP, 0.5);
       }
       cd_energy e;
       cd_sim_energy(s, &e);
       printf("step %ld t %.6e front %.6e KE %.10g PE %.10g broken %.6g Wp %.10g total %.10g\n", k,
-             s->t, zfr[nfr - 1], e.kinetic, e.potential, e.broken, e.piston_work, e.total);
+             cd_sim_time(s), zfr[nfr - 1], e.kinetic, e.potential, e.broken, e.piston_work,
+             e.total);
       t0 = ms_wall_time();
     }
   }
@@ -76,8 +77,10 @@ int main(int argc, char **argv) {
   cd_sim_energy(s, &e1);
   printf("step %ld: KE %.17g PE %.17g total %.17g (broken %.6g, piston work %.6g)\n", steps,
          e1.kinetic, e1.potential, e1.total, e1.broken, e1.piston_work);
-  printf("loop time %.3f s (force %.3f, neighbour %.3f), rebuilds %ld, pairs %zu\n", loop,
-         s->wall_time_force, s->wall_time_neigh, cd_sim_rebuilds(s), cd_sim_pairs(s));
+  double w_force, w_neigh;
+  cd_sim_wall_times(s, &w_force, &w_neigh);
+  printf("loop time %.3f s (force %.3f, neighbour %.3f), rebuilds %ld, pairs %zu\n", loop, w_force,
+         w_neigh, cd_sim_rebuilds(s), cd_sim_pairs(s));
   printf("process CPU time in the loop %.3f s (all threads)\n", cpu);
   printf("bytes/particle %.1f\n", (double)cd_sim_bytes(s) / (double)n);
   printf("particle-steps/s %.4g\n", (double)n * (double)steps / loop);

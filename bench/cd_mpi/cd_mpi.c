@@ -53,7 +53,7 @@ int main(int argc, char **argv) {
   }
   eos_t *eos = eos_create_mg_cold(RHO0, C0, NEXP, 2.0, true);
   cd_sim *s = cd_lammps_setup(probB, eos, NULL);
-  const size_t n = s->p->n;
+  const size_t n = cd_sim_particles(s)->n;
   if (ctx.size > 1) {
     cd_mpi_config mc = {.partition = method,
                         .rebalance_threshold = 1.2,
@@ -90,16 +90,18 @@ int main(int argc, char **argv) {
   const cd_mpi_stats *ms = cd_sim_mpi_stats(s);
   double xs = ms ? ms->exchange_s : 0.0, xd = ms ? ms->exchanged_doubles : 0.0;
   const double xs_max = par_max_double(xs), xd_sum = par_sum_double(xd);
-  const double fw = par_max_double(s->wall_time_force), nw = par_max_double(s->wall_time_neigh);
+  double w_force, w_neigh;
+  cd_sim_wall_times(s, &w_force, &w_neigh);
+  const double fw = par_max_double(w_force), nw = par_max_double(w_neigh);
   const double pairs = (double)cd_sim_pairs(s);
   const double pairs_max = par_max_double(pairs), pairs_sum = par_sum_double(pairs);
   /* per rank: owned, ghosts, list entries, force wall, CPU outside MPI (where the time goes),
    * peak resident memory, wall inside MPI calls and in ghost refreshes + migrations */
   enum { NPR = 8 };
-  double mine[NPR] = {(double)s->p->nlocal,
-                      (double)(s->p->n - s->p->nlocal),
+  double mine[NPR] = {(double)cd_sim_particles(s)->nlocal,
+                      (double)(cd_sim_particles(s)->n - cd_sim_particles(s)->nlocal),
                       pairs,
-                      s->wall_time_force,
+                      w_force,
                       work,
                       peak_rss_mb(),
                       mw1 - mw0,

@@ -230,49 +230,18 @@ typedef struct cd_mpi_stats {
   long lost_bonds;          /* bonded mode: partners not found on the rank at a migration */
 } cd_mpi_stats;
 
-typedef struct cd_sim {
-  ptl_state *p; /* owned */
-  cd_box box;
-  cd_config cfg;
-  int nmat;
-  cd_pair_table *pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* [a][b] == [b][a], owned */
-  double rc_max;
-  cd_neigh *nl;
-  double t;
-  long step;
-  /* piston */
-  cd_history piston; /* u(t) of every PTL_DRIVEN particle */
-  double piston_dir[3];
-  size_t n_driven;
-  int32_t *driven; /* indices of driven particles */
-  /* balance accumulators */
-  double dissipated, piston_work, broken_bonded;
-  long n_inside0[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* pairs inside R_c at start (plain) */
-  bool have_inside0;
-  double *scratch;   /* 3N, damping velocity increments (NULL if no damping) */
-  int32_t *partners; /* bonded mode: [N][CD_MAX_PARTNERS] (−1 = none/broken) */
-  long n_broken_bonds;
-  bool forces_zeroed;         /* the step zeroed f in its drift loop */
-  double disp_bound;          /* Σ Δt·max|v| since the last build (cheap rebuild pre-check) */
-  double vmax_last;           /* max|v| of the last Verlet step (when to take the extents) */
-  struct cd_layer_sums *sums; /* per-layer accumulators of the kernels */
-  int sums_cap;
-  double *pw; /* [N][6] per-particle virials (allocated by diagnostics) */
-  /* RKN integrators (cfg.integrator != velocity Verlet): stage buffers, driven particles'
-   * positions at the start of the step, the piston force at each stage */
-  struct rkn_integrator *rkn;
-  double rkn_reach[2]; /* stage excursion bound: |q_l − r^n| ≤ Δt c0 max|v| + Δt² c1 max|a| */
-  double *driven_x0;   /* [n_driven][3] */
-  double stage_force[3];
-  int stage;
-  double wall_time_force, wall_time_neigh;
-  long last_build_step; /* step of the last list build (full or half lists: cd_sim.c) */
-  double kick_hdt;      /* > 0: the fit kernel also kicks v += kick_hdt f/m (cd_sim.c) */
-  struct cd_dd *dd;     /* MPI decomposition (cd_par.c); NULL on one rank */
-  cd_mpi_config mpi;
-  bool mpi_on;   /* cd_sim_set_mpi was called */
-  char err[512]; /* what the instability guard found (cd_sim_error) */
-} cd_sim;
+/* A cluster-dynamics simulation (opaque: particles/cd/cd_impl.h holds its layout). */
+typedef struct cd_sim cd_sim;
+/* What a caller may read of it. The particles: [0, nlocal) owned, then ghosts; the pointer is
+ * the sim's (it changes on a restart, cd_sim_init_restart). */
+ptl_state *cd_sim_particles(const cd_sim *s);
+double cd_sim_time(const cd_sim *s);       /* simulated time since the start, 10 µs */
+long cd_sim_step_count(const cd_sim *s);   /* steps taken */
+const cd_box *cd_sim_box(const cd_sim *s); /* the box (changes under cd_sim_affine) */
+const cd_config *cd_sim_config(const cd_sim *s);
+long cd_sim_broken_bonds(const cd_sim *s); /* bonded mode: set-up partners broken so far */
+/* Wall time spent so far in the force kernels and in the neighbour lists (s). */
+void cd_sim_wall_times(const cd_sim *s, double *force, double *neighbour);
 
 enum { CD_MAX_PARTNERS = 16 };
 

@@ -264,7 +264,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
     assert_int_equal(cd_sim_step(s), MS_OK);
     if (k % every == 0 && nf < 64) {
       cd_profile(s, 2, blo, blo + nbin * bw, nbin, area, prof);
-      tf[nf] = s->t;
+      tf[nf] = cd_sim_time(s);
       cd_energy en;
       cd_sim_energy(s, &en);
       pm[nf] = en.momentum[2];
@@ -274,8 +274,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
         for (int b = 0; b < nbin; b++) {
           const double *row = prof + (size_t)b * CD_PROFILE_NCOL;
           if (row[1] > 0)
-            fprintf(dump, "%g,%g,%g,%g,%g,%g,%g,%g\n", up, s->t, row[0], row[2], row[5], row[6],
-                    row[8], row[12]);
+            fprintf(dump, "%g,%g,%g,%g,%g,%g,%g,%g\n", up, cd_sim_time(s), row[0], row[2], row[5],
+                    row[6], row[8], row[12]);
         }
     }
   }
@@ -285,7 +285,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   r.D_mom = fit_slope(tf, pm, nf, 0.25 * tf[nf - 1]) / (r.rho00 * area * up);
   /* shocked state: bins between the piston + 5a and the front − 5a at the last frame */
   cd_profile(s, 2, blo, blo + nbin * bw, nbin, area, prof);
-  double zp = zpist + up * s->t, zfront = cd_front_position(prof, nbin, 2, up, 0.5);
+  double zp = zpist + up * cd_sim_time(s), zfront = cd_front_position(prof, nbin, 2, up, 0.5);
   double rho = 0, pzz = 0, vz = 0, pxx = 0, su = 0;
   int cnt = 0;
   for (int b = 0; b < nbin; b++) {
@@ -406,20 +406,22 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
                               .rebond = true,
                               .plain = opt_plain != 0};
   assert_int_equal(cd_sim_relax(s, &rc, &ps.rr), MS_OK);
-  ps.box = s->box;
+  ps.box = (*cd_sim_box(s));
   /* interior density: bins 5a away from both ends */
   double zmax = -INFINITY, zmin = INFINITY;
-  for (size_t i = 0; i < s->p->n; i++) zmax = fmax(zmax, s->p->z[i]), zmin = fmin(zmin, s->p->z[i]);
+  for (size_t i = 0; i < cd_sim_particles(s)->n; i++)
+    zmax = fmax(zmax, cd_sim_particles(s)->z[i]), zmin = fmin(zmin, cd_sim_particles(s)->z[i]);
   const int nbin = (int)fmin(1e5, (zmax - zmin) / a) + 1;
   double *prof = calloc((size_t)(unsigned)nbin * CD_PROFILE_NCOL, sizeof *prof);
   const double area = (ps.box.hi[0] - ps.box.lo[0]) * (ps.box.hi[1] - ps.box.lo[1]);
   cd_profile(s, 2, zmin - 0.5 * a, zmin - 0.5 * a + nbin * a, nbin, area, prof);
   ps.rho00 = mean_bin_density(prof, nbin, zmin + 5 * a, zmax - 5 * a);
   free(prof);
-  ps.p = ptl_state_create(s->p->n, 3);
-  for (size_t i = 0; i < s->p->n; i++) {
-    size_t k = ptl_state_add(ps.p, s->p->x[i], s->p->y[i], s->p->z[i], m, 0);
-    ps.p->flags[k] = s->p->flags[i];
+  ps.p = ptl_state_create(cd_sim_particles(s)->n, 3);
+  for (size_t i = 0; i < cd_sim_particles(s)->n; i++) {
+    size_t k = ptl_state_add(ps.p, cd_sim_particles(s)->x[i], cd_sim_particles(s)->y[i],
+                             cd_sim_particles(s)->z[i], m, 0);
+    ps.p->flags[k] = cd_sim_particles(s)->flags[i];
   }
   const cd_relax_result *r = &ps.rr;
   printf("polycrystal: %d grains, min_distance %.2f r0, seed %d, %zu sites, generated porosity "

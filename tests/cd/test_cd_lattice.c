@@ -257,12 +257,13 @@ static void test_relax(void **state) {
     for (int a = 0; a < 3; a++) {
       assert_true(fabs(r.stress[a]) < 1e-4);
       assert_true(fabs(r.lambda[a] * strain[a] - 1) < 1e-5);
-      assert_true(fabs(s->box.hi[a] - L) < 1e-5 * L);
+      assert_true(fabs(cd_sim_box(s)->hi[a] - L) < 1e-5 * L);
     }
-    assert_true(r.energy > 0 && r.broken_bonds == 0 && s->n_broken_bonds == 0);
-    assert_true(s->t == 0.0 && s->step == 0);
-    for (size_t i = 0; i < s->p->n; i++)
-      assert_true(s->p->vx[i] == 0 && s->p->vy[i] == 0 && s->p->vz[i] == 0);
+    assert_true(r.energy > 0 && r.broken_bonds == 0 && cd_sim_broken_bonds(s) == 0);
+    assert_true(cd_sim_time(s) == 0.0 && cd_sim_step_count(s) == 0);
+    for (size_t i = 0; i < cd_sim_particles(s)->n; i++)
+      assert_true(cd_sim_particles(s)->vx[i] == 0 && cd_sim_particles(s)->vy[i] == 0 &&
+                  cd_sim_particles(s)->vz[i] == 0);
     cd_energy en;
     cd_sim_energy(s, &en);
     assert_true(en.dissipated == 0 && en.piston_work == 0 && en.broken == 0);
@@ -317,11 +318,11 @@ static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_
   *rho_out = r.mass / r.volume;
   /* positions by gid (the lists renumber particles) */
   double *x = calloc(3 * n, sizeof *x);
-  for (size_t i = 0; i < s->p->n; i++) {
-    const int64_t g = s->p->gid[i];
-    x[3 * g] = s->p->x[i];
-    x[3 * g + 1] = s->p->y[i];
-    x[3 * g + 2] = s->p->z[i];
+  for (size_t i = 0; i < cd_sim_particles(s)->n; i++) {
+    const int64_t g = cd_sim_particles(s)->gid[i];
+    x[3 * g] = cd_sim_particles(s)->x[i];
+    x[3 * g + 1] = cd_sim_particles(s)->y[i];
+    x[3 * g + 2] = cd_sim_particles(s)->z[i];
   }
   *x_out = x;
   cd_sim_free(s);

@@ -117,7 +117,7 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
     assert_int_equal(cd_sim_step(s), MS_OK);
     if (k % every == 0 && nf < 64) {
       cd_profile(s, 2, -0.25 * a, (nbin - 0.25) * a, nbin, L[0] * L[1], prof);
-      tf[nf] = s->t;
+      tf[nf] = cd_sim_time(s);
       zf[nf++] = cd_front_position(prof, nbin, 2, up, 0.5);
     }
   }

@@ -93,11 +93,12 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
   result res = {0};
   const cd_mpi_stats *ms = cd_sim_mpi_stats(s);
   if (distributed && ms) /* right after the set-up every owned particle lies in an owned cell */
-    for (size_t i = 0; i < s->p->nlocal; i++) {
-      double x[3] = {s->p->x[i], s->p->y[i], s->p->z[i]};
+    for (size_t i = 0; i < cd_sim_particles(s)->nlocal; i++) {
+      double x[3] = {cd_sim_particles(s)->x[i], cd_sim_particles(s)->y[i],
+                     cd_sim_particles(s)->z[i]};
       if (!cd_sim_owns_position(s, x)) {
         CHECK(false, "owned particle %zu (gid %ld) outside the rank's cells", i,
-              (long)s->p->gid[i]);
+              (long)cd_sim_particles(s)->gid[i]);
         break;
       }
     }
@@ -114,7 +115,7 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
     if (kind != CASE_BONDED && k % 50 == 0) {
       cd_profile(s, 2, -0.25 * a, (nbin - 0.25) * a, nbin, 25.0 * a * a, prof);
       double z = cd_front_position(prof, nbin, 2, UP, 0.5);
-      if (isfinite(z) && nf < 64) tf[nf] = s->t, zf[nf++] = z;
+      if (isfinite(z) && nf < 64) tf[nf] = cd_sim_time(s), zf[nf++] = z;
     }
   }
   cd_sim_energy(s, &res.e);
@@ -125,7 +126,7 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
     sx += tf[k], sy += zf[k], sxx += tf[k] * tf[k], sxy += tf[k] * zf[k];
   res.D = m > 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : NAN;
   /* global state by gid: each owned particle contributes once, the sum over ranks fills it */
-  const ptl_state *p = s->p;
+  const ptl_state *p = cd_sim_particles(s);
   long nown = (long)p->nlocal;
   res.n = (size_t)(distributed ? par_sum_long(nown) : nown);
   res.x = calloc(3 * res.n + 1, sizeof(double));
@@ -146,7 +147,7 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
   size_t bad = 0;
   for (size_t g = 0; g < res.n; g++) bad += count[g] != 1.0;
   CHECK(bad == 0, "%zu gids not owned by exactly one rank", bad);
-  res.broken = distributed ? par_sum_long(s->n_broken_bonds) : s->n_broken_bonds;
+  res.broken = distributed ? par_sum_long(cd_sim_broken_bonds(s)) : cd_sim_broken_bonds(s);
   res.rebalances = ms ? ms->rebalances : 0;
   res.rebuilds = cd_sim_rebuilds(s);
   if (distributed && ms && my_rank == 0)

@@ -75,7 +75,7 @@ int main(int argc, char **argv) {
 
   /* serial reference, in-process on every rank */
   cd_sim *ss = make_block(eos, false);
-  const ptl_state *sp = ss->p;
+  const ptl_state *sp = cd_sim_particles(ss);
   uint8_t *sskip = ms_calloc(sp->n, 1);
   cpl_particles sv = view(sp, sskip);
   cpl_fragments ref;
@@ -87,7 +87,7 @@ int main(int argc, char **argv) {
   /* distributed run */
   cd_sim *ds = make_block(eos, true);
   cd_sim_refresh_ghosts(ds);
-  const ptl_state *dp = ds->p;
+  const ptl_state *dp = cd_sim_particles(ds);
   const size_t ng = dp->n - dp->nlocal;
   int32_t *gown = ms_calloc(ng + 1, sizeof *gown);
   cd_sim_ghost_owners(ds, gown);

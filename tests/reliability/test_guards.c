@@ -55,15 +55,15 @@ static void test_non_finite(void **state) {
   (void)state;
   eos_t *eos = eos_create_mg_cold(2.71, C0, 4.0, 2.0, true);
   cd_sim *s = block(eos);
-  s->p->vy[17] = NAN;
+  cd_sim_particles(s)->vy[17] = NAN;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "non-finite vy = nan");
-  s->p->vy[17] = 0.0;
-  s->p->x[17] = INFINITY;
+  cd_sim_particles(s)->vy[17] = 0.0;
+  cd_sim_particles(s)->x[17] = INFINITY;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "non-finite x = inf");
   /* ... and cd_sim_step reports it at the next guard step (the NaN spreads through the forces) */
-  s->p->x[17] = NAN;
+  cd_sim_particles(s)->x[17] = NAN;
   ms_status st = MS_OK;
   for (int k = 0; k < CD_GUARD_EVERY && st == MS_OK; k++) st = cd_sim_step(s);
   assert_int_equal(st, MS_ERR_UNSTABLE);
@@ -77,9 +77,9 @@ static void test_too_fast(void **state) {
   eos_t *eos = eos_create_mg_cold(2.71, C0, 4.0, 2.0, true);
   cd_sim *s = block(eos);
   /* 0.5 r0 per step is |v| = 0.5 r0 / dt = 25 c0: just below passes, just above does not */
-  s->p->vx[17] = 0.99 * 25.0 * C0;
+  cd_sim_particles(s)->vx[17] = 0.99 * 25.0 * C0;
   assert_int_equal(cd_sim_guard(s), MS_OK);
-  s->p->vx[17] = 1.01 * 25.0 * C0;
+  cd_sim_particles(s)->vx[17] = 1.01 * 25.0 * C0;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "moves it 0.505 r0 per step");
   cd_sim_free(s);
@@ -90,9 +90,9 @@ static void test_left_through_wall(void **state) {
   (void)state;
   eos_t *eos = eos_create_mg_cold(2.71, C0, 4.0, 2.0, true);
   cd_sim *s = block(eos);
-  s->p->x[17] = -0.1 * R0; /* periodic axis: no finding */
+  cd_sim_particles(s)->x[17] = -0.1 * R0; /* periodic axis: no finding */
   assert_int_equal(cd_sim_guard(s), MS_OK);
-  s->p->z[17] = s->box.hi[2] + 0.1 * R0;
+  cd_sim_particles(s)->z[17] = cd_sim_box(s)->hi[2] + 0.1 * R0;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "left the box through the wall: z = ");
   cd_sim_free(s);
