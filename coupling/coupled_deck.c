@@ -67,12 +67,9 @@ static void set_gas(cpl_problem *p, int material, int layer, dk_errors *e, dk_do
              gm->name);
 }
 
-cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
-                              dk_errors *e) {
-  size_t nerr0 = e->n;
-  cpl_problem *p = ms_calloc(1, sizeof *p);
-  p->sum.check.rel_diff = NAN;
-  p->mats = mats;
+/* The grid (read twice: one copy runs first, the other supplies the gas) and the two-way gas
+ * grid. */
+static void read_grids(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
   /* the grid first: the continuum reader checks the error count it started with */
   const dk_node *G = dk_get(sec, "grid");
   if (!G) {
@@ -80,26 +77,29 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
              "coupled: a 'grid:' section (the keys of a continuum section) is "
              "required");
   } else {
-    p->grid_out = cont_problem_read(doc, G, mats, e);
+    p->grid_out = cont_problem_read(doc, G, p->mats, e);
     if (p->grid_out) {
       dk_errors scratch; /* the second read repeats the first one's (already empty) findings */
       dk_errors_init(&scratch);
-      p->grid_live = cont_problem_read(doc, G, mats, &scratch);
+      p->grid_live = cont_problem_read(doc, G, p->mats, &scratch);
       dk_errors_free(&scratch);
     }
   }
   /* two-way only: the gas beyond the particles' free surface, a grid of its own */
   const dk_node *Gs = dk_get(sec, "gas");
-  if (Gs) p->gas_grid = cont_problem_read(doc, Gs, mats, e);
+  if (Gs) p->gas_grid = cont_problem_read(doc, Gs, p->mats, e);
+}
+
+static const dk_node *read_drive(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e,
+                                 const char **drive_tag, const char **fs_tag) {
   const dk_node *D = dk_get(sec, "drive");
-  const char *drive_tag = NULL, *fs_tag = NULL;
   if (!D)
     dk_error(e, doc, sec,
              "coupled: a 'drive:' section is required (the tag whose U(t) drives "
              "the particles)");
   else if (dk_expect_map(e, doc, D, "drive")) {
-    dk_read_string(e, doc, D, "tag", true, NULL, &drive_tag);
-    dk_read_string(e, doc, D, "free_surface_tag", false, "", &fs_tag);
+    dk_read_string(e, doc, D, "tag", true, NULL, drive_tag);
+    dk_read_string(e, doc, D, "free_surface_tag", false, "", fs_tag);
     p->drive_mode = 1;
     dk_read_enum(e, doc, D, "mode", false, 1, cpl_drive_mode_names, &p->drive_mode);
     dk_read_double(e, doc, D, "impedance", MS_DIM_NONE, false, 0.0, 0.0, INFINITY, &p->impedance);
@@ -107,8 +107,11 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     dk_read_double(e, doc, D, "check_window", MS_DIM_TIME, false, 0.0, 0.0, INFINITY,
                    &p->check_window);
   }
-  read_particles(p, doc, sec, e);
+  return D;
+}
 
+/* time, fragments, drag, transport */
+static void read_options(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
   const dk_node *T = dk_get(sec, "time");
   if (!T)
     dk_error(e, doc, sec,
@@ -141,89 +144,115 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     dk_read_positive(e, doc, X, "end", MS_DIM_TIME, true, 0, &p->transport_end);
     dk_read_int(e, doc, X, "windows", false, 200, 1, 100000, &p->transport_windows);
   }
+}
 
+/* Two-way: the grid ends at the interface node; the particles continue it, with the gas grid of
+ * `gas:` beyond them (if any). */
+static void check_two_way(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e,
+                          const dk_node *at, const char *drive_tag, size_t nd, cont_view v) {
+  const dk_node *X = dk_get(sec, "transport"), *R = dk_get(sec, "drag");
+  if (nd != v.ncells)
+    dk_error(e, doc, at,
+             "drive.mode two_way: drive.tag '%s' must be the grid's last node (%zu), "
+             "with `right: {type: free}`: the particles replace what lies beyond it",
+             drive_tag, v.ncells);
+  if (!(p->depth > 0))
+    dk_error(e, doc, dk_get(sec, "particles") ? dk_get(sec, "particles") : sec,
+             "drive.mode two_way needs particles.depth (the particle region's length "
+             "beyond the interface, cm)");
+  p->sample_mat = v.material[nd ? nd - 1 : 0];
+  if (!p->gas_grid) {
+    if (X)
+      dk_error(e, doc, X,
+               "drive.mode two_way without a 'gas:' section has no gas: remove "
+               "'transport' (or add the gas beyond the particles as 'gas:')");
+    p->drag_law = CPL_DRAG_NONE;
+  } else {
+    cont_view gv = cont_grid_view(cont_problem_grid(p->gas_grid));
+    set_gas(p, gv.material[0], gv.layer[0], e, doc, R ? R : sec);
+  }
+}
+
+/* One-way: the sample between the drive tag and the free-surface tag, one material, with the
+ * gas layer beyond it. */
+static void check_one_way(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *e,
+                          const dk_node *at, const char *drive_tag, const char *fs_tag, size_t nd,
+                          const cont_grid *g) {
+  const dk_node *D = dk_get(sec, "drive"), *Gs = dk_get(sec, "gas"), *R = dk_get(sec, "drag");
+  cont_view v = cont_grid_view(g);
+  size_t nf = v.ncells;
+  if (Gs)
+    dk_error(e, doc, Gs,
+             "'gas:' is for drive.mode two_way; the one-way grid carries its own gas layer "
+             "beyond free_surface_tag");
+  if (p->have_fs) {
+    p->tag_fs = find_tag(g, fs_tag);
+    if (p->tag_fs == (size_t)-1) {
+      dk_error(e, doc, dk_get(D, "free_surface_tag"),
+               "drive.free_surface_tag: no tag named '%s' in grid.tags", fs_tag);
+      p->have_fs = false;
+    } else {
+      nf = cont_grid_history(g, p->tag_fs).node;
+    }
+  }
+  if (!p->have_fs) {
+    dk_error(e, doc, D,
+             "drive.free_surface_tag is required: it marks the sample's free "
+             "surface, where the particle region ends");
+  } else if (nd >= nf) {
+    dk_error(e, doc, at,
+             "drive.tag '%s' (node %zu) must lie left of the free surface '%s' "
+             "(node %zu)",
+             drive_tag, nd, fs_tag, nf);
+  } else {
+    p->sample_mat = v.material[nd];
+    for (size_t c = nd; c < nf; c++)
+      if (v.material[c] != p->sample_mat) {
+        dk_error(e, doc, at,
+                 "the cells between drive.tag '%s' and the free surface '%s' "
+                 "must be one material (the particle region's)",
+                 drive_tag, fs_tag);
+        break;
+      }
+    if (nf >= v.ncells) {
+      dk_error(e, doc, dk_get(D, "free_surface_tag"),
+               "the free surface '%s' is the grid's last node: the gas layer beyond it is "
+               "missing",
+               fs_tag);
+    } else {
+      set_gas(p, v.material[nf], v.layer[nf], e, doc, R ? R : sec);
+    }
+    if (!p->mats->m[p->sample_mat].eos)
+      dk_error(e, doc, at, "the sample material has no equation of state");
+  }
+}
+
+cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
+                              dk_errors *e) {
+  size_t nerr0 = e->n;
+  cpl_problem *p = ms_calloc(1, sizeof *p);
+  p->sum.check.rel_diff = NAN;
+  p->mats = mats;
+  read_grids(p, doc, sec, e);
+  const char *drive_tag = NULL, *fs_tag = NULL;
+  const dk_node *D = read_drive(p, doc, sec, e, &drive_tag, &fs_tag);
+  read_particles(p, doc, sec, e);
+  read_options(p, doc, sec, e);
   /* consistency with the grid: tags, the sample between them, the gas beyond */
   if (p->grid_out && drive_tag) {
     const cont_grid *g = cont_problem_grid(p->grid_out);
-    cont_view v = cont_grid_view(g);
     p->tag_drive = find_tag(g, drive_tag);
     const dk_node *at = dk_get(D, "tag");
     if (p->tag_drive == (size_t)-1) {
       dk_error(e, doc, at, "drive.tag: no tag named '%s' in grid.tags", drive_tag);
     } else {
       p->have_fs = fs_tag && fs_tag[0];
-      size_t nd = cont_grid_history(g, p->tag_drive).node, nf = v.ncells;
-      if (p->drive_mode == DRIVE_TWO_WAY) {
-        /* the grid ends at the interface; the particles continue it */
-        if (nd != v.ncells)
-          dk_error(e, doc, at,
-                   "drive.mode two_way: drive.tag '%s' must be the grid's last node (%zu), "
-                   "with `right: {type: free}`: the particles replace what lies beyond it",
-                   drive_tag, v.ncells);
-        if (!(p->depth > 0))
-          dk_error(e, doc, dk_get(sec, "particles") ? dk_get(sec, "particles") : sec,
-                   "drive.mode two_way needs particles.depth (the particle region's length "
-                   "beyond the interface, cm)");
-        p->sample_mat = v.material[nd ? nd - 1 : 0];
-        if (!p->gas_grid) {
-          if (X)
-            dk_error(e, doc, X,
-                     "drive.mode two_way without a 'gas:' section has no gas: remove "
-                     "'transport' (or add the gas beyond the particles as 'gas:')");
-          p->drag_law = CPL_DRAG_NONE;
-        } else {
-          cont_view gv = cont_grid_view(cont_problem_grid(p->gas_grid));
-          set_gas(p, gv.material[0], gv.layer[0], e, doc, R ? R : sec);
-        }
-        goto consistency_done;
-      }
-      if (Gs)
-        dk_error(e, doc, Gs,
-                 "'gas:' is for drive.mode two_way; the one-way grid carries its own gas layer "
-                 "beyond free_surface_tag");
-      if (p->have_fs) {
-        p->tag_fs = find_tag(g, fs_tag);
-        if (p->tag_fs == (size_t)-1) {
-          dk_error(e, doc, dk_get(D, "free_surface_tag"),
-                   "drive.free_surface_tag: no tag named '%s' in grid.tags", fs_tag);
-          p->have_fs = false;
-        } else {
-          nf = cont_grid_history(g, p->tag_fs).node;
-        }
-      }
-      if (!p->have_fs) {
-        dk_error(e, doc, D,
-                 "drive.free_surface_tag is required: it marks the sample's free "
-                 "surface, where the particle region ends");
-      } else if (nd >= nf) {
-        dk_error(e, doc, at,
-                 "drive.tag '%s' (node %zu) must lie left of the free surface '%s' "
-                 "(node %zu)",
-                 drive_tag, nd, fs_tag, nf);
-      } else {
-        p->sample_mat = v.material[nd];
-        for (size_t c = nd; c < nf; c++)
-          if (v.material[c] != p->sample_mat) {
-            dk_error(e, doc, at,
-                     "the cells between drive.tag '%s' and the free surface '%s' "
-                     "must be one material (the particle region's)",
-                     drive_tag, fs_tag);
-            break;
-          }
-        if (nf >= v.ncells) {
-          dk_error(e, doc, dk_get(D, "free_surface_tag"),
-                   "the free surface '%s' is the grid's last node: the gas layer beyond it is "
-                   "missing",
-                   fs_tag);
-        } else {
-          set_gas(p, v.material[nf], v.layer[nf], e, doc, R ? R : sec);
-        }
-        if (!mats->m[p->sample_mat].eos)
-          dk_error(e, doc, at, "the sample material has no equation of state");
-      }
+      const size_t nd = cont_grid_history(g, p->tag_drive).node;
+      if (p->drive_mode == DRIVE_TWO_WAY)
+        check_two_way(p, doc, sec, e, at, drive_tag, nd, cont_grid_view(g));
+      else check_one_way(p, doc, sec, e, at, drive_tag, fs_tag, nd, g);
     }
   }
-consistency_done:
   if (e->n == nerr0 && p->grid_out) /* before the region allocates its lattice */
     memory_check(p, doc, sec, e);
   if (e->n != nerr0) {
