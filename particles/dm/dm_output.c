@@ -66,21 +66,22 @@ void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size
   free(path);
 }
 
-/* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView): current positions
- * X + w, reference positions, w, u, |u|, Cauchy stress (9 components) and its pressure
- * −tr Σ/3, von Mises intensity and Σ_xx. */
+/* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView), by ptl_write_snapshot:
+ * current positions X + w (particles/x), reference positions, w, u, |u|, Cauchy stress (9
+ * components) and its pressure −tr Σ/3, von Mises intensity and Σ_xx; attributes time, step.
+ * The velocity is particles/u (no particles/v), no mass, no vertex ids, no time series. */
 void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, long step,
                         const char *name) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = m->s;
   char *path = ms_out_path(ctx, name);
   double *S = malloc(9 * s->n * sizeof(double));
-  double *x = malloc(3 * nreal * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
+  double *x = malloc((3 * nreal + 1) * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
   dm_cauchy_stress(m, S);
   double *speed = sc, *pres = sc + nreal, *vm = sc + 2 * nreal, *sxx = sc + 3 * nreal;
   for (size_t i = 0; i < nreal; ++i) {
     const double *u = &s->u[3 * i], *T = &S[9 * i];
-    for (int a = 0; a < 3; ++a) x[3 * i + a] = s->X[3 * i + a] + s->w[3 * i + a];
+    for (int a = 0; a < 3; ++a) x[a * nreal + i] = s->X[3 * i + a] + s->w[3 * i + a];
     speed[i] = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     pres[i] = -(T[0] + T[4] + T[8]) / 3.0;
     double s12 = 0.5 * (T[1] + T[3]), s23 = 0.5 * (T[5] + T[7]), s31 = 0.5 * (T[2] + T[6]);
@@ -88,37 +89,27 @@ void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, 
                         (T[8] - T[0]) * (T[8] - T[0]) + 6.0 * (s12 * s12 + s23 * s23 + s31 * s31)));
     sxx[i] = T[0];
   }
-  ms_status st = MS_ERR_IO;
-  ms_h5 *h = ms_h5_create(path);
-  if (h) {
-    st = ms_h5_write_doubles(h, "particles/x", nreal, 3, x, "cm");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/X", nreal, 3, s->X, "cm");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/w", nreal, 3, s->w, "cm");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/u", nreal, 3, s->u, "km/s");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/speed", nreal, 1, speed, "km/s");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/cauchy", nreal, 9, S, "GPa");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/pressure", nreal, 1, pres, "GPa");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/von_mises", nreal, 1, vm, "GPa");
-    if (st == MS_OK) st = ms_h5_write_doubles(h, "particles/sigma_xx", nreal, 1, sxx, "GPa");
-    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "time", t);
-    if (st == MS_OK) st = ms_h5_attr_double(h, "particles", "step", (double)step);
-    if (st == MS_OK) st = ms_h5_close(h);
-    else ms_h5_abort(h);
-  }
-  if (st == MS_OK) {
-    ms_xdmf_attr attr[] = {{"displacement", "particles/w", 3, false},
-                           {"velocity", "particles/u", 3, false},
-                           {"speed", "particles/speed", 1, false},
-                           {"pressure", "particles/pressure", 1, false},
-                           {"von_mises", "particles/von_mises", 1, false},
-                           {"sigma_xx", "particles/sigma_xx", 1, false}};
-    char xname[64]; /* the sidecar: NAME.h5 -> NAME.xmf */
-    snprintf(xname, sizeof xname, "%.*s.xmf", (int)strcspn(name, "."), name);
-    char *xmf = ms_out_path(ctx, xname);
-    st = ms_xdmf_write_points(xmf, name, "particles/x", nreal, 3, t, 6, attr);
-    free(xmf);
-  }
-  if (st != MS_OK) ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
+  const ptl_snapshot_data data[] = {
+      {"particles/X", s->X, NULL, 3, "cm"},        {"particles/w", s->w, NULL, 3, "cm"},
+      {"particles/u", s->u, NULL, 3, "km/s"},      {"particles/speed", speed, NULL, 1, "km/s"},
+      {"particles/cauchy", S, NULL, 9, "GPa"},     {"particles/pressure", pres, NULL, 1, "GPa"},
+      {"particles/von_mises", vm, NULL, 1, "GPa"}, {"particles/sigma_xx", sxx, NULL, 1, "GPa"}};
+  const ms_xdmf_attr xdmf[] = {
+      {"displacement", "particles/w", 3, false},      {"velocity", "particles/u", 3, false},
+      {"speed", "particles/speed", 1, false},         {"pressure", "particles/pressure", 1, false},
+      {"von_mises", "particles/von_mises", 1, false}, {"sigma_xx", "particles/sigma_xx", 1, false}};
+  const double *const xc[3] = {x, x + nreal, x + 2 * nreal}, *const none[3] = {NULL, NULL, NULL};
+  ptl_snapshot snap = ptl_snapshot_of(nreal, xc, none, NULL, t, false);
+  snap.omit =
+      PTL_SNAPSHOT_NO_V | PTL_SNAPSHOT_NO_MASS | PTL_SNAPSHOT_NO_VERTEX | PTL_SNAPSHOT_NO_SERIES;
+  snap.ndata = sizeof data / sizeof data[0];
+  snap.data = data;
+  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
+  snap.xdmf = xdmf;
+  ptl_snapshot_attr_add(&snap, "time", t);
+  ptl_snapshot_attr_add(&snap, "step", (double)step);
+  if (ptl_write_snapshot(path, &snap) != MS_OK)
+    ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
   free(path);
   free(S);
   free(x);
