@@ -54,6 +54,17 @@ void dm_state_free(dm_state *s) {
   memset(s, 0, sizeof *s);
 }
 
+void dm_alloc_work(dm_model *m, size_t n) {
+  const size_t na = n ? n : 1;
+  m->Ainv = ms_aligned_alloc(9 * na, sizeof(double));
+  m->cond = ms_aligned_alloc(na, sizeof(double));
+  m->kappa = ms_aligned_alloc(na, sizeof(double));
+  m->C = ms_aligned_alloc(9 * na, sizeof(double));
+  m->sigma = ms_aligned_alloc(9 * na, sizeof(double));
+  m->Q = ms_aligned_alloc(9 * na, sizeof(double));
+  m->energy = ms_aligned_alloc(na, sizeof(double));
+}
+
 dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *status,
                     size_t *first_bad) {
   ms_status dummy;
@@ -96,13 +107,7 @@ dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_st
   m->opt = *opt;
   if (m->opt.cond_max <= 0) m->opt.cond_max = 1e8;
   size_t n = s->n;
-  m->Ainv = ms_aligned_alloc(9 * n, sizeof(double));
-  m->cond = ms_aligned_alloc(n, sizeof(double));
-  m->kappa = ms_aligned_alloc(n, sizeof(double));
-  m->C = ms_aligned_alloc(9 * n, sizeof(double));
-  m->sigma = ms_aligned_alloc(9 * n, sizeof(double));
-  m->Q = ms_aligned_alloc(9 * n, sizeof(double));
-  m->energy = ms_aligned_alloc(n, sizeof(double));
+  dm_alloc_work(m, n);
   ms_status st = dm_build_families(m, ctx);
   if (st == MS_OK) st = dm_build_shape(m, ctx, first_bad);
   if (st != MS_OK) {
