@@ -309,9 +309,8 @@ static ms_status run_model(dm_run *r) {
       .horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = p->hourglass};
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
-  ms_status st;
-  r->m = dm_create(s, &opt, r->ctx, &st, NULL);
-  if (!r->m) return st;
+  ms_status st = dm_model_create(&(dm_model_params){.state = s, .opt = opt, .ctx = r->ctx}, &r->m);
+  if (st != MS_OK) return st;
   if (p->has_source) {
     r->m->prescribe = sphere_prescribe;
     r->m->prescribe_user = p;
@@ -338,9 +337,8 @@ static ms_status run_distribute(dm_run *r) {
   ms_ctx *ctx = r->ctx;
   dm_problem *p = r->p;
   dm_run_summary *sum = &p->sum;
-  ms_status st;
-  r->d = dm_dist_create(r->m, ctx, &st);
-  if (!r->d) return st;
+  ms_status st = dm_dist_create(&(dm_dist_params){.global = r->m, .ctx = ctx}, &r->d);
+  if (st != MS_OK) return st;
   r->par = ctx->size > 1;
   const dm_dist_stats *ds = dm_dist_get_stats(r->d);
   sum->ranks = ctx->size;
@@ -631,8 +629,8 @@ static void run_free(dm_run *r) {
   free(r->pr);
   free(r->probe_val);
   rkn_destroy(r->ig);
-  dm_dist_free(r->d);
-  dm_destroy(r->m);
+  dm_dist_destroy(&r->d);
+  dm_model_destroy(&r->m);
   dm_state_free(&r->s);
 }
 

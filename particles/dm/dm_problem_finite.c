@@ -30,9 +30,9 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = 0.0};
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
-  ms_status st;
-  dm_model *m = dm_create(&s, &opt, ctx, &st, NULL);
-  if (!m) {
+  dm_model *m = NULL;
+  ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
+  if (st != MS_OK) {
     dm_state_free(&s);
     return st;
   }
@@ -46,10 +46,11 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(dmp_layer_at(p, s.X[3 * i]) - p->layers);
   dm_fin_params par = {
       .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
-  dm_fin *f = dm_fin_create(m, mat, imat, &par, &st);
-  if (!f) {
+  dm_fin *f = NULL;
+  st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
+  if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model (response eos): the initial state is not valid");
-    free(mat), free(imat), dm_destroy(m), dm_state_free(&s);
+    free(mat), free(imat), dm_model_destroy(&m), dm_state_free(&s);
     return st;
   }
   sum->particles = s.n, sum->real_particles = nreal, sum->bonds = m->nbonds, sum->ranks = 1;
@@ -122,8 +123,8 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
         eh, ne);
   }
   free(bins), free(eh), free(done), free(mat), free(imat);
-  dm_fin_free(f);
-  dm_destroy(m);
+  dm_fin_destroy(&f);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   return st;
 }
