@@ -7,7 +7,7 @@
 
 /* Exact rod displacement at the probe. */
 static double rod_exact(const dm_problem *p, double x, double t) {
-  const double c = dmp_rod_wave_speed(p), L = p->length;
+  const double c = dmp_wave_speed(p), L = p->length;
   if (p->profile == PROF_ROD_TRIANGLE) return dm_exact_rod_triangle(x, t, L, p->amplitude, c, 0);
   return p->amplitude * L * sin(p->mode * M_PI * x / (2 * L)) *
          cos(p->mode * M_PI * c * t / (2 * L));
@@ -34,7 +34,7 @@ static double lag_fit(const dm_problem *p, const double *hist, size_t first, siz
  *   peak error = (max|w| − max|w_exact|)/max|w_exact|, which includes that ringing;
  *   rms error = rms(w − w_exact)/max|w_exact| without any fit. */
 void dmp_rod_analysis(dm_problem *p, const double *hist, size_t nrec, double xprobe) {
-  const double c = dmp_rod_wave_speed(p), L = p->length, t0 = p->sum.t_end - 10.0 * L / c;
+  const double c = dmp_wave_speed(p), L = p->length, t0 = p->sum.t_end - 10.0 * L / c;
   double amax = 0, emax = 0, se = 0;
   size_t cnt = 0, first = nrec;
   for (size_t r = 0; r < nrec; ++r) {
@@ -91,8 +91,7 @@ void dmp_contact_analysis(dm_problem *p, const dm_model *m, size_t nreal, double
 }
 
 void dmp_sphere_analysis(dm_problem *p, const dm_state *s, size_t nreal, double t) {
-  const dm_layer *l = &p->layers[0];
-  double cl = sqrt((l->K + 4.0 * l->G / 3.0) / l->rho);
+  const double cl = dmp_wave_speed(p);
   double s1 = 0, s2 = 0, sinf = 0, su = 0, wmax = 0;
   size_t cnt = 0;
   for (size_t i = 0; i < nreal; ++i) {

@@ -41,9 +41,9 @@ void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size
       ex = dm_exact_contact_stress(X[0], t, p->length, p->amplitude, l0->rho, l0->K + 4 * l0->G / 3,
                                    l1->rho, l1->K + 4 * l1->G / 3);
     } else if (p->profile == PROF_ROD_TRIANGLE) {
-      ex = dm_exact_rod_triangle(X[0], t, p->length, p->amplitude, dmp_rod_wave_speed(p), 0);
+      ex = dm_exact_rod_triangle(X[0], t, p->length, p->amplitude, dmp_wave_speed(p), 0);
     } else if (p->profile == PROF_ROD_SINE) {
-      double c = dmp_rod_wave_speed(p), L = p->length;
+      double c = dmp_wave_speed(p), L = p->length;
       ex = p->amplitude * L * sin(p->mode * M_PI * X[0] / (2 * L)) *
            cos(p->mode * M_PI * c * t / (2 * L));
     }
@@ -130,8 +130,7 @@ void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_st
   char title[128];
   snprintf(title, sizeof title, "spherical wave, all free particles, t = %.9g (10 us)", t);
   ms_csv_header(af.f, title, 5, names, units);
-  const dm_layer *l = &p->layers[0];
-  double cl = sqrt((l->K + 4.0 * l->G / 3.0) / l->rho);
+  const double cl = dmp_wave_speed(p);
   size_t stride = nreal > 400000 ? nreal / 400000 + 1 : 1; /* keep the file < ~40 MB */
   for (size_t i = 0; i < nreal; i += stride) {
     if (s->bc[i] != DM_FREE) continue;

@@ -114,7 +114,7 @@ void dmp_build_particles(dm_problem *p, dm_state *s) {
   s->n = next; /* arrays are longer than needed when faces are free: harmless */
 }
 
-double dmp_rod_wave_speed(const dm_problem *p) {
+double dmp_wave_speed(const dm_problem *p) {
   const dm_layer *l = &p->layers[0];
   return sqrt((l->K + 4.0 * l->G / 3.0) / l->rho);
 }
@@ -155,8 +155,7 @@ void dmp_set_initial(dm_problem *p, dm_state *s, size_t nreal) {
 static void sphere_prescribe(void *user, size_t i, const double X[3], double t, double w[3]) {
   (void)i;
   const dm_problem *p = user;
-  const dm_layer *l = &p->layers[0];
-  double cl = sqrt((l->K + 4.0 * l->G / 3.0) / l->rho);
+  const double cl = dmp_wave_speed(p);
   double r = sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]), wr, ur;
   dm_exact_sphere(r, t, p->src_r0, p->src_w0, p->src_period, cl, &wr, &ur);
   for (int a = 0; a < 3; ++a) w[a] = X[a] / r * wr;

@@ -72,7 +72,7 @@ const dm_layer *dmp_layer_at(const dm_problem *p, double x);
 void dmp_build_particles(dm_problem *p, dm_state *s);
 void dmp_set_initial(dm_problem *p, dm_state *s, size_t nreal);
 /* Longitudinal wave speed sqrt((K + 4G/3)/ρ) of the first layer. */
-double dmp_rod_wave_speed(const dm_problem *p);
+double dmp_wave_speed(const dm_problem *p);
 /* The run's summary with every field that a run may leave unset as NaN. */
 void dmp_summary_reset(dm_run_summary *sum, int finite);
 /* response: eos (dm_problem_finite.c) */
