@@ -64,11 +64,23 @@ typedef struct ptl_snapshot_attr {
 
 enum { PTL_SNAPSHOT_MAX_ATTR = 16 };
 
+/* Parts of the standard layout a snapshot can leave out (ptl_snapshot.omit; 0: all written). */
+enum {
+  PTL_SNAPSHOT_NO_V = 1u,      /* no particles/v (v unused) */
+  PTL_SNAPSHOT_NO_MASS = 2u,   /* no particles/mass (mass unused) */
+  PTL_SNAPSHOT_NO_VERTEX = 4u, /* no particles/vertex; the sidecar's Polyvertex topology then
+                                * has no connectivity (ms_xdmf_write_points) */
+  PTL_SNAPSHOT_NO_SERIES = 8u  /* no time-series sidecar of the file's prefix */
+};
+
 /* What a snapshot holds. Datasets, in this order: particles/x [n][3] from x[0..2] (x[2] NULL:
- * 0), particles/v [n][3] from v[0..2] (a NULL component: 0), particles/mass [n], then data[0..ndata); then the attributes
- * attr[0..nattr) of /particles, in order. The sidecar (PATH with .h5 replaced by .xmf, naming
- * the file by its base name) shows xdmf[0..nxdmf) at `time`. Collective when dist: every rank
- * gives its own n particles, stored in rank order (docs/mpi.md). */
+ * 0), particles/v [n][3] from v[0..2] (a NULL component: 0), particles/mass [n], then
+ * data[0..ndata), then particles/vertex (0..N-1, the sidecar's connectivity); then the
+ * attributes attr[0..nattr) of /particles, in order. `omit` leaves out v, mass, vertex (and the
+ * time series). The sidecar (PATH with .h5 replaced by .xmf, naming the file by its base name)
+ * shows xdmf[0..nxdmf) at `time`; with it, the time series DIR/particles.xmf of every sidecar
+ * of the file's prefix (its name up to the first digit). Collective when dist: every rank gives
+ * its own n particles, stored in rank order (docs/mpi.md). */
 typedef struct ptl_snapshot {
   size_t n;
   const double *x[3], *v[3];
@@ -81,6 +93,7 @@ typedef struct ptl_snapshot {
   const ms_xdmf_attr *xdmf;
   double time;
   bool dist;
+  unsigned omit; /* PTL_SNAPSHOT_NO_* */
 } ptl_snapshot;
 
 /* A snapshot of n particles at positions x[0..2], velocities v[0..2] and masses at `time`

@@ -1,7 +1,8 @@
-/* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c) and
- * of the coupled problem's fragment snapshots (coupling/snapshot.c): positions, velocities and
- * masses as [n][3] and [n] datasets, the caller's extra datasets and attributes, an XDMF
- * sidecar that ParaView opens. Under MPI one collective file, rows in rank order. */
+/* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c), of
+ * the discrete model (dm/dm_output.c) and of the coupled problem's fragment snapshots
+ * (coupling/snapshot.c): positions, velocities and masses as [n][3] and [n] datasets, the
+ * caller's extra datasets and attributes, an XDMF sidecar that ParaView opens. Under MPI one
+ * collective file, rows in rank order. */
 #include "ptl.h"
 
 #include <stdlib.h>
@@ -59,14 +60,16 @@ static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *
                                 const double *vel) {
   const size_t n = sn->n;
   ms_status st = ms_h5_write_doubles_dist(h, "particles/x", n, 3, xyz, "cm");
-  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
-  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, sn->mass, "g");
+  if (st == MS_OK && !(sn->omit & PTL_SNAPSHOT_NO_V))
+    st = ms_h5_write_doubles_dist(h, "particles/v", n, 3, vel, "km/s");
+  if (st == MS_OK && !(sn->omit & PTL_SNAPSHOT_NO_MASS))
+    st = ms_h5_write_doubles_dist(h, "particles/mass", n, 1, sn->mass, "g");
   for (size_t k = 0; k < sn->ndata && st == MS_OK; k++) {
     const ptl_snapshot_data *d = &sn->data[k];
     st = d->d ? ms_h5_write_doubles_dist(h, d->name, n, (size_t)d->ncomp, d->d, d->units)
               : ms_h5_write_ints_dist(h, d->name, n, d->i);
   }
-  if (st == MS_OK) st = write_vertex_ids(h, n, sn->dist);
+  if (st == MS_OK && !(sn->omit & PTL_SNAPSHOT_NO_VERTEX)) st = write_vertex_ids(h, n, sn->dist);
   for (size_t k = 0; k < sn->nattr && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "particles", sn->attr[k].name, sn->attr[k].value);
   return st;
@@ -81,9 +84,11 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
   strcpy(xmf + len, ".xmf");
   const char *base = strrchr(path, '/');
   base = base ? base + 1 : path;
-  ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", "particles/vertex", nglobal, 3,
-                                         sn->time, sn->nxdmf, sn->xdmf);
+  const char *vertex = sn->omit & PTL_SNAPSHOT_NO_VERTEX ? NULL : "particles/vertex";
+  ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", vertex, nglobal, 3, sn->time,
+                                         sn->nxdmf, sn->xdmf);
   free(xmf);
+  if (sn->omit & PTL_SNAPSHOT_NO_SERIES) return st;
   /* the run's time series: every sidecar of this prefix (the name up to its number) */
   size_t dirlen = (size_t)(base - path), plen = strcspn(base, "0123456789");
   char *dir = ms_calloc(dirlen + 2, 1), *prefix = ms_calloc(plen + 1, 1);
@@ -102,7 +107,7 @@ ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *sn) {
   for (size_t i = 0; i < n; i++)
     for (int a = 0; a < 3; a++) {
       xyz[3 * i + a] = sn->x[a] ? sn->x[a][i] : 0.0;
-      vel[3 * i + a] = sn->v[a] ? sn->v[a][i] : 0.0;
+      vel[3 * i + a] = sn->v[a] && !(sn->omit & PTL_SNAPSHOT_NO_V) ? sn->v[a][i] : 0.0;
     }
   ms_status st = MS_ERR_IO;
   ms_h5 *h = sn->dist ? ms_h5_create_collective(path) : ms_h5_create(path);

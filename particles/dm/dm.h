@@ -71,13 +71,21 @@ typedef struct dm_model {
   void *prescribe_user;
 } dm_model;
 
-/* Builds the families with a cell list and precomputes A_i⁻¹. Singular or ill-conditioned A_i
- * (too few or coplanar/collinear neighbours) are reported through ctx (each with the particle's
- * position, up to 20) and make this return NULL with *status = MS_ERR_INPUT; *first_bad (if
- * not NULL) is the first such particle. Other errors: bad options (MS_ERR_INPUT). */
-dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *status,
-                    size_t *first_bad);
-void dm_destroy(dm_model *m);
+/* What a model is built from (dm_model_create). */
+typedef struct dm_model_params {
+  dm_state *state; /* the particles (not owned, outlive the model; u of DM_FIXED particles is
+                    * set to 0) */
+  dm_options opt;
+  const ms_ctx *ctx; /* set-up errors are logged here */
+  size_t *first_bad; /* if not NULL: receives the first particle with a singular or
+                      * ill-conditioned A_i */
+} dm_model_params;
+/* Builds the families with a cell list and precomputes A_i⁻¹ into *out (NULL on failure).
+ * Singular or ill-conditioned A_i (too few or coplanar/collinear neighbours) are reported
+ * through ctx (each with the particle's position, up to 20): MS_ERR_INPUT. Other errors: bad
+ * particles or options (MS_ERR_INPUT). */
+ms_status dm_model_create(const dm_model_params *par, dm_model **out);
+void dm_model_destroy(dm_model **m); /* null-safe; *m = NULL */
 
 /* Forces F = −∂H/∂w at displacement w (both [n][3]); fills m->C, sigma, Q, energy.
  * OpenMP-parallel over particles; each particle sums its own bonds in a fixed order, so the
@@ -127,9 +135,15 @@ typedef struct dm_dist_diag {
   double kinetic, potential; /* kJ, non-mirror particles */
   double hourglass, dw_norm; /* as dm_hourglass_norm (sums per particle, then in global order) */
 } dm_dist_diag;
-/* The global model's prescribe callback must be set before this (it is copied). Collective. */
-dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status);
-void dm_dist_free(dm_dist *d);
+typedef struct dm_dist_params {
+  dm_model *global;  /* the replicated global model (not owned; dm_dist_release_global frees
+                      * its families) */
+  const ms_ctx *ctx; /* rank, size and the log */
+} dm_dist_params;
+/* The global model's prescribe callback must be set before this (it is copied). Collective:
+ * every rank gets the same status (*out NULL on failure). */
+ms_status dm_dist_create(const dm_dist_params *par, dm_dist **out);
+void dm_dist_destroy(dm_dist **d);   /* null-safe; *d = NULL */
 dm_state *dm_dist_state(dm_dist *d); /* local particles: owned [0, owned), then ghosts */
 dm_model *dm_dist_model(dm_dist *d);
 size_t dm_dist_owned(const dm_dist *d);
@@ -246,11 +260,18 @@ typedef struct dm_fin {
   const char *bad_what; /* and the quantity */
   double bad_value;
 } dm_fin;
-/* Driven particles (DM_PRESCRIBED, DM_FIXED) keep their velocity u; mirror ghosts are not
- * supported (MS_ERR_INPUT). e starts at eos_e0. Computes the first forces and dt_next. */
-dm_fin *dm_fin_create(dm_model *m, const dm_fin_material *mat, const uint8_t *imat,
-                      const dm_fin_params *par, ms_status *status);
-void dm_fin_free(dm_fin *f);
+/* What a finite-deformation model is built from (dm_fin_create). */
+typedef struct dm_fin_setup {
+  dm_model *m;                /* families and A⁻¹ (not owned; its κ and hourglass are set) */
+  const dm_fin_material *mat; /* not owned */
+  const uint8_t *imat;        /* [n] material of each particle (not owned) */
+  dm_fin_params par;
+} dm_fin_setup;
+/* Driven particles (DM_PRESCRIBED, DM_FIXED) keep their velocity u; mirror ghosts and bad
+ * parameters are not accepted (MS_ERR_INPUT). e starts at eos_e0. Computes the first forces
+ * and dt_next (their status on failure). *out is NULL on failure. */
+ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out);
+void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
 /* One kick–drift–kick step of length f->dt_next; MS_ERR_UNSTABLE (f->bad, f->bad_what) when a
  * J ≤ 0 or a non-finite e, p or force appears: the state is then the one of the bad step. */
 ms_status dm_fin_step(dm_fin *f);

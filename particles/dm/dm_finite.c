@@ -238,21 +238,26 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
   if (hourglass) *hourglass = H;
 }
 
-void dm_fin_free(dm_fin *f) {
-  if (!f) return;
+void dm_fin_destroy(dm_fin **fp) {
+  if (!fp || !*fp) return;
+  dm_fin *f = *fp;
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
   free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar);
   free(f);
+  *fp = NULL;
 }
 
-dm_fin *dm_fin_create(dm_model *m, const dm_fin_material *mat, const uint8_t *imat,
-                      const dm_fin_params *par, ms_status *status) {
+ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
+  *out = NULL;
+  dm_model *m = setup->m;
+  const dm_fin_material *mat = setup->mat;
+  const uint8_t *imat = setup->imat;
+  const dm_fin_params *par = &setup->par;
   dm_state *st = m->s;
-  *status = MS_ERR_INPUT;
   for (size_t i = 0; i < st->n; ++i)
-    if (st->bc[i] == DM_MIRROR) return NULL;
+    if (st->bc[i] == DM_MIRROR) return MS_ERR_INPUT;
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
-    return NULL;
+    return MS_ERR_INPUT;
   dm_fin *f = ms_calloc(1, sizeof *f);
   size_t n = st->n, n1 = n ? n : 1;
   f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;
@@ -278,12 +283,13 @@ dm_fin *dm_fin_create(dm_model *m, const dm_fin_material *mat, const uint8_t *im
     m->kappa[i] = par->hourglass > 0 && trA > 0 ? par->hourglass * M * st->vol[i] / trA : 0.0;
     f->e[i] = eos_e0(mt->eos);
   }
-  *status = forces(f, 0.0);
-  if (*status != MS_OK) {
-    dm_fin_free(f);
-    return NULL;
+  const ms_status status = forces(f, 0.0);
+  if (status != MS_OK) {
+    dm_fin_destroy(&f);
+    return status;
   }
-  return f;
+  *out = f;
+  return MS_OK;
 }
 
 /* ---- the piston problem ---- */
@@ -312,16 +318,17 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
   dm_options opt = {.horizon = sp->horizon * h, .cond_max = 1e8, .hourglass = 0.0};
   if (dim > 1) opt.box[1] = ny * h;
   if (dim > 2) opt.box[2] = nz * h;
-  ms_status st;
-  dm_model *m = dm_create(&s, &opt, ctx, &st, NULL);
-  if (!m) {
+  dm_model *m = NULL;
+  ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
+  if (st != MS_OK) {
     dm_state_free(&s);
     return res->status = st;
   }
   uint8_t *imat = ms_calloc(n, 1);
-  dm_fin *f = dm_fin_create(m, &sp->mat, imat, &sp->par, &st);
-  if (!f) {
-    free(imat), dm_destroy(m), dm_state_free(&s);
+  dm_fin *f = NULL;
+  st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = &sp->mat, .imat = imat, .par = sp->par}, &f);
+  if (st != MS_OK) {
+    free(imat), dm_model_destroy(&m), dm_state_free(&s);
     return res->status = st;
   }
   double K, U, H;
@@ -392,8 +399,8 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
   }
   res->profile = lay;
   free(ts), free(xs), free(imat);
-  dm_fin_free(f);
-  dm_destroy(m);
+  dm_fin_destroy(&f);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   return res->status = st;
 }

@@ -4,6 +4,9 @@
 
 #include "dm.h"
 
+/* The per-particle arrays of a model of n particles (at least 1 row each), zeroed: A⁻¹, cond,
+ * κ, C, σ, Q, energy (dm_create; the local model of dm_par.c). */
+void dm_alloc_work(dm_model *m, size_t n);
 ms_status dm_build_families(dm_model *m, const ms_ctx *ctx);
 ms_status dm_build_shape(dm_model *m, const ms_ctx *ctx, size_t *first_bad);
 double dm_sym_inverse(int dim, const double *A, double *inv);

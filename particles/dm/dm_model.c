@@ -54,40 +54,51 @@ void dm_state_free(dm_state *s) {
   memset(s, 0, sizeof *s);
 }
 
-dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *status,
-                    size_t *first_bad) {
-  ms_status dummy;
-  if (!status) status = &dummy;
-  *status = MS_ERR_INPUT;
+void dm_alloc_work(dm_model *m, size_t n) {
+  const size_t na = n ? n : 1;
+  m->Ainv = ms_aligned_alloc(9 * na, sizeof(double));
+  m->cond = ms_aligned_alloc(na, sizeof(double));
+  m->kappa = ms_aligned_alloc(na, sizeof(double));
+  m->C = ms_aligned_alloc(9 * na, sizeof(double));
+  m->sigma = ms_aligned_alloc(9 * na, sizeof(double));
+  m->Q = ms_aligned_alloc(9 * na, sizeof(double));
+  m->energy = ms_aligned_alloc(na, sizeof(double));
+}
+
+ms_status dm_model_create(const dm_model_params *par, dm_model **out) {
+  *out = NULL;
+  dm_state *s = par->state;
+  const dm_options *opt = &par->opt;
+  const ms_ctx *ctx = par->ctx;
   if (!s || s->n == 0 || s->dim < 1 || s->dim > 3 || !(opt->horizon > 0.0)) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model: needs particles, dim 1..3 and a horizon > 0");
-    return NULL;
+    return MS_ERR_INPUT;
   }
   if (s->n > UINT32_MAX) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model: more than 2^32 particles");
-    return NULL;
+    return MS_ERR_INPUT;
   }
   for (size_t i = 0; i < s->n; ++i) {
     if (!(s->mass[i] > 0) || !(s->vol[i] > 0) || !(s->K[i] > 0) || !(s->G[i] >= 0)) {
       ms_log(ctx, MS_LOG_ERROR,
              "discrete model: particle %zu at (%g, %g, %g) needs mass, volume, K > 0 and G >= 0", i,
              s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2]);
-      return NULL;
+      return MS_ERR_INPUT;
     }
     if (s->bc[i] == DM_MIRROR && (s->partner[i] >= s->n || s->bc[s->partner[i]] == DM_MIRROR)) {
       ms_log(ctx, MS_LOG_ERROR, "discrete model: mirror ghost %zu has no real partner", i);
-      return NULL;
+      return MS_ERR_INPUT;
     }
     for (int a = 0; a < 3; ++a) {
       if (opt->box[a] > 0 && (s->X[3 * i + a] < 0 || s->X[3 * i + a] >= opt->box[a])) {
         ms_log(ctx, MS_LOG_ERROR, "discrete model: particle %zu outside the periodic box", i);
-        return NULL;
+        return MS_ERR_INPUT;
       }
       if (a >= s->dim && (s->X[3 * i + a] != 0.0 || s->w[3 * i + a] != 0.0)) {
         ms_log(ctx, MS_LOG_ERROR,
                "discrete model: particle %zu has a nonzero component %d in a %dD model", i, a,
                s->dim);
-        return NULL;
+        return MS_ERR_INPUT;
       }
     }
   }
@@ -96,28 +107,22 @@ dm_model *dm_create(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_st
   m->opt = *opt;
   if (m->opt.cond_max <= 0) m->opt.cond_max = 1e8;
   size_t n = s->n;
-  m->Ainv = ms_aligned_alloc(9 * n, sizeof(double));
-  m->cond = ms_aligned_alloc(n, sizeof(double));
-  m->kappa = ms_aligned_alloc(n, sizeof(double));
-  m->C = ms_aligned_alloc(9 * n, sizeof(double));
-  m->sigma = ms_aligned_alloc(9 * n, sizeof(double));
-  m->Q = ms_aligned_alloc(9 * n, sizeof(double));
-  m->energy = ms_aligned_alloc(n, sizeof(double));
+  dm_alloc_work(m, n);
   ms_status st = dm_build_families(m, ctx);
-  if (st == MS_OK) st = dm_build_shape(m, ctx, first_bad);
+  if (st == MS_OK) st = dm_build_shape(m, ctx, par->first_bad);
   if (st != MS_OK) {
-    dm_destroy(m);
-    *status = st;
-    return NULL;
+    dm_model_destroy(&m);
+    return st;
   }
   for (size_t i = 0; i < n; ++i)
     if (s->bc[i] == DM_FIXED) s->u[3 * i] = s->u[3 * i + 1] = s->u[3 * i + 2] = 0.0;
-  *status = MS_OK;
-  return m;
+  *out = m;
+  return MS_OK;
 }
 
-void dm_destroy(dm_model *m) {
-  if (!m) return;
+void dm_model_destroy(dm_model **mp) {
+  if (!mp || !*mp) return;
+  dm_model *m = *mp;
   free(m->start);
   free(m->nbr);
   free(m->img);
@@ -129,6 +134,7 @@ void dm_destroy(dm_model *m) {
   free(m->Q);
   free(m->energy);
   free(m);
+  *mp = NULL;
 }
 
 /* Pass 1 for particle i: C_i, σ_i, Q_i and the particle's energy. */

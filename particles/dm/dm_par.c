@@ -239,18 +239,7 @@ static void build_local(dm_dist *d) {
   lm->s = &d->ls;
   lm->opt = m->opt;
   memcpy(lm->shift, m->shift, sizeof lm->shift);
-  size_t nla = nl ? nl : 1;
-  lm->Ainv = ms_aligned_alloc(9 * nla, sizeof(double));
-  lm->cond = ms_aligned_alloc(nla, sizeof(double));
-  lm->kappa = ms_aligned_alloc(nla, sizeof(double));
-  lm->C = ms_aligned_alloc(9 * nla, sizeof(double));
-  lm->sigma = ms_aligned_alloc(9 * nla, sizeof(double));
-  lm->Q = ms_aligned_alloc(9 * nla, sizeof(double));
-  lm->energy = ms_aligned_alloc(nla, sizeof(double));
-  memset(lm->C, 0, 9 * nla * sizeof(double));
-  memset(lm->sigma, 0, 9 * nla * sizeof(double));
-  memset(lm->Q, 0, 9 * nla * sizeof(double));
-  memset(lm->energy, 0, nla * sizeof(double));
+  dm_alloc_work(lm, nl);
   lm->start = ms_calloc(nl + 1, sizeof(size_t));
   lm->nbr = ms_calloc(lbonds ? lbonds : 1, sizeof(uint32_t));
   lm->img = ms_calloc(lbonds ? lbonds : 1, sizeof(uint8_t));
@@ -335,7 +324,10 @@ static void exchange(dm_dist *d, double *v, int width) {
   d->stats.exchanged_doubles += (double)width * (double)d->n_ghost;
 }
 
-dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status) {
+ms_status dm_dist_create(const dm_dist_params *prm, dm_dist **out) {
+  *out = NULL;
+  dm_model *global = prm->global;
+  const ms_ctx *ctx = prm->ctx;
   dm_dist *d = ms_calloc(1, sizeof *d);
   d->rank = ctx->rank;
   d->size = ctx->size > 0 ? ctx->size : 1;
@@ -363,9 +355,8 @@ dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status) 
   free(slab);
   free(wvert);
   if (st != MS_OK) {
-    if (status) *status = st;
-    dm_dist_free(d);
-    return NULL;
+    dm_dist_destroy(&d);
+    return st;
   }
   build_local(d);
   d->stats.owned = d->n_owned;
@@ -376,13 +367,14 @@ dm_dist *dm_dist_create(dm_model *global, const ms_ctx *ctx, ms_status *status) 
   d->stats.max_ghosts = par ? (size_t)par_max_double((double)d->n_ghost) : d->n_ghost;
   d->stats.total_ghosts = par ? (size_t)par_sum_long((long)d->n_ghost) : d->n_ghost;
   d->stats.bonds = global->nbonds / 2;
-  if (status) *status = MS_OK;
-  return d;
+  *out = d;
+  return MS_OK;
 }
 
-void dm_dist_free(dm_dist *d) {
-  if (!d) return;
-  dm_destroy(d->lm);
+void dm_dist_destroy(dm_dist **dp) {
+  if (!dp || !*dp) return;
+  dm_dist *d = *dp;
+  dm_model_destroy(&d->lm);
   dm_state_free(&d->ls);
   free(d->gid);
   free(d->local_of);
@@ -401,6 +393,7 @@ void dm_dist_free(dm_dist *d) {
   free(d->gbuf);
   free(d->tbuf);
   free(d);
+  *dp = NULL;
 }
 
 dm_state *dm_dist_state(dm_dist *d) { return &d->ls; }

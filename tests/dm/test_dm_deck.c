@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
+#include <dirent.h>
+#include <unistd.h>
 
 #include "dm.h"
 #include "test_util.h"
@@ -219,11 +221,95 @@ static void test_finite_degenerate_stops(void **state) {
   unload(&L);
 }
 
+
+/* A snapshot (written through ptl_write_snapshot, docs/input-dm.md) holds exactly the DM's
+ * datasets, one row per real particle, with particles/x = X + w to the bit (the same sum) and
+ * the attributes time and step; its sidecar names the file and no vertex dataset, and no time
+ * series is written (the DM layout leaves out v, mass, vertex and the series). */
+static void test_snapshot_layout(void **state) {
+  (void)state;
+  loaded L;
+  load(&L, "discrete_model:\n"
+           "  spacing: 0.05\n"
+           "  domain: {lo: [0], hi: [1]}\n"
+           "  boundaries: {x_lo: wall, x_hi: free}\n"
+           "  layers: [{material: steel}]\n"
+           "  initial: {profile: rod_sine, amplitude: 0.001, length: 1}\n"
+           "  steps: 4\n"
+           "  dt: 0.002\n"
+           "  output: {snapshot_times: [0.004]}\n");
+  dk_errors_print(&L.e, stderr);
+  assert_int_equal(L.e.n, 0);
+  char dir[] = "/tmp/dm_snap_test_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.quiet = true;
+  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
+  assert_int_equal(dm_problem_run(&ctx, L.p), MS_OK);
+  ms_ctx_close(&ctx);
+  char path[512];
+  snprintf(path, sizeof path, "%s/dm_snapshot_000.h5", dir);
+  ms_h5r *h = ms_h5_open_read(path, &L.e);
+  assert_non_null(h);
+  ms_h5_entry *items = NULL;
+  size_t nitems = 0;
+  assert_int_equal(ms_h5_list(h, "particles", &items, &nitems, &L.e), MS_OK);
+  static const char *const want[] = {"X", "cauchy",    "pressure", "sigma_xx", "speed",
+                                     "u", "von_mises", "w",        "x"};
+  static const size_t cols[] = {3, 9, 1, 1, 1, 3, 1, 3, 3};
+  assert_int_equal(nitems, sizeof want / sizeof want[0]);
+  for (size_t k = 0; k < nitems; k++) {
+    assert_string_equal(items[k].name, want[k]);
+    assert_int_equal(items[k].rows, 20); /* the real particles: 1 / 0.05 */
+    assert_int_equal(items[k].cols, cols[k]);
+  }
+  ms_h5_entries_free(items, nitems);
+  double *x = NULL, *X = NULL, *w = NULL, t = 0, step = 0;
+  size_t n0 = 0, n1 = 0;
+  assert_int_equal(ms_h5_read_doubles(h, "particles/x", &x, &n0, &n1, &L.e), MS_OK);
+  assert_int_equal(ms_h5_read_doubles(h, "particles/X", &X, &n0, &n1, &L.e), MS_OK);
+  assert_int_equal(ms_h5_read_doubles(h, "particles/w", &w, &n0, &n1, &L.e), MS_OK);
+  for (size_t i = 0; i < 3 * n0; i++) assert_true(x[i] == X[i] + w[i]);
+  double wmax = 0;
+  for (size_t i = 0; i < n0; i++) wmax = fmax(wmax, fabs(w[3 * i]));
+  assert_true(wmax > 0); /* the displaced rod, not a zero field */
+  assert_int_equal(ms_h5_read_attr_double(h, "particles", "time", &t, &L.e), MS_OK);
+  assert_int_equal(ms_h5_read_attr_double(h, "particles", "step", &step, &L.e), MS_OK);
+  assert_true(fabs(t - 0.004) < 1e-15); /* step 2 of dt = 0.002 (rounding of 2 x 0.002 only) */
+  assert_true(step == 2.0);
+  ms_h5_close_read(h);
+  free(x), free(X), free(w);
+  snprintf(path, sizeof path, "%s/dm_snapshot_000.xmf", dir);
+  FILE *f = fopen(path, "r");
+  assert_non_null(f);
+  char xmf[8192];
+  size_t len = fread(xmf, 1, sizeof xmf - 1, f);
+  fclose(f);
+  xmf[len] = 0;
+  assert_non_null(strstr(xmf, "dm_snapshot_000.h5:particles/x"));
+  assert_non_null(strstr(xmf, "dm_snapshot_000.h5:particles/u"));
+  assert_null(strstr(xmf, "particles/vertex"));
+  snprintf(path, sizeof path, "%s/particles.xmf", dir);
+  assert_int_equal(access(path, F_OK), -1);
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  for (struct dirent *de; (de = readdir(d));)
+    if (de->d_name[0] != '.') {
+      snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
+      unlink(path);
+    }
+  closedir(d);
+  rmdir(dir);
+  unload(&L);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_errors_collected),          cmocka_unit_test(test_finite_errors),
       cmocka_unit_test(test_finite_degenerate_stops),   cmocka_unit_test(test_unstable_dt_refused),
       cmocka_unit_test(test_singular_geometry_refused), cmocka_unit_test(test_small_runs),
+      cmocka_unit_test(test_snapshot_layout),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

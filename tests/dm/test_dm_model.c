@@ -13,6 +13,18 @@
 
 #include "dm.h"
 
+/* dm_model_create with the model as the result: NULL exactly when the status (in *st, if not
+ * NULL) is not MS_OK; bad (if not NULL) receives the first singular particle. */
+static dm_model *model_of(dm_state *s, const dm_options *opt, const ms_ctx *ctx, ms_status *st,
+                          size_t *bad) {
+  dm_model *m = NULL;
+  const ms_status status = dm_model_create(
+      &(dm_model_params){.state = s, .opt = *opt, .ctx = ctx, .first_bad = bad}, &m);
+  assert_true((status == MS_OK) == (m != NULL));
+  if (st) *st = status;
+  return m;
+}
+
 static uint64_t rng_k; /* outputs drawn so far from the generator started from seed 12345 */
 static double urand(void) { return ptl_splitmix64_uniform(12345, rng_k++); } /* [0, 1) */
 
@@ -52,7 +64,7 @@ static void check_fd(int dim, int nx, int ny, int nz, double hourglass) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ms_status st;
-  dm_model *m = dm_create(&s, &opt, &ctx, &st, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, &st, NULL);
   assert_non_null(m);
   double *F = calloc(3 * s.n, sizeof(double));
   dm_forces(m, s.w, F);
@@ -76,7 +88,7 @@ static void check_fd(int dim, int nx, int ny, int nz, double hourglass) {
   assert_true(fbig > 0.0);
   assert_true(errmax / fbig < 1e-6);
   free(F);
-  dm_destroy(m);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
@@ -105,7 +117,7 @@ static void test_linear_field_exact(void **state) {
   dm_options opt = {.horizon = 1.8, .hourglass = 1.0};
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
-  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
   assert_non_null(m);
   double *F = calloc(3 * s.n, sizeof(double));
   dm_forces(m, s.w, F);
@@ -118,7 +130,7 @@ static void test_linear_field_exact(void **state) {
   double dwn, hg = dm_hourglass_norm(m, s.w, &dwn);
   assert_true(dwn > 0 && hg / dwn < 1e-12);
   free(F);
-  dm_destroy(m);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
@@ -138,7 +150,7 @@ static void test_momenta_conserved(void **state) {
     dm_options opt = {.horizon = 0.22, .hourglass = k == 1 ? 0.5 : 0.0};
     ms_ctx ctx;
     ms_ctx_init_serial(&ctx);
-    dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+    dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
     assert_non_null(m);
     double P0[3], J0[3], P[3], J[3];
     dm_momenta(&s, P0, J0);
@@ -162,7 +174,7 @@ static void test_momenta_conserved(void **state) {
     assert_true(dP / pscale < 1e-12);
     assert_true(dJ / jscale < 1e-12);
     rkn_destroy(ig);
-    dm_destroy(m);
+    dm_model_destroy(&m);
     dm_state_free(&s);
     ms_ctx_close(&ctx);
   }
@@ -180,7 +192,7 @@ static void test_energy_no_drift(void **state) {
   dm_options opt = {.horizon = 0.16};
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
-  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
   assert_non_null(m);
   rkn_integrator *ig = rkn_create(RKN_VERLET, 3 * s.n);
   double E0 = dm_kinetic_energy(&s) + dm_potential_energy(m, s.w);
@@ -201,7 +213,7 @@ static void test_energy_no_drift(void **state) {
   assert_true(max_all < 2.0 * max_first);
   assert_true(fabs(mean_last - mean_first) < 0.2 * max_first);
   rkn_destroy(ig);
-  dm_destroy(m);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
@@ -218,29 +230,32 @@ static void test_singular_shape_detected(void **state) {
   dm_options opt = {.horizon = 1.5};
   ms_status st = MS_OK;
   size_t bad = (size_t)-1;
-  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_null(model_of(&s, &opt, &ctx, &st, &bad));
   assert_int_equal(st, MS_ERR_INPUT);
   assert_true(bad < s.n);
   dm_state_free(&s);
   /* Nearly coplanar: one layer displaced by 1e-6 h out of plane -> condition number ~1e12 */
   make_block(&s, 3, 4, 4, 2, 1.0, 0.0);
   for (size_t i = 16; i < 32; ++i) s.X[3 * i + 2] = 1e-6;
-  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_null(model_of(&s, &opt, &ctx, &st, &bad));
   assert_int_equal(st, MS_ERR_INPUT);
   dm_state_free(&s);
   /* 1D: two particles farther apart than the horizon */
   dm_state_alloc(&s, 2, 1);
   s.X[3] = 2.0;
   for (int i = 0; i < 2; ++i) s.mass[i] = s.vol[i] = s.K[i] = s.G[i] = 1.0;
-  assert_null(dm_create(&s, &opt, &ctx, &st, &bad));
+  assert_null(model_of(&s, &opt, &ctx, &st, &bad));
   assert_int_equal(bad, 0);
   dm_state_free(&s);
   /* and a well-posed block is accepted */
   make_block(&s, 3, 3, 3, 3, 1.0, 0.1);
-  dm_model *m = dm_create(&s, &opt, &ctx, &st, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, &st, NULL);
   assert_non_null(m);
   assert_int_equal(st, MS_OK);
-  dm_destroy(m);
+  dm_model_destroy(&m);
+  assert_null(m);       /* destroy clears the pointer */
+  dm_model_destroy(&m); /* and is null-safe */
+  dm_model_destroy(NULL);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
@@ -262,7 +277,7 @@ static void test_periodic_and_threads(void **state) {
   dm_options opt = {.horizon = 1.5 * h, .box = {nc * h, nc * h, nc * h}};
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
-  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
   assert_non_null(m);
   for (size_t i = 0; i < s.n; ++i) assert_int_equal(m->start[i + 1] - m->start[i], 18);
   double *F1 = calloc(3 * s.n, sizeof(double)), *F2 = calloc(3 * s.n, sizeof(double));
@@ -278,7 +293,7 @@ static void test_periodic_and_threads(void **state) {
   }
   free(F1);
   free(F2);
-  dm_destroy(m);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
@@ -301,13 +316,13 @@ static void integrate_chain(rkn_kind kind, double dt, double T, double *w_out) {
   dm_options opt = {.horizon = 1.5 * h};
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
-  dm_model *m = dm_create(&s, &opt, &ctx, NULL, NULL);
+  dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
   rkn_integrator *ig = rkn_create(kind, 3 * n);
   long steps = lround(T / dt);
   for (long k = 0; k < steps; ++k) rkn_step(ig, k * dt, dt, s.w, s.u, dm_accel, dm_constrain, m);
   for (int i = 0; i < n; ++i) w_out[i] = s.w[3 * i];
   rkn_destroy(ig);
-  dm_destroy(m);
+  dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
 }
