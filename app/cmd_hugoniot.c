@@ -323,7 +323,7 @@ int cmd_hugoniot(int argc, char **argv) {
   if (st != MS_OK) rc = ms_exit_code(st) == 0 ? 1 : ms_exit_code(st);
   free(pts);
 done:
-  eos_materials_free(mats);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   dk_errors_free(&e);
   free(up);

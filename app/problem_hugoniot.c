@@ -79,10 +79,11 @@ ms_status hugoniot_problem_run(ms_ctx *ctx, void *vp) {
   return s;
 }
 
-void hugoniot_problem_free(void *vp) {
-  hugoniot_problem *p = vp;
+void hugoniot_problem_destroy(void **vp) {
+  hugoniot_problem *p = vp ? *vp : NULL;
   if (!p) return;
   free(p->mat);
   free(p->up);
   free(p);
+  *vp = NULL;
 }

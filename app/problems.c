@@ -19,46 +19,46 @@
 
 typedef void *(*problem_read_fn)(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
 typedef ms_status (*problem_run_fn)(ms_ctx *, void *);
-typedef void (*problem_free_fn)(void *);
+typedef void (*problem_destroy_fn)(void **); /* null-safe, sets the pointer to NULL */
 
 typedef struct problem_type {
   const char *name, *summary;
   bool restartable; /* reads ctx->restart (`mscale run --restart`) */
   problem_read_fn read;
   problem_run_fn run;
-  problem_free_fn free;
+  problem_destroy_fn destroy;
 } problem_type;
 
 /* Built in: Hugoniot curves of deck materials (app/problem_hugoniot.c). */
 void *hugoniot_problem_read(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
 ms_status hugoniot_problem_run(ms_ctx *, void *);
-void hugoniot_problem_free(void *);
+void hugoniot_problem_destroy(void **);
 
 static const problem_type problem_types[] = {
     {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", false,
-     hugoniot_problem_read, hugoniot_problem_run, hugoniot_problem_free},
+     hugoniot_problem_read, hugoniot_problem_run, hugoniot_problem_destroy},
 #ifdef MSCALE_HAVE_CONTINUUM
     {"continuum", "1D Lagrangian gas dynamics (cross scheme)", false,
      (problem_read_fn)cont_problem_read, (problem_run_fn)cont_problem_run,
-     (problem_free_fn)cont_problem_free},
+     (problem_destroy_fn)cont_problem_destroy},
     {"grid2d", "2D Lagrangian quad grid, compatible discretisation (x-y, r-z)", false,
      (problem_read_fn)c2d_problem_read, (problem_run_fn)c2d_problem_run,
-     (problem_free_fn)c2d_problem_free},
+     (problem_destroy_fn)c2d_problem_destroy},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_CD
     {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", true,
      (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
-     (problem_free_fn)cd_problem_free},
+     (problem_destroy_fn)cd_problem_destroy},
 #endif
 #ifdef MSCALE_HAVE_PARTICLES_DM
     {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes", true,
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
-     (problem_free_fn)dm_problem_free},
+     (problem_destroy_fn)dm_problem_destroy},
 #endif
 #ifdef MSCALE_HAVE_COUPLING
     {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", true,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
-     (problem_free_fn)cpl_problem_free},
+     (problem_destroy_fn)cpl_problem_destroy},
 #endif
 };
 enum { N_PROBLEM_TYPES = sizeof problem_types / sizeof problem_types[0] };
@@ -111,8 +111,8 @@ ms_status app_deck_run(ms_ctx *ctx, app_deck *d) {
 }
 
 void app_deck_free(app_deck *d) {
-  if (d->problem && d->problem_kind >= 0) problem_types[d->problem_kind].free(d->problem);
-  eos_materials_free(d->mats);
+  if (d->problem_kind >= 0) problem_types[d->problem_kind].destroy(&d->problem);
+  eos_materials_destroy(&d->mats);
   dk_free(d->doc);
   memset(d, 0, sizeof *d);
 }

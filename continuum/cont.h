@@ -124,7 +124,7 @@ typedef struct cont_grid cont_grid;
 
 /* Build the grid. NULL with a message in err on impossible input. */
 cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen);
-void cont_grid_destroy(cont_grid *g);
+void cont_grid_destroy(cont_grid **g); /* null-safe; sets *g = NULL */
 
 /* One step. The step size is the stability constraint, limited by dt_limit (pass INFINITY for
  * none; the run loop uses it to land exactly on output times). MS_ERR_UNSTABLE on NaN/Inf,
@@ -217,7 +217,7 @@ typedef struct cont_problem cont_problem;
 cont_problem *cont_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                                 dk_errors *e);
 ms_status cont_problem_run(ms_ctx *ctx, cont_problem *p);
-void cont_problem_free(cont_problem *p);
+void cont_problem_destroy(cont_problem **p); /* null-safe; sets *p = NULL */
 /* The grid of a problem that has been read (built by cont_problem_read); for tests/coupling. */
 cont_grid *cont_problem_grid(cont_problem *p);
 /* Run with a caller stepping alongside (two-way coupling): the problem's own loop — output

@@ -76,7 +76,7 @@ typedef struct c2d_grid c2d_grid;
 /* NULL with a message in err (the zone and the problem) on impossible input: a zone of
  * non-positive area (tangled or inverted), r < 0 in r–z, ρ ≤ 0, an EOS failure. */
 c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen);
-void c2d_grid_destroy(c2d_grid *g);
+void c2d_grid_destroy(c2d_grid **g); /* null-safe; sets *g = NULL */
 ms_status c2d_grid_step(c2d_grid *g, double dt_limit);
 ms_status c2d_grid_run_to(c2d_grid *g, double t_end);
 const char *c2d_grid_error(const c2d_grid *g);
@@ -148,7 +148,7 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *section, const eos_mat
  * grid2d.xmf (ParaView opens the run as one series) into ctx->outdir; an inverted zone or EOS
  * failure stops the run with the zone and the step in the log and a last snapshot. */
 ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p);
-void c2d_problem_free(c2d_problem *p);
+void c2d_problem_destroy(c2d_problem **p); /* null-safe; sets *p = NULL */
 c2d_grid *c2d_problem_grid(c2d_problem *p);
 
 #endif /* MSCALE_CONT2D_H */

@@ -426,28 +426,34 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
   }
 
   if (e->n != nerr0) {
-    cont_problem_free(p);
+    cont_problem_destroy(&p);
     return NULL;
   }
   char err[512] = "";
   p->grid = cont_grid_create(s, err, sizeof err);
   if (!p->grid) {
     dk_error(e, doc, sec, "continuum: %s", err);
-    cont_problem_free(p);
+    cont_problem_destroy(&p);
     return NULL;
   }
   return p;
 }
 
-void cont_problem_free(cont_problem *p) {
+static void cont_problem_free(cont_problem *p) {
   if (!p) return;
-  cont_grid_destroy(p->grid);
+  cont_grid_destroy(&p->grid);
   cont_fn_free(&p->setup.left.fn);
   cont_fn_free(&p->setup.right.fn);
   free(p->layers);
   free(p->tags);
   free(p->out_times);
   free(p);
+}
+
+void cont_problem_destroy(cont_problem **p) {
+  if (!p) return;
+  cont_problem_free(*p);
+  *p = NULL;
 }
 
 cont_grid *cont_problem_grid(cont_problem *p) { return p ? p->grid : NULL; }

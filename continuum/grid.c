@@ -307,7 +307,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   cont_grid *g = grid_alloc(s, ncells);
   size_t N = ncells, Nn = ncells + 1;
   if (!place_layers(g, s, err, errlen) || !node_masses(g, s, err, errlen)) {
-    cont_grid_destroy(g);
+    cont_grid_destroy(&g);
     return NULL;
   }
 
@@ -335,7 +335,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
     set_err(err, errlen,
             "initial state of cell %zu (layer %d: rho = %g, e = %g) is outside its EOS", bad,
             g->layer[bad], g->rho[bad], g->e[bad]);
-    cont_grid_destroy(g);
+    cont_grid_destroy(&g);
     return NULL;
   }
   cont_calc_q_for_cells(g, 0, N, g->rho, g->u, g->c, g->q);
@@ -351,7 +351,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
     if (s->tags[k].node >= Nn) {
       set_err(err, errlen, "tag '%s': node %zu outside 0..%zu", s->tags[k].name, s->tags[k].node,
               N);
-      cont_grid_destroy(g);
+      cont_grid_destroy(&g);
       return NULL;
     }
     cont_grid_add_tag(g, s->tags[k].name, s->tags[k].node);
@@ -359,7 +359,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
   return g;
 }
 
-void cont_grid_destroy(cont_grid *g) {
+static void cont_grid_release(cont_grid *g) {
   if (!g) return;
   double **arrays[] = {&g->x,
                        &g->u,
@@ -401,6 +401,12 @@ void cont_grid_destroy(cont_grid *g) {
   }
   free(g->tags);
   free(g);
+}
+
+void cont_grid_destroy(cont_grid **g) {
+  if (!g) return;
+  cont_grid_release(*g);
+  *g = NULL;
 }
 
 /* ------------------------------------------------------------------------------------------ */

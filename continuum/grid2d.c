@@ -629,7 +629,7 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
     if (g->geo == C2D_RZ && g->x[n] < 0.0) {
       snprintf(err, errlen, "r–z grid: node %zu (i = %zu, j = %zu) has r = %.6g < 0", n,
                n % (g->ni + 1), n / (g->ni + 1), g->x[n]);
-      c2d_grid_destroy(g);
+      c2d_grid_destroy(&g);
       return NULL;
     }
   }
@@ -650,12 +650,12 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
                "2D grid: zone %zu (i = %zu, j = %zu, near x = %.6g, y = %.6g) is tangled or "
                "inverted (area %.6g, or a corner of non-positive area)",
                z, z % g->ni, z / g->ni, xc, yc, a);
-      c2d_grid_destroy(g);
+      c2d_grid_destroy(&g);
       return NULL;
     }
     if (!(s->rho[z] > 0.0) || !s->eos[z]) {
       snprintf(err, errlen, "2D grid: zone %zu needs ρ > 0 and an EOS", z);
-      c2d_grid_destroy(g);
+      c2d_grid_destroy(&g);
       return NULL;
     }
     g->rho[z] = s->rho[z];
@@ -700,7 +700,7 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   }
   if (zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c) != MS_OK) {
     snprintf(err, errlen, "2D grid at set-up: %s", g->err);
-    c2d_grid_destroy(g);
+    c2d_grid_destroy(&g);
     return NULL;
   }
   for (size_t n = 0; n < nn; ++n) apply_bc(g, n, 0.0, &g->u[n], &g->v[n]);
@@ -711,7 +711,7 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   return g;
 }
 
-void c2d_grid_destroy(c2d_grid *g) {
+static void c2d_grid_release(c2d_grid *g) {
   if (!g) return;
   double *arr[] = {g->x,    g->y,  g->u,   g->v,       g->M,   g->xh, g->yh, g->uh,   g->vh,  g->fx,
                    g->fy,   g->rf, g->rx0, g->m,       g->rho, g->e,  g->p,  g->c,    g->vol, g->eh,
@@ -734,6 +734,12 @@ void c2d_grid_destroy(c2d_grid *g) {
   free(g->material);
   free(g->runs);
   free(g);
+}
+
+void c2d_grid_destroy(c2d_grid **g) {
+  if (!g) return;
+  c2d_grid_release(*g);
+  *g = NULL;
 }
 
 /* Acceleration of node n from the gathered planar force. */

@@ -273,10 +273,16 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   return p;
 }
 
-void c2d_problem_free(c2d_problem *p) {
+static void c2d_problem_free(c2d_problem *p) {
   if (!p) return;
-  c2d_grid_destroy(p->grid);
+  c2d_grid_destroy(&p->grid);
   free(p);
+}
+
+void c2d_problem_destroy(c2d_problem **p) {
+  if (!p) return;
+  c2d_problem_free(*p);
+  *p = NULL;
 }
 
 c2d_grid *c2d_problem_grid(c2d_problem *p) { return p ? p->grid : NULL; }

@@ -302,6 +302,6 @@ ms_status cpl_transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *
     free(det.mass);
   }
   free(gcount);
-  cpl_transport_free(tr);
+  cpl_transport_destroy(&tr);
   return ctx->size > 1 ? par_agree_status(st) : st; /* rank 0's file errors */
 }

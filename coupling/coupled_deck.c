@@ -256,18 +256,24 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   if (e->n == nerr0 && p->grid_out) /* before the region allocates its lattice */
     memory_check(p, doc, sec, e);
   if (e->n != nerr0) {
-    cpl_problem_free(p);
+    cpl_problem_destroy(&p);
     return NULL;
   }
   p->deck_hash = dk_hash(doc, NULL);
   return p;
 }
 
-void cpl_problem_free(cpl_problem *p) {
+static void cpl_problem_free(cpl_problem *p) {
   if (!p) return;
-  cont_problem_free(p->grid_out);
-  cont_problem_free(p->grid_live);
-  cont_problem_free(p->gas_grid);
+  cont_problem_destroy(&p->grid_out);
+  cont_problem_destroy(&p->grid_live);
+  cont_problem_destroy(&p->gas_grid);
   ptl_region_params_destroy(&p->region);
   free(p);
+}
+
+void cpl_problem_destroy(cpl_problem **p) {
+  if (!p) return;
+  cpl_problem_free(*p);
+  *p = NULL;
 }

@@ -258,7 +258,7 @@ typedef enum cpl_frag_state {
 
 typedef struct cpl_transport cpl_transport;
 cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas, void *gas_user);
-void cpl_transport_free(cpl_transport *tr);
+void cpl_transport_destroy(cpl_transport **tr); /* null-safe; sets *tr = NULL */
 /* Optional momentum/energy return to the gas. */
 void cpl_transport_set_return(cpl_transport *tr, cpl_gas_return_fn fn, void *user);
 /* Add a fragment (mass g, position cm, velocity km/s) at time t0; returns its index.
@@ -333,7 +333,7 @@ typedef struct cpl_problem cpl_problem;
 cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                               dk_errors *e);
 ms_status cpl_problem_run(ms_ctx *ctx, cpl_problem *p);
-void cpl_problem_free(cpl_problem *p);
+void cpl_problem_destroy(cpl_problem **p); /* null-safe; sets *p = NULL */
 /* What the last cpl_problem_run measured (for tests and summaries). */
 typedef struct cpl_run_summary {
   size_t particles;

@@ -86,12 +86,18 @@ static void rec_free(flight_rec *r) {
   free(r);
 }
 
-void cpl_transport_free(cpl_transport *tr) {
+static void cpl_transport_free(cpl_transport *tr) {
   if (!tr) return;
   for (size_t i = 0; i < tr->n; i++) rec_free(tr->rec[i]);
   free(tr->rec);
   SUNContext_Free(&tr->sunctx);
   free(tr);
+}
+
+void cpl_transport_destroy(cpl_transport **tr) {
+  if (!tr) return;
+  cpl_transport_free(*tr);
+  *tr = NULL;
 }
 
 void cpl_transport_set_return(cpl_transport *tr, cpl_gas_return_fn fn, void *user) {

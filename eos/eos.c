@@ -20,12 +20,18 @@ eos_t *eos_alloc(eos_kind kind, const eos_ops *ops, double rho0, const void *dat
   return eos;
 }
 
-void eos_destroy(eos_t *eos) {
+static void eos_release(eos_t *eos) {
   if (!eos) return;
   if (eos->ops && eos->ops->free_data) eos->ops->free_data(eos);
   eos_hermite_free(&eos->isentrope);
   free(eos->data);
   free(eos);
+}
+
+void eos_destroy(eos_t **eos) {
+  if (!eos) return;
+  eos_release(*eos);
+  *eos = NULL;
 }
 
 eos_kind eos_get_kind(const eos_t *eos) { return eos->kind; }

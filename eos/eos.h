@@ -45,7 +45,7 @@ ms_status eos_table_write(const eos_t *table, const char *path);
  * source). NULL if a node is outside the source's domain or has c² ≤ 0 (docs/eos.md §6). */
 eos_t *eos_create_table_from(const eos_t *src, double rho_min, double rho_max, size_t nrho,
                              double e_min, double e_max, size_t ne);
-void eos_destroy(eos_t *eos);
+void eos_destroy(eos_t **eos); /* null-safe; sets *eos = NULL */
 
 eos_kind eos_get_kind(const eos_t *eos);
 const char *eos_kind_name(eos_kind k);
@@ -120,7 +120,7 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e);
 const eos_material *eos_materials_find(const eos_materials *mats, const char *name, dk_errors *e,
                                        const dk_doc *doc, const dk_node *where);
 const eos_mixture *eos_mixtures_find(const eos_materials *mats, const char *name);
-void eos_materials_free(eos_materials *mats);
+void eos_materials_destroy(eos_materials **mats); /* null-safe; sets *mats = NULL */
 
 /* ------------------------------------------------------------------------------------------ */
 /* Hugoniot (Rankine–Hugoniot jump conditions from an initial state rho0, e0, p0).             */

@@ -169,7 +169,7 @@ eos_t *eos_create_mg_linear(double rho0, double c0, double s, double gamma0) {
   if (s > 1.0) dmax = fmin(dmax, 0.95 * s / (s - 1.0));
   if (s > 0.0) dmin = fmax(dmin, 1.1 * s / (s + 1.0));
   if (eos_build_isentrope_cold(eos, dmin, dmax, 2000) != MS_OK) {
-    eos_destroy(eos);
+    eos_destroy(&eos);
     return NULL;
   }
   return eos;

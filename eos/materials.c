@@ -349,7 +349,7 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
                what, name ? " ('" : "", name ? name : "", name ? "')" : "");
     else if (dk_expect_map(e, doc, eosmap, eos_what)) eos = read_eos(e, doc, eosmap, eos_what);
     if (!eos || e->n != nerr0) {
-      eos_destroy(eos);
+      eos_destroy(&eos);
       /* a duplicate is not "broken": the first definition stands */
       if (name && !find_material(mats, name)) add_broken(mats, name);
       continue;
@@ -367,11 +367,11 @@ eos_materials *eos_materials_read(dk_doc *doc, dk_errors *e) {
   return mats;
 }
 
-void eos_materials_free(eos_materials *mats) {
+static void eos_materials_free(eos_materials *mats) {
   if (!mats) return;
   for (size_t i = 0; i < mats->n; ++i) {
     free(mats->m[i].name);
-    eos_destroy(mats->m[i].eos);
+    eos_destroy(&mats->m[i].eos);
   }
   free(mats->m);
   for (size_t i = 0; i < mats->nmix; ++i) {
@@ -383,4 +383,10 @@ void eos_materials_free(eos_materials *mats) {
   for (size_t i = 0; i < mats->nbroken; ++i) free(mats->broken[i]);
   free(mats->broken);
   free(mats);
+}
+
+void eos_materials_destroy(eos_materials **mats) {
+  if (!mats) return;
+  eos_materials_free(*mats);
+  *mats = NULL;
 }

@@ -56,7 +56,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   }
   fuzz_check_errors(&e, path);
   if (eos) query(eos, data, size);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_errors_free(&e);
   return 0;
 }

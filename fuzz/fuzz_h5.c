@@ -160,7 +160,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     (void)eos_sound_speed(eos, rho0 * 1.01, 0.1);
     (void)eos_pressure(eos, NAN, 0.0);
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_errors_free(&e);
   (void)take;
   (void)c;

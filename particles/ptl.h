@@ -31,7 +31,7 @@ typedef struct ptl_state {
 } ptl_state;
 
 ptl_state *ptl_state_create(size_t cap, int dim);
-void ptl_state_free(ptl_state *s);
+void ptl_state_destroy(ptl_state **s); /* null-safe; sets *s = NULL */
 /* Append one particle at rest; returns its index, or (size_t)-1 if the capacity is exhausted. */
 size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat);
 /* Bytes held by the arrays above (for the memory-per-particle figure). */
@@ -160,7 +160,7 @@ typedef void (*rkn_constrain_fn)(void *user, double t, double *q, double *u);
 
 typedef struct rkn_integrator rkn_integrator;
 rkn_integrator *rkn_create(rkn_kind kind, size_t ndof);
-void rkn_destroy(rkn_integrator *ig);
+void rkn_destroy(rkn_integrator **ig); /* null-safe; sets *ig = NULL */
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
 /* Dofs of the next steps, at most the ndof of rkn_create (MPI: the owned particle count changes
  * at each migration; 0 is allowed: a rank may own nothing). MS_ERR_INPUT beyond it. */

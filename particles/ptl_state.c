@@ -17,7 +17,7 @@ ptl_state *ptl_state_create(size_t cap, int dim) {
   return s;
 }
 
-void ptl_state_free(ptl_state *s) {
+static void ptl_state_free(ptl_state *s) {
   if (!s) return;
   free(s->x);
   free(s->y);
@@ -33,6 +33,12 @@ void ptl_state_free(ptl_state *s) {
   free(s->mat);
   free(s->flags);
   free(s);
+}
+
+void ptl_state_destroy(ptl_state **s) {
+  if (!s) return;
+  ptl_state_free(*s);
+  *s = NULL;
 }
 
 size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat) {
@@ -67,7 +73,7 @@ void ptl_state_reserve(ptl_state *s, size_t cap) {
   ptl_state tmp = *s;
   *s = *t;
   *t = tmp;
-  ptl_state_free(t);
+  ptl_state_destroy(&t);
 }
 
 void ptl_state_keep_range(ptl_state *s, size_t lo, size_t hi) {

@@ -68,11 +68,17 @@ rkn_integrator *rkn_create(rkn_kind kind, size_t ndof) {
   return ig;
 }
 
-void rkn_destroy(rkn_integrator *ig) {
+static void rkn_release(rkn_integrator *ig) {
   if (!ig) return;
   free(ig->q);
   for (int l = 0; l < 3; ++l) free(ig->acc[l]);
   free(ig);
+}
+
+void rkn_destroy(rkn_integrator **ig) {
+  if (!ig) return;
+  rkn_release(*ig);
+  *ig = NULL;
 }
 
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig) { return &ig->s; }

@@ -109,7 +109,7 @@ int main(int argc, char **argv) {
     for (int k = 0; k < nfr; k++) printf("%.4e %.5e %.5e\n", tfr[k], zfr1[k], zfr[k]);
   }
   free(prof);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
   return 0;
 }

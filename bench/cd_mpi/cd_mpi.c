@@ -150,8 +150,8 @@ int main(int argc, char **argv) {
   free(all);
   free(cnt);
   free(dsp);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
   par_finalize();
   return 0;
 }

@@ -79,7 +79,7 @@ int main(int argc, char **argv) {
   printf("bench_cont: energy drift %.2e (relative), t = %.4g\n",
          (b.internal + b.kinetic - b.work - b0.internal - b0.kinetic) / (b0.internal + b0.kinetic),
          cont_grid_time(g));
-  cont_grid_destroy(g);
-  eos_destroy(al);
+  cont_grid_destroy(&g);
+  eos_destroy(&al);
   return 0;
 }

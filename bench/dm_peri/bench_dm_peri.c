@@ -48,8 +48,8 @@ int main(int argc, char **argv) {
          s->real_particles, s->bonds, s->steps, omp_get_max_threads(), s->wall_s, s->cpu_s,
          s->particle_steps_per_s,
          s->cpu_s > 0 ? (double)s->real_particles * s->steps / s->cpu_s : 0.0);
-  dm_problem_free(p);
-  eos_materials_free(mats);
+  dm_problem_destroy(&p);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   dk_errors_free(&e);
   ms_ctx_close(&ctx);

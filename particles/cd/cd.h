@@ -253,7 +253,7 @@ void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t);
 /* Piston: every PTL_DRIVEN particle moves with u(t)·dir (history copied). */
 void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]);
 ms_status cd_sim_init(cd_sim *s);
-void cd_sim_free(cd_sim *s);
+void cd_sim_destroy(cd_sim **s); /* null-safe; sets *s = NULL */
 /* Affine deformation x_a ← lo_a + λ_a (x_a − lo_a) of positions and box (homogeneous
  * compression/tension); rebuilds the lists and recomputes forces. Bonds are kept. */
 ms_status cd_sim_affine(cd_sim *s, const double lambda[3]);
@@ -377,7 +377,7 @@ long cd_restart_step(const cd_restart *r);
 /* cd_sim_init for a sim made from cd_restart_take_particles (tables and piston set): restores
  * partners, accumulators, time and step, then builds lists and forces as cd_sim_refresh. */
 ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e);
-void cd_restart_free(cd_restart *r);
+void cd_restart_destroy(cd_restart **r); /* null-safe; sets *r = NULL */
 
 /* Cluster dynamics as the coupled problem's particle region (cd_region.c, ptl_region.h). */
 const ptl_region_model *cd_region_model_get(void);
@@ -387,7 +387,7 @@ typedef struct cd_problem cd_problem;
 cd_problem *cd_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                             dk_errors *e);
 ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p);
-void cd_problem_free(cd_problem *p);
+void cd_problem_destroy(cd_problem **p); /* null-safe; sets *p = NULL */
 
 
 #endif /* MSCALE_CD_H */

@@ -206,7 +206,7 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
   }
   free(dseg), free(pos), free(vel), free(mass), free(in0), free(gid), free(mat), free(flags);
   if (st != MS_OK) {
-    cd_restart_free(r);
+    cd_restart_destroy(&r);
     return NULL;
   }
   return r;
@@ -263,10 +263,16 @@ ms_status cd_sim_init_restart(cd_sim *s, const cd_restart *r, dk_errors *e) {
   return st;
 }
 
-void cd_restart_free(cd_restart *r) {
+static void cd_restart_free(cd_restart *r) {
   if (!r) return;
-  ptl_state_free(r->p);
+  ptl_state_destroy(&r->p);
   free(r->partner_gid);
   free(r->owner);
   free(r);
+}
+
+void cd_restart_destroy(cd_restart **r) {
+  if (!r) return;
+  cd_restart_free(*r);
+  *r = NULL;
 }

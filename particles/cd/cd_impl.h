@@ -185,7 +185,7 @@ static inline int32_t *cd_image_list(const cd_neigh *nl, int layer, int32_t pos)
 }
 
 cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin);
-void cd_neigh_free(cd_neigh *nl);
+void cd_neigh_destroy(cd_neigh **nl); /* null-safe; sets *nl = NULL */
 /* Wraps positions into periodic axes, bins, builds the half lists (bonded flags from
  * `partners` when non-NULL). MS_ERR_INPUT if a periodic period is below 2 r_list. */
 ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,

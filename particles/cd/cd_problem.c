@@ -637,7 +637,7 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
           }
   }
   if (e->n > nerr0) {
-    cd_problem_free(p);
+    cd_problem_destroy(&p);
     return NULL;
   }
   /* a restart may run to another t_end; anything else must be the deck that wrote it */
@@ -648,10 +648,16 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   return p;
 }
 
-void cd_problem_free(cd_problem *p) {
+static void cd_problem_free(cd_problem *p) {
   if (!p) return;
   cd_history_free(&p->piston);
   free(p);
+}
+
+void cd_problem_destroy(cd_problem **p) {
+  if (!p) return;
+  cd_problem_free(*p);
+  *p = NULL;
 }
 
 /* Fill the regions: a site belongs to the first ordinary region containing it (overlaps of the
@@ -921,8 +927,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     }
     dk_errors_free(&e);
     if (st != MS_OK) {
-      ptl_state_free(ps);
-      cd_restart_free(rs);
+      ptl_state_destroy(&ps);
+      cd_restart_destroy(&rs);
       ms_h5_close_read(rh);
       return st;
     }
@@ -931,7 +937,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   }
   if (!ps || ps->n == 0) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: the regions contain no lattice site");
-    ptl_state_free(ps);
+    ptl_state_destroy(&ps);
     return MS_ERR_INPUT;
   }
   /* thermal velocities; with a relaxation they are given after it (it ends at rest) */
@@ -977,8 +983,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
                "on [r_min, R_c] (cold curve undefined there?)",
                p->mat[a]->name, p->mat[b]->name);
         free(t);
-        cd_sim_free(s);
-        cd_restart_free(rs);
+        cd_sim_destroy(&s);
+        cd_restart_destroy(&rs);
         ms_h5_close_read(rh);
         return MS_ERR_INPUT;
       }
@@ -1004,8 +1010,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   }
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
-    cd_sim_free(s);
-    cd_restart_free(rs);
+    cd_sim_destroy(&s);
+    cd_restart_destroy(&rs);
     ms_h5_close_read(rh);
     return st;
   }
@@ -1056,8 +1062,8 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot open output files");
     if (fe.f) ms_afile_abort(&fe);
     if (fp.f) ms_afile_abort(&fp);
-    cd_sim_free(s);
-    cd_restart_free(rs);
+    cd_sim_destroy(&s);
+    cd_restart_destroy(&rs);
     ms_h5_close_read(rh);
     return st;
   }
@@ -1085,7 +1091,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   if (rs) {
     step0 = cd_restart_step(rs);
     st = restore_outputs(ctx, rh, streams, front, &nf);
-    cd_restart_free(rs);
+    cd_restart_destroy(&rs);
     ms_h5_close_read(rh);
     if (st == MS_OK)
       ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: restarted from %s at step %ld (t = %.9g)",
@@ -1202,6 +1208,6 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
     ms_afile_abort(&fp);
     ms_afile_abort(&ff);
   }
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return st;
 }

@@ -225,7 +225,7 @@ static ptl_state *region_lattice(const cd_region_params *p, double x_drive, cons
     if (tmp->x[i] < x_drive + p->piston_rows * row) ps->flags[j] |= PTL_DRIVEN;
     else if (tmp->x[i] > top - row) ps->flags[j] |= PTL_SURFACE;
   }
-  ptl_state_free(tmp);
+  ptl_state_destroy(&tmp);
   return ps;
 }
 
@@ -277,7 +277,7 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
            "coupled: cannot build the pair potential of the sample material "
            "(cold curve missing or not finite on [r_min a, R_c])");
     free(tab);
-    cd_sim_free(sim);
+    cd_sim_destroy(&sim);
     return st;
   }
   cd_sim_set_pair(sim, 0, 0, tab);
@@ -303,7 +303,7 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
 static cd_sim *sim_of(const ptl_region *r) { return ((const cd_region *)r)->sim; }
 
 static void region_destroy(ptl_region *r) {
-  cd_sim_free(sim_of(r));
+  cd_sim_destroy(&((cd_region *)r)->sim);
   free(r);
 }
 static ptl_region_geometry region_geometry(const ptl_region *r) {
@@ -388,11 +388,11 @@ static ms_status region_restore(ptl_region *r, ms_h5r *h, const ms_ctx *ctx, lon
   cd_sim *sim = sim_of(r);
   cd_restart *rs = cd_restart_read(h, ctx, sim->p->dim, sim->cfg.cutoff == CD_CUTOFF_BONDED, e);
   if (!rs) return MS_ERR_INPUT;
-  ptl_state_free(sim->p); /* the lattice region_create made: the checkpoint's replaces it */
+  ptl_state_destroy(&sim->p); /* the lattice region_create made: the checkpoint's replaces it */
   sim->p = cd_restart_take_particles(rs);
   ms_status st = cd_sim_init_restart(sim, rs, e);
   *step = cd_restart_step(rs);
-  cd_restart_free(rs);
+  cd_restart_destroy(&rs);
   return st;
 }
 

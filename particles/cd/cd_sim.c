@@ -137,7 +137,7 @@ void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]) {
   for (int a = 0; a < 3; a++) s->piston_dir[a] = nrm > 0 ? dir[a] / nrm : 0.0;
 }
 
-void cd_sim_free(cd_sim *s) {
+static void cd_sim_free(cd_sim *s) {
   if (!s) return;
   for (int a = 0; a < CD_MAX_MATERIALS; a++)
     for (int b = a; b < CD_MAX_MATERIALS; b++)
@@ -145,7 +145,7 @@ void cd_sim_free(cd_sim *s) {
         cd_pair_table_free(s->pair[a][b]);
         free(s->pair[a][b]);
       }
-  cd_neigh_free(s->nl);
+  cd_neigh_destroy(&s->nl);
   cd_dd_free(s->dd);
   cd_history_free(&s->piston);
   free(s->driven);
@@ -153,10 +153,16 @@ void cd_sim_free(cd_sim *s) {
   free(s->partners);
   free(s->sums);
   free(s->pw);
-  rkn_destroy(s->rkn);
+  rkn_destroy(&s->rkn);
   free(s->driven_x0);
-  ptl_state_free(s->p);
+  ptl_state_destroy(&s->p);
   free(s);
+}
+
+void cd_sim_destroy(cd_sim **s) {
+  if (!s) return;
+  cd_sim_free(*s);
+  *s = NULL;
 }
 
 static void ensure_sums(cd_sim *s) {

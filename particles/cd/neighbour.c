@@ -39,7 +39,7 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
   return nl;
 }
 
-void cd_neigh_free(cd_neigh *nl) {
+static void cd_neigh_free(cd_neigh *nl) {
   if (!nl) return;
   for (int l = 0; l < nl->layers_cap; l++) free(nl->buf[l]);
   free(nl->buf);
@@ -58,6 +58,12 @@ void cd_neigh_free(cd_neigh *nl) {
   free(nl->zb);
   free(nl->xs);
   free(nl);
+}
+
+void cd_neigh_destroy(cd_neigh **nl) {
+  if (!nl) return;
+  cd_neigh_free(*nl);
+  *nl = NULL;
 }
 
 size_t cd_neigh_bytes(const cd_neigh *nl) {

@@ -190,7 +190,7 @@ typedef struct dm_problem dm_problem;
 dm_problem *dm_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                             dk_errors *e);
 ms_status dm_problem_run(ms_ctx *ctx, dm_problem *p);
-void dm_problem_free(dm_problem *p);
+void dm_problem_destroy(dm_problem **p); /* null-safe; sets *p = NULL */
 
 /* What a run measured (also written to the log and to OUTDIR/dm_summary.csv). Fields that do
  * not apply to the deck's problem are NaN. */

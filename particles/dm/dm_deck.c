@@ -310,7 +310,7 @@ dm_problem *dm_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   if (p->finite && p->checkpoint_every > 0)
     dk_error(e, doc, out, "discrete_model.output.checkpoint_every: not with response: eos yet");
   if (e->n > nerr0) {
-    dm_problem_free(p);
+    dm_problem_destroy(&p);
     return NULL;
   }
   return p;

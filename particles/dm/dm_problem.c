@@ -20,7 +20,7 @@ size_t dm_problem_final_state(const dm_problem *p, const double **w, const doubl
   return p->final_n;
 }
 
-void dm_problem_free(dm_problem *p) {
+static void dm_problem_free(dm_problem *p) {
   if (!p) return;
   free(p->layers);
   free(p->probes);
@@ -29,6 +29,12 @@ void dm_problem_free(dm_problem *p) {
   free(p->final_w);
   free(p->final_u);
   free(p);
+}
+
+void dm_problem_destroy(dm_problem **p) {
+  if (!p) return;
+  dm_problem_free(*p);
+  *p = NULL;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -627,7 +633,7 @@ static void run_free(dm_run *r) {
   free(r->snap_step);
   free(r->pr);
   free(r->probe_val);
-  rkn_destroy(r->ig);
+  rkn_destroy(&r->ig);
   dm_dist_destroy(&r->d);
   dm_model_destroy(&r->m);
   dm_state_free(&r->s);

@@ -50,8 +50,8 @@ static cd_problem *read_deck(const char *text, dk_errors *e, dk_doc **docp, eos_
 
 /* Frees what read_deck made (p may be NULL: a deck with errors). */
 static void free_deck(cd_problem *p, eos_materials *m, dk_doc *doc, dk_errors *e) {
-  cd_problem_free(p);
-  eos_materials_free(m);
+  cd_problem_destroy(&p);
+  eos_materials_destroy(&m);
   dk_free(doc);
   dk_errors_free(e);
 }

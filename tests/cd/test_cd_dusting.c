@@ -119,8 +119,8 @@ static size_t run(double J, cd_cutoff_mode mode, int nz, double *vfs) {
          "%.3g of piston work %.3g\n",
          J, mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", nd, p->n, *vfs, e.dissipated,
          e.piston_work);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
   return nd;
 }
 

@@ -104,13 +104,13 @@ static void test_nve(void **state) {
   cd_energy e;
   cd_sim_energy(s, &e);
   assert_true(e.broken == 0.0); /* no pair crossed R_c */
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   s = hot_block(eos, 3, 0.2, 0.0, 0.0005, CD_CUTOFF_PLAIN);
   balance(s, 10000, 10, &drift, &dev, NULL);
   printf("NVE dt = 0.0005 r0/c0: drift %.3g, max deviation %.3g\n", drift, dev);
   assert_true(dev < 1e-6 && drift < 1e-6);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 /* With damping Γ = c0/(50 a): kinetic + potential + dissipated is conserved like the NVE
@@ -136,8 +136,8 @@ static void test_damping_balance(void **state) {
   for (size_t i = 0; i < s->p->n; i++) pscale += s->p->mass[i] * fabs(s->p->vx[i]);
   for (int c = 0; c < 3; c++)
     assert_true(fabs(e1.momentum[c] - e0.momentum[c]) < 1e-12 * fmax(pscale, 1e-30) + 1e-25);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 /* The largest difference between the forces in s (from its lists) and a brute-force sum over
@@ -176,8 +176,8 @@ static void test_lists_vs_brute_force(void **state) {
   printf("lists vs brute force after %ld rebuilds: %.3g of a typical pair force\n",
          cd_sim_rebuilds(s), worst);
   assert_true(worst < 1e-9); /* only summation order differs */
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 /* The rebuild test ignores a common translation (neighbour.c): the same hot block, once at
@@ -206,10 +206,10 @@ static void test_lists_moving_block(void **state) {
              rebuilds[0], worst);
       assert_true(worst < 1e-9);
     }
-    cd_sim_free(s);
+    cd_sim_destroy(&s);
   }
   assert_true(rebuilds[0] > 3 && rebuilds[1] <= rebuilds[0] + rebuilds[0] / 10 + 2);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 
   /* four particles displaced from build positions at 0 (skin 0.1: skin/2 = 0.05; xb_err 0) */
   cd_neigh *nl = cd_neigh_create(4, 1.1, 0.1);
@@ -240,8 +240,8 @@ static void test_lists_moving_block(void **state) {
   assert_true(cd_neigh_holds(nl, p, 4, 0.049, 0.0, false, NULL)); /* a bound < 0.05 is trusted */
   p->x[0] = NAN;
   assert_false(cd_neigh_holds(nl, p, 4, INFINITY, 0.0, false, NULL));
-  ptl_state_free(p);
-  cd_neigh_free(nl);
+  ptl_state_destroy(&p);
+  cd_neigh_destroy(&nl);
 }
 
 /* The fast path (the fit of F/r on full lists, AVX-512 builds) against the table path (the
@@ -299,8 +299,8 @@ static void test_fit_path_vs_table(void **state) {
   assert_true(worst <= 12 * 1e-9 * frmax * t->rc);
   for (int c = 0; c < 3; c++) assert_true(fabs(sum[c]) < 1e-13 * fabs_sum);
   free(ff);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 /* The layer colouring makes every force sum's order independent of the thread count:
@@ -326,11 +326,11 @@ static void test_threads_bitwise(void **state) {
       pos[run % 2][3 * g + 2] = s->p->z[i];
     }
     if (run % 2 == 1) assert_memory_equal(pos[0], pos[1], 3 * n * sizeof(double));
-    cd_sim_free(s);
+    cd_sim_destroy(&s);
   }
   free(pos[0]);
   free(pos[1]);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* Piston (1 km/s) into a free slab: kinetic + potential + broken − piston work stays
@@ -387,7 +387,7 @@ static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_integrator in
          "D = %.5f km/s\n",
          mode == CD_CUTOFF_PLAIN ? "plain" : "bonded", cd_integrator_names[integ], e1->piston_work,
          e1->kinetic, e1->potential, e1->broken, err, *D);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return err;
 }
 
@@ -401,7 +401,7 @@ static void test_piston_balance(void **state) {
   assert_true(fabs(err) < 1e-5);
   err = piston_run(eos, CD_CUTOFF_PLAIN, CD_INT_VELOCITY_VERLET, &e, &D);
   assert_true(fabs(err) < 1e-3);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* ---- the integrators (cfg.integrator): velocity Verlet and the RKN family ---- */
@@ -420,7 +420,7 @@ static double *positions_after(const eos_t *eos, cd_integrator integ, double dt_
     x[3 * g + 2] = p->z[i];
   }
   *rebuilds = cd_sim_rebuilds(s);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return x;
 }
 
@@ -463,7 +463,7 @@ static void test_integrator_order(void **state) {
     free(x2);
     free(xr);
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* NVE with every scheme, 10⁴ steps: secular drift of kinetic + potential below 1e-6 relative.
@@ -486,9 +486,9 @@ static void test_integrator_nve(void **state) {
       printf("NVE %-16s dt %.3g r0/c0: drift %.3g, max deviation %.3g (relative)\n",
              cd_integrator_names[k], dts[q], drift, dev);
       assert_true(drift < 1e-6);
-      cd_sim_free(s);
+      cd_sim_destroy(&s);
     }
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* The SIMD kernels against their scalar references (cd_force_fit.h, neighbour_select.h), which
@@ -567,8 +567,8 @@ static void test_kernels_vs_scalar(void **state) {
   printf("candidate selection: the build's kernel == scalar on 500 ranges (%ld taken)\n", taken);
   free(a);
   free(b);
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 /* Piston (1 km/s, bonded cutoff) with every scheme: the same shock speed as velocity Verlet and
@@ -587,7 +587,7 @@ static void test_integrator_piston(void **state) {
     assert_true(fabs(D - D0) < 1e-3 * D0);
     assert_true(fabs(err) < 1e-5);
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* Two ctest entries share this file: the default group is `unit` (also run under the sanitizers);

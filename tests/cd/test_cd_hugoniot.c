@@ -305,7 +305,7 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   r.pzz = cnt ? pzz / cnt : NAN;
   r.up_behind = cnt ? vz / cnt : NAN;
   free(prof);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return r;
 }
 
@@ -437,7 +437,7 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
          r->lambda[2], r->mass / r->volume0, r->mass / r->volume, ps.rho00,
          ps.rho00 / eos_rho0(eos), r->energy / r->mass, r->dissipated / r->mass, r->broken_bonds);
   fflush(stdout);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return ps;
 }
 
@@ -480,8 +480,8 @@ static void run_poly(const eos_t *eos, const char *cname, const double *ups, int
      * at this size. */
     if (ci) assert_true(fabs(r.D_mom - usp) / usp < 0.045);
   }
-  eos_destroy(fit);
-  ptl_state_free(ps.p);
+  eos_destroy(&fit);
+  ptl_state_destroy(&ps.p);
 }
 
 static void test_hugoniot(void **state) {
@@ -496,8 +496,8 @@ static void test_hugoniot(void **state) {
     const double ups_poly[] = {1.5, 2.0, 3.0};
     const int c = opt_curve > 0 ? 1 : 0;
     run_poly(curves[c], cname[c], opt_nup ? opt_ups : ups_poly, opt_nup ? opt_nup : 3, poly_ci);
-    eos_destroy(curves[0]);
-    eos_destroy(curves[1]);
+    eos_destroy(&curves[0]);
+    eos_destroy(&curves[1]);
     return;
   }
   printf("| cold curve | cutoff | shock along | up km/s | D km/s | D (front seen from ahead) | D "
@@ -549,9 +549,9 @@ static void test_hugoniot(void **state) {
       }
     }
   }
-  eos_destroy(fit);
-  eos_destroy(curves[0]);
-  eos_destroy(curves[1]);
+  eos_destroy(&fit);
+  eos_destroy(&curves[0]);
+  eos_destroy(&curves[1]);
 }
 
 /* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V |

@@ -58,7 +58,7 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
   assert_int_equal(cd_sim_affine(s, l3), MS_OK);
   vol *= l3[0] * l3[1] * l3[2];
   cd_sim_virial(s, vol, P);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
 }
 
 static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff_mode mode,
@@ -100,7 +100,7 @@ static void test_fcc_mg(void **state) {
   eos_t *eos = eos_create_mg_cold(2.71, 5.35, 4.0, 2.0, true);
   check_lattice(eos, CD_LATTICE_FCC, 1.2 * R0, CD_CUTOFF_PLAIN, "fcc MG plain");
   check_lattice(eos, CD_LATTICE_FCC, 1.2 * R0, CD_CUTOFF_BONDED, "fcc MG bonded");
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 static void test_fcc_table1(void **state) {
@@ -124,7 +124,7 @@ static void test_fcc_table1(void **state) {
     assert_true(fabs(P[0] - px) < 1e-5 * fmax(fabs(px), 1e-3 * pscale));
     assert_true(fabs(P[2] - px) < 1e-5 * fmax(fabs(px), 1e-3 * pscale));
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_errors_free(&e);
 }
 
@@ -134,7 +134,7 @@ static void test_tri2d_mg(void **state) {
   /* δ = 0.6 stretches bonds to r0/√0.6 = 1.29 r0: the 2D cutoff must exceed it */
   check_lattice(eos, CD_LATTICE_TRI2D, 1.35 * R0, CD_CUTOFF_PLAIN, "tri MG plain");
   check_lattice(eos, CD_LATTICE_TRI2D, 1.35 * R0, CD_CUTOFF_BONDED, "tri MG bonded");
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 static void test_von_mises(void **state) {
@@ -270,9 +270,9 @@ static void test_relax(void **state) {
     /* bad input: box rescale without a modulus */
     rc.modulus = 0;
     assert_int_equal(cd_sim_relax(s, &rc, &r), MS_ERR_INPUT);
-    cd_sim_free(s);
+    cd_sim_destroy(&s);
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* Relaxation of a Voronoi polycrystal (periodic x, y; free z; a bonded run relaxed with the plain
@@ -325,7 +325,7 @@ static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_
     x[3 * g + 2] = cd_sim_particles(s)->z[i];
   }
   *x_out = x;
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return n;
 }
 
@@ -341,7 +341,7 @@ static void test_relax_polycrystal(void **state) {
   assert_memory_equal(x, x2, 3 * n * sizeof *x);
   free(x);
   free(x2);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 int main(void) {

@@ -123,7 +123,7 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
   }
   double D = fit_slope(tf, zf, nf, 0.25 * tf[nf - 1]);
   free(prof);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return D;
 }
 
@@ -154,8 +154,8 @@ static void test_kuropatenko(void **state) {
      * and faster than pure h-BN's (the Kuropatenko rule lies between them too) */
     if (!full_run) assert_true(Dm[1] < Dm[2] && Dm[2] < Dm[0]);
   }
-  eos_destroy(comp[0]);
-  eos_destroy(comp[1]);
+  eos_destroy(&comp[0]);
+  eos_destroy(&comp[1]);
 }
 
 /* The rule with the lattice's own component Hugoniots (validation.md): each pure lattice's D
@@ -238,8 +238,8 @@ static void test_lattice_rule(void **state) {
   eos_t *comp[2] = {eos_create_mg_cold(2.51, 9.06, 3.13, 1.0, true),   /* B4C */
                     eos_create_mg_cold(2.29, 3.19, 10.41, 1.0, true)}; /* h-BN */
   lattice_rule_run(comp);
-  eos_destroy(comp[0]);
-  eos_destroy(comp[1]);
+  eos_destroy(&comp[0]);
+  eos_destroy(&comp[1]);
 }
 
 int main(int argc, char **argv) {

@@ -62,7 +62,7 @@ static void test_table_vs_formula_fcc(void **state) {
   assert_true(cd_pair_table_force(&t, R0) == 0.0);
   assert_true(cd_pair_table_energy(&t, R0) == 0.0);
   cd_pair_table_free(&t);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* The fast path's fit of F/r (cd_potential.c): within 1e-12 of max|F/r| of the formula on its
@@ -104,7 +104,7 @@ static void test_fit(void **state) {
       MS_OK);
   assert_false(t.fit_ok);
   cd_pair_table_free(&t);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* f = −dE/dr of the tabulated energy (central differences, step 1e-6 r0: truncation error of
@@ -126,7 +126,7 @@ static void test_force_is_energy_derivative(void **state) {
   printf("f vs -dE/dr (256 intervals): %.3g of max|f|\n", worst);
   assert_true(worst < 1e-7);
   cd_pair_table_free(&t);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* Table 1 of [Davydov]: E(r) [J] and f(r) [N] columns follow from eps_x and P_x by eqs. 1–2.
@@ -170,7 +170,7 @@ static void test_paper_table1(void **state) {
    * (Analytic cold curves reach ~1e-9, test above.) */
   assert_true(ferr < 1e-5);
   cd_pair_table_free(&t);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_errors_free(&e);
 }
 
@@ -196,7 +196,7 @@ static void test_2d_potential(void **state) {
   printf("2D: max force error %.3g, energy %.3g\n", ferr, eerr);
   assert_true(ferr < 1e-6);
   cd_pair_table_free(&t);
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* mixing rule: E_ab = ½(E_a + E_b) in compression, scaled by `attraction` beyond r0 */
@@ -215,8 +215,8 @@ static void test_mixing_rule(void **state) {
     assert_true(fabs(cd_pair_table_energy(&t, r) - want) < 1e-7 * fabs(want) + 1e-20);
   }
   cd_pair_table_free(&t);
-  eos_destroy(a);
-  eos_destroy(b);
+  eos_destroy(&a);
+  eos_destroy(&b);
 }
 
 int main(void) {

@@ -96,7 +96,7 @@ static void test_old_names_are_aliases(void **state) {
   ptl_region_params_destroy(&pn);
   ptl_region_params_destroy(&po);
   ptl_region_params_destroy(&pf);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_free(d_new);
   dk_free(d_old);
   dk_free(d_flat);
@@ -144,7 +144,7 @@ static void test_region_advances(void **state) {
   assert_true(fabs(gained - e1.piston_work) < 1e-3 * e1.piston_work);
   ptl_region_destroy(&r);
   ptl_region_params_destroy(&pp);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_free(doc);
   dk_errors_free(&e);
 }

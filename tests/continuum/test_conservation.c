@@ -80,9 +80,9 @@ static void test_planar_impact_wall_free(void **state) {
          NSTEPS, cont_grid_time(g), d.energy, d.momentum);
   assert_true(d.energy < tol);
   assert_true(d.momentum < tol);
-  cont_grid_destroy(g);
-  eos_destroy(al);
-  eos_destroy(air);
+  cont_grid_destroy(&g);
+  eos_destroy(&al);
+  eos_destroy(&air);
 }
 
 /* Piston with a velocity table on the left, trapezoidal pressure pulse on the right. */
@@ -123,10 +123,10 @@ static void test_spherical_piston_pressure(void **state) {
     assert_true(fabs(b.work) > 1e-3 * (b.internal + b.kinetic)); /* the boundaries did work */
     assert_true(d.energy < tol);
     if (k == 0) assert_true(d.momentum < tol);
-    cont_grid_destroy(g);
+    cont_grid_destroy(&g);
   }
-  eos_destroy(gas);
-  eos_destroy(pb);
+  eos_destroy(&gas);
+  eos_destroy(&pb);
 }
 
 /* Two-way coupling hooks: an oscillating external traction on one interior node and a
@@ -156,8 +156,8 @@ static void test_coupling_hooks(void **state) {
   assert_true(fabs(b.work) > 0.0 && fabs(b.impulse) > 0.0);
   assert_true(d.energy < tol);
   assert_true(d.momentum < tol);
-  cont_grid_destroy(g);
-  eos_destroy(al);
+  cont_grid_destroy(&g);
+  eos_destroy(&al);
 }
 
 /* Several cache-blocking chunks (3000 cells > 2 × CONT_CHUNK): two Al slabs collide at ±1 km/s.
@@ -195,8 +195,8 @@ static void test_chunk_boundaries(void **state) {
   assert_true(asym_u < 1e-10 && asym_rho < 1e-10);
   assert_true(de < tol);
   assert_true(fabs(b.momentum) < 1e-12); /* ±1 km/s slabs of equal mass: zero total */
-  cont_grid_destroy(g);
-  eos_destroy(al);
+  cont_grid_destroy(&g);
+  eos_destroy(&al);
 }
 
 int main(void) {

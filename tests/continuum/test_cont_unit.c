@@ -87,8 +87,8 @@ static void test_grading_and_sampling(void **state) {
   assert_false(cont_grid_sample(g, -1.5, &smp));
   assert_int_equal(cont_grid_nearest_node(g, -0.0001), 20);
   assert_int_equal(cont_grid_nearest_node(g, 7.0), 40);
-  cont_grid_destroy(g);
-  eos_destroy(gas);
+  cont_grid_destroy(&g);
+  eos_destroy(&gas);
 }
 
 static void test_energy_from_pressure(void **state) {
@@ -103,8 +103,8 @@ static void test_energy_from_pressure(void **state) {
   assert_true(cont_energy_from_pressure(gas, 2.0, 3.0, &e));
   assert_true(fabs(e - 3.0 / ((5.0 / 3.0 - 1.0) * 2.0)) < 1e-13);
   assert_false(cont_energy_from_pressure(gas, 2.0, -1.0, &e)); /* no e ≥ 0 gives p < 0 */
-  eos_destroy(al);
-  eos_destroy(gas);
+  eos_destroy(&al);
+  eos_destroy(&gas);
 }
 
 /* A gas at rest at uniform pressure stays exactly at rest in every geometry (the face-area
@@ -141,7 +141,7 @@ static void test_rest_and_uniform_motion(void **state) {
     for (size_t j = 0; j < v.nnodes; ++j) umax = fmax(umax, fabs(v.u[j]));
     /* the same pressure in and out: every force is exactly zero */
     assert_true(umax == 0.0);
-    cont_grid_destroy(g);
+    cont_grid_destroy(&g);
   }
   cont_layer_spec layer = {
       .name = "g", .eos = gas, .thickness = 1.0, .rho = 1.0, .e = 2.5, .u = 1.0, .ncells = 50};
@@ -165,8 +165,8 @@ static void test_rest_and_uniform_motion(void **state) {
   }
   for (size_t i = 0; i < v.ncells; ++i) assert_true(fabs(v.rho[i] - 1.0) < 1e-12);
   assert_true(cont_grid_time(g) == 0.3);
-  cont_grid_destroy(g);
-  eos_destroy(gas);
+  cont_grid_destroy(&g);
+  eos_destroy(&gas);
 }
 
 int main(void) {

@@ -41,8 +41,8 @@ static void parse(parsed *r, const char *section) {
 }
 
 static void release(parsed *r) {
-  cont_problem_free(r->p);
-  eos_materials_free(r->mats);
+  cont_problem_destroy(&r->p);
+  eos_materials_destroy(&r->mats);
   dk_free(r->doc);
   dk_errors_free(&r->e);
 }
@@ -279,8 +279,8 @@ static void test_si_units(void **state) {
   /* the piston table: 1000 m/s at 1 µs = 1 km/s at t = 0.1 (internal); half-way 0.5 */
   assert_int_equal(cont_grid_run_to(g, 0.05), MS_OK);
   assert_true(fabs(v.u[0] - 0.5) < 1e-12);
-  cont_problem_free(p);
-  eos_materials_free(mats);
+  cont_problem_destroy(&p);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   dk_errors_free(&e);
 }

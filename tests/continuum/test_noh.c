@@ -71,8 +71,8 @@ static void run_noh(cont_geometry geo, long NCELLS, double rho_exact, double rho
   /* Shock speed 1/3: the front is resolved to ~2 post-shock cells; the initial cell size is
    * 1/NCELLS and shocked cells are (ρ0/ρ)^(1/(d+1))-ish smaller, so 2/NCELLS is generous. */
   assert_true(fabs(rs - t_end / 3.0) < 2.0 / NCELLS + 0.01);
-  cont_grid_destroy(g);
-  eos_destroy(gas);
+  cont_grid_destroy(&g);
+  eos_destroy(&gas);
 }
 
 /* Tolerances on the plateau density: planar 1 % at 200 cells (the plateau is flat to 1e-4);

@@ -124,8 +124,8 @@ static void test_symmetric_al_impact(void **state) {
   assert_true(fabs(smp.u - up) < 1e-2 && fabs(smp.p / h.p - 1) < 0.02 && smp.layer == 1);
   assert_false(cont_grid_sample(g, v.x[v.ncells] + 1.0, &smp));
 
-  cont_grid_destroy(g);
-  eos_destroy(al);
+  cont_grid_destroy(&g);
+  eos_destroy(&al);
 }
 
 int main(void) {

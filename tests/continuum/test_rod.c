@@ -81,8 +81,8 @@ static rod_result run_rod(long ncells, double q_quad, double q_lin) {
   printf("rod: %5ld cells, q = (%.2g, %.2g): amplitude of w(L/2) over 240-250 L/c = %.4f of "
          "exact (exact %.3e), rms error %.4f of amplitude, %ld steps\n",
          ncells, q_quad, q_lin, r.amp_ratio, amp_ex, r.rms_error, r.steps);
-  cont_grid_destroy(g);
-  eos_destroy(rod);
+  cont_grid_destroy(&g);
+  eos_destroy(&rod);
   return r;
 }
 

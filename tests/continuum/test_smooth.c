@@ -58,9 +58,9 @@ static void run_smooth(long n, double *err_w, double *err_u) {
   printf("smooth rod: %4ld cells, %6ld steps: max error of w(L/2,t) %.3e, of u(L/2,t) %.3e "
          "(relative to amplitude)\n",
          n, cont_grid_steps(g), *err_w, *err_u);
-  cont_grid_destroy(g);
+  cont_grid_destroy(&g);
   free(layers);
-  eos_destroy(rod);
+  eos_destroy(&rod);
 }
 
 static void test_second_order_histories(void **state) {

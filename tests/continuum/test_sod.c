@@ -66,7 +66,7 @@ static void sod_errors(long n, const eos_t *gas, double err[3]) {
     err[1] += fabs(uc - eu) * dx;
     err[2] += fabs(v.p[i] - ep) * dx;
   }
-  cont_grid_destroy(g);
+  cont_grid_destroy(&g);
 }
 
 static void test_sod_convergence(void **state) {
@@ -99,7 +99,7 @@ static void test_sod_convergence(void **state) {
   /* Absolute accuracy guard: at 800 cells a working scheme is well below 1 % of the jump
    * (ρ jump 0.875, u* 0.93, p jump 0.9) in L1 over the unit tube. */
   assert_true(err[3][0] < 5e-3 && err[3][1] < 5e-3 && err[3][2] < 5e-3);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 int main(void) {

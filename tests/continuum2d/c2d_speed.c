@@ -44,8 +44,8 @@ int main(int argc, char **argv) {
   double w = ms_wall_time() - t0;
   printf("c2d_speed: %zu x %zu zones, %ld steps, %d thread(s): %.3f s, %.3e zone-steps/s\n", n, n,
          k, th, w, (double)(n * n) * (double)k / w);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(al);
+  eos_destroy(&al);
   return 0;
 }

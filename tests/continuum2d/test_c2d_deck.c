@@ -41,8 +41,8 @@ static bool read_deck(const char *geo, const char *mesh, dk_errors *e) {
     assert_int_equal(c2d_grid_step(g, 1e-3), MS_OK);
   }
   bool built = p != NULL;
-  c2d_problem_free(p);
-  eos_materials_free(mats);
+  c2d_problem_destroy(&p);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   return built;
 }

@@ -47,10 +47,10 @@ static void test_uniform_rest(void **state) {
     /* c = 1.18, so t = 1 is ~10 sound crossings of a zone (0.125): an O(1) imbalance of the
      * corner forces would give |u| ~ 0.1; round-off gives ~1e-15. */
     assert_true(umax < 1e-12);
-    c2d_grid_destroy(g);
+    c2d_grid_destroy(&g);
     fixture_free(&f);
   }
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 static void test_energy_random(void **state) {
@@ -77,10 +77,10 @@ static void test_energy_random(void **state) {
       printf("random velocities %s hg %d: %ld steps, energy drift %.2e\n", geo ? "r-z" : "x-y", hg,
              c2d_grid_steps(g), d);
       assert_true(d < 1e-12); /* issue 24: total energy to 1e-12 relative */
-      c2d_grid_destroy(g);
+      c2d_grid_destroy(&g);
       fixture_free(&f);
     }
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 static void test_bad_mesh(void **state) {
@@ -102,7 +102,7 @@ static void test_bad_mesh(void **state) {
   printf("%s\n", msg);
   assert_non_null(strstr(msg, "r = -0.5 < 0"));
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 /* Outside pressure equal to the gas pressure on two sides (walls on the others, skewed interior):
@@ -140,10 +140,10 @@ static void test_pressure_bc(void **state) {
       if (!squeeze) assert_true(umax < 1e-12); /* round-off, as test_uniform_rest */
       if (squeeze) assert_true(b.work > 0.01); /* the box is compressed: work was done */
       assert_true(d < 1e-12);
-      c2d_grid_destroy(g);
+      c2d_grid_destroy(&g);
       fixture_free(&f);
     }
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 /* A run that tangles (Saltzman mesh, no viscosity at all, a 5 km/s piston into cold gas) stops
@@ -177,9 +177,9 @@ static void test_runtime_inversion(void **state) {
   assert_non_null(strstr(m, "step "));
   assert_non_null(strstr(m, "inverted"));
   assert_non_null(strstr(m, "(i = "));
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 /* OpenMP: the same Saltzman-like run with 1 and 2 threads gives bitwise equal states (zones
@@ -215,7 +215,7 @@ static void test_threads(void **state) {
     x[t] = malloc(v.nnodes * sizeof(double));
     memcpy(rho[t], v.rho, v.nzones * sizeof(double));
     memcpy(x[t], v.x, v.nnodes * sizeof(double));
-    c2d_grid_destroy(g);
+    c2d_grid_destroy(&g);
     fixture_free(&f);
   }
   assert_memory_equal(rho[0], rho[1], 320 * sizeof(double));
@@ -224,7 +224,7 @@ static void test_threads(void **state) {
     free(rho[t]);
     free(x[t]);
   }
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 int main(void) {

@@ -102,10 +102,10 @@ static void test_flyer(void **state) {
          us, hp.us, 100 * (us / hp.us - 1), c2d_grid_steps(g), drift);
   assert_true(fabs(us / hp.us - 1) < 0.005);
   assert_true(drift < 1e-12);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(al);
-  eos_destroy(gas);
+  eos_destroy(&al);
+  eos_destroy(&gas);
 }
 
 int main(void) {

@@ -96,9 +96,9 @@ static void run_noh(size_t ni, size_t nj, c2d_geometry geo, double tol) {
   /* Compatible discretisation: internal + kinetic − piston work constant to round-off, relative
    * to the initial kinetic energy. */
   assert_true(drift < 1e-12);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 static void test_noh_xy(void **state) {

@@ -106,9 +106,9 @@ static void run_saltzman(double hg, double *hg_rms, double *spread) {
   assert_true(amin > 0.0);
   /* Energy relative to the final total (the piston's work; the gas starts with ~0). */
   assert_true(drift < 1e-12);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 static void test_saltzman(void **state) {

@@ -45,7 +45,7 @@ static void run_sedov(size_t ni, size_t nj, double *err_r, double *rho_peak) {
   double mring = 0;
   for (size_t j = 0; j < nj; ++j) mring += v0.mass[ni * j];
   for (size_t j = 0; j < nj; ++j) f.e[ni * j] = E_sphere / (4.0 * PI) / mring;
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   g = c2d_grid_create(&s, msg, sizeof msg);
   assert_non_null(g);
   double e0 = energy_total(g);
@@ -95,9 +95,9 @@ static void run_sedov(size_t ni, size_t nj, double *err_r, double *rho_peak) {
    * the outer boundary is free and unreached, the centre and symmetry walls do none). */
   assert_true(fabs(*err_r) < 0.01);
   assert_true(drift < 1e-12);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 static void test_sedov(void **state) {

@@ -62,7 +62,7 @@ static void run_1d(size_t n, const eos_t *gas, double err[3]) {
   assert_int_equal(cont_grid_run_to(g, t_end), MS_OK);
   cont_view v = cont_grid_view(g);
   l1_errors(v.ncells, v.x, v.u, v.rho, v.p, err);
-  cont_grid_destroy(g);
+  cont_grid_destroy(&g);
 }
 
 static void run_2d(size_t ni, size_t nj, const eos_t *gas, double err[3], double *row_diff,
@@ -109,7 +109,7 @@ static void run_2d(size_t ni, size_t nj, const eos_t *gas, double err[3], double
          ni, nj, c2d_grid_steps(g), err[0], err[1], err[2], d, *drift);
   free(xr);
   free(ur);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
 }
 
@@ -133,7 +133,7 @@ static void test_sod2d(void **state) {
      * same zone size (measured: within 2 %). */
     for (int q = 0; q < 3; ++q) assert_true(e2[q] < 1.1 * e1[q]);
   }
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 /* r–z, flow along z on a mesh that touches the axis (4 × 200 zones, r ≤ 0.1): the columns stay
@@ -196,9 +196,9 @@ static void test_sod_rz_along_z(void **state) {
   free(wn);
   free(rc);
   free(pc);
-  c2d_grid_destroy(g);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 /* r–z, radial Sod (diaphragm at r = 0.5, 200 × 2 zones, walls at r = 1 and top/bottom) against
@@ -267,10 +267,10 @@ static void test_sod_rz_radial(void **state) {
    * is of that size: we require less than twice it. */
   assert_true(diff < 5e-3);
   assert_true(drift < 1e-12);
-  cont_grid_destroy(g1);
-  c2d_grid_destroy(g);
+  cont_grid_destroy(&g1);
+  c2d_grid_destroy(&g);
   fixture_free(&f);
-  eos_destroy(gas);
+  eos_destroy(&gas);
 }
 
 int main(void) {

@@ -73,8 +73,8 @@ static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const ch
 }
 
 static inline void cpl_test_run_free(cpl_test_run *r) {
-  cpl_problem_free(r->p);
-  eos_materials_free(r->mats);
+  cpl_problem_destroy(&r->p);
+  eos_materials_destroy(&r->mats);
   dk_free(r->doc);
   dk_errors_free(&r->e);
 }

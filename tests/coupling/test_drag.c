@@ -110,7 +110,7 @@ static void test_stokes_still_gas(void **state) {
       assert_double_equal(f.x[a], x0[a] + v0[a] * tau * (1 - e), 1e-8 * fabs(v0[a]) * tau);
     }
   }
-  cpl_transport_free(tr);
+  cpl_transport_destroy(&tr);
 }
 
 /* Classical RK4 of the full Schiller–Naumann ODE, h far below the drag time (error ~ (h/τ)⁴
@@ -154,7 +154,7 @@ static void compare_with_rk4(double d, const double v0[3], uniform_gas g, double
     assert_double_equal(f.x[a], y[a], 1e-8 * xscale);
     assert_double_equal(f.v[a], y[3 + a], 1e-8 * vscale);
   }
-  cpl_transport_free(tr);
+  cpl_transport_destroy(&tr);
 }
 
 /* Oblique flight through a moving gas: (a) intermediate Re (~400 → 0), (b) starting in the
@@ -193,7 +193,7 @@ static void test_relaxation_time(void **state) {
       assert_true(dev > -1e-7 && dev < excess + 1e-7);
       assert_double_equal(f.v[1], 0.0, 1e-20);
     }
-    cpl_transport_free(tr);
+    cpl_transport_destroy(&tr);
   }
 }
 
@@ -247,7 +247,7 @@ static void test_detector_arrivals(void **state) {
   }
   fclose(t);
   assert_int_equal(rows, 5); /* 1, 2, 4, 8 µm and the one already past */
-  cpl_transport_free(tr);
+  cpl_transport_destroy(&tr);
 }
 
 /* Momentum and energy handed back to the gas add up to the fragment's changes. */
@@ -285,7 +285,7 @@ static void test_gas_return(void **state) {
   assert_double_equal(s.de, ke1 - ke0, 1e-12 * ke0);
   /* the fragment slowed towards the gas: it gave momentum to the gas along y */
   assert_true(s.dp[1] < 0 && s.de < 0);
-  cpl_transport_free(tr);
+  cpl_transport_destroy(&tr);
 }
 
 /* Particle phase: every particle gets m_i/M of its fragment's drag; the fragment's total is the

@@ -68,8 +68,8 @@ static void test_cell_source(void **state) {
   assert_int_equal(cont_grid_add_cell_source(g, 4, 0.0, -1.0), MS_ERR_UNSTABLE);
   assert_true(cont_grid_view(g).e[4] == e4);
   assert_int_equal(cont_grid_add_cell_source(g, 10, 0.0, 0.0), MS_ERR_UNSTABLE);
-  cont_grid_destroy(g);
-  eos_destroy(air);
+  cont_grid_destroy(&g);
+  eos_destroy(&air);
 }
 
 /* ---- fragments in an air column ---------------------------------------------------------- */
@@ -163,9 +163,9 @@ static totals fly(bool with_return, totals *start) {
          with_return ? "with" : "without", arrived, (int)NFRAG, start->frag_p, end.frag_p, start->p,
          end.p, start->e, end.e, end.gas_heat - start->gas_heat);
   assert_true(arrived >= 3); /* the flight is long enough for drag to matter, short enough to end */
-  cpl_transport_free(tr);
-  cont_grid_destroy(c.g);
-  eos_destroy(air);
+  cpl_transport_destroy(&tr);
+  cont_grid_destroy(&c.g);
+  eos_destroy(&air);
   return end;
 }
 

@@ -43,8 +43,8 @@ static void load(loaded *L, const char *section) {
 }
 
 static void unload(loaded *L) {
-  dm_problem_free(L->p);
-  eos_materials_free(L->mats);
+  dm_problem_destroy(&L->p);
+  eos_materials_destroy(&L->mats);
   dk_free(L->doc);
   dk_errors_free(&L->e);
 }
@@ -186,7 +186,7 @@ static void test_finite_errors(void **state) {
   assert_true(has_error(&e, "needs 'yield_stress'"));
   assert_true(has_error(&e, "deck.yaml:14:"));
   assert_true(has_error(&e, "needs a material with an 'eos:'"));
-  eos_materials_free(mats);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   dk_errors_free(&e);
 }

@@ -73,7 +73,7 @@ static void test_al_1d(void **state) {
   /* 1 %: the criterion for D, P and rho behind the front */
   for (size_t j = 0; j < sizeof ups / sizeof *ups; ++j)
     run_case(&hc, 1, 400, 1, ups[j], 0.01, print_on());
-  eos_destroy(hc.eos);
+  eos_destroy(&hc.eos);
 }
 
 static void test_pb_1d(void **state) {
@@ -81,7 +81,7 @@ static void test_pb_1d(void **state) {
   hcase hc = {"Pb", eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false)};
   for (size_t j = 0; j < sizeof ups / sizeof *ups; ++j)
     run_case(&hc, 1, 400, 1, ups[j], 0.01, print_on());
-  eos_destroy(hc.eos);
+  eos_destroy(&hc.eos);
 }
 
 /* 2D (plane strain, 4 periodic rows) and 3D (3 x 3 periodic columns): a subset of speeds */
@@ -90,7 +90,7 @@ static void test_al_2d(void **state) {
   hcase hc = {"Al", eos_create_mg_linear(2.703, 5.35, 1.34, 2.0)};
   const double u2[] = {0.1, 1.0, 5.0};
   for (size_t j = 0; j < 3; ++j) run_case(&hc, 2, 300, 5, u2[j], 0.01, print_on());
-  eos_destroy(hc.eos);
+  eos_destroy(&hc.eos);
 }
 
 static void test_pb_3d(void **state) {
@@ -98,7 +98,7 @@ static void test_pb_3d(void **state) {
   hcase hc = {"Pb", eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false)};
   const double u3[] = {0.25, 2.0};
   for (size_t j = 0; j < 2; ++j) run_case(&hc, 3, 200, 5, u3[j], 0.01, print_on());
-  eos_destroy(hc.eos);
+  eos_destroy(&hc.eos);
 }
 
 /* Elastic-perfectly plastic Al 6061-T6, G = 27.6 GPa, Y0 = 0.29 GPa ([Steinberg1996]):
@@ -178,7 +178,7 @@ static void test_hel(void **state) {
   if (print_on()) printf("Al6061 EPP 2D up 0.5: energy balance %.2e of the work\n", r.energy_err);
   assert_true(r.energy_err < 1e-6);
   free(r.profile);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   ms_ctx_close(&ctx);
 }
 

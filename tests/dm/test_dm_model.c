@@ -173,7 +173,7 @@ static void test_momenta_conserved(void **state) {
            dJ / jscale);
     assert_true(dP / pscale < 1e-12);
     assert_true(dJ / jscale < 1e-12);
-    rkn_destroy(ig);
+    rkn_destroy(&ig);
     dm_model_destroy(&m);
     dm_state_free(&s);
     ms_ctx_close(&ctx);
@@ -212,7 +212,7 @@ static void test_energy_no_drift(void **state) {
          max_first, max_all, mean_last - mean_first);
   assert_true(max_all < 2.0 * max_first);
   assert_true(fabs(mean_last - mean_first) < 0.2 * max_first);
-  rkn_destroy(ig);
+  rkn_destroy(&ig);
   dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);
@@ -321,7 +321,7 @@ static void integrate_chain(rkn_kind kind, double dt, double T, double *w_out) {
   long steps = lround(T / dt);
   for (long k = 0; k < steps; ++k) rkn_step(ig, k * dt, dt, s.w, s.u, dm_accel, dm_constrain, m);
   for (int i = 0; i < n; ++i) w_out[i] = s.w[3 * i];
-  rkn_destroy(ig);
+  rkn_destroy(&ig);
   dm_model_destroy(&m);
   dm_state_free(&s);
   ms_ctx_close(&ctx);

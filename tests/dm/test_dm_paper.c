@@ -53,8 +53,8 @@ static dm_run_summary run_deck(const char *file, const char *const *edits) {
   fprintf(stderr, "--- %s\n", file);
   assert_int_equal(dm_problem_run(&ctx, p), MS_OK);
   dm_run_summary sum = *dm_problem_summary(p);
-  dm_problem_free(p);
-  eos_materials_free(mats);
+  dm_problem_destroy(&p);
+  eos_materials_destroy(&mats);
   dk_free(doc);
   dk_errors_free(&e);
   ms_ctx_close(&ctx);

@@ -59,7 +59,7 @@ static void test_table1_reproduced(void **state) {
       fail_msg("r/r0 = %g: E = %.6e (printed %.3e), f = %.6e (printed %.3e)", table1_r[i], E,
                table1_E[i], f, table1_f[i]);
   }
-  eos_destroy(al);
+  eos_destroy(&al);
 }
 
 /* The data file holds the printed columns exactly; the EOS reproduces them at the nodes. */
@@ -85,7 +85,7 @@ static void test_table1_nodes(void **state) {
   double dmin, dmax;
   assert_true(eos_cold_range(al, &dmin, &dmax));
   assert_true(fabs(dmin - 1.2335 / 2.71) < 1e-15 && fabs(dmax - 6.423704 / 2.71) < 1e-15);
-  eos_destroy(al);
+  eos_destroy(&al);
 }
 
 /* f = −dE/dr: central differences of E(r) at points between table nodes (E is C¹ and piecewise
@@ -108,8 +108,8 @@ static void test_force_is_minus_dE_dr(void **state) {
   check_force_is_minus_dE(al, 5e-6, 0.7501, 1.2999);
   eos_t *pb = eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false);
   check_force_is_minus_dE(pb, 5e-6, 0.7, 1.3);
-  eos_destroy(pb);
-  eos_destroy(al);
+  eos_destroy(&pb);
+  eos_destroy(&al);
 }
 
 /* ---- Mie–Grüneisen cold form --------------------------------------------------------------- */
@@ -141,7 +141,7 @@ static void test_mg_cold_energy_is_integral(void **state) {
         fail_msg("material %d, delta %g: eps_x = %.15g, integral = %.15g", m, deltas[k], exact,
                  num);
     }
-    eos_destroy(eos);
+    eos_destroy(&eos);
   }
 }
 
@@ -159,7 +159,7 @@ static void test_isentrope_integrator(void **state) {
     double pe = eos_cold_pressure(eos, d), pt = eos_isentrope_cold_pressure(eos, d);
     if (fabs(pe - pt) > 1e-8 * 2.51 * c02) fail_msg("delta %g: P %.15g vs %.15g", d, pe, pt);
   }
-  eos_destroy(eos);
+  eos_destroy(&eos);
 }
 
 /* Cold curves that are tabulated isentropes (Us–up form) are consistent: P_x = ρ0 δ² dε_x/dδ
@@ -187,7 +187,7 @@ static void test_mg_linear_cold_curve(void **state) {
   }
   /* Beyond the limiting compression s/(s−1) the Us–up form is undefined: NaN, not garbage. */
   assert_true(isnan(eos_pressure(al, 2.703 * 1.34 / 0.34 * 1.01, 1.0)));
-  eos_destroy(al);
+  eos_destroy(&al);
 }
 
 /* Linear elastic: P = K(1 − ρ0/ρ), ε_x = Kθ²/(2ρ0), c² = Kρ0/ρ² (docs/eos.md). */
@@ -202,7 +202,7 @@ static void test_linear_elastic(void **state) {
     assert_true(fabs(eos_pressure(s, rho0 * d, 3.0) - K * theta) < 1e-13);
     assert_true(fabs(eos_cold_energy(s, d) - integrate_cold_energy(s, d)) < 1e-14);
   }
-  eos_destroy(s);
+  eos_destroy(&s);
 }
 
 /* ---- Sound speed against a finite-difference isentrope ------------------------------------- */
@@ -257,8 +257,8 @@ static void test_sound_speed_isentrope(void **state) {
   assert_true(fabs(eos_sound_speed(kinds[2], 2.703, 0.0) - 5.35) < 1e-14);
   /* Ideal gas: c0 = sqrt(γ p0/ρ0) at 1 atm, 1.225 kg/m³: 0.3403 km/s. */
   assert_true(fabs(eos_c0(kinds[3]) - 0.34029) < 1e-4);
-  for (int k = 0; k < 5; ++k) eos_destroy(kinds[k]);
-  eos_destroy(al);
+  for (int k = 0; k < 5; ++k) eos_destroy(&kinds[k]);
+  eos_destroy(&al);
 }
 
 /* eos_eval: the array form (fused P and c² where a kind has them) agrees with the scalar
@@ -290,7 +290,7 @@ static void test_eval_array(void **state) {
         fail_msg("%s: eval (%.17g, %.17g) vs scalar (%.17g, %.17g)",
                  eos_kind_name(eos_get_kind(kinds[k])), p[i], c[i], ps, cs);
     }
-    eos_destroy(kinds[k]);
+    eos_destroy(&kinds[k]);
   }
 
   eos_t *al = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
@@ -307,7 +307,7 @@ static void test_eval_array(void **state) {
   rho[2] = -1.0;
   assert_int_equal(eos_eval(al, 4, rho, e, p, c, &bad), MS_ERR_UNSTABLE);
   assert_int_equal(bad, 2);
-  eos_destroy(al);
+  eos_destroy(&al);
   /* Constructors refuse impossible parameters. */
   assert_null(eos_create_mg_cold(-1.0, 2.0, 3.0, 2.0, false));
   assert_null(eos_create_mg_cold(1.0, 2.0, 1.0, 2.0, false));
@@ -329,14 +329,14 @@ static void test_temperature(void **state) {
     assert_true(fabs(eos_temperature(pb, 11.34 * d, ex)) < 1e-9); /* on the cold curve: 0 K */
     assert_true(fabs(eos_temperature(pb, 11.34 * d, ex + 0.129e-3 * 300.0) - 300.0) < 1e-9);
   }
-  eos_destroy(pb);
+  eos_destroy(&pb);
   /* air: cv = 718 J/(kg K); at 1 atm, 1.225 kg/m³ the ideal-gas temperature is
    * p0/(ρ0 (γ−1) cv) = 288.1 K */
   eos_t *air = eos_create_ideal_gas(1.4, 1.225e-3);
   eos_set_heat_capacity(air, 0.718e-3);
   assert_true(fabs(eos_temperature(air, 1.225e-3, eos_e0(air)) - 288.1) < 0.1);
   assert_true(isnan(eos_temperature(air, 1.225e-3, -0.1)));
-  eos_destroy(air);
+  eos_destroy(&air);
 }
 
 int main(void) {

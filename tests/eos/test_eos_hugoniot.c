@@ -34,7 +34,7 @@ static void test_linear_us_up(void **state) {
   assert_true(fabs(h2.us - 8.03) < 1e-10);
   assert_true(fabs(h2.p - 43.4) < 0.05); /* 2.703 · 8.03 · 2 = 43.41 GPa */
   assert_true(fabs(h2.p - 2.703 * 8.03 * 2.0) < 1e-9);
-  eos_destroy(al);
+  eos_destroy(&al);
 }
 
 /* Cold-curve form ([Davydov]'s materials, both Grüneisen models): all three jump conditions
@@ -63,7 +63,7 @@ static void test_cold_form_jump_conditions(void **state) {
         /* Weak-shock limit: Us → c(ρ0, e0) as up → 0 (Us − c = O(up); up = 0.01). */
         double c = eos_sound_speed(eos, rho0, e0);
         assert_true(fabs(h[0].us - c) < 0.05 * c);
-        eos_destroy(eos);
+        eos_destroy(&eos);
       }
 }
 
@@ -82,7 +82,7 @@ static void test_ideal_gas(void **state) {
   }
   /* Strong-shock limit: ρ/ρ0 → (γ+1)/(γ−1) = 4; at up/c0 ≈ 21 it is 3.98. */
   assert_true(fabs(h[4].rho / rho0 - 4.0) < 0.03);
-  eos_destroy(gas);
+  eos_destroy(&gas);
   /* The reference state of a gas given by (ρ0, p0): e0 = p0/((γ−1)ρ0), c0 = sqrt(γ p0/ρ0). */
   eos_t *air = eos_create_ideal_gas_ref(1.4, 1.225e-3, 1.01325e-4);
   double ea = eos_e0(air), ca = eos_c0(air);
@@ -93,7 +93,7 @@ static void test_ideal_gas(void **state) {
   assert_int_equal(eos_hugoniot(air, 1.225e-3, ea, 1, &u1, &ha), MS_OK);
   double aa = 2.4 / 4, usa = aa * u1 + sqrt(aa * aa * u1 * u1 + ca * ca);
   assert_true(fabs(ha.us - usa) < 1e-10 * usa);
-  eos_destroy(air);
+  eos_destroy(&air);
 }
 
 /* Hugoniot at a given pressure is the inverse of the up parametrisation (Brent, 1e-15). */
@@ -110,7 +110,7 @@ static void test_at_pressure(void **state) {
     assert_true(fabs(q.rho - h[i].rho) < 1e-10 * h[i].rho);
   }
   assert_int_equal(eos_hugoniot_at_pressure(pb, 11.34, 0.0, -1.0, &q), MS_ERR_INPUT);
-  eos_destroy(pb);
+  eos_destroy(&pb);
 }
 
 /* A Hugoniot from a table sampled on a uniform (ρ, e) grid from the Us–up form of Al agrees
@@ -155,9 +155,9 @@ static void test_table_hugoniot_converges(void **state) {
   eos_hugoniot_point hb;
   assert_int_equal(eos_hugoniot(t1, 2.703, 0.0, 1, &big, &hb), MS_ERR_SOLVER);
   assert_true(isnan(hb.us));
-  eos_destroy(t1);
-  eos_destroy(t2);
-  eos_destroy(al);
+  eos_destroy(&t1);
+  eos_destroy(&t2);
+  eos_destroy(&al);
 }
 
 /* [Davydov] builds its aluminium clusters from the OSA cold curve of Table 1 and compares the
@@ -185,7 +185,7 @@ static void test_al_osa_table_hugoniot(void **state) {
     jump_residuals(osa, 2.71, 0.0, &h[i], r);
     assert_true(r[0] < 1e-10 && r[1] < 1e-10 && r[2] < 1e-10);
   }
-  eos_destroy(osa);
+  eos_destroy(&osa);
   dk_errors_free(&e);
 }
 
@@ -237,8 +237,8 @@ static void test_kuropatenko(void **state) {
   /* Bad fractions are refused. */
   double bad[2] = {0.5, 0.6};
   assert_int_equal(eos_kuropatenko(2, comp, bad, 1.0, &D, &p), MS_ERR_INPUT);
-  eos_destroy(b4c);
-  eos_destroy(bn);
+  eos_destroy(&b4c);
+  eos_destroy(&bn);
 }
 
 int main(void) {

@@ -100,7 +100,7 @@ static void test_good_deck(void **state) {
   /* lookups of unknown names report the known ones */
   assert_null(eos_materials_find(m, "cu", &e, doc, dk_root(doc)));
   assert_true(has_error(&e, "unknown material 'cu' (known: al, pb, air, b4c_tab, tab, steel)"));
-  eos_materials_free(m);
+  eos_materials_destroy(&m);
   dk_free(doc);
   dk_errors_free(&e);
 }
@@ -133,7 +133,7 @@ static void test_si_units(void **state) {
   assert_true(fabs(m->m[1].viscosity - 1.8e-9) < 1e-20);
   /* c0 = sqrt(γ p0/ρ0) = sqrt(1.4 · 2e-4 GPa / 1.2e-3 g/cm³) */
   assert_true(fabs(eos_c0(m->m[1].eos) - sqrt(1.4 * 2e-4 / 1.2e-3)) < 1e-12);
-  eos_materials_free(m);
+  eos_materials_destroy(&m);
   dk_free(doc);
   dk_errors_free(&e);
 }
@@ -248,7 +248,7 @@ static void test_bad_decks(void **state) {
       eos_test_dump(&e);
       fail_msg("bad deck '%s': expected an error at %s containing '%s'", b->what, where, b->needle);
     }
-    eos_materials_free(m);
+    eos_materials_destroy(&m);
     dk_free(doc);
     dk_errors_free(&e);
   }
@@ -271,7 +271,7 @@ static void test_error_details(void **state) {
   size_t n0 = e.n;
   assert_null(eos_materials_find(m, "al", &e, doc, dk_root(doc)));
   assert_int_equal(e.n, n0);
-  eos_materials_free(m);
+  eos_materials_destroy(&m);
   dk_free(doc);
   dk_errors_free(&e);
 
@@ -282,7 +282,7 @@ static void test_error_details(void **state) {
   size_t count = 0;
   for (size_t i = 0; i < e.n; ++i) count += strstr(e.msg[i], "'gama'") != NULL;
   assert_int_equal(count, 1);
-  eos_materials_free(m);
+  eos_materials_destroy(&m);
   dk_free(doc);
   dk_errors_free(&e);
 }

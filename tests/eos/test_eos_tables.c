@@ -68,7 +68,7 @@ static void test_cold_table_good_and_broken(void **state) {
   double d = 1.05, n = 3.13, c0 = 9.06;
   double px = 2.51 * c0 * c0 / n * (pow(d, n) - 1.0);
   assert_true(fabs(eos_cold_pressure(eos, d) - px) < 1e-3 * fabs(px));
-  eos_destroy(eos);
+  eos_destroy(&eos);
   dk_errors_free(&e);
 
   /* truncated: the last row lost its P_x column */
@@ -149,11 +149,11 @@ static void test_full_table_roundtrip(void **state) {
                   1e-13 * fabs(eos_pressure(t, rho, e)) + 1e-13);
       assert_true(fabs(eos_sound_speed(r, rho, e) - eos_sound_speed(t, rho, e)) <= 1e-13);
     }
-    eos_destroy(r);
+    eos_destroy(&r);
     dk_errors_free(&e);
   }
-  eos_destroy(t);
-  eos_destroy(pb);
+  eos_destroy(&t);
+  eos_destroy(&pb);
 }
 
 /* Interpolation: exact at nodes, monotone in ρ, O(h²) in P and O(h²) in the nodal c², NaN
@@ -195,8 +195,8 @@ static void test_full_table_interpolation(void **state) {
   for (double d = 0.85; d < dmax; d += 0.1)
     assert_true(fabs(eos_cold_pressure(t, d) - eos_cold_pressure(al, d)) <
                 1e-3 * (fabs(eos_cold_pressure(al, d)) + 1.0));
-  eos_destroy(t);
-  eos_destroy(al);
+  eos_destroy(&t);
+  eos_destroy(&al);
 }
 
 static void expect_full_error(const char *name, const char *text, int line, const char *needle) {
@@ -229,7 +229,7 @@ static void test_full_table_broken(void **state) {
   if (!ok) eos_test_dump(&e);
   assert_non_null(ok);
   assert_true(fabs(eos_pressure(ok, 1.5, 0.5) - 3.0) < 1e-14); /* bilinear: 1.5·... = 3 */
-  eos_destroy(ok);
+  eos_destroy(&ok);
   dk_errors_free(&e);
   /* truncated: the last row is missing */
   snprintf(text, sizeof text, "%s1 0 1\n1 1 2\n1 2 3\n2 0 4\n2 1 5\n", head);

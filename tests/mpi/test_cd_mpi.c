@@ -158,7 +158,7 @@ static result run_case(case_kind kind, const eos_t *eos, bool distributed, long 
            ms->lost_bonds);
   free(count);
   free(prof);
-  cd_sim_free(s);
+  cd_sim_destroy(&s);
   return res;
 }
 
@@ -217,7 +217,7 @@ int main(int argc, char **argv) {
   compare("piston (slab, rebalance 1.05)", CASE_REBALANCE, eos, 1000);
   compare("bonded + damping", CASE_BONDED, eos, 300);
   compare("piston, RKN4", CASE_RKN, eos, 400);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   int all = (int)par_sum_long(failures);
   if (my_rank == 0)
     printf("%s (%d failures over %d ranks)\n", all ? "FAILED" : "OK", all, ctx.size);

@@ -100,8 +100,8 @@ static int load(loaded *L, const char *text) {
 }
 
 static void unload(loaded *L) {
-  dm_problem_free(L->p);
-  eos_materials_free(L->mats);
+  dm_problem_destroy(&L->p);
+  eos_materials_destroy(&L->mats);
   dk_free(L->doc);
   dk_errors_free(&L->e);
 }

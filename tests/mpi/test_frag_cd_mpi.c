@@ -131,13 +131,13 @@ int main(int argc, char **argv) {
     printf("%s: %d failure(s) on %d rank(s)\n", total ? "FAILED" : "passed", total, ctx.size);
   cpl_fragments_free(&f);
   cpl_fragments_free(&ref);
-  cd_sim_free(ss);
-  cd_sim_free(ds);
+  cd_sim_destroy(&ss);
+  cd_sim_destroy(&ds);
   free(sskip);
   free(dskip);
   free(ref_id);
   free(gown);
-  eos_destroy(eos);
+  eos_destroy(&eos);
   par_finalize();
   return total ? 1 : 0;
 }

@@ -33,7 +33,7 @@ static void integrate(rkn_kind kind, double dt, double T, double q[2], double u[
   long n = lround(T / dt);
   for (long s = 0; s < n; ++s)
     assert_int_equal(rkn_step(ig, s * dt, dt, q, u, anharmonic, NULL, NULL), MS_OK);
-  rkn_destroy(ig);
+  rkn_destroy(&ig);
 }
 
 /* Order conditions of RKN methods up to order 4 with b = γ, c = α, a_lk = γ_k(α_l − α_k)
@@ -122,7 +122,7 @@ static void test_energy_bounded(void **state) {
            rkn_scheme_get((rkn_kind)k)->name, max_first, max_all, mean_last - mean_first);
     assert_true(max_all < 2.0 * max_first);
     assert_true(fabs(mean_last - mean_first) < 0.1 * 2.0 * max_first);
-    rkn_destroy(ig);
+    rkn_destroy(&ig);
   }
 }
 

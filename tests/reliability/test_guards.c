@@ -68,8 +68,8 @@ static void test_non_finite(void **state) {
   for (int k = 0; k < CD_GUARD_EVERY && st == MS_OK; k++) st = cd_sim_step(s);
   assert_int_equal(st, MS_ERR_UNSTABLE);
   assert_non_null(strstr(cd_sim_error(s), "unstable at step 20"));
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 static void test_too_fast(void **state) {
@@ -82,8 +82,8 @@ static void test_too_fast(void **state) {
   cd_sim_particles(s)->vx[17] = 1.01 * 25.0 * C0;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "moves it 0.505 r0 per step");
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 static void test_left_through_wall(void **state) {
@@ -95,8 +95,8 @@ static void test_left_through_wall(void **state) {
   cd_sim_particles(s)->z[17] = cd_sim_box(s)->hi[2] + 0.1 * R0;
   assert_int_equal(cd_sim_guard(s), MS_ERR_UNSTABLE);
   expect_message(s, "left the box through the wall: z = ");
-  cd_sim_free(s);
-  eos_destroy(eos);
+  cd_sim_destroy(&s);
+  eos_destroy(&eos);
 }
 
 int main(void) {
