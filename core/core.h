@@ -36,6 +36,10 @@ typedef enum ms_status {
 } ms_status;
 
 const char *ms_status_str(ms_status s);
+/* For a constructor whose arguments the caller knows to be valid (x_create(const x_params *,
+ * x **out) returning ms_status, docs/developing.md "Conventions"): anything but MS_OK is a
+ * programming error, reported with `what` and the status, and the run aborts. */
+void ms_must(ms_status st, const char *what);
 /* Process exit code for a status: 0 success, 2 bad input, 1 anything else (docs/design.md §8). */
 int ms_exit_code(ms_status s);
 

@@ -1,4 +1,6 @@
 /* Status codes (one list) and the exit-code mapping of docs/design.md §8; checked allocation. */
+#include <stdio.h>
+#include <stdlib.h>
 #include "core.h"
 
 #include <stdlib.h>
@@ -66,4 +68,10 @@ char *ms_strdup(const char *s) {
   char *d = ms_calloc(n, 1);
   memcpy(d, s, n);
   return d;
+}
+
+void ms_must(ms_status st, const char *what) {
+  if (st == MS_OK) return;
+  fprintf(stderr, "mscale: internal error: %s failed (%s)\n", what, ms_status_str(st));
+  abort();
 }

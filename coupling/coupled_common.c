@@ -217,7 +217,13 @@ ms_status cpl_transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *
   to.law = (cpl_drag_law)p->drag_law;
   to.rho_p = rho0;
   to.det_x = det_x;
-  cpl_transport *tr = cpl_transport_create(&to, cpl_grid_gas, gas);
+  cpl_transport *tr = NULL;
+  const cpl_transport_params tp = {.opts = &to, .gas = cpl_grid_gas, .gas_user = gas};
+  st = cpl_transport_create(&tp, &tr);
+  if (st != MS_OK) {
+    ms_log(ctx, MS_LOG_ERROR, "coupled: the transport's ODE solver could not be set up");
+    return ctx->size > 1 ? par_agree_status(st) : st;
+  }
   if (p->gas_return) cpl_transport_set_return(tr, cpl_gas_deposit, gas);
   /* keep each flight's fragment size g for the detector spectrum */
   int64_t *gcount = ms_calloc(fr->n + 1, sizeof *gcount);

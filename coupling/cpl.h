@@ -257,7 +257,13 @@ typedef enum cpl_frag_state {
 } cpl_frag_state;
 
 typedef struct cpl_transport cpl_transport;
-cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas, void *gas_user);
+typedef struct cpl_transport_params {
+  const cpl_transport_opts *opts;
+  cpl_gas_fn gas; /* the gas the fragments fly through */
+  void *gas_user;
+} cpl_transport_params;
+/* MS_ERR_INPUT (and *out NULL) without options or a gas. */
+ms_status cpl_transport_create(const cpl_transport_params *p, cpl_transport **out);
 void cpl_transport_destroy(cpl_transport **tr); /* null-safe; sets *tr = NULL */
 /* Optional momentum/energy return to the gas. */
 void cpl_transport_set_return(cpl_transport *tr, cpl_gas_return_fn fn, void *user);

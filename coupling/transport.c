@@ -53,7 +53,12 @@ void cpl_transport_opts_default(cpl_transport_opts *o) {
   o->max_steps = 100000;
 }
 
-cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas, void *gas_user) {
+ms_status cpl_transport_create(const cpl_transport_params *p, cpl_transport **out) {
+  *out = NULL;
+  if (!p->opts || !p->gas) return MS_ERR_INPUT;
+  const cpl_transport_opts *o = p->opts;
+  cpl_gas_fn gas = p->gas;
+  void *gas_user = p->gas_user;
   cpl_transport *tr = ms_calloc(1, sizeof *tr);
   tr->o = *o;
   if (!(tr->o.rtol > 0)) tr->o.rtol = 1e-8;
@@ -72,9 +77,10 @@ cpl_transport *cpl_transport_create(const cpl_transport_opts *o, cpl_gas_fn gas,
   tr->gas_user = gas_user;
   if (SUNContext_Create(NULL, &tr->sunctx) != 0) {
     free(tr);
-    return NULL;
+    return MS_ERR_SOLVER;
   }
-  return tr;
+  *out = tr;
+  return MS_OK;
 }
 
 static void rec_free(flight_rec *r) {

@@ -30,7 +30,12 @@ typedef struct ptl_state {
   uint8_t *flags;       /* PTL_* bits */
 } ptl_state;
 
-ptl_state *ptl_state_create(size_t cap, int dim);
+typedef struct ptl_state_params {
+  size_t cap; /* particles it can hold */
+  int dim;    /* 2 or 3 */
+} ptl_state_params;
+/* MS_ERR_INPUT (and *out NULL) unless dim is 2 or 3. */
+ms_status ptl_state_create(const ptl_state_params *p, ptl_state **out);
 void ptl_state_destroy(ptl_state **s); /* null-safe; sets *s = NULL */
 /* Append one particle at rest; returns its index, or (size_t)-1 if the capacity is exhausted. */
 size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, int mat);
@@ -159,7 +164,12 @@ typedef ms_status (*rkn_accel_fn)(void *user, double t, const double *q, double 
 typedef void (*rkn_constrain_fn)(void *user, double t, double *q, double *u);
 
 typedef struct rkn_integrator rkn_integrator;
-rkn_integrator *rkn_create(rkn_kind kind, size_t ndof);
+typedef struct rkn_params {
+  rkn_kind kind;
+  size_t ndof; /* > 0 */
+} rkn_params;
+/* MS_ERR_INPUT (and *out NULL) for an unknown kind or ndof 0. */
+ms_status rkn_create(const rkn_params *p, rkn_integrator **out);
 void rkn_destroy(rkn_integrator **ig); /* null-safe; sets *ig = NULL */
 const rkn_scheme *rkn_integrator_scheme(const rkn_integrator *ig);
 /* Dofs of the next steps, at most the ndof of rkn_create (MPI: the owned particle count changes

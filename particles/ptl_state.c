@@ -4,7 +4,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-ptl_state *ptl_state_create(size_t cap, int dim) {
+ms_status ptl_state_create(const ptl_state_params *p, ptl_state **out) {
+  *out = NULL;
+  if (p->dim != 2 && p->dim != 3) return MS_ERR_INPUT;
+  const size_t cap = p->cap;
+  const int dim = p->dim;
   ptl_state *s = ms_calloc(1, sizeof *s);
   s->cap = cap;
   s->dim = dim;
@@ -14,7 +18,8 @@ ptl_state *ptl_state_create(size_t cap, int dim) {
   s->gid = ms_aligned_alloc(c, sizeof *s->gid);
   s->mat = ms_aligned_alloc(c, 1);
   s->flags = ms_aligned_alloc(c, 1);
-  return s;
+  *out = s;
+  return MS_OK;
 }
 
 static void ptl_state_free(ptl_state *s) {
@@ -59,7 +64,8 @@ size_t ptl_state_add(ptl_state *s, double x, double y, double z, double mass, in
 
 void ptl_state_reserve(ptl_state *s, size_t cap) {
   if (cap <= s->cap) return;
-  ptl_state *t = ptl_state_create(cap, s->dim);
+  ptl_state *t = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = cap, .dim = s->dim}, &t), "ptl_state_create");
   double *src[] = {s->x, s->y, s->z, s->vx, s->vy, s->vz, s->fx, s->fy, s->fz, s->mass};
   double *dst[] = {t->x, t->y, t->z, t->vx, t->vy, t->vz, t->fx, t->fy, t->fz, t->mass};
   for (size_t k = 0; k < sizeof src / sizeof *src; k++)

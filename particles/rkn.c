@@ -57,15 +57,18 @@ struct rkn_integrator {
   double *acc[3];   /* stage accelerations a(q_l) */
 };
 
-rkn_integrator *rkn_create(rkn_kind kind, size_t ndof) {
-  const rkn_scheme *s = rkn_scheme_get(kind);
-  if (!s || ndof == 0) return NULL;
+ms_status rkn_create(const rkn_params *p, rkn_integrator **out) {
+  *out = NULL;
+  const rkn_scheme *s = rkn_scheme_get(p->kind);
+  const size_t ndof = p->ndof;
+  if (!s || ndof == 0) return MS_ERR_INPUT;
   rkn_integrator *ig = ms_calloc(1, sizeof *ig);
   ig->s = *s;
   ig->ndof = ig->cap = ndof;
   ig->q = ms_aligned_alloc(ndof, sizeof(double));
   for (int l = 0; l < s->stages; ++l) ig->acc[l] = ms_aligned_alloc(ndof, sizeof(double));
-  return ig;
+  *out = ig;
+  return MS_OK;
 }
 
 static void rkn_release(rkn_integrator *ig) {

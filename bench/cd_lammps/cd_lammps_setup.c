@@ -10,7 +10,8 @@ cd_sim *cd_lammps_setup(bool probB, const eos_t *eos, int *nx_out) {
   const double mass = RHO0 * R0 * R0 * R0 / sqrt(2.0);
   const int nx = probB ? 20 : 40, nz = probB ? 200 : 40;
   const size_t n = (size_t)4 * nx * nx * nz;
-  ptl_state *p = ptl_state_create(n, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = n, .dim = 3}, &p), "ptl_state_create");
   double shift[3] = {0.25, 0.25, probB ? 0.0 : 0.25}, origin[3] = {0, 0, 0};
   cd_lattice_fcc(p, nx, nx, nz, shift, origin, R0, mass, 0);
   /* v[i][c] = VAMP(2u_{3i+c} − 1), mean over mobile particles subtracted; piston at +UP z */
@@ -34,7 +35,9 @@ cd_sim *cd_lammps_setup(bool probB, const eos_t *eos, int *nx_out) {
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, probB ? CD_BC_FREE : CD_BC_PERIODIC}};
   cd_config cfg = {
       .r0 = R0, .skin = skin, .dt = dt, .cutoff = CD_CUTOFF_PLAIN, .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = ms_calloc(1, sizeof *t);
   if (cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0.0, rc, 0.5 * R0, 1.0, 0) != MS_OK) {
     fprintf(stderr, "table failed\n");

@@ -247,7 +247,15 @@ enum { CD_MAX_PARTNERS = 16 };
 
 /* Takes ownership of p. Tables are set afterwards with cd_sim_set_pair; cd_sim_init then
  * builds the lists (and, in bonded mode, the partner lists) and the first forces. */
-cd_sim *cd_sim_create(ptl_state *p, const cd_box *box, const cd_config *cfg, int nmat);
+typedef struct cd_sim_params {
+  ptl_state *particles; /* ownership passes to the sim */
+  const cd_box *box;
+  const cd_config *cfg;
+  int nmat; /* 1 .. CD_MAX_MATERIALS */
+} cd_sim_params;
+/* MS_ERR_INPUT (and *out NULL, the particles still the caller's) for a missing particle state,
+ * box or configuration or a material count out of range. */
+ms_status cd_sim_create(const cd_sim_params *p, cd_sim **out);
 /* Takes ownership of t (heap allocated); a != b sets both [a][b] and [b][a]. */
 void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t);
 /* Piston: every PTL_DRIVEN particle moves with u(t)·dir (history copied). */

@@ -182,7 +182,8 @@ cd_restart *cd_restart_read(ms_h5r *h, const ms_ctx *ctx, int dim, bool bonded, 
     free(o);
   }
   if (st == MS_OK) {
-    r->p = ptl_state_create(nrow, dim);
+    ms_must(ptl_state_create(&(ptl_state_params){.cap = nrow, .dim = dim}, &r->p),
+            "ptl_state_create");
     r->p->n = r->p->nlocal = nrow;
     for (size_t i = 0; i < nrow; i++) {
       r->p->x[i] = pos[3 * i], r->p->y[i] = pos[3 * i + 1], r->p->z[i] = pos[3 * i + 2];

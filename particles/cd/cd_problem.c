@@ -763,7 +763,8 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
     free(xyz);
     free(grain);
   }
-  ptl_state *s = ptl_state_create(l.n, p->dim);
+  ptl_state *s = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = l.n, .dim = p->dim}, &s), "ptl_state_create");
   for (size_t q = 0; q < l.n; q++) {
     const cd_region *r = &p->reg[l.reg[q]];
     const double *x = l.x + 3 * q;
@@ -969,7 +970,10 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
                    .integrator = p->integrator};
   const bool dist = ctx->size > 1;
   const size_t nglobal = ps->n;
-  cd_sim *s = cd_sim_create(ps, &p->box, &cfg, p->nmat);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(
+              &(cd_sim_params){.particles = ps, .box = &p->box, .cfg = &cfg, .nmat = p->nmat}, &s),
+          "cd_sim_create");
   /* every rank built (or read) the whole set: cd_sim_init keeps what each rank's cells own */
   if (dist) cd_sim_set_mpi(s, &p->mpi);
   for (int a = 0; a < p->nmat; a++)

@@ -199,7 +199,9 @@ static ptl_state *region_lattice(const cd_region_params *p, double x_drive, cons
   const bool fcc = p->lattice == 1;
   const double a = p->k.r0;
   size_t ncap = (size_t)(fcc ? 4 : 2) * (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
-  ptl_state *tmp = ptl_state_create(ncap, fcc ? 3 : 2);
+  ptl_state *tmp = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = ncap, .dim = fcc ? 3 : 2}, &tmp),
+          "ptl_state_create");
   if (fcc) {
     double sh[3] = {0.25, 0.25, 0.25}, o[3] = {x_drive, 0, 0};
     cd_lattice_fcc(tmp, n[0], n[1], n[2], sh, o, a, mass, 0);
@@ -215,7 +217,9 @@ static ptl_state *region_lattice(const cd_region_params *p, double x_drive, cons
   }
   surface_modes modes;
   surface_setup(p, &modes, fcc);
-  ptl_state *ps = ptl_state_create(tmp->n, fcc ? 3 : 2);
+  ptl_state *ps = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = tmp->n, .dim = fcc ? 3 : 2}, &ps),
+          "ptl_state_create");
   const double row = fcc ? 0.5 * sqrt(2.0) * a : 0.5 * sqrt(3.0) * a; /* layer spacing in x */
   for (size_t i = 0; i < tmp->n; i++) {
     double drop = surface_drop(p, &modes, tmp->y[i], tmp->z[i]);
@@ -268,7 +272,10 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
   cfg.lattice = lat;
   cfg.thickness = p->k.thickness;
   const size_t nglobal = ps->n;
-  cd_sim *sim = cd_sim_create(ps, &box, &cfg, 1);
+  cd_sim *sim = NULL;
+  ms_must(
+      cd_sim_create(&(cd_sim_params){.particles = ps, .box = &box, .cfg = &cfg, .nmat = 1}, &sim),
+      "cd_sim_create");
   cd_pair_table *tab = ms_calloc(1, sizeof *tab);
   ms_status st = cd_pair_table_build(tab, eos, eos, lat, a, p->k.thickness, p->k.rc * a,
                                      p->k.r_min * a, 1.0, p->k.table_intervals);

@@ -107,13 +107,17 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
 }
 
 /* ---- set-up ---- */
-cd_sim *cd_sim_create(ptl_state *p, const cd_box *box, const cd_config *cfg, int nmat) {
+ms_status cd_sim_create(const cd_sim_params *p, cd_sim **out) {
+  *out = NULL;
+  if (!p->particles || !p->box || !p->cfg || p->nmat < 1 || p->nmat > CD_MAX_MATERIALS)
+    return MS_ERR_INPUT;
   cd_sim *s = ms_calloc(1, sizeof *s);
-  s->p = p;
-  s->box = *box;
-  s->cfg = *cfg;
-  s->nmat = nmat;
-  return s;
+  s->p = p->particles;
+  s->box = *p->box;
+  s->cfg = *p->cfg;
+  s->nmat = p->nmat;
+  *out = s;
+  return MS_OK;
 }
 
 void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t) {
@@ -343,7 +347,8 @@ ms_status cd_sim_init(cd_sim *s) {
     if ((int)s->cfg.integrator < 0 || s->cfg.integrator >= CD_INT_COUNT) return MS_ERR_INPUT;
     /* MPI: room for every particle (the owned count changes with migration; rkn_resize) */
     const size_t cap = s->dd ? p->cap : p->n;
-    s->rkn = rkn_create(rkn_of[s->cfg.integrator], 3 * cap);
+    ms_must(rkn_create(&(rkn_params){.kind = rkn_of[s->cfg.integrator], .ndof = 3 * cap}, &s->rkn),
+            "rkn_create");
     s->driven_x0 = ms_calloc(3 * (s->dd ? cap : s->n_driven) + 1, sizeof *s->driven_x0);
     /* q_l − x^n = Δt α_l u + Δt² Σ_{k<l} γ_k(α_l − α_k) a_k: reach coefficients */
     const rkn_scheme *sc = rkn_integrator_scheme(s->rkn);

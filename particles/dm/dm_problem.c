@@ -410,7 +410,9 @@ static void run_records(dm_run *r) {
   for (size_t q = 0; q < p->nsnapshot_times; ++q)
     r->snap_step[q] = lround(p->snapshot_times[q] / r->dt);
 
-  r->ig = rkn_create(p->integrator, 3 * (r->ls->n ? r->ls->n : 1));
+  ms_must(rkn_create(&(rkn_params){.kind = p->integrator, .ndof = 3 * (r->ls->n ? r->ls->n : 1)},
+                     &r->ig),
+          "rkn_create");
   dm_dist_diag dg;
   dm_dist_diagnostics(r->d, &dg);
   r->E0 = dg.kinetic + dg.potential;

@@ -83,7 +83,9 @@ static size_t run(double J, cd_cutoff_mode mode, int nz, double *vfs) {
   eos_t *eos = eos_create_mg_cold(2.71, C0, 4.0, 2.0, true);
   const int nx = 2;
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * nx * nx * nz, .dim = 3}, &p),
+          "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
   const size_t npist = (size_t)4 * nx * nx * 2;
@@ -100,7 +102,9 @@ static size_t run(double J, cd_cutoff_mode mode, int nz, double *vfs) {
                    .damping_gamma = J > 0 ? C0 / (J * R0) : 0.0,
                    .sort_every = 8,
                    .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.1 * R0, 0.5 * R0, 1.0, 0), MS_OK);

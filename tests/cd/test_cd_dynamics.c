@@ -27,7 +27,9 @@ static eos_t *al(void) { return eos_create_mg_cold(2.71, C0, 4.0, 2.0, true); }
 static cd_sim *hot_block_with(const eos_t *eos, int n, double vamp, double gamma, double dt_frac,
                               cd_cutoff_mode mode, cd_integrator integ) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * n * n * n, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * n * n * n, .dim = 3}, &p),
+          "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.25}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, n, n, n, sh, o, R0, m, 0);
   double mean[3] = {0, 0, 0}, *v[3] = {p->vx, p->vy, p->vz};
@@ -48,7 +50,9 @@ static cd_sim *hot_block_with(const eos_t *eos, int n, double vamp, double gamma
                    .damping_gamma = gamma,
                    .lattice = CD_LATTICE_FCC,
                    .integrator = integ};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
@@ -213,7 +217,8 @@ static void test_lists_moving_block(void **state) {
 
   /* four particles displaced from build positions at 0 (skin 0.1: skin/2 = 0.05; xb_err 0) */
   cd_neigh *nl = cd_neigh_create(4, 1.1, 0.1);
-  ptl_state *p = ptl_state_create(4, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = 4, .dim = 3}, &p), "ptl_state_create");
   p->n = 4;
   const double dx[4] = {9.97, 10.03, 10.0, 10.0}; /* |Δ| ≈ 10, all within 0.03 of (10, 0, 0) */
   for (int i = 0; i < 4; i++) p->x[i] = dx[i];
@@ -342,7 +347,9 @@ static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_integrator in
                          double *D) {
   const int nx = 3, nz = 40;
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * nx * nx * nz, .dim = 3}, &p),
+          "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
   for (size_t i = 0; i < (size_t)4 * nx * nx * 2; i++) p->flags[i] = PTL_DRIVEN;
@@ -353,7 +360,9 @@ static double piston_run(const eos_t *eos, cd_cutoff_mode mode, cd_integrator in
                    .cutoff = mode,
                    .lattice = CD_LATTICE_FCC,
                    .integrator = integ};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);

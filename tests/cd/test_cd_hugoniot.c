@@ -137,7 +137,10 @@ static ptl_state *crystal_slab(double m, int nx, int nz, orientation orient, cd_
     cell[c] *= R0;
     nc[c] = (int)lround((c < 2 ? nx : nz) * a / cell[c]);
   }
-  ptl_state *p = ptl_state_create((size_t)nb * nc[0] * nc[1] * nc[2], 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)nb * nc[0] * nc[1] * nc[2], .dim = 3},
+                           &p),
+          "ptl_state_create");
   const double piston_top = 2.0 * a - 1e-3 * R0;
   size_t sample_sites = 0, sample_kept = 0;
   for (int iz = 0; iz < nc[2]; iz++)
@@ -178,7 +181,9 @@ static double opt_damping_j = 0.0; /* --damping J: relative-velocity damping Γ 
                                     * shock run ([Davydov] eq. 6; exploration), 0: off */
 
 static cd_sim *make_sim(const eos_t *eos, ptl_state *p, const cd_box *box, const cd_config *cfg) {
-  cd_sim *s = cd_sim_create(p, box, cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = box, .cfg = cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, opt_rc * R0, 0.5 * R0, 1.0, 0),
@@ -209,7 +214,8 @@ static shock_result piston_shock(const eos_t *eos, cd_cutoff_mode mode, double u
   double fill = 1.0;
   if (poly) { /* a copy of the relaxed sample */
     box = poly->box;
-    p = ptl_state_create(poly->p->n, 3);
+    ms_must(ptl_state_create(&(ptl_state_params){.cap = poly->p->n, .dim = 3}, &p),
+            "ptl_state_create");
     for (size_t i = 0; i < poly->p->n; i++) {
       size_t k = ptl_state_add(p, poly->p->x[i], poly->p->y[i], poly->p->z[i], m, 0);
       p->flags[k] = poly->p->flags[i];
@@ -382,7 +388,8 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   int32_t *grain = NULL;
   size_t n = cd_polycrystal(3, R0, 0, lo, hi, per, opt_ngrains, (uint64_t)opt_seed, opt_dmin, NULL,
                             NULL, &xyz, &grain, &ps.porosity);
-  ptl_state *p = ptl_state_create(n, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = n, .dim = 3}, &p), "ptl_state_create");
   for (size_t i = 0; i < n; i++) {
     size_t k = ptl_state_add(p, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], m, 0);
     if (p->z[k] < 2.0 * a) p->flags[k] = PTL_DRIVEN; /* the piston: the bottom 2a */
@@ -417,7 +424,8 @@ static poly_sample relax_poly(const eos_t *eos, int nx, int nz) {
   cd_profile(s, 2, zmin - 0.5 * a, zmin - 0.5 * a + nbin * a, nbin, area, prof);
   ps.rho00 = mean_bin_density(prof, nbin, zmin + 5 * a, zmax - 5 * a);
   free(prof);
-  ps.p = ptl_state_create(cd_sim_particles(s)->n, 3);
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = cd_sim_particles(s)->n, .dim = 3}, &ps.p),
+          "ptl_state_create");
   for (size_t i = 0; i < cd_sim_particles(s)->n; i++) {
     size_t k = ptl_state_add(ps.p, cd_sim_particles(s)->x[i], cd_sim_particles(s)->y[i],
                              cd_sim_particles(s)->z[i], m, 0);

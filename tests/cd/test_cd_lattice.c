@@ -29,8 +29,12 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
   const double lam_final = lam;
   lam = 1.0;
   double m = eos_rho0(eos) * cd_cluster_volume(lat, R0, h);
-  ptl_state *p = ptl_state_create(lat == CD_LATTICE_FCC ? 4 * n * n * n : 2 * 2 * n * n * 2,
-                                  lat == CD_LATTICE_FCC ? 3 : 2);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(
+              &(ptl_state_params){.cap = lat == CD_LATTICE_FCC ? 4 * n * n * n : 2 * 2 * n * n * 2,
+                                  .dim = lat == CD_LATTICE_FCC ? 3 : 2},
+              &p),
+          "ptl_state_create");
   cd_box box = {
       .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, lat == CD_LATTICE_FCC ? CD_BC_PERIODIC : CD_BC_FREE}};
   double vol;
@@ -49,7 +53,9 @@ static void strained_stress(const eos_t *eos, cd_lattice lat, double delta, doub
   }
   cd_config cfg = {
       .r0 = R0, .skin = 0.1 * R0, .dt = 1e-6, .cutoff = mode, .lattice = lat, .thickness = h};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(cd_pair_table_build(t, eos, eos, lat, R0, h, rc, 0.5 * R0, 1.0, 0), MS_OK);
   cd_sim_set_pair(s, 0, 0, t);
@@ -201,7 +207,9 @@ static cd_sim *bonded_sim(const eos_t *eos, ptl_state *p, const cd_box *box) {
                          .dt = 0.02 * R0 / eos_c0(eos),
                          .cutoff = CD_CUTOFF_BONDED,
                          .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
@@ -225,7 +233,9 @@ static void test_relax(void **state) {
   const int n = 4;
   const double m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0), L = n * sqrt(2.0) * R0;
   for (int plain = 0; plain < 2; plain++) {
-    ptl_state *p = ptl_state_create(4 * n * n * n, 3);
+    ptl_state *p = NULL;
+    ms_must(ptl_state_create(&(ptl_state_params){.cap = 4 * n * n * n, .dim = 3}, &p),
+            "ptl_state_create");
     const double zero[3] = {0, 0, 0}, sh[3] = {0.25, 0.25, 0.25};
     cd_lattice_fcc(p, n, n, n, sh, zero, R0, m, 0);
     for (size_t i = 0; i < p->n; i++) {
@@ -291,7 +301,8 @@ static size_t relax_poly_once(const eos_t *eos, double *stress_out, double *rho_
   int32_t *grain = NULL;
   size_t n = cd_polycrystal(3, R0, 0, lo, hi, per, 4, 5, 0.6, NULL, NULL, &xyz, &grain, &por);
   const double m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create(n, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = n, .dim = 3}, &p), "ptl_state_create");
   for (size_t i = 0; i < n; i++) ptl_state_add(p, xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], m, 0);
   free(xyz);
   free(grain);

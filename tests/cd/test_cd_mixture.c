@@ -48,7 +48,9 @@ static double fit_slope(const double *t, const double *z, int n, double tmin) {
 static double mixture_shock(eos_t *const comp[2], double alpha, double up, int nx, int nz,
                             double *alpha_out) {
   const double a = sqrt(2.0) * R0, vs = cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * nx * nx * nz, .dim = 3}, &p),
+          "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.0}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, 1.0, 0);
   /* grains of ~6 r0 diameter */
@@ -95,7 +97,9 @@ static double mixture_shock(eos_t *const comp[2], double alpha, double up, int n
                    .cutoff = CD_CUTOFF_BONDED,
                    .sort_every = 8,
                    .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 2);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 2}, &s),
+          "cd_sim_create");
   for (int x = 0; x < 2; x++)
     for (int y = x; y < 2; y++) {
       cd_pair_table *t = calloc(1, sizeof *t);

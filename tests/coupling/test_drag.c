@@ -83,7 +83,10 @@ static cpl_transport *make_transport(cpl_drag_law law, uniform_gas *gas, double 
   o.rtol = 1e-10;
   o.atol_x = 1e-14;
   o.atol_v = 1e-14;
-  cpl_transport *tr = cpl_transport_create(&o, gas_uniform, gas);
+  cpl_transport *tr = NULL;
+  ms_must(cpl_transport_create(
+              &(cpl_transport_params){.opts = &o, .gas = gas_uniform, .gas_user = gas}, &tr),
+          "cpl_transport_create");
   assert_non_null(tr);
   return tr;
 }

@@ -140,7 +140,10 @@ static totals fly(bool with_return, totals *start) {
   o.law = CPL_DRAG_SCHILLER_NAUMANN;
   o.rho_p = RHO_PB;
   o.det_x = 3.5;
-  cpl_transport *tr = cpl_transport_create(&o, column_gas, &c);
+  cpl_transport *tr = NULL;
+  ms_must(cpl_transport_create(
+              &(cpl_transport_params){.opts = &o, .gas = column_gas, .gas_user = &c}, &tr),
+          "cpl_transport_create");
   if (with_return) cpl_transport_set_return(tr, column_deposit, &c);
   for (int k = 0; k < NFRAG; k++) {
     double x0[3] = {0.3 + 0.05 * k, 0, 0}, v0[3] = {FRAG_V[k], 0, 0};

@@ -161,7 +161,8 @@ static void test_momenta_conserved(void **state) {
       pscale += um;
       jscale += um * 0.5;
     }
-    rkn_integrator *ig = rkn_create((rkn_kind)k, 3 * s.n);
+    rkn_integrator *ig = NULL;
+    ms_must(rkn_create(&(rkn_params){.kind = (rkn_kind)k, .ndof = 3 * s.n}, &ig), "rkn_create");
     const double dt = 2e-3; /* c ≈ 5, h = 0.1: well inside the stability limit */
     for (int step = 0; step < 2000; ++step)
       assert_int_equal(rkn_step(ig, step * dt, dt, s.w, s.u, dm_accel, dm_constrain, m), MS_OK);
@@ -194,7 +195,8 @@ static void test_energy_no_drift(void **state) {
   ms_ctx_init_serial(&ctx);
   dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
   assert_non_null(m);
-  rkn_integrator *ig = rkn_create(RKN_VERLET, 3 * s.n);
+  rkn_integrator *ig = NULL;
+  ms_must(rkn_create(&(rkn_params){.kind = RKN_VERLET, .ndof = 3 * s.n}, &ig), "rkn_create");
   double E0 = dm_kinetic_energy(&s) + dm_potential_energy(m, s.w);
   const double dt = 4e-3; /* ~ 1/5 of the Verlet limit for c_max ≈ 7, h = 0.1 */
   const long nsteps = 100000, tenth = nsteps / 10;
@@ -317,7 +319,8 @@ static void integrate_chain(rkn_kind kind, double dt, double T, double *w_out) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   dm_model *m = model_of(&s, &opt, &ctx, NULL, NULL);
-  rkn_integrator *ig = rkn_create(kind, 3 * n);
+  rkn_integrator *ig = NULL;
+  ms_must(rkn_create(&(rkn_params){.kind = kind, .ndof = 3 * n}, &ig), "rkn_create");
   long steps = lround(T / dt);
   for (long k = 0; k < steps; ++k) rkn_step(ig, k * dt, dt, s.w, s.u, dm_accel, dm_constrain, m);
   for (int i = 0; i < n; ++i) w_out[i] = s.w[3 * i];

@@ -18,7 +18,9 @@ static cd_sim *cd_test_create(ptl_state *p, const cd_box *box, const cd_config *
     const size_t r = (size_t)par_rank(), P = (size_t)par_size();
     ptl_state_keep_range(p, p->n * r / P, p->n * (r + 1) / P);
   }
-  cd_sim *s = cd_sim_create(p, box, cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = box, .cfg = cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   const double r0 = cfg->r0;
   if (!t ||

@@ -49,7 +49,9 @@ static cd_sim *make_case(case_kind kind, const eos_t *eos, bool distributed) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
   const bool piston = kind != CASE_BONDED;
   const int nx = piston ? 5 : 7, nz = piston ? 26 : 7;
-  ptl_state *p = ptl_state_create((size_t)4 * nx * nx * nz, 3);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * nx * nx * nz, .dim = 3}, &p),
+          "ptl_state_create");
   double sh[3] = {0.25, 0.25, piston ? 0.0 : 0.25}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, nx, nx, nz, sh, o, R0, m, 0);
   const double vamp = piston ? 0.02 : 0.5;

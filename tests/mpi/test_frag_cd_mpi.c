@@ -29,7 +29,10 @@
 static cd_sim *make_block(const eos_t *eos, bool distributed) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
   const double half = 0.5 * NCELL * a;
-  ptl_state *p = ptl_state_create((size_t)4 * NCELL * NCELL * NCELL, 3);
+  ptl_state *p = NULL;
+  ms_must(
+      ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * NCELL * NCELL * NCELL, .dim = 3}, &p),
+      "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.25}, o[3] = {-half, -half, -half};
   cd_lattice_fcc(p, NCELL, NCELL, NCELL, sh, o, R0, m, 0);
   double *x[3] = {p->x, p->y, p->z}, *v[3] = {p->vx, p->vy, p->vz};

@@ -28,7 +28,8 @@ static double anharmonic_energy(const double *q, const double *u) {
 }
 
 static void integrate(rkn_kind kind, double dt, double T, double q[2], double u[2]) {
-  rkn_integrator *ig = rkn_create(kind, 2);
+  rkn_integrator *ig = NULL;
+  ms_must(rkn_create(&(rkn_params){.kind = kind, .ndof = 2}, &ig), "rkn_create");
   q[0] = 0.6, q[1] = -0.3, u[0] = 0.0, u[1] = 0.4;
   long n = lround(T / dt);
   for (long s = 0; s < n; ++s)
@@ -105,7 +106,8 @@ static void test_convergence_order(void **state) {
 static void test_energy_bounded(void **state) {
   (void)state;
   for (int k = 0; k < RKN_KIND_COUNT; ++k) {
-    rkn_integrator *ig = rkn_create((rkn_kind)k, 2);
+    rkn_integrator *ig = NULL;
+    ms_must(rkn_create(&(rkn_params){.kind = (rkn_kind)k, .ndof = 2}, &ig), "rkn_create");
     double q[2] = {0.6, -0.3}, u[2] = {0.0, 0.4};
     double E0 = anharmonic_energy(q, u), dt = 0.1;
     long nsteps = 100000, tenth = nsteps / 10;

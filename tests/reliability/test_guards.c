@@ -21,7 +21,10 @@ enum { NCELL = 3 };
 /* a resting fcc block of NCELL³ cells, walls on z, periodic on x and y, run for 10 steps */
 static cd_sim *block(eos_t *eos) {
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
-  ptl_state *p = ptl_state_create((size_t)4 * NCELL * NCELL * NCELL, 3);
+  ptl_state *p = NULL;
+  ms_must(
+      ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * NCELL * NCELL * NCELL, .dim = 3}, &p),
+      "ptl_state_create");
   double sh[3] = {0.25, 0.25, 0.25}, o[3] = {0, 0, 0};
   cd_lattice_fcc(p, NCELL, NCELL, NCELL, sh, o, R0, m, 0);
   cd_box box = {.lo = {0, 0, 0},
@@ -32,7 +35,9 @@ static cd_sim *block(eos_t *eos) {
                    .dt = 0.02 * R0 / C0,
                    .cutoff = CD_CUTOFF_BONDED,
                    .lattice = CD_LATTICE_FCC};
-  cd_sim *s = cd_sim_create(p, &box, &cfg, 1);
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
   cd_pair_table *t = calloc(1, sizeof *t);
   assert_int_equal(
       cd_pair_table_build(t, eos, eos, CD_LATTICE_FCC, R0, 0, 1.2 * R0, 0.5 * R0, 1.0, 0), MS_OK);
