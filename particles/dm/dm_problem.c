@@ -27,7 +27,7 @@ static const char *const profile_names[] = {
 
 enum response { RESP_LINEAR = 0, RESP_EOS };
 static const char *const response_names[] = {"linear_elastic", "eos", NULL};
-static const char *const yield_names[] = {"none", "elastic_plastic", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan", NULL};
 
 typedef struct dm_layer {
   double x_max; /* particles with x < x_max (the last layer takes the rest) */
@@ -35,6 +35,7 @@ typedef struct dm_layer {
   const char *name;
   int response, yield; /* enum response, dm_yield */
   double Y0;           /* yield stress (GPa), elastic_plastic */
+  dm_sg sg;            /* steinberg_guinan (dm_strength.c) */
   const eos_t *eos;    /* the material's EOS (response eos) */
 } dm_layer;
 
@@ -151,6 +152,7 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
                    mm->name);
       }
     }
+    dm_sg_read(e, doc, it, ly->yield, ly->eos, &ly->sg); /* strength_set / strength keys */
     if (ly->yield != DM_YIELD_NONE) {
       if (ly->response != RESP_EOS)
         dk_error(e, doc, it, "discrete_model.layers: 'yield' needs response: eos");
@@ -159,12 +161,17 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
                  "discrete_model.layers: a yield model on an ideal gas (material '%s') has no "
                  "meaning",
                  ly->name);
-      if (!(ly->G > 0))
+      if (ly->yield == DM_YIELD_STEINBERG_GUINAN) ly->G = ly->sg.G0, ly->Y0 = ly->sg.Y0;
+      else if (!(ly->G > 0))
         dk_error(e, doc, it,
                  "discrete_model.layers: yield: elastic_plastic needs the material's "
                  "shear_modulus > 0 (GPa), got %g",
                  ly->G);
-      if (!dk_get(it, "yield_stress"))
+      if (ly->yield == DM_YIELD_STEINBERG_GUINAN) {
+        if (dk_get(it, "yield_stress"))
+          dk_error(e, doc, dk_get(it, "yield_stress"),
+                   "discrete_model.layers: with steinberg_guinan give Y0 as strength.yield_stress");
+      } else if (!dk_get(it, "yield_stress"))
         dk_error(e, doc, it, "discrete_model.layers: yield: elastic_plastic needs 'yield_stress'");
       else dk_read_positive(e, doc, it, "yield_stress", MS_DIM_PRESSURE, true, 0, &ly->Y0);
     } else if (dk_get(it, "yield_stress")) {
@@ -1074,7 +1081,8 @@ static ms_status run_finite(ms_ctx *ctx, dm_problem *p) {
     mat[l] = (dm_fin_material){.eos = p->layers[l].eos,
                                .yield = p->layers[l].yield,
                                .G = p->layers[l].G,
-                               .Y0 = p->layers[l].Y0};
+                               .Y0 = p->layers[l].Y0,
+                               .sg = &p->layers[l].sg};
   uint8_t *imat = ms_calloc(s.n, 1);
   for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(layer_at(p, s.X[3 * i]) - p->layers);
   dm_fin_params par = {
