@@ -263,6 +263,8 @@ dm_fin *dm_fin_create(dm_model *m, const dm_fin_material *mat, const uint8_t *im
     if (st->bc[i] == DM_MIRROR) return NULL;
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
     return NULL;
+  for (size_t i = 0; i < st->n; ++i)
+    if (mat[imat[i]].yield == DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) return NULL;
   dm_fin *f = ms_calloc(1, sizeof *f);
   size_t n = st->n, n1 = n ? n : 1;
   f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;
