@@ -230,11 +230,17 @@ size_t dm_problem_final_state(const dm_problem *p, const double **w, const doubl
  * f_i = Σ_k (Q_i + Q_k) ξ_ik with Q_i = V_i P_i A_i⁻¹ − κ_i C_i (+ the bond penalty
  * (κ_i + κ_k) Δw_ik), m_i ė_i = V_i P_i : Ḟ_i(ū) with ū the time-centred velocity of each half
  * kick of velocity Verlet: Σ m|u|²/2 + Σ m e + E_hg − W_piston is conserved to round-off. */
-typedef enum dm_yield { DM_YIELD_NONE = 0, DM_YIELD_ELASTIC_PLASTIC = 1 } dm_yield;
+typedef enum dm_yield {
+  DM_YIELD_NONE = 0,
+  DM_YIELD_ELASTIC_PLASTIC = 1,
+  DM_YIELD_STEINBERG_GUINAN = 2 /* G(P, T), Y(ε_p, P, T), melt (dm_strength.c) */
+} dm_yield;
+typedef struct dm_sg dm_sg; /* Steinberg–Guinan parameters (dm_impl.h) */
 typedef struct dm_fin_material {
   const eos_t *eos; /* not owned */
   int yield;        /* dm_yield */
-  double G, Y0;     /* shear modulus, yield stress (GPa) */
+  double G, Y0;     /* shear modulus, yield stress (GPa); G0, Y0 for steinberg_guinan */
+  const dm_sg *sg;  /* steinberg_guinan: its parameters (not owned), else NULL */
 } dm_fin_material;
 typedef struct dm_fin_params {
   double cq, cl;    /* quadratic and linear viscosity coefficients */
@@ -301,6 +307,7 @@ typedef struct dm_piston_result {
   ms_status status;
   /* layer profile at t_end (nx rows, each averaged over the layer): X, x, u_x, ρ, p, q, −σ_xx, e */
   double *profile; /* [nx][8], owned by the caller (free) */
+  double *eps_p;   /* [nx] layer mean of the plastic strain at t_end (inside profile's block) */
 } dm_piston_result;
 ms_status dm_piston_run(const dm_piston_spec *spec, const ms_ctx *ctx, dm_piston_result *res);
 

@@ -13,7 +13,7 @@ static const char *const profile_names[] = {
     "none", "rod_triangle", "rod_sine", "contact_harmonic", "random_velocity", NULL};
 
 static const char *const response_names[] = {"linear_elastic", "eos", NULL};
-static const char *const yield_names[] = {"none", "elastic_plastic", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan", NULL};
 
 static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                         dk_errors *e) {
@@ -73,6 +73,7 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
                    mm->name);
       }
     }
+    dm_sg_read(e, doc, it, ly->yield, ly->eos, &ly->sg); /* strength_set / strength keys */
     if (ly->yield != DM_YIELD_NONE) {
       if (ly->response != RESP_EOS)
         dk_error(e, doc, it, "discrete_model.layers: 'yield' needs response: eos");
@@ -81,12 +82,17 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
                  "discrete_model.layers: a yield model on an ideal gas (material '%s') has no "
                  "meaning",
                  ly->name);
-      if (!(ly->G > 0))
+      if (ly->yield == DM_YIELD_STEINBERG_GUINAN) ly->G = ly->sg.G0, ly->Y0 = ly->sg.Y0;
+      else if (!(ly->G > 0))
         dk_error(e, doc, it,
                  "discrete_model.layers: yield: elastic_plastic needs the material's "
                  "shear_modulus > 0 (GPa), got %g",
                  ly->G);
-      if (!dk_get(it, "yield_stress"))
+      if (ly->yield == DM_YIELD_STEINBERG_GUINAN) {
+        if (dk_get(it, "yield_stress"))
+          dk_error(e, doc, dk_get(it, "yield_stress"),
+                   "discrete_model.layers: with steinberg_guinan give Y0 as strength.yield_stress");
+      } else if (!dk_get(it, "yield_stress"))
         dk_error(e, doc, it, "discrete_model.layers: yield: elastic_plastic needs 'yield_stress'");
       else dk_read_positive(e, doc, it, "yield_stress", MS_DIM_PRESSURE, true, 0, &ly->Y0);
     } else if (dk_get(it, "yield_stress")) {

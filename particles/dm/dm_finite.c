@@ -81,6 +81,15 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   const double q = trD < 0 ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
+  double G = mt->G, Y = mt->Y0;                 /* elastic_plastic: constants */
+  if (mt->yield == DM_YIELD_STEINBERG_GUINAN) { /* G(p, T), Y(ε_p, p, T) of this state */
+    const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
+    if (!isfinite(T)) {
+      *what = "temperature T (no cold curve at this density)", *val = rho;
+      return -1.0;
+    }
+    dm_sg_moduli(mt->sg, rho / eos_rho0(mt->eos), p, T, f->eps_p[i], &G, &Y);
+  }
   if (strength && dt > 0) {
     /* Jaumann: ṡ = 2G D′ + W s − s W (D = sym L, W = skew L) */
     double D[9], W[9], ds[9];
@@ -94,7 +103,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
         double ws = 0;
         for (int c2 = 0; c2 < 3; ++c2)
           ws += W[3 * a + c2] * s[3 * c2 + b] - s[3 * a + c2] * W[3 * c2 + b];
-        ds[3 * a + b] = 2.0 * mt->G * (D[3 * a + b] - (a == b ? trD / 3.0 : 0.0)) + ws;
+        ds[3 * a + b] = 2.0 * G * (D[3 * a + b] - (a == b ? trD / 3.0 : 0.0)) + ws;
       }
     for (int a = 0; a < 9; ++a) s[a] += dt * ds[a];
     const double tr = (s[0] + s[4] + s[8]) / 3.0; /* keep s traceless against round-off */
@@ -102,11 +111,12 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
     double ss = 0;
     for (int a = 0; a < 9; ++a) ss += s[a] * s[a];
     const double seq = sqrt(1.5 * ss);
-    if (seq > mt->Y0) { /* J2 radial return */
-      const double r = mt->Y0 / seq;
+    if (seq > Y && G > 0) { /* J2 radial return */
+      const double r = Y / seq;
       for (int a = 0; a < 9; ++a) s[a] *= r;
-      f->eps_p[i] += (seq - mt->Y0) / (3.0 * mt->G);
-    }
+      f->eps_p[i] += (seq - Y) / (3.0 * G);
+    } else if (seq > Y) /* molten (steinberg_guinan above T_m): no deviator */
+      for (int a = 0; a < 9; ++a) s[a] = 0.0;
   }
   double *sg = &f->sig[9 * i];
   for (int a = 0; a < 9; ++a) sg[a] = s[a];
@@ -124,7 +134,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
       Q[3 * a + b] = QP[3 * a + b] - kap * C[3 * a + b];
     }
   f->rho[i] = rho, f->p[i] = p, f->q[i] = q;
-  const double cL = sqrt(c * c + (strength ? 4.0 * mt->G / (3.0 * rho) : 0.0));
+  const double cL = sqrt(c * c + (strength ? 4.0 * G / (3.0 * rho) : 0.0));
   const double nu_l = f->par.cq * ell * fabs(trD) + f->par.cl * c; /* ν_q / ℓ */
   return f->par.courant * ell / (cL + 2.0 * nu_l);
 }
@@ -258,6 +268,8 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
     if (st->bc[i] == DM_MIRROR) return MS_ERR_INPUT;
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
     return MS_ERR_INPUT;
+  for (size_t i = 0; i < st->n; ++i)
+    if (mat[imat[i]].yield == DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) return MS_ERR_INPUT;
   dm_fin *f = ms_calloc(1, sizeof *f);
   size_t n = st->n, n1 = n ? n : 1;
   f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;
@@ -336,7 +348,7 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
   const double E0 = K + U + H;
   const int ns = sp->nsamples > 1 ? sp->nsamples : 2;
   double *ts = ms_calloc((size_t)ns, sizeof(double)), *xs = ms_calloc((size_t)ns, sizeof(double));
-  double *lay = ms_calloc((size_t)nx * 8, sizeof(double));
+  double *lay = ms_calloc((size_t)nx * 9, sizeof(double)); /* profile, then ε_p */
   int js = 0;
   double t = 0.0, dEmax = 0.0;
   while (t < sp->t_end && st == MS_OK) {
@@ -373,8 +385,10 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
         r[0] += s.X[3 * i], r[1] += s.X[3 * i] + s.w[3 * i], r[2] += s.u[3 * i];
         r[3] += f->rho[i], r[4] += f->p[i], r[5] += f->q[i], r[6] += -f->sig[9 * i];
         r[7] += f->e[i];
+        lay[8 * nx + ix] += f->eps_p[i];
       }
       for (int c = 0; c < 8; ++c) r[c] /= (double)(ny * nz);
+      lay[8 * nx + ix] /= (double)(ny * nz);
     }
     /* D: least-squares slope of the front positions */
     double st_ = 0, sx = 0, stt = 0, stx = 0;
@@ -398,6 +412,7 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
            f->bad, f->bad_what, f->bad_value);
   }
   res->profile = lay;
+  res->eps_p = lay + 8 * nx;
   free(ts), free(xs), free(imat);
   dm_fin_destroy(&f);
   dm_model_destroy(&m);

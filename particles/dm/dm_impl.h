@@ -14,6 +14,35 @@ double dm_sym_inverse(int dim, const double *A, double *inv);
 void dm_stress_pass(dm_model *m, const double *w, size_t n);
 void dm_gather_pass(dm_model *m, const double *w, double *F, size_t n);
 
+/* ---- Steinberg–Guinan strength (dm_strength.c; docs/particles-dm.md, [SCG1980]) ----
+ * G = G0 + G'_P p η^(−1/3) + G'_T (T − T0),  Y = min(Y0 [1 + β(ε_p + ε_i)]^n, Ymax) · G/G0,
+ * both 0 at T ≥ T_m(η) = T_m0 exp(2a(1 − 1/η)) η^(2(Γ0 − a − 1/3)), η = ρ/ρ0 of the EOS, and
+ * clipped at 0 from below. T = T0 + (e − ε_x(η))/c_v: ε_x is the EOS's cold curve
+ * (eos_cold_energy: the 0 K isotherm or the reference isentrope through (ρ0, e0)), taken as the
+ * T0 isotherm, so the reference state (ρ0, e0) is at T0 = 300 K. */
+struct dm_sg {
+  double G0, dGdP, dGdT; /* GPa, dimensionless, GPa/K */
+  double Y0, Ymax;       /* GPa */
+  double beta, n, eps_i; /* hardening */
+  double Tm0, gamma0, a; /* melt curve (K, −, −) */
+  double cv, T0;         /* specific heat kJ/(g·K), reference temperature K */
+};
+/* A built-in parameter set by name (Al6061_T6, Cu_OFHC, Pb, Sn; docs/particles-dm.md); false if
+ * unknown. dm_sg_set_names: the names, comma-separated (for messages). */
+bool dm_sg_set(const char *name, dm_sg *out);
+const char *dm_sg_set_names(void);
+double dm_sg_melt_temperature(const dm_sg *sg, double eta);
+/* T (K) of (ρ, e) on eos; NaN where the EOS has no cold curve at ρ/ρ0. */
+double dm_sg_temperature(const dm_sg *sg, const eos_t *eos, double rho, double e);
+/* G and Y (GPa) at η = ρ/ρ0, pressure p (GPa), temperature T (K), plastic strain ε_p. */
+void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p, double *G,
+                  double *Y);
+/* The deck keys of one discrete_model layer: `strength_set` and/or `strength: {...}` with
+ * yield: steinberg_guinan (errors otherwise), every value checked, located errors in *e.
+ * eos may be NULL (already reported). */
+void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
+                dm_sg *out);
+
 /* ξ_ik = X_k + image shift − X_i of bond b of particle i. */
 static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double xi[3]) {
   const double *X = m->s->X;

@@ -41,7 +41,8 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
     mat[l] = (dm_fin_material){.eos = p->layers[l].eos,
                                .yield = p->layers[l].yield,
                                .G = p->layers[l].G,
-                               .Y0 = p->layers[l].Y0};
+                               .Y0 = p->layers[l].Y0,
+                               .sg = &p->layers[l].sg};
   uint8_t *imat = ms_calloc(s.n, 1);
   for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(dmp_layer_at(p, s.X[3 * i]) - p->layers);
   dm_fin_params par = {

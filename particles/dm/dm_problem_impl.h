@@ -26,6 +26,7 @@ typedef struct dm_layer {
   const char *name;
   int response, yield; /* enum response, dm_yield */
   double Y0;           /* yield stress (GPa), elastic_plastic */
+  dm_sg sg;            /* steinberg_guinan (dm_strength.c) */
   const eos_t *eos;    /* the material's EOS (response eos) */
 } dm_layer;
 

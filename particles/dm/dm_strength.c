@@ -1,0 +1,156 @@
+/* dm_strength.c — the Steinberg–Guinan strength model for the finite-deformation discrete model
+ * (docs/particles-dm.md, "Strength: Steinberg–Guinan"; [SCG1980] for the model, [Steinberg1996]
+ * for the parameter sets): shear modulus and yield stress of a particle from its density,
+ * pressure, temperature and plastic strain, and zero above the melt curve. dm_finite.c evaluates
+ * them per particle in every stress pass; nothing here allocates.
+ */
+#include "dm_impl.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Built-in sets: Steinberg's compilation [Steinberg1996] as transcribed in the Uintah MPM
+ * material files (docs/references.md); A = G'_P/G0 in Mbar⁻¹ and B = −G'_T/G0 in K⁻¹ as that
+ * table gives them, c_v in J/(kg·K). G'_P = A G0 / 100 GPa, G'_T = −B G0. */
+typedef struct sg_row {
+  const char *name;
+  double G0, A, B, Y0, Ymax, beta, n, Tm0, gamma0, a, cv;
+} sg_row;
+static const sg_row sg_table[] = {
+    {"Al6061_T6", 27.6, 6.52, 6.16e-4, 0.29, 0.68, 125.0, 0.10, 1220.0, 1.97, 1.5, 885.0},
+    {"Cu_OFHC", 47.7, 2.83, 3.77e-4, 0.12, 0.64, 36.0, 0.45, 1790.0, 2.02, 1.5, 383.0},
+    {"Pb", 8.6, 11.63, 1.16e-3, 0.008, 0.10, 110.0, 0.52, 760.0, 2.74, 2.20, 124.0},
+    {"Sn", 17.9, 8.66, 2.12e-3, 0.16, 0.22, 2000.0, 0.06, 656.6, 2.27, 1.7, 220.0},
+};
+enum { SG_NSETS = sizeof sg_table / sizeof sg_table[0] };
+
+bool dm_sg_set(const char *name, dm_sg *out) {
+  for (int k = 0; name && k < SG_NSETS; ++k) {
+    const sg_row *r = &sg_table[k];
+    if (strcmp(name, r->name)) continue;
+    *out = (dm_sg){.G0 = r->G0,
+                   .dGdP = r->A * r->G0 / 100.0, /* Mbar⁻¹ → GPa⁻¹ */
+                   .dGdT = -r->B * r->G0,
+                   .Y0 = r->Y0,
+                   .Ymax = r->Ymax,
+                   .beta = r->beta,
+                   .n = r->n,
+                   .eps_i = 0.0,
+                   .Tm0 = r->Tm0,
+                   .gamma0 = r->gamma0,
+                   .a = r->a,
+                   .cv = r->cv * 1e-6, /* J/(kg·K) → kJ/(g·K) */
+                   .T0 = 300.0};
+    return true;
+  }
+  return false;
+}
+
+const char *dm_sg_set_names(void) { return "Al6061_T6, Cu_OFHC, Pb, Sn"; }
+
+/* [SCG1980] eq. (5): the Lindemann law with Γ = Γ0 − a(1 − 1/η) integrated */
+double dm_sg_melt_temperature(const dm_sg *sg, double eta) {
+  return sg->Tm0 * exp(2.0 * sg->a * (1.0 - 1.0 / eta)) *
+         pow(eta, 2.0 * (sg->gamma0 - sg->a - 1.0 / 3.0));
+}
+
+double dm_sg_temperature(const dm_sg *sg, const eos_t *eos, double rho, double e) {
+  const double ex = eos_cold_energy(eos, rho / eos_rho0(eos));
+  return sg->T0 + (e - ex) / sg->cv;
+}
+
+/* [SCG1980] eqs. (1)–(2): Y'_P/Y0 = G'_P/G0 and Y'_T/Y0 = G'_T/G0, i.e. Y = Y0 f(ε_p) G/G0 */
+void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p, double *G,
+                  double *Y) {
+  if (!(T < dm_sg_melt_temperature(sg, eta))) { /* molten (or NaN): no strength */
+    *G = 0.0, *Y = 0.0;
+    return;
+  }
+  const double g = sg->G0 + sg->dGdP * p / cbrt(eta) + sg->dGdT * (T - sg->T0);
+  *G = g > 0 ? g : 0.0;
+  const double f = sg->Y0 * pow(1.0 + sg->beta * (eps_p + sg->eps_i), sg->n);
+  *Y = (f < sg->Ymax ? f : sg->Ymax) * *G / sg->G0;
+}
+
+/* ---- deck ---- */
+
+static void rd(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim, bool req,
+               double lo, double *v) {
+  if (map) dk_read_double(e, doc, map, key, dim, req, *v, lo, INFINITY, v);
+}
+
+static void rd_pos(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim,
+                   bool req, double *v) {
+  if (map) dk_read_positive(e, doc, map, key, dim, req, *v, v);
+}
+
+void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
+                dm_sg *out) {
+  const dk_node *set = dk_get(layer, "strength_set"), *map = dk_get(layer, "strength");
+  memset(out, 0, sizeof *out);
+  if (yield != DM_YIELD_STEINBERG_GUINAN) {
+    if (set)
+      dk_error(e, doc, set,
+               "discrete_model.layers: 'strength_set' needs yield: "
+               "steinberg_guinan");
+    if (map)
+      dk_error(e, doc, map,
+               "discrete_model.layers: 'strength' needs yield: "
+               "steinberg_guinan");
+    if (map) dk_mark_used(layer, "strength");
+    return;
+  }
+  bool have = false;
+  out->T0 = 300.0;
+  if (set) {
+    const char *nm = dk_scalar(set);
+    if (!dm_sg_set(nm, out))
+      dk_error(e, doc, set, "discrete_model.layers: unknown strength_set '%s' (known: %s)",
+               nm ? nm : "(not a name)", dm_sg_set_names());
+    have = true; /* reported; do not also report every key of `strength` as missing */
+  }
+  if (map && !dk_expect_map(e, doc, map, "discrete_model.layers.strength")) {
+    dk_mark_used(layer, "strength");
+    return;
+  }
+  if (!have && !map) {
+    dk_error(e, doc, layer,
+             "discrete_model.layers: yield: steinberg_guinan needs 'strength_set: NAME' (known: "
+             "%s) or 'strength: {shear_modulus, dG_dP, dG_dT, yield_stress, yield_max, beta, n, "
+             "melt_temperature, gamma0, a, cv}'",
+             dm_sg_set_names());
+    return;
+  }
+  const bool req = !have; /* keys of `strength` override the set's values */
+  rd_pos(e, doc, map, "shear_modulus", MS_DIM_PRESSURE, req, &out->G0);
+  rd(e, doc, map, "dG_dP", MS_DIM_NONE, req, -INFINITY, &out->dGdP);
+  rd(e, doc, map, "dG_dT", MS_DIM_PRESSURE, req, -INFINITY, &out->dGdT); /* GPa/K */
+  rd_pos(e, doc, map, "yield_stress", MS_DIM_PRESSURE, req, &out->Y0);
+  rd_pos(e, doc, map, "yield_max", MS_DIM_PRESSURE, req, &out->Ymax);
+  rd(e, doc, map, "beta", MS_DIM_NONE, req, 0.0, &out->beta);
+  rd(e, doc, map, "n", MS_DIM_NONE, req, 0.0, &out->n);
+  rd(e, doc, map, "eps_i", MS_DIM_NONE, false, 0.0, &out->eps_i);
+  rd_pos(e, doc, map, "melt_temperature", MS_DIM_TEMPERATURE, req, &out->Tm0);
+  rd(e, doc, map, "gamma0", MS_DIM_NONE, req, 0.0, &out->gamma0);
+  rd(e, doc, map, "a", MS_DIM_NONE, req, 0.0, &out->a);
+  rd_pos(e, doc, map, "cv", MS_DIM_SPEC_ENERGY, req, &out->cv); /* kJ/(g·K) */
+  rd_pos(e, doc, map, "T0", MS_DIM_TEMPERATURE, false, &out->T0);
+  if (out->Ymax > 0 && out->Y0 > 0 && out->Ymax < out->Y0)
+    dk_error(e, doc, map ? map : layer,
+             "discrete_model.layers: steinberg_guinan: yield_max (%g GPa) below yield_stress "
+             "(%g GPa)",
+             out->Ymax, out->Y0);
+  if (out->G0 > 0 && out->T0 > 0 && out->Tm0 > 0 && !(out->T0 < out->Tm0))
+    dk_error(e, doc, map ? map : layer,
+             "discrete_model.layers: steinberg_guinan: T0 = %g K is not below the melt "
+             "temperature %g K: no strength at the reference state",
+             out->T0, out->Tm0);
+  if (eos && out->cv > 0) {
+    const double T = dm_sg_temperature(out, eos, eos_rho0(eos), eos_e0(eos));
+    if (!isfinite(T))
+      dk_error(e, doc, layer,
+               "discrete_model.layers: yield: steinberg_guinan takes the temperature from the "
+               "EOS's cold curve, and this EOS (%s) has none",
+               eos_kind_name(eos_get_kind(eos)));
+  }
+}
