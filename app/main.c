@@ -52,6 +52,14 @@ int main(int argc, char **argv) {
                   {"export", cmd_export}};
   for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
     if (!strcmp(cmd, commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
+  const char *names[sizeof commands / sizeof commands[0] + 1] = {NULL};
+  for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) names[i] = commands[i].name;
+  const char *hint = dk_suggest(cmd, names);
+  if (hint) {
+    fprintf(stderr, "mscale: unknown command '%s' (did you mean '%s'?); see mscale --help\n", cmd,
+            hint);
+    return 2;
+  }
   fprintf(stderr, "mscale: unknown command '%s'\n\n", cmd);
   usage(stderr);
   return 2;

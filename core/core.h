@@ -133,14 +133,25 @@ const char *ms_unit_label(ms_dim dim);
 typedef struct dk_node dk_node;
 typedef struct dk_doc dk_doc;
 
+typedef struct dk_error_pos {
+  char *file; /* the file the message names */
+  int line, col;
+} dk_error_pos;
+
 typedef struct dk_errors {
   size_t n, cap;
-  char **msg; /* each "FILE:LINE:COL: message" */
+  char **msg;        /* each "FILE:LINE:COL: message", in the order recorded; no two equal */
+  dk_error_pos *pos; /* where each message points (NULL in a list assembled by hand) */
 } dk_errors;
 
 void dk_errors_init(dk_errors *e);
 void dk_errors_free(dk_errors *e);
+/* Prints the messages sorted by file (in order of first mention), line and column; messages
+ * about a whole file come first. */
 void dk_errors_print(const dk_errors *e, FILE *f);
+/* The entry of the NULL-terminated `choices` closest to `word` (edit distance at most 2 and at most
+ * half of `word`'s length), for "did you mean" hints; NULL if none is close. */
+const char *dk_suggest(const char *word, const char *const *choices);
 /* Record an error located at node `at` (NULL: at the file as a whole). */
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

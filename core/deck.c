@@ -21,20 +21,63 @@ enum { DK_MAX_DEPTH = 64, DK_MAX_NODES = 1000000, DK_MAX_ALIAS_NODES = 10000 };
 void dk_errors_init(dk_errors *e) { memset(e, 0, sizeof *e); }
 
 void dk_errors_free(dk_errors *e) {
-  for (size_t i = 0; i < e->n; i++) free(e->msg[i]);
+  for (size_t i = 0; i < e->n; i++) {
+    free(e->msg[i]);
+    if (e->pos) free(e->pos[i].file);
+  }
   free(e->msg);
+  free(e->pos);
   memset(e, 0, sizeof *e);
 }
 
-void dk_errors_print(const dk_errors *e, FILE *f) {
-  for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[i]);
+/* Order of two messages for printing: file (in order of first mention), line, column, then the
+ * order recorded. `first` is the index of each message's file's first mention. */
+typedef struct err_order {
+  size_t index, first;
+  int line, col;
+} err_order;
+
+static int err_order_cmp(const void *pa, const void *pb) {
+  const err_order *a = pa, *b = pb;
+  if (a->first != b->first) return a->first < b->first ? -1 : 1;
+  if (a->line != b->line) return a->line < b->line ? -1 : 1;
+  if (a->col != b->col) return a->col < b->col ? -1 : 1;
+  return a->index < b->index ? -1 : a->index > b->index;
 }
 
-static void errors_push(dk_errors *e, char *msg) {
+void dk_errors_print(const dk_errors *e, FILE *f) {
+  if (!e->pos) { /* assembled by hand: no positions to sort by */
+    for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[i]);
+    return;
+  }
+  err_order *o = ms_calloc(e->n ? e->n : 1, sizeof *o);
+  for (size_t i = 0; i < e->n; i++) {
+    size_t first = i;
+    for (size_t j = 0; j < i; j++)
+      if (!strcmp(e->pos[j].file, e->pos[i].file)) {
+        first = o[j].first;
+        break;
+      }
+    o[i] = (err_order){i, first, e->pos[i].line, e->pos[i].col};
+  }
+  qsort(o, e->n, sizeof *o, err_order_cmp);
+  for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[o[i].index]);
+  free(o);
+}
+
+/* A message equal to one already recorded (the same node checked by two readers) is dropped. */
+static void errors_push(dk_errors *e, char *msg, const char *file, int line, int col) {
+  for (size_t i = 0; i < e->n; i++)
+    if (!strcmp(e->msg[i], msg)) {
+      free(msg);
+      return;
+    }
   if (e->n == e->cap) {
     e->cap = e->cap ? 2 * e->cap : 8;
     e->msg = ms_realloc(e->msg, e->cap, sizeof *e->msg);
+    e->pos = ms_realloc(e->pos, e->cap, sizeof *e->pos);
   }
+  e->pos[e->n] = (dk_error_pos){ms_strdup(file), line > 0 ? line : 0, line > 0 ? col : 0};
   e->msg[e->n++] = msg;
 }
 
@@ -45,7 +88,7 @@ static void verror_at(dk_errors *e, const char *file, int line, int col, const c
   char *msg = ms_calloc(strlen(body) + strlen(file) + 48, 1);
   if (line > 0) sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
   else sprintf(msg, "%s: %s", file, body);
-  errors_push(e, msg);
+  errors_push(e, msg, file, line, col > 0 ? col : 1);
 }
 
 void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *fmt, ...) {
@@ -398,6 +441,20 @@ static size_t edit_distance(const char *a, const char *b) {
   return d[la][lb];
 }
 
+const char *dk_suggest(const char *word, const char *const *choices) {
+  if (!word || !choices) return NULL;
+  const char *best = NULL;
+  size_t len = strlen(word), best_d = len / 2 + 1 < 3 ? len / 2 + 1 : 3;
+  for (size_t i = 0; choices[i]; i++) {
+    size_t d = edit_distance(word, choices[i]);
+    if (d > 0 && d < best_d) {
+      best_d = d;
+      best = choices[i];
+    }
+  }
+  return best;
+}
+
 static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
   if (n->kind == DK_SEQ) {
     for (size_t i = 0; i < n->n; i++) report_unused(e, doc, n->items[i]);
@@ -417,8 +474,8 @@ static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
       snprintf(expected + len, sizeof expected - len, "%s%s", j ? ", " : "", n->asked[j]);
       size_t dist = edit_distance(n->keys[i], n->asked[j]);
       bool present = false;
-      for (size_t k = 0; k < n->n; k++)
-        if (!strcmp(n->keys[k], n->asked[j])) present = true;
+      for (size_t k = 0; k < n->n; k++) /* a default filled in by a reader was not written */
+        if (!strcmp(n->keys[k], n->asked[j]) && !n->is_default[k]) present = true;
       if (dist < best_d && !present) {
         best_d = dist;
         best = n->asked[j];

@@ -261,9 +261,14 @@ bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key
         return true;
       }
   }
-  dk_error(e, doc, n, "%s: expected one of: %s; found %s%s%s", w, list,
-           n->kind == DK_SCALAR ? "'" : "", n->kind == DK_SCALAR ? n->value : "a collection",
-           n->kind == DK_SCALAR ? "'" : "");
+  const char *hint = n->kind == DK_SCALAR ? dk_suggest(n->value, choices) : NULL;
+  if (hint)
+    dk_error(e, doc, n, "%s: expected one of: %s; found '%s' (did you mean '%s'?)", w, list,
+             n->value, hint);
+  else
+    dk_error(e, doc, n, "%s: expected one of: %s; found %s%s%s", w, list,
+             n->kind == DK_SCALAR ? "'" : "", n->kind == DK_SCALAR ? n->value : "a collection",
+             n->kind == DK_SCALAR ? "'" : "");
   return false;
 }
 
