@@ -19,7 +19,7 @@ static void usage(FILE *f) {
           "pressure GPa, density g/cm^3, specific energy kJ/g).\n"
           "Exit codes: 0 success, 1 the run failed, 2 bad usage or bad input.\n"
           "Under MPI: mpirun -np N mscale run DECK\n",
-          MSCALE_VERSION_STRING);
+          app_version());
 }
 
 int app_wants_help(int argc, char **argv) {
@@ -35,7 +35,7 @@ int main(int argc, char **argv) {
   }
   const char *cmd = argv[1];
   if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
-    printf("mscale %s\n", MSCALE_VERSION_STRING);
+    app_print_version(stdout);
     return 0;
   }
   if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {

@@ -165,6 +165,13 @@ dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e);
 void dk_free(dk_doc *doc);
 const dk_node *dk_root(const dk_doc *doc);
 const char *dk_file(const dk_doc *doc);
+/* Override one value of the deck before it is read (`mscale run DECK --set PATH=VALUE`). PATH
+ * names a value as messages do ("continuum.time.end", "materials[0].eos.gamma",
+ * "cluster_dynamics.box.hi[2]"); VALUE is YAML (a number, a name, "[0, 0, 1]", "{a: 1}").
+ * Missing mapping keys are created; list items must exist. Messages about the value name the
+ * override ("--set PATH=VALUE: ...") instead of a deck position. The override is listed in the
+ * resolved deck's header. Returns false (with an error in *e) if PATH or VALUE is malformed. */
+bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e);
 /* Directory of the deck file (for resolving relative data-file paths); "" for strings. */
 const char *dk_dir(const dk_doc *doc);
 /* Unit system of the deck (`units:` at top level, read by dk_read_units). */
@@ -385,6 +392,14 @@ uint64_t par_comm_sum_u64(const ms_comm *c, uint64_t v);
 /* Sum of v over the lower ranks (0 on rank 0). */
 uint64_t par_comm_exscan_u64(const ms_comm *c, uint64_t v);
 void par_finalize(void);
+/* Provenance (run_info.yaml): the MPI library's version (MPI_Get_library_version, first line;
+ * callable before par_init) and the OpenMP threads a parallel region gets. */
+void par_mpi_library_version(char *buf, size_t n);
+int par_max_threads(void);
+/* The HDF5 library's version (H5get_libversion), "1.10.8". */
+void ms_h5_library_version(char *buf, size_t n);
+/* The libyaml version the deck reader runs with, "0.2.5". */
+const char *dk_yaml_version(void);
 void par_barrier(void);
 double par_sum_double(double v);
 double par_max_double(double v);

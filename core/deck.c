@@ -101,7 +101,8 @@ void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, fmt, ap);
+  if (at && at->origin) verror_at(e, at->origin, 0, 0, fmt, ap);
+  else verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, fmt, ap);
   va_end(ap);
 }
 
@@ -131,6 +132,7 @@ static void node_free(dk_node *n) {
   free(n->is_default);
   free(n->value);
   free(n->path);
+  free(n->origin);
   free(n);
 }
 
@@ -350,10 +352,124 @@ dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e) {
 
 void dk_free(dk_doc *doc) {
   if (!doc) return;
+  for (size_t i = 0; i < doc->noverrides; i++) free(doc->overrides[i]);
+  free(doc->overrides);
   node_free(doc->root);
   free(doc->file);
   free(doc->dir);
   free(doc);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Command-line overrides                                                                      */
+
+/* A copy of `src` (from the override's own small YAML document) at `path` in the deck. */
+static dk_node *clone_node(const dk_node *src, const char *path, const char *origin) {
+  dk_node *n = dk_node_new(src->kind, 0, 0, path);
+  n->origin = ms_strdup(origin);
+  n->quoted = src->quoted;
+  if (src->value) n->value = ms_strdup(src->value);
+  for (size_t i = 0; i < src->n; i++) {
+    char *cp = dk_child_path(path, src->kind == DK_MAP ? src->keys[i] : NULL, i);
+    dk_node_append(n, src->kind == DK_MAP ? src->keys[i] : NULL,
+                   clone_node(src->items[i], cp, origin), false, false);
+    free(cp);
+  }
+  return n;
+}
+
+bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
+  size_t olen = strlen(path) + strlen(value) + 8;
+  char *origin = ms_calloc(olen, 1);
+  snprintf(origin, olen, "--set %s=%s", path, value);
+  /* the value: parsed as the YAML of one mapping entry */
+  size_t tlen = strlen(value) + 8;
+  char *text = ms_calloc(tlen, 1);
+  snprintf(text, tlen, "v: %s\n", value);
+  dk_errors ve;
+  dk_errors_init(&ve);
+  dk_doc *vdoc = strchr(value, '\n') ? NULL : dk_load_string(text, origin, &ve);
+  free(text);
+  const dk_node *vnode = vdoc && !ve.n && vdoc->root->n == 1 ? vdoc->root->items[0] : NULL;
+  dk_errors_free(&ve);
+  bool ok = vnode != NULL;
+  if (!ok) dk_error_at(e, origin, 0, 0, "the value is not a YAML value on one line");
+  /* walk the path: key segments separated by '.', each with optional [N] suffixes */
+  dk_node *cur = doc->root, *parent = NULL;
+  size_t slot = 0;
+  char seg[256];
+  const char *p = path;
+  if (ok && !*p) {
+    dk_error_at(e, origin, 0, 0, "no key path before '='");
+    ok = false;
+  }
+  while (ok && *p) {
+    size_t k = strcspn(p, ".[");
+    if (k == 0 || k >= sizeof seg) {
+      dk_error_at(e, origin, 0, 0, "a key path is names separated by '.', e.g. continuum.time.end");
+      ok = false;
+      break;
+    }
+    memcpy(seg, p, k);
+    seg[k] = 0;
+    p += k;
+    if (cur->kind != DK_MAP) {
+      dk_error_at(e, origin, 0, 0, "%s (line %d of %s) is not a mapping: it has no key '%s'",
+                  cur->path[0] ? cur->path : "the deck", cur->line, doc->file, seg);
+      ok = false;
+      break;
+    }
+    size_t i = 0;
+    while (i < cur->n && strcmp(cur->keys[i], seg)) i++;
+    if (i == cur->n) { /* a new key: a mapping on the way, the value at the end */
+      char *cp = dk_child_path(cur->path, seg, 0);
+      dk_node *m = dk_node_new(DK_MAP, 0, 0, cp);
+      m->origin = ms_strdup(origin);
+      free(cp);
+      dk_node_append(cur, seg, m, false, false);
+    }
+    parent = cur;
+    slot = i;
+    cur = cur->items[i];
+    while (ok && *p == '[') {
+      char *end;
+      long idx = strtol(p + 1, &end, 10);
+      if (end == p + 1 || *end != ']' || idx < 0) {
+        dk_error_at(e, origin, 0, 0, "a list index is [N] with N >= 0");
+        ok = false;
+        break;
+      }
+      p = end + 1;
+      if (cur->kind != DK_SEQ || (size_t)idx >= cur->n) {
+        dk_error_at(e, origin, 0, 0, "%s (line %d of %s) has no item [%ld]", cur->path, cur->line,
+                    doc->file, idx);
+        ok = false;
+        break;
+      }
+      parent = cur;
+      slot = (size_t)idx;
+      cur = cur->items[idx];
+    }
+    if (ok && *p == '.') {
+      p++;
+      if (!*p) {
+        dk_error_at(e, origin, 0, 0, "the key path ends with '.'");
+        ok = false;
+      }
+    }
+  }
+  if (ok) {
+    dk_node *n = clone_node(vnode, cur->path, origin);
+    n->key_line = 0;
+    node_free(cur);
+    parent->items[slot] = n;
+    if (parent->kind == DK_MAP) parent->used[slot] = parent->is_default[slot] = false;
+    doc->overrides = ms_realloc(doc->overrides, doc->noverrides + 1, sizeof *doc->overrides);
+    doc->overrides[doc->noverrides++] = ms_strdup(origin + 6);
+  }
+  dk_free(vdoc);
+  free(origin);
+  return ok;
 }
 
 const dk_node *dk_root(const dk_doc *doc) { return doc->root; }
@@ -624,6 +740,11 @@ ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
   if (s) return s;
   fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING, doc->file);
   fprintf(af.f, "# Every key the run used, with defaults filled in (marked '# default').\n");
+  for (size_t i = 0; i < doc->noverrides; i++) {
+    fputs("# overridden on the command line: --set ", af.f);
+    for (const char *c = doc->overrides[i]; *c; c++) fputc(*c == '\n' ? ' ' : *c, af.f);
+    fputc('\n', af.f);
+  }
   emit(af.f, doc->root, 0, 0);
   return ms_afile_commit(&af);
 }
@@ -660,3 +781,5 @@ uint64_t dk_hash(const dk_doc *doc, const char *const *skip) {
 uint64_t dk_hash_doubles(uint64_t h, const double *v, size_t n) {
   return fnv1a(h, v, n * sizeof *v);
 }
+
+const char *dk_yaml_version(void) { return yaml_get_version_string(); }

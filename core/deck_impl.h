@@ -18,12 +18,15 @@ struct dk_node {
   bool *is_default;      /* map: the value was filled in by a reader's default */
   char **asked;          /* map: every key a reader asked for (for "did you mean") */
   size_t nasked;
+  char *origin; /* set by a command-line override: messages name it instead of FILE:LINE:COL */
 };
 
 struct dk_doc {
   char *file, *dir;
   dk_node *root;
   ms_unit_system units;
+  char **overrides; /* the `--set PATH=VALUE` applied (dk_set), for the resolved deck */
+  size_t noverrides;
 };
 
 dk_node *dk_node_new(dk_kind kind, int line, int col, const char *path);
