@@ -178,8 +178,13 @@ const char *dk_dir(const dk_doc *doc);
 ms_unit_system dk_units(const dk_doc *doc);
 /* Reads the top-level `units:` key: `internal` (g, cm, 10 µs; the default) or `si`. */
 void dk_read_units(dk_doc *doc, dk_errors *e);
-/* Resolve a path given in the deck relative to the deck's directory; malloc'd. */
+/* Resolve a path given in the deck relative to the deck's directory, or, when no such file
+ * exists, in the installed data directory (core/deck.c); malloc'd. */
 char *dk_resolve_path(const dk_doc *doc, const char *path);
+/* The installed data directory, PREFIX/share/mscale (inputs/, eos/data/, tools/): the
+ * environment's MSCALE_DATA_DIR, else found from the binary's own location, else the configured
+ * install prefix's; NULL if none exists (a build tree). */
+const char *ms_data_dir(void);
 
 typedef enum dk_kind { DK_SCALAR, DK_MAP, DK_SEQ } dk_kind;
 dk_kind dk_node_kind(const dk_node *n);

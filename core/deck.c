@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <yaml.h>
 
 /* Guards against alias bombs and runaway nesting in hostile decks. Nodes written out in the
@@ -477,11 +478,62 @@ const char *dk_file(const dk_doc *doc) { return doc->file; }
 const char *dk_dir(const dk_doc *doc) { return doc->dir; }
 ms_unit_system dk_units(const dk_doc *doc) { return doc->units; }
 
+static bool file_exists(const char *path) { return access(path, F_OK) == 0; }
+
+const char *ms_data_dir(void) {
+  static char dir[4096];
+  static bool done = false;
+  if (done) return dir[0] ? dir : NULL;
+  done = true;
+  const char *env = getenv("MSCALE_DATA_DIR");
+  if (env && env[0]) {
+    snprintf(dir, sizeof dir, "%s", env);
+    return dir;
+  }
+  /* PREFIX/BINDIR/mscale -> PREFIX/DATADIR/mscale: a relocated install still finds its data */
+  char exe[4096];
+  ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n > 0) {
+    exe[n] = 0;
+    char *slash = strrchr(exe, '/');
+    if (slash) *slash = 0; /* the binary's directory */
+    size_t lb = strlen(MSCALE_INSTALL_BINDIR), le = strlen(exe);
+    if (le > lb && !strcmp(exe + le - lb, MSCALE_INSTALL_BINDIR) && exe[le - lb - 1] == '/') {
+      exe[le - lb - 1] = 0;
+      snprintf(dir, sizeof dir, "%s/%s/mscale", exe, MSCALE_INSTALL_DATADIR);
+      if (file_exists(dir)) return dir;
+    }
+  }
+  snprintf(dir, sizeof dir, "%s", MSCALE_INSTALL_FULL_DATADIR "/mscale");
+  if (file_exists(dir)) return dir;
+  dir[0] = 0;
+  return NULL;
+}
+
+/* Relative to the deck's directory; if no such file exists, in the installed data directory
+ * (ms_data_dir): PATH without its leading "./" and "../" (a shipped deck's
+ * "../eos/data/al_osa_cold.txt" is DATA/eos/data/al_osa_cold.txt), then DATA/inputs/PATH (the
+ * history files beside the shipped decks). A deck copied out of share/mscale/inputs still runs. */
 char *dk_resolve_path(const dk_doc *doc, const char *path) {
   if (path[0] == '/' || !doc->dir[0]) return ms_strdup(path);
   size_t n = strlen(doc->dir) + strlen(path) + 2;
   char *p = ms_calloc(n, 1);
   snprintf(p, n, "%s/%s", doc->dir, path);
+  const char *data = file_exists(p) ? NULL : ms_data_dir();
+  if (!data) return p;
+  const char *rel = path;
+  while (!strncmp(rel, "./", 2) || !strncmp(rel, "../", 3)) rel += rel[1] == '/' ? 2 : 3;
+  const char *const sub[] = {"", "inputs/"};
+  for (int i = 0; i < 2; i++) {
+    size_t m = strlen(data) + strlen(sub[i]) + strlen(rel) + 2;
+    char *q = ms_calloc(m, 1);
+    snprintf(q, m, "%s/%s%s", data, sub[i], rel);
+    if (file_exists(q)) {
+      free(p);
+      return q;
+    }
+    free(q);
+  }
   return p;
 }
 
