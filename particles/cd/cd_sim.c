@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_sim.c — the cluster-dynamics run: set-up, time step, piston, walls, balance.
  *
  * Every force evaluation of a run goes through step_forces (the one place for per-evaluation
