@@ -16,7 +16,7 @@ say_fail() { echo "FAIL: $*"; fail=1; }
 cmake --install "$build" --prefix "$prefix" >"$tmp/install.log" 2>&1 ||
   { cat "$tmp/install.log"; echo "FAIL: cmake --install"; exit 1; }
 share=$prefix/share/mscale
-for f in bin/mscale share/mscale/inputs/default.yaml share/mscale/eos/data/al_osa_cold.txt \
+for f in bin/mscale share/doc/mscale/CHANGELOG.md share/mscale/inputs/default.yaml share/mscale/eos/data/al_osa_cold.txt \
          share/mscale/tools/plot_run.py share/doc/mscale/LICENSE share/doc/mscale/README.md \
          share/doc/mscale/developing.md; do
   [ -e "$prefix/$f" ] || say_fail "not installed: $f"
@@ -29,6 +29,11 @@ cd "$tmp" || exit 1
 unset MSCALE_DATA_DIR MSCALE_SOURCE_DIR
 mscale=$prefix/bin/mscale
 "$mscale" --version | head -1 | grep -qE '^mscale [0-9]+\.[0-9]+' || say_fail "mscale --version"
+# CHANGELOG.md (Keep a Changelog) is installed and has a section for this version's release
+project=$("$mscale" --version | head -1 | sed -nE 's/^mscale v?([0-9]+\.[0-9]+\.[0-9]+).*/\1/p')
+log=$prefix/share/doc/mscale/CHANGELOG.md
+grep -q '^## \[Unreleased\]' "$log" || say_fail "CHANGELOG.md: no '## [Unreleased]'"
+grep -qF "## [$project]" "$log" || say_fail "CHANGELOG.md: no section '## [$project]'"
 
 run() { # NAME DECK: run DECK into $tmp/NAME, expect exit 0 and run_info status completed
   if ! "$mscale" run "$2" -o "$tmp/$1" --quiet >"$tmp/$1.log" 2>&1; then
