@@ -23,7 +23,7 @@ int cmd_check(int argc, char **argv) {
   const char *deck = NULL;
   int rc = -1, c;
   opterr = 0;
-  optind = 1;
+  optind = 0; /* glibc: a full reset (tests call the commands in-process, repeatedly) */
   while (rc < 0 && (c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
     if (c == 's' && app_option_value_missing("check", "--set", optarg)) rc = 2;
     else if (c == 's') sets[nsets++] = optarg;

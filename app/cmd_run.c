@@ -72,44 +72,6 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
   free(path);
 }
 
-/* getopt_long's "needs a value" and "unknown option" cases, said plainly (exit 2). */
-int app_option_error(const char *cmd, int c, int optopt_, const char *arg,
-                     const struct option *opts) {
-  if (c == ':') {
-    for (const struct option *o = opts; o->name; o++)
-      if (o->val == optopt_) {
-        if (o->val < 128)
-          fprintf(stderr, "mscale %s: option '-%c' (--%s) needs a value\n", cmd, o->val, o->name);
-        else fprintf(stderr, "mscale %s: option '--%s' needs a value\n", cmd, o->name);
-        return 2;
-      }
-    fprintf(stderr, "mscale %s: option '%s' needs a value\n", cmd, arg);
-    return 2;
-  }
-  const char *names[64] = {NULL};
-  size_t n = 0;
-  for (const struct option *o = opts; o->name && n < 63; o++) names[n++] = o->name;
-  const char *word = arg;
-  while (*word == '-') word++;
-  char stem[128];
-  snprintf(stem, sizeof stem, "%.*s", (int)strcspn(word, "="), word);
-  const char *hint = dk_suggest(stem, names);
-  if (hint)
-    fprintf(stderr, "mscale %s: unknown option '%s' (did you mean '--%s'?)\n", cmd, arg, hint);
-  else fprintf(stderr, "mscale %s: unknown option '%s'; see mscale %s --help\n", cmd, arg, cmd);
-  return 2;
-}
-
-/* An option's value that is the next option ("-o --force"): the value was left out. */
-int app_option_value_missing(const char *cmd, const char *name, const char *value) {
-  if (value[0] == '-' && value[1] == '-') {
-    fprintf(stderr, "mscale %s: option '%s' needs a value (found the option '%s' instead)\n", cmd,
-            name, value);
-    return 1;
-  }
-  return 0;
-}
-
 int cmd_run(int argc, char **argv) {
   /* the command line as given, for run_info.yaml (getopt_long permutes argv) */
   char **cmdline = ms_calloc((size_t)argc + 1, sizeof *cmdline);
@@ -130,7 +92,7 @@ int cmd_run(int argc, char **argv) {
                                        {NULL, 0, NULL, 0}};
   int rc = -1, c;
   opterr = 0;
-  optind = 1;
+  optind = 0; /* glibc: a full reset (tests call the commands in-process, repeatedly) */
   while (rc < 0 && (c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
     const char *name = c == 'o' ? "-o" : c == OPT_RESTART ? "--restart" : "--set";
     if ((c == 'o' || c == OPT_RESTART || c == OPT_SET) &&

@@ -150,7 +150,11 @@ for args, want in ((["run", deck, "-o"], "option '-o' (--output) needs a value")
                    (["run", deck, deck], "unexpected argument"),
                    (["run"], "no deck given"),
                    (["check", deck, "--sett=a=1"], "did you mean '--set'?"),
-                   (["chek", deck], "unknown command 'chek' (did you mean 'check'?)")):
+                   (["chek", deck], "unknown command 'chek' (did you mean 'check'?)"),
+                   (["export", "x.h5", "--format"], "option '--format' needs a value"),
+                   (["export", "x.h5", "--formt=extxyz"], "did you mean '--format'?"),
+                   (["spectrum", "x.h5", "--bond"], "option '--bond' needs a value"),
+                   (["spectrum", "--bond=abc", "x.h5"], "--bond needs a positive number")):
     r = mscale(*args)
     check(r.returncode == 2 and want in r.stderr,
           "%s: exit %d, stderr %r (wanted %r)" % (" ".join(args), r.returncode, r.stderr, want))
