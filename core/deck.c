@@ -398,6 +398,7 @@ bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
   if (!ok) dk_error_at(e, origin, 0, 0, "the value is not a YAML value on one line");
   /* walk the path: key segments separated by '.', each with optional [N] suffixes */
   dk_node *cur = doc->root, *parent = NULL;
+  dk_node *created_in = NULL; /* the map where the path's first new key was appended */
   size_t slot = 0;
   char seg[256];
   const char *p = path;
@@ -424,6 +425,7 @@ bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
     size_t i = 0;
     while (i < cur->n && strcmp(cur->keys[i], seg)) i++;
     if (i == cur->n) { /* a new key: a mapping on the way, the value at the end */
+      if (!created_in) created_in = cur;
       char *cp = dk_child_path(cur->path, seg, 0);
       dk_node *m = dk_node_new(DK_MAP, 0, 0, cp);
       m->origin = ms_strdup(origin);
@@ -468,6 +470,10 @@ bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
     if (parent->kind == DK_MAP) parent->used[slot] = parent->is_default[slot] = false;
     doc->overrides = ms_realloc(doc->overrides, doc->noverrides + 1, sizeof *doc->overrides);
     doc->overrides[doc->noverrides++] = ms_strdup(origin + 6);
+  } else if (created_in) { /* a path that failed leaves no new keys behind (no knock-on errors) */
+    size_t last = --created_in->n;
+    node_free(created_in->items[last]);
+    free(created_in->keys[last]);
   }
   dk_free(vdoc);
   free(origin);

@@ -135,6 +135,11 @@ for want in ("--set continuum.time.end=abc: continuum.time.end: expected a numbe
              "(did you mean 'planar'?)", "--set materials[5].name=x: materials", "has no item [5]",
              "--set: 'noequals': expected PATH=VALUE"):
     check(want in r.stderr, "bad --set: no %r in %r" % (want, r.stderr))
+# a path that fails halfway leaves no new key behind: one error, not also "unknown key 'nw'"
+r = mscale("check", deck, "--set", "continuum.nw.key[0]=1")
+errors = [l for l in r.stderr.splitlines() if l.startswith("--set")]
+check(r.returncode == 2 and len(errors) == 1 and "has no item [0]" in errors[0],
+      "failed --set path: %r" % r.stderr)
 check(not os.path.exists(os.path.join(WORK, "bad")), "bad --set created its output directory")
 r = mscale("check", deck, "--set", "continuum.time.end=-1")
 check(r.returncode == 2 and "--set continuum.time.end=-1: continuum.time.end:" in r.stderr,
