@@ -380,6 +380,12 @@ static dk_node *clone_node(const dk_node *src, const char *path, const char *ori
   return n;
 }
 
+/* "line L of FILE", or the override a node came from. */
+static void node_where(const dk_node *n, const dk_doc *doc, char *buf, size_t len) {
+  if (n->origin) snprintf(buf, len, "from %s", n->origin);
+  else snprintf(buf, len, "line %d of %s", n->line, doc->file);
+}
+
 bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
   size_t olen = strlen(path) + strlen(value) + 8;
   char *origin = ms_calloc(olen, 1);
@@ -417,8 +423,10 @@ bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
     seg[k] = 0;
     p += k;
     if (cur->kind != DK_MAP) {
-      dk_error_at(e, origin, 0, 0, "%s (line %d of %s) is not a mapping: it has no key '%s'",
-                  cur->path[0] ? cur->path : "the deck", cur->line, doc->file, seg);
+      char at[300];
+      node_where(cur, doc, at, sizeof at);
+      dk_error_at(e, origin, 0, 0, "%s (%s) is not a mapping: it has no key '%s'",
+                  cur->path[0] ? cur->path : "the deck", at, seg);
       ok = false;
       break;
     }
@@ -445,8 +453,9 @@ bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
       }
       p = end + 1;
       if (cur->kind != DK_SEQ || (size_t)idx >= cur->n) {
-        dk_error_at(e, origin, 0, 0, "%s (line %d of %s) has no item [%ld]", cur->path, cur->line,
-                    doc->file, idx);
+        char at[300];
+        node_where(cur, doc, at, sizeof at);
+        dk_error_at(e, origin, 0, 0, "%s (%s) has no item [%ld]", cur->path, at, idx);
         ok = false;
         break;
       }
