@@ -516,8 +516,8 @@ const char *ms_data_dir(void) {
     size_t lb = strlen(MSCALE_INSTALL_BINDIR), le = strlen(exe);
     if (le > lb && !strcmp(exe + le - lb, MSCALE_INSTALL_BINDIR) && exe[le - lb - 1] == '/') {
       exe[le - lb - 1] = 0;
-      snprintf(dir, sizeof dir, "%s/%s/mscale", exe, MSCALE_INSTALL_DATADIR);
-      if (file_exists(dir)) return dir;
+      int w = snprintf(dir, sizeof dir, "%s/%s/mscale", exe, MSCALE_INSTALL_DATADIR);
+      if (w > 0 && (size_t)w < sizeof dir && file_exists(dir)) return dir;
     }
   }
   snprintf(dir, sizeof dir, "%s", MSCALE_INSTALL_FULL_DATADIR "/mscale");
