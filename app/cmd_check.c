@@ -42,7 +42,9 @@ int cmd_check(int argc, char **argv) {
   ms_status s = app_deck_read_set(deck, sets, nsets, &d, &e);
   dk_errors_print(&e, stderr);
   if (s == MS_OK) printf("%s: ok\n", deck);
-  else fprintf(stderr, "%s: %zu error%s\n", deck, e.n, e.n == 1 ? "" : "s");
+  else
+    fprintf(stderr, "%s: %zu error%s\n", deck, dk_errors_count(&e),
+            dk_errors_count(&e) == 1 ? "" : "s");
   app_deck_free(&d);
   dk_errors_free(&e);
   free(sets);

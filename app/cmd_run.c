@@ -144,7 +144,8 @@ int cmd_run(int argc, char **argv) {
   if (s) {
     if (ctx.rank == 0) {
       dk_errors_print(&e, stderr);
-      fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, e.n, e.n == 1 ? "" : "s");
+      fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, dk_errors_count(&e),
+              dk_errors_count(&e) == 1 ? "" : "s");
     }
   } else if (restart && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)

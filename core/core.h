@@ -137,22 +137,34 @@ typedef struct dk_doc dk_doc;
 typedef struct dk_error_pos {
   char *file; /* the file the message names */
   int line, col;
+  int role;    /* DK_ROLE_*: a missing key, or an unknown key that is a misspelling of one */
+  char *about; /* the key path the role is about (NULL: none) */
+  bool hidden; /* a repeat of another message, or a missing key a misspelling explains */
 } dk_error_pos;
+/* "missing required key 'gamma'" beside "unknown key 'gama' (did you mean 'gamma'?)" in the same
+ * mapping is one mistake: the missing-key message is hidden (the deck still fails). */
+enum { DK_ROLE_NONE = 0, DK_ROLE_MISSING, DK_ROLE_MISSPELT };
 
 typedef struct dk_errors {
-  size_t n, cap;
-  char **msg;        /* each "FILE:LINE:COL: message", in the order recorded; no two equal */
+  size_t n, cap;     /* n counts every error recorded, hidden ones too (readers compare counts) */
+  char **msg;        /* each "FILE:LINE:COL: message", in the order recorded */
   dk_error_pos *pos; /* where each message points (NULL in a list assembled by hand) */
 } dk_errors;
 
 void dk_errors_init(dk_errors *e);
 void dk_errors_free(dk_errors *e);
 /* Prints the messages sorted by file (in order of first mention), line and column; messages
- * about a whole file come first. */
+ * about a whole file come first; each text once. */
 void dk_errors_print(const dk_errors *e, FILE *f);
+/* The number of messages dk_errors_print prints: repeats and explained missing keys hidden. */
+size_t dk_errors_count(const dk_errors *e);
 /* The entry of the NULL-terminated `choices` closest to `word` (edit distance at most 2 and at most
  * half of `word`'s length), for "did you mean" hints; NULL if none is close. */
 const char *dk_suggest(const char *word, const char *const *choices);
+/* Report key i of `map` as unknown, with "did you mean" from `allowed` (NULL-terminated) when a
+ * close key is not written in the map, else the list of allowed keys; `what` names the map. */
+void dk_report_unknown_key(dk_errors *e, const dk_doc *doc, const dk_node *map, size_t i,
+                           const char *what, const char *const *allowed);
 /* Record an error located at node `at` (NULL: at the file as a whole). */
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));

@@ -25,7 +25,7 @@ void dk_errors_init(dk_errors *e) { memset(e, 0, sizeof *e); }
 void dk_errors_free(dk_errors *e) {
   for (size_t i = 0; i < e->n; i++) {
     free(e->msg[i]);
-    if (e->pos) free(e->pos[i].file);
+    if (e->pos) free(e->pos[i].file), free(e->pos[i].about);
   }
   free(e->msg);
   free(e->pos);
@@ -63,48 +63,80 @@ void dk_errors_print(const dk_errors *e, FILE *f) {
     o[i] = (err_order){i, first, e->pos[i].line, e->pos[i].col};
   }
   qsort(o, e->n, sizeof *o, err_order_cmp);
-  for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[o[i].index]);
+  for (size_t i = 0; i < e->n; i++)
+    if (!e->pos[o[i].index].hidden) fprintf(f, "%s\n", e->msg[o[i].index]);
   free(o);
 }
 
-/* A message equal to one already recorded (the same node checked by two readers) is dropped. */
-static void errors_push(dk_errors *e, char *msg, const char *file, int line, int col) {
-  for (size_t i = 0; i < e->n; i++)
-    if (!strcmp(e->msg[i], msg)) {
-      free(msg);
-      return;
-    }
+/* A message equal to one already recorded (the same node checked by two readers) is hidden; so
+ * is a missing key that an unknown key in the same mapping misspells (DK_ROLE_*). Hidden errors
+ * still count in e->n: readers decide by the count whether something went wrong. */
+static void errors_push(dk_errors *e, char *msg, const char *file, int line, int col, int role,
+                        const char *about) {
+  bool hidden = false;
+  for (size_t i = 0; i < e->n && e->pos; i++) {
+    bool same_about = about && e->pos[i].about && !strcmp(e->pos[i].about, about);
+    if (!strcmp(e->msg[i], msg)) hidden = true;
+    if (same_about && role == DK_ROLE_MISSING && e->pos[i].role == DK_ROLE_MISSPELT) hidden = true;
+    if (same_about && role == DK_ROLE_MISSPELT && e->pos[i].role == DK_ROLE_MISSING)
+      e->pos[i].hidden = true;
+  }
   if (e->n == e->cap) {
     e->cap = e->cap ? 2 * e->cap : 8;
     e->msg = ms_realloc(e->msg, e->cap, sizeof *e->msg);
     e->pos = ms_realloc(e->pos, e->cap, sizeof *e->pos);
   }
-  e->pos[e->n] = (dk_error_pos){ms_strdup(file), line > 0 ? line : 0, line > 0 ? col : 0};
+  e->pos[e->n] = (dk_error_pos){ms_strdup(file),
+                                line > 0 ? line : 0,
+                                line > 0 ? col : 0,
+                                role,
+                                about ? ms_strdup(about) : NULL,
+                                hidden};
   e->msg[e->n++] = msg;
 }
 
-static void verror_at(dk_errors *e, const char *file, int line, int col, const char *fmt,
-                      va_list ap) {
+size_t dk_errors_count(const dk_errors *e) {
+  size_t n = 0;
+  for (size_t i = 0; i < e->n; i++) n += !(e->pos && e->pos[i].hidden);
+  return n;
+}
+
+static void verror_at(dk_errors *e, const char *file, int line, int col, int role,
+                      const char *about, const char *fmt, va_list ap) {
   char body[1536];
   vsnprintf(body, sizeof body, fmt, ap);
   char *msg = ms_calloc(strlen(body) + strlen(file) + 48, 1);
   if (line > 0) sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
   else sprintf(msg, "%s: %s", file, body);
-  errors_push(e, msg, file, line, col > 0 ? col : 1);
+  errors_push(e, msg, file, line, col > 0 ? col : 1, role, about);
 }
 
 void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  verror_at(e, file ? file : "<input>", line, col, fmt, ap);
+  verror_at(e, file ? file : "<input>", line, col, DK_ROLE_NONE, NULL, fmt, ap);
   va_end(ap);
 }
 
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  if (at && at->origin) verror_at(e, at->origin, 0, 0, fmt, ap);
-  else verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, fmt, ap);
+  if (at && at->origin) verror_at(e, at->origin, 0, 0, DK_ROLE_NONE, NULL, fmt, ap);
+  else
+    verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, DK_ROLE_NONE,
+              NULL, fmt, ap);
+  va_end(ap);
+}
+
+void dk_error_role(dk_errors *e, const dk_doc *doc, const dk_node *at, int line, int col, int role,
+                   const char *about, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  if (line > 0) verror_at(e, doc->file, line, col, role, about, fmt, ap);
+  else if (at && at->origin) verror_at(e, at->origin, 0, 0, role, about, fmt, ap);
+  else
+    verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, role, about, fmt,
+              ap);
   va_end(ap);
 }
 
@@ -639,6 +671,27 @@ const char *dk_suggest(const char *word, const char *const *choices) {
   return best;
 }
 
+void dk_report_unknown_key(dk_errors *e, const dk_doc *doc, const dk_node *map, size_t i,
+                           const char *what, const char *const *allowed) {
+  if (!map || map->kind != DK_MAP || i >= map->n) return;
+  const char *key = map->keys[i], *hint = dk_suggest(key, allowed);
+  for (size_t k = 0; hint && k < map->n; k++) /* a close key written in the map is not meant */
+    if (!strcmp(map->keys[k], hint) && !map->is_default[k]) hint = NULL;
+  if (hint) {
+    char *about = dk_child_path(map->path, hint, 0);
+    dk_error_role(e, doc, map->items[i], 0, 0, DK_ROLE_MISSPELT, about,
+                  "%s: unknown key '%s' (did you mean '%s'?)", what, key, hint);
+    free(about);
+    return;
+  }
+  char list[600] = "";
+  for (size_t k = 0; allowed[k]; ++k) {
+    size_t len = strlen(list);
+    snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", allowed[k]);
+  }
+  dk_error(e, doc, map->items[i], "%s: unknown key '%s' (expected one of: %s)", what, key, list);
+}
+
 static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
   if (n->kind == DK_SEQ) {
     for (size_t i = 0; i < n->n; i++) report_unused(e, doc, n->items[i]);
@@ -666,10 +719,12 @@ static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
       }
     }
     const char *where = n->path[0] ? n->path : "top level";
-    if (best)
-      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (did you mean '%s'?)", where, n->keys[i],
-               best);
-    else if (n->nasked)
+    if (best) {
+      char *about = dk_child_path(n->path, best, 0);
+      dk_error_role(e, doc, n->items[i], 0, 0, DK_ROLE_MISSPELT, about,
+                    "%s: unknown key '%s' (did you mean '%s'?)", where, n->keys[i], best);
+      free(about);
+    } else if (n->nasked)
       dk_error(e, doc, n->items[i], "%s: unknown key '%s' (expected one of: %s)", where, n->keys[i],
                expected);
     else

@@ -33,5 +33,8 @@ struct dk_doc {
 dk_node *dk_node_new(dk_kind kind, int line, int col, const char *path);
 void dk_node_append(dk_node *parent, const char *key, dk_node *child, bool used, bool is_default);
 char *dk_child_path(const char *parent, const char *key, size_t index);
+/* dk_error with a role (DK_ROLE_*) about a key path; line > 0 overrides the node's position. */
+void dk_error_role(dk_errors *e, const dk_doc *doc, const dk_node *at, int line, int col, int role,
+                   const char *about, const char *fmt, ...) __attribute__((format(printf, 8, 9)));
 
 #endif

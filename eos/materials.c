@@ -43,18 +43,7 @@ static void check_keys(dk_errors *e, const dk_doc *doc, const dk_node *map, cons
   for (size_t i = 0; i < dk_map_len(map); ++i) {
     const char *key = dk_map_key(map, i);
     if (in_list(key, allowed)) continue;
-    char list[400] = "";
-    for (size_t k = 0; allowed[k]; ++k) {
-      size_t len = strlen(list);
-      snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", allowed[k]);
-    }
-    const char *hint = dk_suggest(key, allowed);
-    if (hint && !dk_get(map, hint))
-      dk_error(e, doc, dk_map_value(map, i), "%s: unknown key '%s' (did you mean '%s'?)", what, key,
-               hint);
-    else
-      dk_error(e, doc, dk_map_value(map, i), "%s: unknown key '%s' (expected one of: %s)", what,
-               key, list);
+    dk_report_unknown_key(e, doc, map, i, what, allowed);
     (void)dk_get(map, key);
   }
 }

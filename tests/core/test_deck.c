@@ -192,7 +192,8 @@ static void test_errors_sorted_once(void **state) {
   dk_error(&e, doc, dk_get(root, "c"), "third"); /* the same message again */
   dk_error(&e, doc, NULL, "whole file");
   dk_error(&e, doc, dk_get(root, "b"), "second");
-  assert_int_equal(e.n, 5);
+  assert_int_equal(e.n, 6);                 /* every error counts (readers compare counts) */
+  assert_int_equal(dk_errors_count(&e), 5); /* the repeat is not printed */
   char buf[1024] = "";
   FILE *f = fmemopen(buf, sizeof buf, "w");
   assert_non_null(f);
@@ -203,6 +204,30 @@ static void test_errors_sorted_once(void **state) {
                            "s.yaml:2:4: second\n"
                            "s.yaml:3:4: third\n"
                            "table.csv:4:1: in a data file\n");
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+/* A required key that is missing beside its misspelling is one message, in either order. */
+static void test_misspelt_required_key(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string("m:\n  gama: 1.4\n  q: 2\n", "t.yaml", &e);
+  const dk_node *m = dk_get(dk_root(doc), "m");
+  double g, r;
+  assert_false(dk_read_double(&e, doc, m, "gamma", MS_DIM_NONE, true, 0, 1, 3, &g));
+  assert_false(dk_read_double(&e, doc, m, "rho", MS_DIM_NONE, true, 0, 0, 3, &r));
+  dk_mark_used(m, "q");
+  dk_report_unused(&e, doc);
+  assert_int_equal(e.n, 3);
+  assert_int_equal(dk_errors_count(&e), 2);
+  char buf[1024] = "";
+  FILE *f = fmemopen(buf, sizeof buf, "w");
+  dk_errors_print(&e, f);
+  fclose(f);
+  assert_string_equal(buf, "t.yaml:1:1: m: missing required key 'rho' (a number in [0, 3])\n"
+                           "t.yaml:2:9: m: unknown key 'gama' (did you mean 'gamma'?)\n");
   dk_free(doc);
   dk_errors_free(&e);
 }
@@ -265,6 +290,7 @@ int main(void) {
                                      cmocka_unit_test(test_resolved_deck),
                                      cmocka_unit_test(test_errors_sorted_once),
                                      cmocka_unit_test(test_suggest),
+                                     cmocka_unit_test(test_misspelt_required_key),
                                      cmocka_unit_test(test_set_overrides)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
