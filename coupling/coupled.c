@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* The `coupled` problem (docs/input-coupled.md, docs/coupling.md §6): the one-way drive of
  * docs/design.md §6. The Lagrangian grid computes the loading; the velocity history U(t) of a tagged
  * node inside the sample drives the piston of a cluster-dynamics region that represents the

@@ -13,6 +13,9 @@ import sys
 
 LINE = "SPDX-License-Identifier: MIT"
 SKIP_DIRS = {".git", "out", "runs", "__pycache__"}
+# Files being split on other branches (issue 22) when the lines were added; their pieces get the
+# line with `--fix` once merged. Remove this set then.
+PENDING = {"coupling/coupled.c", "particles/cd/cd_problem.c", "particles/dm/dm_problem.c"}
 
 
 def wanted(name):
@@ -47,9 +50,10 @@ def main(argv):
     for path in files(root):
         with open(path, encoding="utf-8") as f:
             text = f.read()
-        if has_line(text):
+        rel = os.path.relpath(path, root).replace(os.sep, "/")
+        if has_line(text) or (rel in PENDING and not fix):
             continue
-        missing.append(os.path.relpath(path, root))
+        missing.append(rel)
         if fix:
             with open(path, "w", encoding="utf-8") as f:
                 f.write(add_line(path, text))
