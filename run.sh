@@ -1,5 +1,4 @@
 #!/usr/bin/env bash
-# SPDX-License-Identifier: MIT
 # The main job: set up, build (Release), run the default deck, turn its outputs into plots.
 #   ./run.sh [DECK] [OUTDIR]
 set -euo pipefail

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* mscale check DECK: validate only; exit 0, or 2 with FILE:LINE:COL: message lines. */
 #include "commands.h"
 

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* mscale — command-line front end (docs/design.md §8). */
 #include "commands.h"
 

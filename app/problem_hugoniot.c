@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Built-in problem `hugoniot`: shock Hugoniots of deck materials, one CSV per material
  * (the reference curves validation runs are compared with). */
 #include "commands.h"

@@ -1,4 +1,3 @@
-# SPDX-License-Identifier: MIT
 # Every dependency comes from a Debian package; a missing one stops configuration and names it.
 include(FindPackageHandleStandardArgs)
 

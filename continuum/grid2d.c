@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* grid2d.c — the 2D staggered Lagrangian quad grid with the compatible discretisation
  * ([CBSW98], docs/continuum2d.md). Public API in cont2d.h.
  *

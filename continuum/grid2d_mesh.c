@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* grid2d_mesh.c — logical-rectangle mesh builders for the 2D grid (cont2d.h). */
 #include "cont2d.h"
 

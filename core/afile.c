@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Atomic files: write "<path>.part", rename to <path> when complete. */
 #include "core.h"
 

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* core.h — the one public header of mscale's core library.
  *
  * The core is what every physics folder stands on and nothing physical lives here:

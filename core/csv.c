@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* CSV tables with a units header line. */
 #include "core.h"
 

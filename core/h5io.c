@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* HDF5 output (temporary name + rename) and input for post-processing. */
 #include "core.h"
 #include "par_mpi.h"

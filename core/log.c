@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Logging, the run context and output directories. */
 #include "core.h"
 

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Check-time memory estimate (core.h, "Check-time memory estimate"). */
 #include "core.h"
 

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Progress: an updating line with ETA on a terminal, plain log lines otherwise. */
 #include "core.h"
 

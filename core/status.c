@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Status codes (one list) and the exit-code mapping of docs/design.md §8; checked allocation. */
 #include "core.h"
 

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Numeric tables (EOS tables, histories): CSV or whitespace separated, '#' comments, an
  * optional header line of column names. Every problem is reported as FILE:LINE. */
 #include "core.h"

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* XDMF sidecar so ParaView opens the HDF5 snapshots (Polyvertex topology). */
 #include "core.h"
 

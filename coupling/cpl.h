@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* cpl.h — the one public header of the coupling library (docs/design.md §6, docs/coupling.md).
  *
  * What lives here:

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c) and
  * of the coupled problem's fragment snapshots (coupling/snapshot.c): positions, velocities and
  * masses as [n][3] and [n] datasets, the caller's extra datasets and attributes, an XDMF

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* ptl_state.c — structure-of-arrays particle storage, sized once (ptl.h). */
 #include "ptl.h"
 

@@ -1,5 +1,4 @@
 #!/usr/bin/env bash
-# SPDX-License-Identifier: MIT
 # Runs a fixed list of decks with two mscale binaries and compares every output: CSV and XDMF
 # byte for byte, HDF5 by value (h5diff, no tolerance). The evidence for a change that must keep
 # results bitwise equal (docs/developing.md, "Refactoring"). run.log and run_info.yaml hold wall

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Partition quality of the cluster-dynamics coarse-cell graph (docs/benchmarks.md "CD
  * partition"): METIS vs plain slabs (cd_partition_cells).
  *

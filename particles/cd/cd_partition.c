@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* cd_partition.c — partition of the cluster-dynamics coarse-cell grid over MPI ranks
  * (docs/mpi.md "Partitioning the cluster-dynamics region").
  *

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* cd_sim.c — the cluster-dynamics run: set-up, time step, piston, walls, balance.
  *
  * Every force evaluation of a run goes through step_forces (the one place for per-evaluation

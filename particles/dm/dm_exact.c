@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* dm_exact.c — exact reference solutions of [Sofronov] §5 (units g, cm, 10 µs). */
 #include "dm.h"
 

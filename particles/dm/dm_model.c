@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* dm_model.c — strain, stress, energy and the exact Hamiltonian force of the discrete model
  * ([Sofronov] §1 with the correction of docs/design.md §5.2).
  *

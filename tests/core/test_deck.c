@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Deck reader: positions in messages, every error collected, unknown keys, defaults written
  * back, unit conversion. */
 #include <math.h>

@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* The `discrete_model` deck section: every error located and collected, run-time refusals
  * (unstable time step, singular shape matrices) as input errors, a small deck that runs. */
 #include <math.h>

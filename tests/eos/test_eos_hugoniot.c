@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Hugoniot solver and Kuropatenko mixtures (docs/eos.md "Hugoniot"). */
 #include <math.h>
 

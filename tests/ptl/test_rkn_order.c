@@ -1,4 +1,3 @@
-/* SPDX-License-Identifier: MIT */
 /* Symplectic RKN integrators: coefficient conditions, measured convergence order, bounded
  * energy error (docs/design.md §5.2, [Sofronov] §2). */
 #include <math.h>
