@@ -10,13 +10,15 @@
 static void run_usage(FILE *f) {
   fprintf(f,
           "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose] [--restart FILE]\n"
-          "                       [--set PATH=VALUE]...\n\n"
+          "                       [--continue] [--set PATH=VALUE]...\n\n"
           "  -o, --output=OUTDIR  output directory (default: out/<deck name>)\n"
           "  --force              allow writing into an OUTDIR that already holds results\n"
           "  --quiet              no progress line\n"
           "  --verbose            debug messages in the log\n"
           "  --restart=FILE       continue from a checkpoint the same deck wrote (discrete_model,\n"
-          "                       cluster_dynamics, coupled one-way; docs/mpi.md)\n"
+          "                       cluster_dynamics, coupled; docs/mpi.md)\n"
+          "  --continue           continue in OUTDIR from its own last checkpoint (after an\n"
+          "                       interrupt or a wall-time limit; docs/reliability.md)\n"
           "  --set PATH=VALUE     override a deck value before the deck is checked, e.g.\n"
           "                       --set continuum.time.end=0.1 --set materials[0].eos.gamma=1.4\n"
           "                       (repeatable; VALUE is YAML; recorded in run_info.yaml and\n"
@@ -64,8 +66,13 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
     fprintf(af.f, "\"\noverrides:%s\n", nsets ? "" : " []");
     for (size_t i = 0; i < nsets; i++) put_quoted(af.f, "  - \"", sets[i]), fputs("\"\n", af.f);
     fprintf(af.f, "started: \"%s\"\n", started);
-    fprintf(af.f, "status: %s\nstatus_message: \"%s\"\nwall_time_s: %.3f\n",
-            s == MS_OK ? "completed" : "failed", ms_status_str(s), wall);
+    /* s < 0: the run is under way (written when it starts) */
+    const char *status = (int)s < 0            ? "running"
+                         : s == MS_OK          ? "completed"
+                         : s == MS_INTERRUPTED ? "interrupted"
+                                               : "failed";
+    fprintf(af.f, "status: %s\nstatus_message: \"%s\"\nwall_time_s: %.3f\n", status,
+            (int)s < 0 ? "" : ms_status_str(s), wall);
     ms_afile_commit(&af);
   }
   free(path);
@@ -79,14 +86,15 @@ int cmd_run(int argc, char **argv) {
   const char *deck = NULL, *outdir_arg = NULL, *restart = NULL;
   const char **sets = ms_calloc((size_t)argc + 1, sizeof *sets);
   size_t nsets = 0;
-  bool force = false, quiet = false, verbose = false;
-  enum { OPT_FORCE = 256, OPT_QUIET, OPT_VERBOSE, OPT_RESTART, OPT_SET };
+  bool force = false, quiet = false, verbose = false, cont = false;
+  enum { OPT_FORCE = 256, OPT_QUIET, OPT_VERBOSE, OPT_RESTART, OPT_SET, OPT_CONTINUE };
   static const struct option opts[] = {{"output", required_argument, NULL, 'o'},
                                        {"force", no_argument, NULL, OPT_FORCE},
                                        {"quiet", no_argument, NULL, OPT_QUIET},
                                        {"verbose", no_argument, NULL, OPT_VERBOSE},
                                        {"restart", required_argument, NULL, OPT_RESTART},
                                        {"set", required_argument, NULL, OPT_SET},
+                                       {"continue", no_argument, NULL, OPT_CONTINUE},
                                        {"help", no_argument, NULL, 'h'},
                                        {NULL, 0, NULL, 0}};
   int rc = -1, c;
@@ -101,6 +109,7 @@ int cmd_run(int argc, char **argv) {
     else if (c == OPT_RESTART) restart = optarg;
     else if (c == OPT_SET) sets[nsets++] = optarg;
     else if (c == OPT_FORCE) force = true;
+    else if (c == OPT_CONTINUE) cont = true;
     else if (c == OPT_QUIET) quiet = true;
     else if (c == OPT_VERBOSE) verbose = true;
     else if (c == 'h') rc = 0, run_usage(stdout);
@@ -112,6 +121,11 @@ int cmd_run(int argc, char **argv) {
       fprintf(stderr, "mscale run: unexpected argument '%s' (one deck per run)\n", argv[i]);
       rc = 2;
     }
+  }
+  if (rc < 0 && cont && restart) {
+    fprintf(stderr, "mscale run: --continue takes the output directory's own checkpoint; give "
+                    "it or --restart FILE, not both\n");
+    rc = 2;
   }
   if (rc < 0 && !deck) {
     fprintf(stderr, "mscale run: no deck given\n\n");
@@ -127,6 +141,8 @@ int cmd_run(int argc, char **argv) {
   ms_ctx_init_serial(&ctx);
   ctx.quiet = quiet;
   ctx.restart = restart;
+  ctx.continuing = cont;
+  char *continue_from = NULL; /* --continue: OUTDIR/<the problem's checkpoint> */
   if (verbose) ctx.verbosity = MS_LOG_DEBUG;
   if (par_init(&argc, &argv, &ctx)) {
     fprintf(stderr, "mscale: cannot start MPI\n");
@@ -146,14 +162,28 @@ int cmd_run(int argc, char **argv) {
       fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, dk_errors_count(&e),
               dk_errors_count(&e) == 1 ? "" : "s");
     }
-  } else if (restart && !app_deck_restartable(&d)) {
+  } else if ((restart || cont) && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)
       fprintf(stderr, "mscale run: --restart is not available for this deck's problem type "
                       "(discrete_model, cluster_dynamics and coupled write checkpoints)\n");
     s = MS_ERR_INPUT;
   } else {
     char *outdir = outdir_arg ? ms_strdup(outdir_arg) : default_outdir(deck);
-    s = par_agree_status(ms_outdir_create(&ctx, outdir, force));
+    if (cont) { /* the directory's own checkpoint, which must be there */
+      size_t len = strlen(outdir) + strlen(app_deck_checkpoint_name(&d)) + 2;
+      continue_from = ms_calloc(len, 1);
+      snprintf(continue_from, len, "%s/%s", outdir, app_deck_checkpoint_name(&d));
+      FILE *f = fopen(continue_from, "rb");
+      if (f) fclose(f);
+      else {
+        if (ctx.rank == 0)
+          fprintf(stderr, "mscale run: --continue: no checkpoint %s (the run wrote none yet?)\n",
+                  continue_from);
+        s = MS_ERR_INPUT;
+      }
+      ctx.restart = continue_from;
+    }
+    if (!s) s = par_agree_status(ms_outdir_create(&ctx, outdir, force || cont));
     free(outdir);
     if (!s) {
       char *resolved = ms_out_path(&ctx, "deck.resolved.yaml");
@@ -164,9 +194,17 @@ int cmd_run(int argc, char **argv) {
     if (!s) {
       ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s", app_version(), deck,
              ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
+      if (ctx.rank == 0) /* status: running, until the run ends */
+        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, (ms_status)-1, 0.0);
+      ms_interrupts_install();
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
-      if (s)
+      if (s == MS_INTERRUPTED)
+        ms_log(&ctx, MS_LOG_WARN,
+               "run interrupted (outputs so far are in %s; `mscale run %s -o %s --continue` "
+               "goes on from the last checkpoint)",
+               ctx.outdir, deck, ctx.outdir);
+      else if (s)
         ms_log(&ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
                ctx.outdir);
       else ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
@@ -176,6 +214,7 @@ int cmd_run(int argc, char **argv) {
   }
   app_deck_free(&d);
   dk_errors_free(&e);
+  free(continue_from);
   free(cmdline);
   free(sets);
   ms_ctx_close(&ctx);

@@ -30,6 +30,8 @@ bool app_apply_set(dk_doc *doc, const char *arg, dk_errors *e);
 ms_status app_deck_run(ms_ctx *ctx, app_deck *d);
 /* True if the deck's problem type can continue from a checkpoint (`run --restart`). */
 bool app_deck_restartable(const app_deck *d);
+/* The checkpoint file the deck's problem writes into its output directory (NULL: none). */
+const char *app_deck_checkpoint_name(const app_deck *d);
 void app_deck_free(app_deck *d);
 /* One line per problem type, for --help. */
 void app_print_problem_types(FILE *f);

@@ -136,3 +136,14 @@ void app_deck_free(app_deck *d) {
   dk_free(d->doc);
   memset(d, 0, sizeof *d);
 }
+
+const char *app_deck_checkpoint_name(const app_deck *d) {
+  /* the names the problems write (docs/mpi.md "Checkpoint / restart") */
+  static const char *const names[][2] = {{"cluster_dynamics", "cd_checkpoint.h5"},
+                                         {"discrete_model", "dm_checkpoint.h5"},
+                                         {"coupled", "coupled_checkpoint.h5"}};
+  if (d->problem_kind < 0) return NULL;
+  for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)
+    if (!strcmp(problem_types[d->problem_kind].name, names[k][0])) return names[k][1];
+  return NULL;
+}

@@ -160,6 +160,11 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   ms_progress prog;
   ms_progress_start(&prog, ctx, "continuum", 0.0, p->t_end);
   while (g->t < p->t_end) {
+    if (!h && ctx->size == 1 && ms_interrupt_requested()) { /* no checkpoints: stop at once */
+      ms_log(ctx, MS_LOG_WARN, "continuum: interrupted at t = %g (step %ld)", g->t, g->step);
+      s = MS_INTERRUPTED;
+      break;
+    }
     double target = p->t_end;
     if (next_out < p->n_out && p->out_times[next_out] < target) target = p->out_times[next_out];
     double tf = (double)next_frame * frame_dt;
@@ -208,6 +213,9 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
     s = write_profile(&fw, g, "profile_final");
     if (!s) s = write_histories(&fw, g, p->history_stride);
     if (!s && p->xt_frames > 0) s = write_xt(&fw, &xt, p->xt_quantity);
+  } else if (s == MS_INTERRUPTED) { /* what the run has so far, under the usual names */
+    write_profile(&fw, g, "profile_interrupted");
+    write_histories(&fw, g, p->history_stride);
   } else if (s == MS_ERR_UNSTABLE && p->xt_frames > 0) {
     xt_add(&xt, g);
     const file_writer fail = {ctx, false};

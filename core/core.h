@@ -32,7 +32,8 @@ typedef enum ms_status {
   MS_ERR_NOMEM,    /* allocation failed                          -> exit 1 */
   MS_ERR_UNSTABLE, /* NaN, negative volume, time-step collapse   -> exit 1 */
   MS_ERR_SOLVER,   /* a nonlinear/ODE solver did not converge    -> exit 1 */
-  MS_ERR_INTERNAL  /* a bug: an invariant was violated           -> exit 1 */
+  MS_ERR_INTERNAL, /* a bug: an invariant was violated           -> exit 1 */
+  MS_INTERRUPTED   /* SIGINT/SIGTERM: stopped cleanly           -> exit 1 */
 } ms_status;
 
 const char *ms_status_str(ms_status s);
@@ -68,7 +69,17 @@ typedef struct ms_ctx {
   bool quiet;             /* no progress lines on stderr */
   double wall_start;      /* ms_wall_time() when the context was made */
   const char *restart;    /* `mscale run --restart FILE`: checkpoint to continue from, or NULL */
+  bool continuing;        /* `mscale run --continue`: the output directory is the run's own */
 } ms_ctx;
+
+/* Interrupts (docs/reliability.md "Interrupts"): ms_interrupts_install makes SIGINT and SIGTERM
+ * set a flag (a second signal ends the process at once); the run loops poll it and stop cleanly
+ * with MS_INTERRUPTED — at their next checkpoint when checkpoints are on, so that
+ * `mscale run --continue` reproduces the uninterrupted run bit for bit. */
+void ms_interrupts_install(void);
+bool ms_interrupt_requested(void); /* this process's flag */
+/* Any rank's flag (collective on MPI ranks: every rank must call it at the same point). */
+bool ms_interrupt_pending(const ms_ctx *ctx);
 
 /* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
 void ms_ctx_init_serial(ms_ctx *ctx);

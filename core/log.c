@@ -119,7 +119,7 @@ ms_status ms_outdir_create(ms_ctx *ctx, const char *dir, bool force) {
   ctx->outdir = ms_strdup(dir);
   if (ctx->rank == 0) {
     char *log = ms_out_path(ctx, "run.log");
-    ctx->log_file = fopen(log, "w");
+    ctx->log_file = fopen(log, ctx->continuing ? "a" : "w"); /* --continue: the log goes on */
     free(log);
     if (!ctx->log_file) {
       fprintf(stderr, "mscale: cannot write run.log in '%s'\n", dir);

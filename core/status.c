@@ -1,7 +1,8 @@
 /* Status codes (one list) and the exit-code mapping of docs/design.md §8; checked allocation. */
-#include <stdio.h>
-#include <stdlib.h>
 #include "core.h"
+
+#include <signal.h>
+#include <stdio.h>
 
 #include <stdlib.h>
 #include <string.h>
@@ -22,6 +23,8 @@ const char *ms_status_str(ms_status s) {
     return "a solver did not converge";
   case MS_ERR_INTERNAL:
     return "internal error";
+  case MS_INTERRUPTED:
+    return "interrupted";
   }
   return "unknown status";
 }
@@ -74,4 +77,28 @@ void ms_must(ms_status st, const char *what) {
   if (st == MS_OK) return;
   fprintf(stderr, "mscale: internal error: %s failed (%s)\n", what, ms_status_str(st));
   abort();
+}
+
+static volatile sig_atomic_t interrupt_flag = 0;
+
+static void on_signal(int sig) {
+  (void)sig;
+  interrupt_flag = 1;
+}
+
+void ms_interrupts_install(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sa.sa_flags = SA_RESETHAND; /* a second signal takes the default action: the process ends */
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+bool ms_interrupt_requested(void) { return interrupt_flag != 0; }
+
+bool ms_interrupt_pending(const ms_ctx *ctx) {
+  const int mine = interrupt_flag != 0;
+  return ctx->size > 1 ? par_max_int(mine) != 0 : mine;
 }

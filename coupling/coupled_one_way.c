@@ -34,6 +34,7 @@ typedef struct one_way {
   double *fs_t, *fs_ug, *fs_up;
   ptl_region_energy e0;
   ms_progress prog;
+  bool stopping; /* interrupted: stop at the next checkpoint */
 } one_way;
 
 /* 1. The grid alone, with its own outputs; the drive and free-surface histories as pistons. */
@@ -267,6 +268,23 @@ static ms_status particle_loop(one_way *w) {
     if (w->ckpt_every > 0 && step - 1 > step0 && (step - 1) % w->ckpt_every == 0) {
       st = checkpoint(w, step - 1);
       if (st != MS_OK) break;
+      if (w->stopping) {
+        ms_log(ctx, MS_LOG_WARN, "coupled: interrupted; checkpoint at particle step %ld written",
+               step - 1);
+        st = MS_INTERRUPTED;
+        break;
+      }
+    }
+    if (!w->stopping && ms_interrupt_pending(ctx)) { /* collective: every rank, every step */
+      w->stopping = true;
+      if (w->ckpt_every == 0) {
+        ms_log(ctx, MS_LOG_WARN, "coupled: interrupted at particle step %ld (no checkpoints)",
+               step - 1);
+        st = MS_INTERRUPTED;
+        break;
+      }
+      ms_log(ctx, MS_LOG_WARN, "coupled: interrupt: stopping at the next checkpoint (step %ld)",
+             ((step - 1) / w->ckpt_every + 1) * w->ckpt_every);
     }
     st = particle_step(w);
     if (st != MS_OK) {

@@ -34,6 +34,7 @@ typedef struct two_way {
    * step; ls.gaslog records the tractions and what was done to the gas grid. A restart replays
    * the log through the grid's own loop until gsteps reaches replay_gsteps, then goes live. */
   long ckpt_every, next_ckpt, replay_gsteps;
+  bool stopping; /* interrupted: stop at the next checkpoint */
   size_t replay_pos;
   cpl_loop_state ls;
   ms_afile *csv[2];
@@ -216,6 +217,20 @@ static ms_status two_way_after(void *user, cont_grid *g) {
   if (st == MS_OK && w->ckpt_every > 0 && w->psteps >= w->next_ckpt) {
     st = two_way_checkpoint(w);
     w->next_ckpt = (w->psteps / w->ckpt_every + 1) * w->ckpt_every;
+    if (st == MS_OK && w->stopping) {
+      ms_log(w->ctx, MS_LOG_WARN, "coupled: interrupted; checkpoint at particle step %ld written",
+             w->psteps);
+      return MS_INTERRUPTED;
+    }
+  }
+  if (st == MS_OK && !w->stopping && ms_interrupt_pending(w->ctx)) { /* collective */
+    w->stopping = true;
+    if (w->ckpt_every == 0) {
+      ms_log(w->ctx, MS_LOG_WARN, "coupled: interrupted at particle step %ld (no checkpoints)",
+             w->psteps);
+      return MS_INTERRUPTED;
+    }
+    ms_log(w->ctx, MS_LOG_WARN, "coupled: interrupt: stopping at the next checkpoint");
   }
   return st;
 }
