@@ -881,14 +881,21 @@ static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
-static uint64_t hash_node(uint64_t h, const dk_node *n, const char *const *skip) {
+static bool hash_skipped(const dk_node *n, const char *const *skip) {
   for (const char *const *s = skip; s && *s; s++)
-    if (n->path && !strcmp(n->path, *s)) return fnv1a(h, "~", 1);
+    if (n->path && !strcmp(n->path, *s)) return true;
+  return false;
+}
+
+/* A skipped node leaves no trace, key included: where a key sits in its map depends on whether
+ * the deck, a --set override or a reader's default put it there. */
+static uint64_t hash_node(uint64_t h, const dk_node *n, const char *const *skip) {
   char kind = n->kind == DK_SCALAR ? 's' : (n->kind == DK_MAP ? 'm' : 'q');
   h = fnv1a(h, &kind, 1);
   if (n->kind == DK_SCALAR)
     return fnv1a(h, n->value ? n->value : "", n->value ? strlen(n->value) + 1 : 1);
   for (size_t i = 0; i < n->n; i++) {
+    if (hash_skipped(n->items[i], skip)) continue;
     if (n->kind == DK_MAP) h = fnv1a(h, n->keys[i], strlen(n->keys[i]) + 1);
     h = hash_node(h, n->items[i], skip);
   }

@@ -196,6 +196,13 @@ long cpl_checkpoint_steps(const cpl_problem *p, double dt) {
   return p->checkpoint_time > 0 ? lround(fmax(1.0, p->checkpoint_time / dt)) : 0;
 }
 
+bool cpl_should_stop(const ms_ctx *ctx, const cpl_problem *p) {
+  int stop = ms_interrupt_requested();
+  if (p->wall_limit > 0 && ctx->rank == 0 && ms_wall_time() - ctx->wall_start > p->wall_limit)
+    stop = 1;
+  return ctx->size > 1 ? par_max_int(stop) != 0 : stop;
+}
+
 ms_status cpl_check_restart_count(const ms_ctx *ctx, ptl_region *r, size_t nglobal) {
   const ptl_state *ps = ptl_region_state(r);
   const size_t nckpt = ctx->size > 1 ? (size_t)par_sum_long((long)ps->nlocal) : ps->n;

@@ -122,6 +122,8 @@ static void read_options(cpl_problem *p, dk_doc *doc, const dk_node *sec, dk_err
     dk_read_int(e, doc, T, "outputs", false, 4, 1, 1000, &p->n_out);
     dk_read_checkpoint_interval(e, doc, T, "time.", "particle steps", &p->checkpoint_every,
                                 &p->checkpoint_time);
+    /* wall-clock seconds (not simulated time), like LAMMPS's `timer timeout` */
+    dk_read_double(e, doc, T, "wall_limit", MS_DIM_NONE, false, 0.0, 0.0, INFINITY, &p->wall_limit);
   }
   const dk_node *F = dk_get(sec, "fragments");
   p->bond = 1.2;
@@ -259,7 +261,9 @@ cpl_problem *cpl_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     cpl_problem_destroy(&p);
     return NULL;
   }
-  p->deck_hash = dk_hash(doc, NULL);
+  /* the wall-time limit may change between a run and its continuation (chained batch jobs) */
+  static const char *const hash_skip[] = {"coupled.time.wall_limit", NULL};
+  p->deck_hash = dk_hash(doc, hash_skip);
   return p;
 }
 

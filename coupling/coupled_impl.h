@@ -36,6 +36,7 @@ struct cpl_problem {
   long checkpoint_every;  /* particle steps between checkpoints (0: none) */
   double checkpoint_time; /* or simulated time between them (rounded to whole steps) */
   uint64_t deck_hash;     /* of the resolved deck: a restart must use the same one */
+  double wall_limit;      /* time.wall_limit: stop at the next checkpoint after this many s */
   /* fragments, drag, transport */
   double bond, jet_margin;
   long frag_every;
@@ -113,6 +114,9 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
                               const cpl_particles *view);
 void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start);
 long cpl_checkpoint_steps(const cpl_problem *p, double dt);
+/* SIGINT/SIGTERM on any rank, or the wall-time limit passed on rank 0 (docs/reliability.md
+ * §5b). Collective: every rank calls it at the same point of the loop. */
+bool cpl_should_stop(const ms_ctx *ctx, const cpl_problem *p);
 /* A restart's particle count against the deck's (MS_ERR_INPUT with a message). */
 ms_status cpl_check_restart_count(const ms_ctx *ctx, ptl_region *r, size_t nglobal);
 

@@ -275,7 +275,7 @@ static ms_status particle_loop(one_way *w) {
         break;
       }
     }
-    if (!w->stopping && ms_interrupt_pending(ctx)) { /* collective: every rank, every step */
+    if (!w->stopping && cpl_should_stop(ctx, p)) { /* collective: every rank, every step */
       w->stopping = true;
       if (w->ckpt_every == 0) {
         ms_log(ctx, MS_LOG_WARN, "coupled: interrupted at particle step %ld (no checkpoints)",
@@ -283,7 +283,8 @@ static ms_status particle_loop(one_way *w) {
         st = MS_INTERRUPTED;
         break;
       }
-      ms_log(ctx, MS_LOG_WARN, "coupled: interrupt: stopping at the next checkpoint (step %ld)",
+      ms_log(ctx, MS_LOG_WARN,
+             "coupled: interrupt or wall-time limit: stopping at the next checkpoint (step %ld)",
              ((step - 1) / w->ckpt_every + 1) * w->ckpt_every);
     }
     st = particle_step(w);

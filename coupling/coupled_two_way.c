@@ -223,7 +223,7 @@ static ms_status two_way_after(void *user, cont_grid *g) {
       return MS_INTERRUPTED;
     }
   }
-  if (st == MS_OK && !w->stopping && ms_interrupt_pending(w->ctx)) { /* collective */
+  if (st == MS_OK && !w->stopping && cpl_should_stop(w->ctx, p)) { /* collective */
     w->stopping = true;
     if (w->ckpt_every == 0) {
       ms_log(w->ctx, MS_LOG_WARN, "coupled: interrupted at particle step %ld (no checkpoints)",
