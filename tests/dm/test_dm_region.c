@@ -5,6 +5,7 @@
  *   - a constant 0.5 km/s piston on Al: K + U − W stays constant, the driven layer's force
  *     opposes the motion, the shock reaches the free surface when the Hugoniot shock speed of
  *     the EOS (eos_hugoniot) says, and the free surface jumps to about 2 u_p;
+ *   - dimension 3 builds the cubic slab and conserves the same balance;
  *   - velocities changed between steps (the coupling's drag kicks) are taken up by the model;
  *   - a step that would outrun the model's own stability limit stops with MS_ERR_UNSTABLE;
  *   - deck errors are located: response other than eos, elastic_plastic without its keys, a
@@ -236,6 +237,43 @@ static void test_step_beyond_the_limit_stops(void **state) {
   dk_errors_free(&e);
 }
 
+/* dimension 3: a simple-cubic slab, periodic along y and z (width_z defaults to ⌈3 horizons⌉),
+ * driven for 300 steps: the same flags and the same round-off energy balance as in 2D. */
+static void test_three_d(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  ptl_region_params *pp = read(SECTION("  dimension: 3\n"), &e, &doc);
+  if (e.n) dk_errors_print(&e, stderr);
+  assert_non_null(pp);
+  eos_t *eos = al();
+  ptl_region *r = build(pp, eos, 0.03);
+  const ptl_region_geometry g = ptl_region_get_geometry(r);
+  assert_int_equal(g.dim, 3);
+  assert_int_equal(g.particles, 30 * 5 * 5);
+  assert_true(fabs(g.area - 0.005 * 0.005) < 1e-18 && fabs(g.period[2] - 0.005) < 1e-15);
+  size_t nd, ns;
+  count_flags(r, &nd, &ns);
+  assert_int_equal(nd, 2 * 25);
+  assert_int_equal(ns, 25);
+  const double t[1] = {0}, u[1] = {0.5}, dir[3] = {1, 0, 0};
+  ptl_region_set_piston(r, 1, t, u, dir);
+  assert_int_equal(ptl_region_init(r), MS_OK);
+  ptl_region_energy e0, e1;
+  ptl_region_energy_get(r, &e0);
+  for (int k = 0; k < 300; k++) assert_int_equal(ptl_region_step(r), MS_OK);
+  ptl_region_energy_get(r, &e1);
+  assert_true(e1.piston_work > 0 && ptl_region_driven_force(r) < 0);
+  /* round-off, as in 2D (test_piston_shock) */
+  assert_true(fabs(e1.total - e0.total) < 1e-10 * e1.piston_work);
+  ptl_region_destroy(&r);
+  ptl_region_params_destroy(&pp);
+  eos_destroy(&eos);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 static void expect_error(const char *text, const char *where, const char *what) {
   dk_errors e;
   dk_errors_init(&e);
@@ -270,8 +308,11 @@ static void test_deck_errors(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_slab),           cmocka_unit_test(test_piston_shock),
-      cmocka_unit_test(test_kicks_are_kept), cmocka_unit_test(test_step_beyond_the_limit_stops),
+      cmocka_unit_test(test_slab),
+      cmocka_unit_test(test_piston_shock),
+      cmocka_unit_test(test_kicks_are_kept),
+      cmocka_unit_test(test_three_d),
+      cmocka_unit_test(test_step_beyond_the_limit_stops),
       cmocka_unit_test(test_deck_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
