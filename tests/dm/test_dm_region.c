@@ -230,6 +230,16 @@ static void test_step_beyond_the_limit_stops(void **state) {
   for (int k = 0; k < 2000 && st == MS_OK; k++) st = ptl_region_step(r);
   assert_int_equal(st, MS_ERR_UNSTABLE);
   assert_non_null(strstr(ptl_region_error(r), "fell below the fixed step"));
+  /* the state it found, as the coupled run writes it (particles_unstable.h5) */
+  char tmp[] = "/tmp/mscale_test_dmr_XXXXXX", path[96], cmd[128];
+  assert_non_null(mkdtemp(tmp));
+  snprintf(path, sizeof path, "%s/particles_unstable.h5", tmp);
+  assert_int_equal(ptl_region_write_snapshot(r, path), MS_OK);
+  FILE *fh = fopen(path, "rb");
+  assert_non_null(fh);
+  fclose(fh);
+  snprintf(cmd, sizeof cmd, "rm -rf %s", tmp);
+  assert_int_equal(system(cmd), 0);
   ptl_region_destroy(&r);
   ptl_region_params_destroy(&pp);
   eos_destroy(&eos);
