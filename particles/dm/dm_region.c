@@ -377,7 +377,8 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
    * The limit courant·ℓ/(c_L + 2(C_q ℓ|tr D| + C_l c)) falls under compression as c grows, ℓ
    * shrinks and the front's |tr D| adds viscosity: for Al at u_p = 0.5 km/s (c ≈ 6.7 km/s,
    * ℓ/h ≈ 0.96 in 2D, |tr D| ≈ u_p/(5 h)) by ≈ 1.35, so dt_margin 0.5 leaves room up to
-   * roughly a 2 km/s piston; beyond, the step check below stops the run with the advice. */
+   * a 2 km/s piston (measured: u_p = 2 km/s runs, 3 km/s needs 0.35; docs/particles-dm.md);
+   * beyond, the step check below stops the run with the advice. */
   r->dt0_limit = r->f->dt_next;
   r->dt = p->dt_margin * r->dt0_limit;
   r->pis.dir[0] = 1.0;
