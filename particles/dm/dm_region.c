@@ -22,7 +22,7 @@
 enum { SURF_FLAT = 0, SURF_SINE };
 static const char *const surface_names[] = {"flat", "sine", NULL};
 static const char *const response_names[] = {"eos", "linear_elastic", NULL};
-static const char *const yield_names[] = {"none", "elastic_plastic", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan", NULL};
 
 typedef struct dm_region_params {
   ptl_region_params base;
@@ -32,6 +32,7 @@ typedef struct dm_region_params {
   long piston_layers;
   int yield;
   double G, Y0;
+  dm_sg sg; /* steinberg_guinan: strength_set and/or strength {...} (dm_strength.c) */
   double cq, cl, courant, hourglass, dt_margin, cond_max;
   int surface;
   double surf_depth, surf_wavelength;
@@ -132,12 +133,16 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
     dk_read_positive(e, doc, P, "shear_modulus", MS_DIM_PRESSURE, true, 0, &p->G);
     dk_read_positive(e, doc, P, "yield_stress", MS_DIM_PRESSURE, true, 0, &p->Y0);
   } else {
+    /* none: no keys; steinberg_guinan: G0 and Y0 from strength_set / strength {...} */
     static const char *const only_ep[] = {"shear_modulus", "yield_stress"};
     for (int k = 0; k < 2; k++)
       if (dk_get(P, only_ep[k]))
         dk_error(e, doc, dk_get(P, only_ep[k]), "particles.%s needs yield: elastic_plastic",
                  only_ep[k]);
   }
+  /* the sample's EOS is not known here: its cold curve (the temperature) is checked at create */
+  dm_sg_read(e, doc, P, p->yield, NULL, &p->sg);
+  if (p->yield == DM_YIELD_STEINBERG_GUINAN) p->G = p->sg.G0, p->Y0 = p->sg.Y0;
   p->cq = 2.0, p->cl = 0.5;
   const dk_node *V = dk_get(P, "viscosity");
   if (V && dk_expect_map(e, doc, V, "particles.viscosity")) {
@@ -363,6 +368,17 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
     return st;
   }
   r->mat = (dm_fin_material){.eos = eos, .yield = p->yield, .G = p->G, .Y0 = p->Y0};
+  if (p->yield == DM_YIELD_STEINBERG_GUINAN) {
+    r->mat.sg = &p->sg; /* the parameters outlive the region (the deck's) */
+    if (!isfinite(dm_sg_temperature(&p->sg, eos, rho0, e0))) {
+      ms_log(ctx, MS_LOG_ERROR,
+             "coupled: particles: yield: steinberg_guinan takes the temperature from the EOS's "
+             "cold curve, and the sample's EOS (%s) has none",
+             eos_kind_name(eos_get_kind(eos)));
+      region_free(r);
+      return MS_ERR_INPUT;
+    }
+  }
   r->imat = ms_calloc(r->s.n, 1);
   const dm_fin_params par = {
       .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = h};
