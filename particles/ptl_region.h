@@ -6,8 +6,9 @@
  * piston, advances it, asks for the driven layer's force and the free-surface velocity, finds
  * fragments in its particle state, and checkpoints it, all through the calls below.
  *
- * Cluster dynamics implements it (particles/cd/cd_region.c); ptl_region_model_find (in the
- * mscale_regions library, particles/regions.c) names the implementations by their deck name.
+ * Cluster dynamics (particles/cd/cd_region.c) and the finite-deformation discrete model
+ * (particles/dm/dm_region.c) implement it; ptl_region_model_find (in the mscale_regions
+ * library, particles/regions.c) names the implementations by their deck name.
  * Units are internal (docs/design.md §2): g, cm, 10 µs, km/s, kJ. */
 #ifndef MSCALE_PTL_REGION_H
 #define MSCALE_PTL_REGION_H
@@ -18,7 +19,8 @@ typedef struct ptl_region ptl_region;               /* a built region (opaque) *
 typedef struct ptl_region_params ptl_region_params; /* a model's deck section, read (opaque) */
 typedef struct ptl_region_model ptl_region_model;   /* an implementation (opaque) */
 
-/* The model whose deck name is `name` ("cluster_dynamics"); NULL if there is none. */
+/* The model whose deck name is `name` ("cluster_dynamics", "discrete_model"); NULL if there is
+ * none. */
 const ptl_region_model *ptl_region_model_find(const char *name);
 /* The known names, NULL-terminated (for the deck's enum and its messages). */
 extern const char *const ptl_region_model_names[];

@@ -3,6 +3,7 @@
 #define MSCALE_DM_H
 
 #include "ptl.h"
+#include "ptl_region.h"
 
 /* The least-squares deformation-gradient particle model of [Sofronov] §1 with the exact pairwise
  * Hamiltonian force (docs/design.md §5.2; docs/particles-dm.md). Small-strain linear elasticity:
@@ -310,5 +311,10 @@ typedef struct dm_piston_result {
   double *eps_p;   /* [nx] layer mean of the plastic strain at t_end (inside profile's block) */
 } dm_piston_result;
 ms_status dm_piston_run(const dm_piston_spec *spec, const ms_ctx *ctx, dm_piston_result *res);
+
+/* The finite-deformation model as the coupled problem's particle region (dm_region.c;
+ * ptl_region.h, deck name `discrete_model`, docs/particles-dm.md "As the coupled problem's
+ * particle region"). */
+const ptl_region_model *dm_region_model_get(void);
 
 #endif /* MSCALE_DM_H */
