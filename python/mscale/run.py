@@ -92,7 +92,8 @@ class Run:
         ``profile_final.csv`` (the grid at the end of its run), a Table.
     ``histories``
         the grid's tagged-node histories, a dict tag -> Table (``history_TAG.csv``, else the
-        groups of ``history.h5``); columns t, x, u and the states beside the node.
+        groups of ``history.h5``; ``histories_from_h5()`` reads the latter at full
+        precision); columns t, x, u and the states beside the node.
     ``energy``
         the particle models' energy balance (``cd_energy.csv``, ``*dm*energy.csv``), a Table.
     ``snapshots``
@@ -210,21 +211,28 @@ class Run:
     @property
     def histories(self):
         def make():
-            out = {}
-            for p in self._glob("history_*.csv"):
-                name = os.path.basename(p)[len("history_"):-4]
-                out[name] = self.table(os.path.basename(p))
-            if not out and self.has("history.h5"):
-                import h5py
-
-                with h5py.File(self.file("history.h5"), "r") as f:
-                    for name in sorted(f):
-                        if hasattr(f[name], "items"):
-                            out[name] = Table.from_h5_group(
-                                f[name], title=f"history of tagged node '{name}'",
-                                path=self.file("history.h5"))
-            return out
+            names = sorted(os.path.basename(p)[len("history_"):-4]
+                           for p in self._glob("history_*.csv"))
+            if not names:
+                return self.histories_from_h5()
+            return {name: self.table(f"history_{name}.csv") for name in names}
         return self._once("histories", make)
+
+    def histories_from_h5(self):
+        """The tagged-node histories of ``history.h5`` (full double precision; the CSVs carry
+        10 significant digits), a dict tag -> Table with columns in name order; {} without
+        the file."""
+        if not self.has("history.h5"):
+            return {}
+        import h5py
+
+        out = {}
+        with h5py.File(self.file("history.h5"), "r") as f:
+            for name in sorted(f):
+                if hasattr(f[name], "items"):
+                    out[name] = Table.from_h5_group(f[name], title=f"history of tagged node "
+                                                    f"'{name}'", path=self.file("history.h5"))
+        return out
 
     @property
     def energy(self):
