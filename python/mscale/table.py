@@ -85,12 +85,15 @@ class Table:
         return len(self.data)
 
     def __getitem__(self, key):
-        """A column by name; rows (a structured array) by index, slice or mask."""
+        """A column by name (a numpy array); one row by an integer index (a numpy record);
+        a new Table of the rows a slice, boolean mask or index array selects."""
         if isinstance(key, str):
             if key not in self.names:
                 raise KeyError(f"{self.name}: no column '{key}' (columns: {', '.join(self.names)})")
             return self.data[key]
-        return self.data[key]
+        if isinstance(key, (int, np.integer)):
+            return self.data[key]
+        return self.select(key)
 
     @property
     def name(self):
@@ -132,7 +135,8 @@ class Table:
         return df
 
     def select(self, mask, title=None):
-        """A new Table of the rows where ``mask`` is true (same units)."""
+        """A new Table of the rows ``mask`` (a boolean mask, slice or index array) selects, with
+        the same units and title."""
         return Table(self.data[mask], self.units, self.title if title is None else title,
                      self.path, self.comments)
 
