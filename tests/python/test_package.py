@@ -138,10 +138,13 @@ with h5py.File(os.path.join(sod, "xt.h5"), "r") as h:
 close(r.final_profile["rho"], xt["rho"][-1], "xt rho[-1] vs profile_final")
 check(r.snapshots == [] and r.fragments is None and r.spectra == [], "a continuum run: no "
       "particles, fragments or spectra")
-df = r.final_profile.to_pandas()
-check(df.shape == (ncell, len(r.final_profile.names)), f"DataFrame shape {df.shape}")
-check(df.attrs["units"]["p"] == r.final_profile.units["p"], "DataFrame units")
-check(np.array_equal(df["rho"].to_numpy(), r.final_profile["rho"]), "DataFrame values")
+if mscale.HAVE_PANDAS:  # python3-pandas (setup.sh installs it; the package runs without it)
+    df = r.final_profile.to_pandas()
+    check(df.shape == (ncell, len(r.final_profile.names)), f"DataFrame shape {df.shape}")
+    check(df.attrs["units"]["p"] == r.final_profile.units["p"], "DataFrame units")
+    check(np.array_equal(df["rho"].to_numpy(), r.final_profile["rho"]), "DataFrame values")
+else:
+    print("test_package: python3-pandas absent, the DataFrame checks are skipped")
 
 # ---------------------------------------------------------------------------------------------
 # 2. A coupled run (grid, drive, cluster-dynamics region, fragments, transport)
@@ -167,9 +170,10 @@ for s in snaps:
           f"{s.path}: units {s.units}")  # the snapshot writer's units (docs/output.md)
     arr = s.to_numpy()
     check(arr["x"].shape == (len(s), 3) and np.array_equal(arr["v"], s["v"]), "to_numpy")
-    df = s.to_pandas()
-    check(np.array_equal(df[["x", "y", "z"]].to_numpy(), s["x"]), "to_pandas positions")
-    check(np.array_equal(df["vx"].to_numpy(), s["v"][:, 0]), "to_pandas velocities")
+    if mscale.HAVE_PANDAS:
+        df = s.to_pandas()
+        check(np.array_equal(df[["x", "y", "z"]].to_numpy(), s["x"]), "to_pandas positions")
+        check(np.array_equal(df["vx"].to_numpy(), s["v"][:, 0]), "to_pandas velocities")
 # extended XYZ: byte for byte what `mscale export` writes, and ASE reads it back exactly
 last = snaps[-1]
 ref = subprocess.run([mscale_bin, "export", last.path, "--format", "extxyz"], env=RUN_ENV,
