@@ -26,6 +26,20 @@ def _read_yaml(path):
         return yaml.safe_load(f)
 
 
+def _newest_group(paths, prefix_re):
+    """The paths whose prefix (the one group of prefix_re) is that of the most recently written
+    file: a directory reused without a manifest may hold another model's files too (the
+    discrete model writes dm_profile_NNN or dm_fin_profile_NNN by its response)."""
+    groups = {}
+    for p in paths:
+        m = re.fullmatch(prefix_re, os.path.basename(p))
+        if m:
+            groups.setdefault(m.group(1), []).append(p)
+    if not groups:
+        return []
+    return max(groups.values(), key=lambda g: max(os.path.getmtime(p) for p in g))
+
+
 def _numbered(paths, stem_re):
     """Paths whose base name matches stem_re (one group: the number), sorted by number."""
     out = []
@@ -190,7 +204,8 @@ class Run:
             grid = _numbered(self._glob("profile_*.csv"), r"profile_(\d+)\.csv")
             if grid:
                 return [self.table(os.path.basename(p)) for p in grid]
-            dm = _numbered(self._glob("*profile_*.csv"), r".*profile_(\d+)\.csv")
+            dm = _numbered(_newest_group(self._glob("*profile_*.csv"), r"(.*)profile_\d+\.csv"),
+                           r".*profile_(\d+)\.csv")
             if dm:
                 return [self.table(os.path.basename(p)) for p in dm]
             if self.has("cd_profiles.csv"):
@@ -236,7 +251,7 @@ class Run:
 
     @property
     def energy(self):
-        for p in self._glob("*energy*.csv"):
+        for p in _newest_group(self._glob("*energy.csv"), r"(.*)energy\.csv")[:1]:
             return self.table(os.path.basename(p))
         return None
 

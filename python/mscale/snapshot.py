@@ -119,11 +119,12 @@ class Snapshot:
     def get(self, name, default=None):
         return self[name] if name in self else default
 
-    def per_particle(self):
-        """The per-particle datasets other than x: [n] or [n][3], in name order (the fields
-        ``mscale export`` carries over)."""
+    def per_particle(self, export=False):
+        """The numeric per-particle datasets other than x ([n] or [n][k]), in name order; with
+        ``export=True`` only the [n], [n][1] and [n][3] ones, the fields ``mscale export``
+        carries over (a stress tensor [n][9] is left out there)."""
         return [k for k, s in self._shape.items() if k != "x" and self._num[k] and len(s) in (1, 2)
-                and s[0] == self.n and (len(s) == 1 or s[1] in (1, 3))]
+                and s[0] == self.n and (len(s) == 1 or not export or s[1] in (1, 3))]
 
     def is_int(self, name):
         """True when the dataset is stored as an integer type."""
@@ -142,8 +143,9 @@ class Snapshot:
 
     def to_pandas(self):
         """A pandas DataFrame, one row per particle: vectors split into x, y, z (positions)
-        and NAMEx, NAMEy, NAMEz (``v`` -> vx, vy, vz, as the LAMMPS dump names them);
-        ``df.attrs["units"]`` holds the units, ``df.attrs["time"]`` the time."""
+        and NAMEx, NAMEy, NAMEz (``v`` -> vx, vy, vz, as the LAMMPS dump names them), other
+        [n][k] datasets into NAME_0 ... NAME_k-1; ``df.attrs["units"]`` holds the units,
+        ``df.attrs["time"]`` the time."""
         import pandas as pd
 
         cols, units = {}, {}
@@ -151,10 +153,10 @@ class Snapshot:
             a = self[k]
             if a.ndim == 1 or a.shape[1] == 1:
                 cols[k], units[k] = a.reshape(-1), self.units.get(k, "1")
-            else:
-                for c, axis in enumerate("xyz"):
-                    key = axis if k == "x" else k + axis
-                    cols[key], units[key] = a[:, c], self.units.get(k, "1")
+                continue
+            for c in range(a.shape[1]):
+                key = ("xyz"[c] if k == "x" else k + "xyz"[c]) if a.shape[1] == 3 else f"{k}_{c}"
+                cols[key], units[key] = a[:, c], self.units.get(k, "1")
         df = pd.DataFrame(cols)
         df.attrs.update(units=units, time=self.time, time_unit=self.time_unit, path=self.path)
         return df
@@ -162,7 +164,7 @@ class Snapshot:
     # -- export --------------------------------------------------------------------------
     def _species(self):
         names = self.material_names
-        mat = "material" in self.per_particle() and self._shape["material"][1:] in ((), (1,))
+        mat = "material" in self.per_particle(export=True) and self._shape["material"][1:] in ((), (1,))
         if not mat or not names:
             sym = species_of(names[0]) if names and len(names) == 1 else "X"
             return [sym] * self.n
@@ -175,7 +177,7 @@ class Snapshot:
         """Write the extended-XYZ frame of this snapshot to the text stream ``f``: the format
         of ``mscale export --format extxyz`` (app/cmd_export.c), byte for byte. Raises
         ValueError on a non-finite value, as the exporter does."""
-        fields = self.per_particle()
+        fields = self.per_particle(export=True)
         data = []
         for k in fields:
             a = self[k]
