@@ -29,12 +29,10 @@ from .snapshot import Snapshot, read_snapshot, species_of, write_extxyz
 from .table import Table, read_csv
 from .units import parse_units_line, to_us, us_per
 
-try:  # pandas is optional: Tables and Snapshots convert with .to_pandas() when it is there
-    import pandas as _pandas  # noqa: F401
+import importlib.util as _util
 
-    HAVE_PANDAS = True
-except ImportError:  # pragma: no cover
-    HAVE_PANDAS = False
+#: pandas is optional: Tables and Snapshots convert with .to_pandas() when it is installed.
+HAVE_PANDAS = _util.find_spec("pandas") is not None
 
 __all__ = ["Run", "Table", "Snapshot", "Arrays", "read_csv", "read_snapshot", "read_h5_group",
            "write_extxyz", "species_of", "parse_units_line", "to_us", "us_per", "HAVE_PANDAS"]

@@ -52,12 +52,14 @@ class Table:
     ``table.label("x")`` the axis label ``"x [cm]"``; ``len(table)`` is the number of rows,
     ``list(table)`` the column names. ``table.data`` is the numpy structured array (one field
     per column: float64, or int64 for counts and indices), ``table.to_pandas()`` a DataFrame
-    whose ``attrs`` hold the units and the title. ``table.time`` is the time the title names
+    whose ``attrs`` hold the units and the title; ``table.attrs`` are the attributes of the
+    HDF5 group a table was read from ({} for a CSV). ``table.time`` is the time the title names
     (``"... at t = 0.1 10us"`` -> 0.1), in ``table.time_unit``; None when the title names none.
     """
 
-    def __init__(self, data, units=None, title="", path=None, comments=None):
+    def __init__(self, data, units=None, title="", path=None, comments=None, attrs=None):
         self.data = data
+        self.attrs = dict(attrs or {})  # an HDF5 group's attributes (a history's node)
         self.units = dict(units or {})
         self.title = title or ""
         self.path = path
@@ -138,7 +140,7 @@ class Table:
         """A new Table of the rows ``mask`` (a boolean mask, slice or index array) selects, with
         the same units and title."""
         return Table(self.data[mask], self.units, self.title if title is None else title,
-                     self.path, self.comments)
+                     self.path, self.comments, self.attrs)
 
     def __repr__(self):
         cols = ", ".join(f"{n} [{self.unit(n)}]" for n in self.names)
@@ -175,7 +177,11 @@ class Table:
                 u = as_text(d.attrs.get("units"))
                 if u is not None:
                     units[n] = u
-        return cls.from_columns(cols, units, title or group.name.strip("/"), path)
+        table = cls.from_columns(cols, units, title or group.name.strip("/"), path)
+        table.attrs = {k: (as_text(v) if isinstance(v, (bytes, np.bytes_)) else
+                           (v.item() if isinstance(v, np.generic) else v))
+                       for k, v in group.attrs.items()}
+        return table
 
 
 def read_csv(path):

@@ -227,6 +227,11 @@ for d in (sod, cpl):
     check(os.path.exists(os.path.join(d, "plots", "histories.png")), f"{d}: plots")
 check(os.path.exists(os.path.join(cpl, "plots", "drive.png")), "coupled plots")
 
+# python3 -m mscale RUNDIR: a summary naming every table with its rows
+res = subprocess.run(["/usr/bin/python3", "-m", "mscale", cpl], capture_output=True, text=True,
+                     env=dict(os.environ, PYTHONPATH=os.path.join(src, "python")))
+check(res.returncode == 0 and f"fragments: {len(frag)} rows" in res.stdout, res.stdout + res.stderr)
+
 # 4. Errors name the file
 for bad, exc in ((os.path.join(work, "none"), FileNotFoundError),):
     try:
