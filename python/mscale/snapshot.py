@@ -71,11 +71,15 @@ class Snapshot:
                 u = as_text(d.attrs.get("units"))
                 if u is not None:
                     self.units[name] = u
+            if len(self._shape["x"]) != 2 or self._shape["x"][1] != 3:
+                raise ValueError(f"{self.path}: /particles/x is {self._shape['x']}, not [n][3]")
             self.n = self._shape["x"][0]
         t = root.get("time", self.attrs.get("time"))  # the root's time first, as the exporter
         self.time = float(t) if t is not None else math.nan
         self.time_unit = as_text(self.attrs.get("time_units")) or INTERNAL_TIME
-        names = self.attrs.get("material_names")
+        names = self.attrs.get("material_names")  # one string, "al,pb,air"
+        if isinstance(names, (list, tuple, np.ndarray)):
+            names = ",".join(as_text(n) for n in names)
         self.material_names = [s for s in names.split(",") if s] if names else None
 
     @staticmethod
@@ -164,7 +168,8 @@ class Snapshot:
     # -- export --------------------------------------------------------------------------
     def _species(self):
         names = self.material_names
-        mat = "material" in self.per_particle(export=True) and self._shape["material"][1:] in ((), (1,))
+        mat = "material" in self.per_particle(export=True) and \
+            self._shape["material"][1:] in ((), (1,))
         if not mat or not names:
             sym = species_of(names[0]) if names and len(names) == 1 else "X"
             return [sym] * self.n

@@ -185,6 +185,19 @@ both = mscale.write_extxyz(snaps, None)
 ref2 = subprocess.run([mscale_bin, "export"] + [s.path for s in snaps] + ["--format", "extxyz"],
                       env=RUN_ENV, check=True, capture_output=True, text=True).stdout
 check(both == ref2, "several frames differ from mscale export")
+# species from a material table: a copy of the snapshot given a material per particle (0, 1,
+# and 2, which the table does not name) and the names "pb,air" (Pb, then X: not an element)
+named = os.path.join(work, "named.h5")
+with h5py.File(last.path, "r") as src_h, h5py.File(named, "w") as h:
+    src_h.copy("particles", h)
+    h["particles"].create_dataset("material", data=np.arange(len(last)) % 3)
+    h["particles"].attrs["material_names"] = np.bytes_("pb,air")
+ref = subprocess.run([mscale_bin, "export", named, "--format", "extxyz"], env=RUN_ENV,
+                     check=True, capture_output=True, text=True).stdout
+named_snap = mscale.read_snapshot(named)
+check(named_snap.material_names == ["pb", "air"], f"material names {named_snap.material_names}")
+check(named_snap.to_extxyz() == ref, "to_extxyz with a material table differs from mscale export")
+check([ln.split()[0] for ln in ref.splitlines()[2:5]] == ["Pb", "X", "X"], "species column")
 try:
     from ase.io import read  # Debian's python3-ase (setup.sh)
 
