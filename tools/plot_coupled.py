@@ -23,6 +23,8 @@ import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 from plot_spectrum import lab, read_csv  # noqa: E402
 
 
@@ -84,7 +86,10 @@ def plot_interface(outdir, plotdir):
 
 def time_label(t, unit="10us"):
     """A time in microseconds for titles (the internal unit is 10 us)."""
-    return f"t = {10.0 * t:.3g} us" if unit == "10us" else f"t = {t:.4g} {unit}"
+    try:
+        return f"t = {mscale.to_us(t, unit):.3g} us"
+    except ValueError:
+        return f"t = {t:.4g} {unit}"
 
 
 def fragment_table(x, v, mass, frag):
@@ -102,18 +107,16 @@ def plot_snapshot(path, out):
     """Two panels: the free-surface region at equal aspect, a few y-periods wide, coloured by the
     velocity along the drive; and the ejecta in (x, vx) phase space, one dot per fragment sized
     and coloured by its mass, so jets (fast, light) and spall layers (slow, heavy) separate."""
-    import h5py
     from matplotlib.colors import LogNorm
 
-    with h5py.File(path, "r") as f:
-        x = f["particles/x"][...]
-        v = f["particles/v"][...] if "particles/v" in f else np.zeros_like(x)
-        mass = f["particles/mass"][...]
-        frag = (f["particles/fragment"][...] if "particles/fragment" in f
-                else np.zeros(len(x), int)).astype(np.int64)
-        t = f["particles"].attrs.get("time", np.nan)
-        period = f["particles"].attrs.get("period_y", 0.0)
-        f_r0 = f["particles"].attrs.get("r0", 0.0)
+    snap = mscale.read_snapshot(path)
+    x = snap["x"]
+    v = snap["v"] if "v" in snap else np.zeros_like(x)
+    mass = snap["mass"]
+    frag = (snap["fragment"] if "fragment" in snap else np.zeros(len(x), int)).astype(np.int64)
+    t = snap.time
+    period = snap.attrs.get("period_y", 0.0)
+    f_r0 = snap.attrs.get("r0", 0.0)
     ids, inv, m, cx, cy, vx = fragment_table(x, v, mass, frag)
     bulk = ids[np.argmax(m)] if len(ids) else -2
     in_bulk = frag == bulk
@@ -141,7 +144,7 @@ def plot_snapshot(path, out):
     a1.set_aspect("equal")
     a1.set_xlabel("x − x_free surface [um]")
     a1.set_ylabel("y [um]" + (" (periodic: two periods)" if copies > 1 else ""))
-    a1.set_title(f"{time_label(t)}: the free surface (black: driven layer)")
+    a1.set_title(f"{time_label(t, snap.time_unit)}: the free surface (black: driven layer)")
     fig.colorbar(sc, ax=a1, label="vx [km/s]", fraction=0.046, pad=0.02)
     det = ids != bulk
     if det.any():

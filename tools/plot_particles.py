@@ -22,9 +22,9 @@ import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 from plot_spectrum import lab, read_csv  # noqa: E402
-
-US_PER_T = 10.0  # the internal time unit is 10 us
 
 
 def plot_energy(outdir, plotdir):
@@ -33,7 +33,7 @@ def plot_energy(outdir, plotdir):
     if not path:
         return []
     c, u, title = read_csv(path)
-    t = US_PER_T * c["t"]
+    t = mscale.to_us(c["t"], c.unit("t"))
     terms = [n for n in c if n not in ("t", "px", "py", "pz", "v_free_surface", "hourglass",
                                        "total")]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
@@ -82,7 +82,8 @@ def plot_cd_profiles(outdir, plotdir):
         col = cmap(k / max(len(times) - 1, 1))
         for ax, n in zip(axs, fields):
             ax.plot(c["x"][sel], c[n][sel], color=col, lw=1,
-                    label=f"t = {US_PER_T * tk:.3g} us" if n == fields[0] else None)
+                    label=f"t = {mscale.to_us(tk, c.unit('t')):.3g} us" if n == fields[0]
+                    else None)
     for ax, n in zip(axs, fields):
         ax.set_xlabel(lab("x", u))
         ax.set_ylabel(lab(n, u))

@@ -28,14 +28,13 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 
-def read_csv(path):
-    """mscale CSV: '# title', '# units: ...', header line, rows."""
-    with open(path) as f:
-        lines = [ln for ln in f if not ln.startswith("#")]
-    names = lines[0].strip().split(",")
-    data = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-    return names, data
+
+def column(table, k):
+    """Column k (by position) of a Table, as floats."""
+    return table[table.names[k]].astype(float)
 
 
 def triangle_exact(x, t, L, eps, c):
@@ -51,16 +50,15 @@ def rod(args):
     L, c, eps = args.L, args.c, args.eps
     tmax = None
     for d in args.dirs:
-        names, data = read_csv(os.path.join(d, "dm_probes.csv"))
-        t, w = data[:, 0], data[:, 1]
-        xprobe = float(names[1].split("(")[1].rstrip(")"))
+        probes = mscale.read_csv(os.path.join(d, "dm_probes.csv"))
+        t, w = column(probes, 0), column(probes, 1)
+        xprobe = float(probes.names[1].split("(")[1].rstrip(")"))
         tmax = t[-1]
         sel = t >= tmax - 10 * L / c
         n = None
         summ = os.path.join(d, "dm_summary.csv")
         if os.path.exists(summ):
-            sn, sd = read_csv(summ)
-            n = int(sd[0, sn.index("real_particles")])
+            n = int(mscale.read_csv(summ)["real_particles"][0])
         ax.plot(t[sel] * c / L, w[sel] * 1e4, lw=1.0,
                 label=f"DM, {n} particles (x = {xprobe:g})" if n else f"DM {d}")
     tt = np.linspace(tmax - 10 * L / c, tmax, 4000)
@@ -68,10 +66,10 @@ def rod(args):
             label="exact (x = L/2)")
     for spec in args.cross or []:
         path, _, label = spec.partition(":")
-        names, data = read_csv(path)
-        t = data[:, 0]
-        col = names.index("w") if "w" in names else names.index("x")
-        w = data[:, col] - (0.5 * L if names[col] == "x" else 0.0)
+        hist = mscale.read_csv(path)
+        t = column(hist, 0)
+        name = "w" if "w" in hist else "x"
+        w = hist[name].astype(float) - (0.5 * L if name == "x" else 0.0)
         sel = t >= tmax - 10 * L / c
         ax.plot(t[sel] * c / L, w[sel] * 1e4, lw=1.0, ls=":",
                 label="cross scheme " + (label or path))
@@ -86,8 +84,8 @@ def rod(args):
 
 def contact(args):
     files = sorted(glob.glob(os.path.join(args.dirs[0], "dm_profile_*.csv")))
-    names, data = read_csv(files[-1])
-    x, s, ex = data[:, 0], data[:, names.index("sigma_xx")], data[:, names.index("exact")]
+    prof = mscale.read_csv(files[-1])
+    x, s, ex = column(prof, 0), prof["sigma_xx"], prof["exact"]
     fig, ax = plt.subplots(figsize=(9, 4.5))
     ax.plot(x, s, "-", lw=0.8, label="DM sigma_xx")
     ax.plot(x, ex, "k--", lw=1.0, label="exact")
@@ -102,8 +100,8 @@ def contact(args):
 
 
 def sphere(args):
-    names, data = read_csv(os.path.join(args.dirs[0], "dm_sphere_radial.csv"))
-    r, wr, ur, we, ue = (data[:, i] for i in range(5))
+    radial = mscale.read_csv(os.path.join(args.dirs[0], "dm_sphere_radial.csv"))
+    r, wr, ur, we, ue = (column(radial, i) for i in range(5))
     o = np.argsort(r)
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     ax[0].plot(r, wr / args.w0, ".", ms=1, alpha=0.3, label="DM (all particles)")
@@ -127,9 +125,9 @@ def slice_(args):
     files = sorted(glob.glob(os.path.join(args.dirs[0], "dm_profile_*.csv")))
     fig, axs = plt.subplots(1, len(files), figsize=(3.6 * len(files), 4.3), squeeze=False)
     for ax, fn in zip(axs[0], files):
-        names, data = read_csv(fn)
-        x, y = data[:, 0], data[:, 1]
-        u = np.sqrt(sum(data[:, names.index(k)] ** 2 for k in ("u_x", "u_y", "u_z")))
+        prof = mscale.read_csv(fn)
+        x, y = column(prof, 0), column(prof, 1)
+        u = np.sqrt(sum(prof[k] ** 2 for k in ("u_x", "u_y", "u_z")))
         h = np.min(np.diff(np.unique(x)))
         nx, ny = int(round((x.max() - x.min()) / h)) + 1, int(round((y.max() - y.min()) / h)) + 1
         img = np.full((ny, nx), np.nan)
@@ -139,10 +137,7 @@ def slice_(args):
             0.8 * np.exp(-5 * u[out] / umax)
         ax.imshow(img, origin="lower", cmap="gray", vmin=0, vmax=0.8,
                   extent=(x.min(), x.max(), y.min(), y.max()))
-        with open(fn) as f:
-            title = f.readline()
-        t = title.split("t = ")[1].split(" ")[0] if "t = " in title else ""
-        ax.set_title(f"t = {float(t):.3g}" if t else "")
+        ax.set_title(f"t = {prof.time:.3g}" if prof.time is not None else "")
         ax.set_xlabel("x [cm]")
     axs[0][0].set_ylabel("y [cm]")
     fig.suptitle("§6.3: |u| at z = h/2, S = 0.8 exp(-5|u|/|u|max) " + args.title, fontsize=9)

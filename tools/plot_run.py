@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from plot_spectrum import lab, read_csv  # noqa: E402  (the one reader of mscale CSVs)
+from plot_spectrum import lab, read_csv  # noqa: E402  (python/mscale's reader, as a tuple)
 
 
 def plot_hugoniots(outdir, plotdir):

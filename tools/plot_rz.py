@@ -10,44 +10,38 @@ free-surface velocity, the jet threshold 1.1 u_ref marked), from fragments.csv â
 coupled run logs (cpl_ejecta_classify). Writes PREFIX-snapshots.png and PREFIX-velocity.png.
 """
 import argparse
-import glob
 import os
+import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-
-def read_csv(path):
-    return np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True, skip_header=2))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 
 
 def last_snapshot(run):
-    files = sorted(glob.glob(os.path.join(run, "particles_*.h5")))
-    with h5py.File(files[-1], "r") as h:
-        g = h["particles"]
-        x, v = g["x"][:], g["v"][:]
-        return x, v, float(g.attrs["time"]), float(g.attrs.get("period_y", 0.0)), float(g.attrs["r0"])
+    snap = mscale.Run(run).snapshots[-1]
+    return (snap["x"], snap["v"], float(snap.attrs["time"]),
+            float(snap.attrs.get("period_y", 0.0)), float(snap.attrs["r0"]))
 
 
 def f_time(run):
     """End of the particle phase: the time of the last snapshot."""
-    files = sorted(glob.glob(os.path.join(run, "particles_*.h5")))
-    with h5py.File(files[-1], "r") as h:
-        return float(h["particles"].attrs["time"])
+    return float(mscale.Run(run).snapshots[-1].attrs["time"])
 
 
 def detached(run):
     """Masses and velocities of the fragments but the bulk (the fragment holding the deepest
     particle of the last snapshot, as cpl_ejecta_classify chooses it) and u_ref."""
-    f = read_csv(os.path.join(run, "fragments.csv"))
-    fs = read_csv(os.path.join(run, "history_free_surface.csv"))
-    files = sorted(glob.glob(os.path.join(run, "particles_*.h5")))
-    with h5py.File(files[-1], "r") as h:
-        fid, x = h["particles/fragment"][:], h["particles/x"][:, 0]
+    r = mscale.Run(run)
+    f = r.fragments
+    fs = r.histories["free_surface"]
+    snap = r.snapshots[-1]
+    fid, x = snap["fragment"], snap["x"][:, 0]
     ok = fid >= 0
     bulk = fid[ok][np.argmin(x[ok])]
     keep = f["id"] != bulk

@@ -26,27 +26,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+
 
 def read_csv(path):
-    """An mscale CSV: '#' comment lines (title, units), a header line, numeric rows.
-    Returns (columns by name, units by name, title)."""
-    with open(path) as f:
-        lines = f.readlines()
-    comments = [ln[1:].strip() for ln in lines if ln.startswith("#")]
-    units = {}
-    for c in comments:
-        if c.startswith("units:"):
-            for item in c[len("units:"):].split(","):
-                if "[" in item:
-                    name, unit = item.split("[", 1)
-                    units[name.strip()] = unit.strip().rstrip("]")
-    body = [ln for ln in lines if not ln.startswith("#") and ln.strip()]
-    if not body:
-        raise ValueError(f"{path}: no header line")
-    names = body[0].strip().split(",")
-    data = np.loadtxt(body[1:], delimiter=",", ndmin=2) if len(body) > 1 else np.zeros((0, len(names)))
-    cols = {n: data[:, i] for i, n in enumerate(names)}
-    return cols, units, (comments[0] if comments else os.path.basename(path))
+    """An mscale CSV read by the package (python/mscale): (columns by name, units by name,
+    title). The title is the file's first comment line, or its name."""
+    t = mscale.read_csv(path)
+    return t, t.units, t.title or os.path.basename(path)
 
 
 def lab(name, units):
@@ -77,12 +65,10 @@ def plot_spectrum_file(path, out):
     return out
 
 
-def title_time(title):
-    """The time in a spectrum CSV's title ('... t = 0.29 (10us) ...'), in us; None if absent."""
-    import re
-
-    m = re.search(r"t = ([0-9.eE+-]+) \(10us\)", title)
-    return 10.0 * float(m.group(1)) if m else None
+def title_time(table):
+    """The time a spectrum CSV's title names ('... t = 0.29 (10us) ...'), in us; None if
+    absent."""
+    return None if table.time is None else mscale.to_us(table.time, table.time_unit)
 
 
 def plot_spectra(outdir, plotdir):
@@ -99,7 +85,7 @@ def plot_spectra(outdir, plotdir):
         c, u, title = read_csv(path)
         if len(c["g"]) == 0:
             continue
-        t = title_time(title)
+        t = title_time(c)
         col = cmap(k / max(len(series) - 1, 1))
         lbl = f"t = {t:.3g} us" if t is not None else os.path.basename(path)
         a1.plot(c["g"], c["count"], "o-", ms=3, lw=1, color=col, label=lbl)
@@ -203,7 +189,7 @@ def plot_arrivals(outdir, plotdir):
         return []
     c, u, title = read_csv(ar)
     fig, axs = plt.subplots(1, 3, figsize=(15, 4))
-    t_us, d_um = 10.0 * c["t_arrival"], 1e4 * c["d"]  # internal units: 10 us, cm
+    t_us, d_um = mscale.to_us(c["t_arrival"], u["t_arrival"]), 1e4 * c["d"]  # d in cm
     if len(t_us):
         axs[0].hist(t_us, bins=min(40, max(5, len(t_us))), weights=c["mass"], edgecolor="k",
                     alpha=0.7)

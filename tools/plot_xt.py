@@ -15,12 +15,22 @@ import argparse
 import os
 import sys
 
-import h5py
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, TwoSlopeNorm  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+
+
+def time_scale(unit):
+    """(factor to us, axis unit) for a time unit; the unit itself when it is not a time."""
+    try:
+        return mscale.us_per(unit), "us"
+    except ValueError:
+        return 1.0, unit
 
 
 def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
@@ -29,15 +39,13 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
     path = os.path.join(a.outdir, "xt.h5")
     if not os.path.exists(path):
         sys.exit(f"plot_xt: {path} not found (set output.xt_frames > 0 in the deck)")
-    with h5py.File(path, "r") as f:
-        t = f["t"][()].ravel()
-        x = f["x"][()]
-        q_attr = f.attrs.get("quantity", b"rho")
-        q_attr = q_attr.decode() if isinstance(q_attr, bytes) else str(q_attr)
-        quantity = a.quantity or ("pressure" if q_attr == "p" else "density")
-        data = f["p" if quantity == "pressure" else "rho"][()]
-        tunit = f["t"].attrs.get("units", b"10us")
-        tunit = tunit.decode() if isinstance(tunit, bytes) else str(tunit)
+    xt = mscale.read_h5_group(path)
+    t = xt["t"].ravel()
+    x = xt["x"]
+    q_attr = str(xt.attrs.get("quantity", "rho"))
+    quantity = a.quantity or ("pressure" if q_attr == "p" else "density")
+    data = xt["p" if quantity == "pressure" else "rho"]
+    tunit = xt.units.get("t", "10us")
     if len(t) < 2:
         sys.exit("plot_xt: fewer than two frames in xt.h5")
     # Quadrilateral mesh in (x, t): frame k's nodes against times between frames.
@@ -50,7 +58,7 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
     T = np.repeat(tb[:, None], x.shape[1], axis=1)
 
     # times in microseconds (the internal unit is 10 us)
-    tscale, tlabel = (10.0, "us") if tunit == "10us" else (1.0, tunit)
+    tscale, tlabel = time_scale(tunit)
     T = T * tscale
     fig, ax = plt.subplots(figsize=(8, 6))
     norm, cmap = None, "viridis"
@@ -72,12 +80,11 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
     label = "density [g/cm^3]" if quantity == "density" else "pressure [GPa]"
     fig.colorbar(mesh, ax=ax, label=label)
     if a.tags:
-        hpath = os.path.join(a.outdir, "history.h5")
-        if os.path.exists(hpath):
-            with h5py.File(hpath, "r") as h:
-                for name in h:
-                    ax.plot(h[name]["x"][()].ravel(), tscale * h[name]["t"][()].ravel(),
-                            lw=1.2, color="k", ls="--" if "free" in name else "-", label=name)
+        hist = mscale.Run(a.outdir).histories_from_h5()  # full precision
+        if hist:
+            for name, h in hist.items():
+                ax.plot(h["x"].ravel(), tscale * h["t"].ravel(),
+                        lw=1.2, color="k", ls="--" if "free" in name else "-", label=name)
             ax.legend(loc="upper left", fontsize=8)
     ax.set_xlabel("x [cm]")
     ax.set_ylabel(f"t [{tlabel}]")
@@ -91,15 +98,16 @@ def plot_xt(outdir, quantity=None, log=False, tags=False, output=None):
 
 def plot_histories(outdir, output):
     """Velocity and position histories of the tagged nodes (the U(t) that drives particles)."""
-    with h5py.File(os.path.join(outdir, "history.h5"), "r") as h:
-        names = [n for n in h if "t" in h[n] and "u" in h[n]]
-        if not names:
-            return None
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
-        for name in names:
-            t = 10.0 * h[name]["t"][()].ravel()  # us
-            ax1.plot(t, h[name]["u"][()].ravel(), label=name)
-            ax2.plot(t, h[name]["x"][()].ravel(), label=name)
+    hist = mscale.Run(outdir).histories_from_h5()  # full precision
+    names = [n for n, h in hist.items() if "t" in h and "u" in h]
+    if not names:
+        return None
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for name in names:
+        h = hist[name]
+        t = mscale.to_us(h["t"].ravel(), h.unit("t"))  # us
+        ax1.plot(t, h["u"].ravel(), label=name)
+        ax2.plot(t, h["x"].ravel(), label=name)
     ax1.set_xlabel("t [us]"); ax1.set_ylabel("u [km/s]"); ax1.set_title("Tagged nodes: U(t)")
     ax2.set_xlabel("t [us]"); ax2.set_ylabel("x [cm]"); ax2.set_title("Tagged nodes: x(t)")
     ax1.legend(fontsize=8); ax2.legend(fontsize=8)
