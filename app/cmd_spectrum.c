@@ -1,15 +1,11 @@
 /* mscale spectrum SNAPSHOT.h5 [--bond B]: the fragment spectrum N(g) of a particle snapshot as
  * CSV on stdout (header `g,count,mass`), docs/design.md §8. Snapshot layout: docs/coupling.md. */
 #include "commands.h"
+#include "cpl.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-#ifdef MSCALE_HAVE_COUPLING
-#include "cpl.h"
-
-int cmd_spectrum(int argc, char **argv);
 
 /* Default bond factor b: the cluster-dynamics cutoff R_c = 1.2 a of the benchmark
  * (docs/design.md §5.1), so fragments are the components of the interacting-pair graph. */
@@ -344,15 +340,3 @@ int cmd_spectrum(int argc, char **argv) {
   dk_errors_free(&e);
   return rc;
 }
-
-#else /* built without the coupling library */
-
-int cmd_spectrum(int argc, char **argv);
-int cmd_spectrum(int argc, char **argv) {
-  (void)argc;
-  (void)argv;
-  fprintf(stderr, "mscale spectrum: this build has no coupling library\n");
-  return 1;
-}
-
-#endif
