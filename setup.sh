@@ -11,6 +11,7 @@ packages=(
   libyaml-dev                          # input decks
   libcmocka-dev                        # unit tests
   python3 python3-numpy python3-h5py python3-matplotlib   # post-processing and plots
+  python3-yaml                         # tests/app read run_info.yaml and the resolved deck
   python3-ase                          # the export test reads extended XYZ back with ASE
   paraview python3-paraview            # pvpython: the test that ParaView opens our XDMF series
 )

@@ -4,6 +4,8 @@
  * model's own fields. Several snapshots become several frames of one file. */
 #include "commands.h"
 
+#include <getopt.h>
+
 #include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
@@ -210,26 +212,29 @@ static void write_lammps_dump(FILE *f, const snapshot *s, size_t frame) {
 }
 
 int cmd_export(int argc, char **argv) {
-  if (app_wants_help(argc, argv)) {
-    export_usage(stdout);
-    return 0;
-  }
   const char *format = NULL, *out = NULL;
   const char **snaps = ms_calloc((size_t)argc, sizeof *snaps);
   size_t nsnap = 0;
-  for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
-    const char **slot = !strcmp(a, "--format") ? &format : !strcmp(a, "-o") ? &out : NULL;
-    if (!strncmp(a, "--format=", 9)) format = a + 9;
-    else if (slot && i + 1 < argc) *slot = argv[++i];
-    else if (slot || a[0] == '-') {
-      fprintf(stderr, "mscale export: %s '%s'\n\n", slot ? "missing value after" : "unknown option",
-              a);
-      export_usage(stderr);
-      free(snaps);
-      return 2;
-    } else snaps[nsnap++] = a;
+  static const struct option opts[] = {{"format", required_argument, NULL, 256},
+                                       {"output", required_argument, NULL, 'o'},
+                                       {"help", no_argument, NULL, 'h'},
+                                       {NULL, 0, NULL, 0}};
+  int c, rc = -1;
+  opterr = 0;
+  optind = 0; /* glibc: a full reset (tests call the commands in-process, repeatedly) */
+  while (rc < 0 && (c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
+    if (c == 'h') rc = 0, export_usage(stdout);
+    else if (c == ':' || c == '?')
+      rc = app_option_error("export", c, optopt, argv[optind - 1], opts);
+    else if (app_option_value_missing("export", c == 'o' ? "-o" : "--format", optarg)) rc = 2;
+    else if (c == 'o') out = optarg;
+    else format = optarg;
   }
+  if (rc >= 0) {
+    free(snaps);
+    return rc;
+  }
+  for (int i = optind; i < argc; i++) snaps[nsnap++] = argv[i];
   enum export_format fmt = EXPORT_EXTXYZ;
   if (!format || nsnap == 0 ||
       !(!strcmp(format, "extxyz") || (fmt = EXPORT_LAMMPS_DUMP, !strcmp(format, "lammps-dump")))) {
@@ -252,7 +257,7 @@ int cmd_export(int argc, char **argv) {
     af = &afile;
     f = af->f;
   }
-  int rc = 0;
+  rc = 0;
   for (size_t k = 0; k < nsnap && rc == 0; k++) {
     dk_errors errs, *e = &errs;
     dk_errors_init(e);

@@ -305,7 +305,8 @@ int cmd_hugoniot(int argc, char **argv) {
   int rc = 0;
   if (e.n > 0 || !mats) {
     dk_errors_print(&e, stderr);
-    fprintf(stderr, "%s: %zu error%s\n", deck, e.n, e.n == 1 ? "" : "s");
+    fprintf(stderr, "%s: %zu error%s\n", deck, dk_errors_count(&e),
+            dk_errors_count(&e) == 1 ? "" : "s");
     rc = 2;
     goto done;
   }

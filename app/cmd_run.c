@@ -2,19 +2,25 @@
  * resolved deck, run.log, run_info.yaml and the problem's data files. */
 #include "commands.h"
 
+#include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 static void run_usage(FILE *f) {
   fprintf(f,
-          "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose] [--restart FILE]\n\n"
-          "  -o OUTDIR   output directory (default: out/<deck name>)\n"
-          "  --force     allow writing into an OUTDIR that already holds results\n"
-          "  --quiet     no progress line\n"
-          "  --verbose   debug messages in the log\n"
-          "  --restart FILE  continue from a checkpoint the same deck wrote (discrete_model,\n"
-          "              cluster_dynamics, coupled one-way; docs/mpi.md)\n\n"
+          "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose] [--restart FILE]\n"
+          "                       [--set PATH=VALUE]...\n\n"
+          "  -o, --output=OUTDIR  output directory (default: out/<deck name>)\n"
+          "  --force              allow writing into an OUTDIR that already holds results\n"
+          "  --quiet              no progress line\n"
+          "  --verbose            debug messages in the log\n"
+          "  --restart=FILE       continue from a checkpoint the same deck wrote (discrete_model,\n"
+          "                       cluster_dynamics, coupled one-way; docs/mpi.md)\n"
+          "  --set PATH=VALUE     override a deck value before the deck is checked, e.g.\n"
+          "                       --set continuum.time.end=0.1 --set materials[0].eos.gamma=1.4\n"
+          "                       (repeatable; VALUE is YAML; recorded in run_info.yaml and\n"
+          "                       deck.resolved.yaml)\n\n"
           "The deck is validated completely before anything runs (see `mscale check`).\n"
           "OUTDIR receives deck.resolved.yaml (defaults filled in), run.log, run_info.yaml and\n"
           "the problem's data (CSV with units headers, HDF5 + XDMF for ParaView).\n"
@@ -45,16 +51,19 @@ static void put_quoted(FILE *f, const char *prefix, const char *s) {
 }
 
 static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char *deck,
-                           const char *started, ms_status s, double wall) {
+                           const char *const *sets, size_t nsets, const char *started, ms_status s,
+                           double wall) {
   char *path = ms_out_path(ctx, "run_info.yaml");
   ms_afile af;
   if (ms_afile_open(&af, path) == MS_OK) {
-    fprintf(af.f, "# What produced this run directory.\nprogram: mscale\nversion: %s\n",
-            MSCALE_VERSION_STRING);
+    fprintf(af.f, "# What produced this run directory.\nprogram: mscale\n");
+    app_write_provenance(af.f, ctx);
     fprintf(af.f, "command: \"");
     for (int i = 0; i < argc; i++) put_quoted(af.f, i ? " " : "mscale ", argv[i]);
     put_quoted(af.f, "\"\ndeck: \"", deck);
-    fprintf(af.f, "\"\nranks: %d\nstarted: \"%s\"\n", ctx->size, started);
+    fprintf(af.f, "\"\noverrides:%s\n", nsets ? "" : " []");
+    for (size_t i = 0; i < nsets; i++) put_quoted(af.f, "  - \"", sets[i]), fputs("\"\n", af.f);
+    fprintf(af.f, "started: \"%s\"\n", started);
     fprintf(af.f, "status: %s\nstatus_message: \"%s\"\nwall_time_s: %.3f\n",
             s == MS_OK ? "completed" : "failed", ms_status_str(s), wall);
     ms_afile_commit(&af);
@@ -63,28 +72,56 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
 }
 
 int cmd_run(int argc, char **argv) {
-  if (app_wants_help(argc, argv)) {
-    run_usage(stdout);
-    return 0;
-  }
+  /* the command line as given, for run_info.yaml (getopt_long permutes argv) */
+  char **cmdline = ms_calloc((size_t)argc + 1, sizeof *cmdline);
+  for (int i = 0; i < argc; i++) cmdline[i] = argv[i];
+  const int cmdline_n = argc;
   const char *deck = NULL, *outdir_arg = NULL, *restart = NULL;
+  const char **sets = ms_calloc((size_t)argc + 1, sizeof *sets);
+  size_t nsets = 0;
   bool force = false, quiet = false, verbose = false;
-  for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "-o") && i + 1 < argc) outdir_arg = argv[++i];
-    else if (!strcmp(argv[i], "--restart") && i + 1 < argc) restart = argv[++i];
-    else if (!strcmp(argv[i], "--force")) force = true;
-    else if (!strcmp(argv[i], "--quiet")) quiet = true;
-    else if (!strcmp(argv[i], "--verbose")) verbose = true;
-    else if (argv[i][0] != '-' && !deck) deck = argv[i];
+  enum { OPT_FORCE = 256, OPT_QUIET, OPT_VERBOSE, OPT_RESTART, OPT_SET };
+  static const struct option opts[] = {{"output", required_argument, NULL, 'o'},
+                                       {"force", no_argument, NULL, OPT_FORCE},
+                                       {"quiet", no_argument, NULL, OPT_QUIET},
+                                       {"verbose", no_argument, NULL, OPT_VERBOSE},
+                                       {"restart", required_argument, NULL, OPT_RESTART},
+                                       {"set", required_argument, NULL, OPT_SET},
+                                       {"help", no_argument, NULL, 'h'},
+                                       {NULL, 0, NULL, 0}};
+  int rc = -1, c;
+  opterr = 0;
+  optind = 0; /* glibc: a full reset (tests call the commands in-process, repeatedly) */
+  while (rc < 0 && (c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
+    const char *name = c == 'o' ? "-o" : c == OPT_RESTART ? "--restart" : "--set";
+    if ((c == 'o' || c == OPT_RESTART || c == OPT_SET) &&
+        app_option_value_missing("run", name, optarg))
+      rc = 2;
+    else if (c == 'o') outdir_arg = optarg;
+    else if (c == OPT_RESTART) restart = optarg;
+    else if (c == OPT_SET) sets[nsets++] = optarg;
+    else if (c == OPT_FORCE) force = true;
+    else if (c == OPT_QUIET) quiet = true;
+    else if (c == OPT_VERBOSE) verbose = true;
+    else if (c == 'h') rc = 0, run_usage(stdout);
+    else rc = app_option_error("run", c, optopt, argv[optind - 1], opts);
+  }
+  for (int i = optind; rc < 0 && i < argc; i++) {
+    if (!deck) deck = argv[i];
     else {
-      fprintf(stderr, "mscale run: unexpected argument '%s'\n", argv[i]);
-      run_usage(stderr);
-      return 2;
+      fprintf(stderr, "mscale run: unexpected argument '%s' (one deck per run)\n", argv[i]);
+      rc = 2;
     }
   }
-  if (!deck) {
+  if (rc < 0 && !deck) {
+    fprintf(stderr, "mscale run: no deck given\n\n");
     run_usage(stderr);
-    return 2;
+    rc = 2;
+  }
+  if (rc >= 0) {
+    free(cmdline);
+    free(sets);
+    return rc;
   }
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
@@ -102,11 +139,12 @@ int cmd_run(int argc, char **argv) {
   dk_errors e;
   dk_errors_init(&e);
   app_deck d;
-  ms_status s = app_deck_read(deck, &d, &e);
+  ms_status s = app_deck_read_set(deck, sets, nsets, &d, &e);
   if (s) {
     if (ctx.rank == 0) {
       dk_errors_print(&e, stderr);
-      fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, e.n, e.n == 1 ? "" : "s");
+      fprintf(stderr, "%s: %zu error%s; nothing was run\n", deck, dk_errors_count(&e),
+              dk_errors_count(&e) == 1 ? "" : "s");
     }
   } else if (restart && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)
@@ -124,19 +162,22 @@ int cmd_run(int argc, char **argv) {
       s = par_agree_status(s);
     }
     if (!s) {
-      ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s", MSCALE_VERSION_STRING,
-             deck, ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
+      ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s", app_version(), deck,
+             ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
       if (s)
         ms_log(&ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
                ctx.outdir);
       else ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
-      if (ctx.rank == 0) write_run_info(&ctx, argc, argv, deck, started, s, wall);
+      if (ctx.rank == 0)
+        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, s, wall);
     }
   }
   app_deck_free(&d);
   dk_errors_free(&e);
+  free(cmdline);
+  free(sets);
   ms_ctx_close(&ctx);
   par_finalize();
   return ms_exit_code(s);

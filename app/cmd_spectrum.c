@@ -3,6 +3,8 @@
 #include "commands.h"
 #include "cpl.h"
 
+#include <getopt.h>
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -193,47 +195,50 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
 }
 
 int cmd_spectrum(int argc, char **argv) {
-  if (app_wants_help(argc, argv)) {
-    spectrum_usage(stdout);
-    return 0;
-  }
   const char *path = NULL, *table_path = NULL;
   double bond = SPECTRUM_DEFAULT_BOND, spacing = NAN, rho0 = NAN;
   double period[3] = {NAN, NAN, NAN};
-  for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
-    bool has_value = i + 1 < argc;
-    if (!strcmp(a, "--bond") && has_value) {
-      if (!parse_positive(argv[++i], &bond)) {
-        fprintf(stderr, "mscale spectrum: --bond needs a positive number, not '%s'\n", argv[i]);
-        return 2;
-      }
-    } else if (!strcmp(a, "--spacing") && has_value) {
-      if (!parse_positive(argv[++i], &spacing)) {
-        fprintf(stderr, "mscale spectrum: --spacing needs a positive length in cm, not '%s'\n",
-                argv[i]);
-        return 2;
-      }
-    } else if (!strcmp(a, "--rho0") && has_value) {
-      if (!parse_positive(argv[++i], &rho0)) {
-        fprintf(stderr, "mscale spectrum: --rho0 needs a positive density, not '%s'\n", argv[i]);
-        return 2;
-      }
-    } else if (!strcmp(a, "--period") && has_value) {
-      if (!parse_triple(argv[++i], period)) {
-        fprintf(stderr, "mscale spectrum: --period needs PX,PY,PZ (cm, >= 0), not '%s'\n", argv[i]);
-        return 2;
-      }
-    } else if (!strcmp(a, "--fragments") && has_value) {
-      table_path = argv[++i];
-    } else if (a[0] == '-' && a[1]) {
-      fprintf(stderr, "mscale spectrum: unknown or incomplete option '%s'\n\n", a);
-      spectrum_usage(stderr);
+  enum { OPT_BOND = 256, OPT_SPACING, OPT_RHO0, OPT_PERIOD, OPT_FRAGMENTS };
+  static const struct option opts[] = {{"bond", required_argument, NULL, OPT_BOND},
+                                       {"spacing", required_argument, NULL, OPT_SPACING},
+                                       {"rho0", required_argument, NULL, OPT_RHO0},
+                                       {"period", required_argument, NULL, OPT_PERIOD},
+                                       {"fragments", required_argument, NULL, OPT_FRAGMENTS},
+                                       {"help", no_argument, NULL, 'h'},
+                                       {NULL, 0, NULL, 0}};
+  int c;
+  opterr = 0;
+  optind = 0; /* glibc: a full reset (tests call the commands in-process, repeatedly) */
+  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+    if (c == ':' || c == '?')
+      return app_option_error("spectrum", c, optopt, argv[optind - 1], opts);
+    if (c == 'h') {
+      spectrum_usage(stdout);
+      return 0;
+    }
+    const char *a = optarg;
+    if (c == OPT_BOND && !parse_positive(a, &bond)) {
+      fprintf(stderr, "mscale spectrum: --bond needs a positive number, not '%s'\n", a);
       return 2;
-    } else if (!path) {
-      path = a;
-    } else {
-      fprintf(stderr, "mscale spectrum: more than one snapshot given ('%s', '%s')\n", path, a);
+    } else if (c == OPT_SPACING && !parse_positive(a, &spacing)) {
+      fprintf(stderr, "mscale spectrum: --spacing needs a positive length in cm, not '%s'\n", a);
+      return 2;
+    } else if (c == OPT_RHO0 && !parse_positive(a, &rho0)) {
+      fprintf(stderr, "mscale spectrum: --rho0 needs a positive density, not '%s'\n", a);
+      return 2;
+    } else if (c == OPT_PERIOD && !parse_triple(a, period)) {
+      fprintf(stderr, "mscale spectrum: --period needs PX,PY,PZ (cm, >= 0), not '%s'\n", a);
+      return 2;
+    } else if (c == OPT_FRAGMENTS) {
+      if (app_option_value_missing("spectrum", "--fragments", a)) return 2;
+      table_path = a;
+    }
+  }
+  for (int i = optind; i < argc; i++) {
+    if (!path) path = argv[i];
+    else {
+      fprintf(stderr, "mscale spectrum: more than one snapshot given ('%s', '%s')\n", path,
+              argv[i]);
       return 2;
     }
   }

@@ -22,12 +22,33 @@ typedef struct app_deck {
 
 /* Load, read and validate a deck; every error goes to *e. Returns MS_OK only if *e is empty. */
 ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e);
+/* The same with command-line overrides (`--set PATH=VALUE`, dk_set) applied before reading. */
+ms_status app_deck_read_set(const char *path, const char *const *sets, size_t nsets, app_deck *d,
+                            dk_errors *e);
+/* Splits "PATH=VALUE" and applies it to the deck (dk_set); false with an error otherwise. */
+bool app_apply_set(dk_doc *doc, const char *arg, dk_errors *e);
 ms_status app_deck_run(ms_ctx *ctx, app_deck *d);
 /* True if the deck's problem type can continue from a checkpoint (`run --restart`). */
 bool app_deck_restartable(const app_deck *d);
 void app_deck_free(app_deck *d);
 /* One line per problem type, for --help. */
 void app_print_problem_types(FILE *f);
+
+/* The version: `git describe` at build time, else the project version (app/provenance.c). */
+const char *app_version(void);
+/* `mscale --version`: version, commit, compiler and flags, library versions. */
+void app_print_version(FILE *f);
+/* run_info.yaml's provenance lines: version, git_describe, git_commit, build {type, compiler,
+ * flags}, libraries {mpi, hdf5, sundials, metis, libyaml}, ranks, threads, host. */
+void app_write_provenance(FILE *f, const ms_ctx *ctx);
+
+/* Command-line parsing with getopt_long (app/cmd_run.c): the message for getopt's ':' (an option
+ * without its value) or '?' (unknown; with a "did you mean") and exit code 2; and the check for
+ * a value that is the next option ("-o --force"), which prints the message and returns 1. */
+struct option;
+int app_option_error(const char *cmd, int c, int optopt_, const char *arg,
+                     const struct option *opts);
+int app_option_value_missing(const char *cmd, const char *name, const char *value);
 
 /* True if argv holds -h or --help. */
 int app_wants_help(int argc, char **argv);

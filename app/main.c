@@ -19,7 +19,7 @@ static void usage(FILE *f) {
           "pressure GPa, density g/cm^3, specific energy kJ/g).\n"
           "Exit codes: 0 success, 1 the run failed, 2 bad usage or bad input.\n"
           "Under MPI: mpirun -np N mscale run DECK\n",
-          MSCALE_VERSION_STRING);
+          app_version());
 }
 
 int app_wants_help(int argc, char **argv) {
@@ -35,7 +35,7 @@ int main(int argc, char **argv) {
   }
   const char *cmd = argv[1];
   if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
-    printf("mscale %s\n", MSCALE_VERSION_STRING);
+    app_print_version(stdout);
     return 0;
   }
   if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
@@ -52,6 +52,14 @@ int main(int argc, char **argv) {
                   {"export", cmd_export}};
   for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
     if (!strcmp(cmd, commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
+  const char *names[sizeof commands / sizeof commands[0] + 1] = {NULL};
+  for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) names[i] = commands[i].name;
+  const char *hint = dk_suggest(cmd, names);
+  if (hint) {
+    fprintf(stderr, "mscale: unknown command '%s' (did you mean '%s'?); see mscale --help\n", cmd,
+            hint);
+    return 2;
+  }
   fprintf(stderr, "mscale: unknown command '%s'\n\n", cmd);
   usage(stderr);
   return 2;

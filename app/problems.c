@@ -54,11 +54,31 @@ void app_print_problem_types(FILE *f) {
     fprintf(f, "  %-18s %s\n", problem_types[i].name, problem_types[i].summary);
 }
 
+bool app_apply_set(dk_doc *doc, const char *arg, dk_errors *e) {
+  const char *eq = strchr(arg, '=');
+  if (!eq) {
+    dk_error_at(e, "--set", 0, 0, "'%s': expected PATH=VALUE, e.g. --set continuum.time.end=0.1",
+                arg);
+    return false;
+  }
+  char *path = ms_calloc((size_t)(eq - arg) + 1, 1);
+  memcpy(path, arg, (size_t)(eq - arg));
+  bool ok = dk_set(doc, path, eq + 1, e);
+  free(path);
+  return ok;
+}
+
 ms_status app_deck_read(const char *path, app_deck *d, dk_errors *e) {
+  return app_deck_read_set(path, NULL, 0, d, e);
+}
+
+ms_status app_deck_read_set(const char *path, const char *const *sets, size_t nsets, app_deck *d,
+                            dk_errors *e) {
   memset(d, 0, sizeof *d);
   d->problem_kind = -1;
   d->doc = dk_load(path, e);
   if (!d->doc) return MS_ERR_INPUT;
+  for (size_t i = 0; i < nsets; i++) app_apply_set(d->doc, sets[i], e);
   dk_read_units(d->doc, e);
   const dk_node *root = dk_root(d->doc);
 

@@ -122,8 +122,8 @@ size_t cont_setup_layer_first_node(const cont_setup *s, size_t layer);
 
 typedef struct cont_grid cont_grid;
 
-/* Build the grid. NULL with a message in err on impossible input. */
-cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen);
+/* Build the grid. MS_ERR_INPUT (and *out NULL) with a message in err on impossible input. */
+ms_status cont_grid_create(const cont_setup *s, cont_grid **out, char *err, size_t errlen);
 void cont_grid_destroy(cont_grid **g); /* null-safe; sets *g = NULL */
 
 /* One step. The step size is the stability constraint, limited by dt_limit (pass INFINITY for

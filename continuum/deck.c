@@ -430,7 +430,7 @@ cont_problem *cont_problem_read(dk_doc *doc, const dk_node *sec, const eos_mater
     return NULL;
   }
   char err[512] = "";
-  p->grid = cont_grid_create(s, err, sizeof err);
+  cont_grid_create(s, &p->grid, err, sizeof err);
   if (!p->grid) {
     dk_error(e, doc, sec, "continuum: %s", err);
     cont_problem_destroy(&p);

@@ -301,14 +301,15 @@ static bool node_masses(cont_grid *g, const cont_setup *s, char *err, size_t err
   return true;
 }
 
-cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
+ms_status cont_grid_create(const cont_setup *s, cont_grid **out, char *err, size_t errlen) {
+  *out = NULL;
   size_t ncells = setup_cells(s, err, errlen);
-  if (ncells == 0) return NULL;
+  if (ncells == 0) return MS_ERR_INPUT;
   cont_grid *g = grid_alloc(s, ncells);
   size_t N = ncells, Nn = ncells + 1;
   if (!place_layers(g, s, err, errlen) || !node_masses(g, s, err, errlen)) {
     cont_grid_destroy(&g);
-    return NULL;
+    return MS_ERR_INPUT;
   }
 
   cont_fn_copy(&g->left.fn, &s->left.fn);
@@ -336,7 +337,7 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
             "initial state of cell %zu (layer %d: rho = %g, e = %g) is outside its EOS", bad,
             g->layer[bad], g->rho[bad], g->e[bad]);
     cont_grid_destroy(&g);
-    return NULL;
+    return MS_ERR_INPUT;
   }
   cont_calc_q_for_cells(g, 0, N, g->rho, g->u, g->c, g->q);
   double dtc = cont_calc_time_constraint(g, 0, N);
@@ -352,11 +353,12 @@ cont_grid *cont_grid_create(const cont_setup *s, char *err, size_t errlen) {
       set_err(err, errlen, "tag '%s': node %zu outside 0..%zu", s->tags[k].name, s->tags[k].node,
               N);
       cont_grid_destroy(&g);
-      return NULL;
+      return MS_ERR_INPUT;
     }
     cont_grid_add_tag(g, s->tags[k].name, s->tags[k].node);
   }
-  return g;
+  *out = g;
+  return MS_OK;
 }
 
 static void cont_grid_release(cont_grid *g) {

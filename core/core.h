@@ -137,14 +137,37 @@ const char *ms_unit_label(ms_dim dim);
 typedef struct dk_node dk_node;
 typedef struct dk_doc dk_doc;
 
+typedef struct dk_error_pos {
+  char *file; /* the file the message names */
+  int line, col;
+  int role;    /* DK_ROLE_*: a missing key, or an unknown key that is a misspelling of one */
+  char *about; /* the key path the role is about (NULL: none) */
+  bool hidden; /* a repeat of another message, or a missing key a misspelling explains */
+} dk_error_pos;
+/* "missing required key 'gamma'" beside "unknown key 'gama' (did you mean 'gamma'?)" in the same
+ * mapping is one mistake: the missing-key message is hidden (the deck still fails). */
+enum { DK_ROLE_NONE = 0, DK_ROLE_MISSING, DK_ROLE_MISSPELT };
+
 typedef struct dk_errors {
-  size_t n, cap;
-  char **msg; /* each "FILE:LINE:COL: message" */
+  size_t n, cap;     /* n counts every error recorded, hidden ones too (readers compare counts) */
+  char **msg;        /* each "FILE:LINE:COL: message", in the order recorded */
+  dk_error_pos *pos; /* where each message points (NULL in a list assembled by hand) */
 } dk_errors;
 
 void dk_errors_init(dk_errors *e);
 void dk_errors_free(dk_errors *e);
+/* Prints the messages sorted by file (in order of first mention), line and column; messages
+ * about a whole file come first; each text once. */
 void dk_errors_print(const dk_errors *e, FILE *f);
+/* The number of messages dk_errors_print prints: repeats and explained missing keys hidden. */
+size_t dk_errors_count(const dk_errors *e);
+/* The entry of the NULL-terminated `choices` closest to `word` (edit distance at most 2 and at most
+ * half of `word`'s length), for "did you mean" hints; NULL if none is close. */
+const char *dk_suggest(const char *word, const char *const *choices);
+/* Report key i of `map` as unknown, with "did you mean" from `allowed` (NULL-terminated) when a
+ * close key is not written in the map, else the list of allowed keys; `what` names the map. */
+void dk_report_unknown_key(dk_errors *e, const dk_doc *doc, const dk_node *map, size_t i,
+                           const char *what, const char *const *allowed);
 /* Record an error located at node `at` (NULL: at the file as a whole). */
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
@@ -158,14 +181,26 @@ dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e);
 void dk_free(dk_doc *doc);
 const dk_node *dk_root(const dk_doc *doc);
 const char *dk_file(const dk_doc *doc);
+/* Override one value of the deck before it is read (`mscale run DECK --set PATH=VALUE`). PATH
+ * names a value as messages do ("continuum.time.end", "materials[0].eos.gamma",
+ * "cluster_dynamics.box.hi[2]"); VALUE is YAML (a number, a name, "[0, 0, 1]", "{a: 1}").
+ * Missing mapping keys are created; list items must exist. Messages about the value name the
+ * override ("--set PATH=VALUE: ...") instead of a deck position. The override is listed in the
+ * resolved deck's header. Returns false (with an error in *e) if PATH or VALUE is malformed. */
+bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e);
 /* Directory of the deck file (for resolving relative data-file paths); "" for strings. */
 const char *dk_dir(const dk_doc *doc);
 /* Unit system of the deck (`units:` at top level, read by dk_read_units). */
 ms_unit_system dk_units(const dk_doc *doc);
 /* Reads the top-level `units:` key: `internal` (g, cm, 10 µs; the default) or `si`. */
 void dk_read_units(dk_doc *doc, dk_errors *e);
-/* Resolve a path given in the deck relative to the deck's directory; malloc'd. */
+/* Resolve a path given in the deck relative to the deck's directory, or, when no such file
+ * exists, in the installed data directory (core/deck.c); malloc'd. */
 char *dk_resolve_path(const dk_doc *doc, const char *path);
+/* The installed data directory, PREFIX/share/mscale (inputs/, eos/data/, tools/): the
+ * environment's MSCALE_DATA_DIR, else found from the binary's own location, else the configured
+ * install prefix's; NULL if none exists (a build tree). */
+const char *ms_data_dir(void);
 
 typedef enum dk_kind { DK_SCALAR, DK_MAP, DK_SEQ } dk_kind;
 dk_kind dk_node_kind(const dk_node *n);
@@ -378,6 +413,14 @@ uint64_t par_comm_sum_u64(const ms_comm *c, uint64_t v);
 /* Sum of v over the lower ranks (0 on rank 0). */
 uint64_t par_comm_exscan_u64(const ms_comm *c, uint64_t v);
 void par_finalize(void);
+/* Provenance (run_info.yaml): the MPI library's version (MPI_Get_library_version, first line;
+ * callable before par_init) and the OpenMP threads a parallel region gets. */
+void par_mpi_library_version(char *buf, size_t n);
+int par_max_threads(void);
+/* The HDF5 library's version (H5get_libversion), "1.10.8". */
+void ms_h5_library_version(char *buf, size_t n);
+/* The libyaml version the deck reader runs with, "0.2.5". */
+const char *dk_yaml_version(void);
 void par_barrier(void);
 double par_sum_double(double v);
 double par_max_double(double v);

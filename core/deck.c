@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <yaml.h>
 
 /* Guards against alias bombs and runaway nesting in hostile decks. Nodes written out in the
@@ -21,44 +22,120 @@ enum { DK_MAX_DEPTH = 64, DK_MAX_NODES = 1000000, DK_MAX_ALIAS_NODES = 10000 };
 void dk_errors_init(dk_errors *e) { memset(e, 0, sizeof *e); }
 
 void dk_errors_free(dk_errors *e) {
-  for (size_t i = 0; i < e->n; i++) free(e->msg[i]);
+  for (size_t i = 0; i < e->n; i++) {
+    free(e->msg[i]);
+    if (e->pos) free(e->pos[i].file), free(e->pos[i].about);
+  }
   free(e->msg);
+  free(e->pos);
   memset(e, 0, sizeof *e);
 }
 
-void dk_errors_print(const dk_errors *e, FILE *f) {
-  for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[i]);
+/* Order of two messages for printing: file (in order of first mention), line, column, then the
+ * order recorded. `first` is the index of each message's file's first mention. */
+typedef struct err_order {
+  size_t index, first;
+  int line, col;
+} err_order;
+
+static int err_order_cmp(const void *pa, const void *pb) {
+  const err_order *a = pa, *b = pb;
+  if (a->first != b->first) return a->first < b->first ? -1 : 1;
+  if (a->line != b->line) return a->line < b->line ? -1 : 1;
+  if (a->col != b->col) return a->col < b->col ? -1 : 1;
+  return a->index < b->index ? -1 : a->index > b->index;
 }
 
-static void errors_push(dk_errors *e, char *msg) {
+void dk_errors_print(const dk_errors *e, FILE *f) {
+  if (!e->pos) { /* assembled by hand: no positions to sort by */
+    for (size_t i = 0; i < e->n; i++) fprintf(f, "%s\n", e->msg[i]);
+    return;
+  }
+  err_order *o = ms_calloc(e->n ? e->n : 1, sizeof *o);
+  for (size_t i = 0; i < e->n; i++) {
+    size_t first = i;
+    for (size_t j = 0; j < i; j++)
+      if (!strcmp(e->pos[j].file, e->pos[i].file)) {
+        first = o[j].first;
+        break;
+      }
+    o[i] = (err_order){i, first, e->pos[i].line, e->pos[i].col};
+  }
+  qsort(o, e->n, sizeof *o, err_order_cmp);
+  for (size_t i = 0; i < e->n; i++)
+    if (!e->pos[o[i].index].hidden) fprintf(f, "%s\n", e->msg[o[i].index]);
+  free(o);
+}
+
+/* A message equal to one already recorded (the same node checked by two readers) is hidden; so
+ * is a missing key that an unknown key in the same mapping misspells (DK_ROLE_*). Hidden errors
+ * still count in e->n: readers decide by the count whether something went wrong. */
+static void errors_push(dk_errors *e, char *msg, const char *file, int line, int col, int role,
+                        const char *about) {
+  bool hidden = false;
+  for (size_t i = 0; i < e->n && e->pos; i++) {
+    bool same_about = about && e->pos[i].about && !strcmp(e->pos[i].about, about);
+    if (!strcmp(e->msg[i], msg)) hidden = true;
+    if (same_about && role == DK_ROLE_MISSING && e->pos[i].role == DK_ROLE_MISSPELT) hidden = true;
+    if (same_about && role == DK_ROLE_MISSPELT && e->pos[i].role == DK_ROLE_MISSING)
+      e->pos[i].hidden = true;
+  }
   if (e->n == e->cap) {
     e->cap = e->cap ? 2 * e->cap : 8;
     e->msg = ms_realloc(e->msg, e->cap, sizeof *e->msg);
+    e->pos = ms_realloc(e->pos, e->cap, sizeof *e->pos);
   }
+  e->pos[e->n] = (dk_error_pos){ms_strdup(file),
+                                line > 0 ? line : 0,
+                                line > 0 ? col : 0,
+                                role,
+                                about ? ms_strdup(about) : NULL,
+                                hidden};
   e->msg[e->n++] = msg;
 }
 
-static void verror_at(dk_errors *e, const char *file, int line, int col, const char *fmt,
-                      va_list ap) {
+size_t dk_errors_count(const dk_errors *e) {
+  size_t n = 0;
+  for (size_t i = 0; i < e->n; i++) n += !(e->pos && e->pos[i].hidden);
+  return n;
+}
+
+static void verror_at(dk_errors *e, const char *file, int line, int col, int role,
+                      const char *about, const char *fmt, va_list ap) {
   char body[1536];
   vsnprintf(body, sizeof body, fmt, ap);
   char *msg = ms_calloc(strlen(body) + strlen(file) + 48, 1);
   if (line > 0) sprintf(msg, "%s:%d:%d: %s", file, line, col > 0 ? col : 1, body);
   else sprintf(msg, "%s: %s", file, body);
-  errors_push(e, msg);
+  errors_push(e, msg, file, line, col > 0 ? col : 1, role, about);
 }
 
 void dk_error_at(dk_errors *e, const char *file, int line, int col, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  verror_at(e, file ? file : "<input>", line, col, fmt, ap);
+  verror_at(e, file ? file : "<input>", line, col, DK_ROLE_NONE, NULL, fmt, ap);
   va_end(ap);
 }
 
 void dk_error(dk_errors *e, const dk_doc *doc, const dk_node *at, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, fmt, ap);
+  if (at && at->origin) verror_at(e, at->origin, 0, 0, DK_ROLE_NONE, NULL, fmt, ap);
+  else
+    verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, DK_ROLE_NONE,
+              NULL, fmt, ap);
+  va_end(ap);
+}
+
+void dk_error_role(dk_errors *e, const dk_doc *doc, const dk_node *at, int line, int col, int role,
+                   const char *about, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  if (line > 0) verror_at(e, doc->file, line, col, role, about, fmt, ap);
+  else if (at && at->origin) verror_at(e, at->origin, 0, 0, role, about, fmt, ap);
+  else
+    verror_at(e, doc ? doc->file : "<deck>", at ? at->line : 0, at ? at->col : 0, role, about, fmt,
+              ap);
   va_end(ap);
 }
 
@@ -88,6 +165,7 @@ static void node_free(dk_node *n) {
   free(n->is_default);
   free(n->value);
   free(n->path);
+  free(n->origin);
   free(n);
 }
 
@@ -307,10 +385,139 @@ dk_doc *dk_load_string(const char *text, const char *name, dk_errors *e) {
 
 void dk_free(dk_doc *doc) {
   if (!doc) return;
+  for (size_t i = 0; i < doc->noverrides; i++) free(doc->overrides[i]);
+  free(doc->overrides);
   node_free(doc->root);
   free(doc->file);
   free(doc->dir);
   free(doc);
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Command-line overrides                                                                      */
+
+/* A copy of `src` (from the override's own small YAML document) at `path` in the deck. */
+static dk_node *clone_node(const dk_node *src, const char *path, const char *origin) {
+  dk_node *n = dk_node_new(src->kind, 0, 0, path);
+  n->origin = ms_strdup(origin);
+  n->quoted = src->quoted;
+  if (src->value) n->value = ms_strdup(src->value);
+  for (size_t i = 0; i < src->n; i++) {
+    char *cp = dk_child_path(path, src->kind == DK_MAP ? src->keys[i] : NULL, i);
+    dk_node_append(n, src->kind == DK_MAP ? src->keys[i] : NULL,
+                   clone_node(src->items[i], cp, origin), false, false);
+    free(cp);
+  }
+  return n;
+}
+
+/* "line L of FILE", or the override a node came from. */
+static void node_where(const dk_node *n, const dk_doc *doc, char *buf, size_t len) {
+  if (n->origin) snprintf(buf, len, "from %s", n->origin);
+  else snprintf(buf, len, "line %d of %s", n->line, doc->file);
+}
+
+bool dk_set(dk_doc *doc, const char *path, const char *value, dk_errors *e) {
+  size_t olen = strlen(path) + strlen(value) + 8;
+  char *origin = ms_calloc(olen, 1);
+  snprintf(origin, olen, "--set %s=%s", path, value);
+  /* the value: parsed as the YAML of one mapping entry */
+  size_t tlen = strlen(value) + 8;
+  char *text = ms_calloc(tlen, 1);
+  snprintf(text, tlen, "v: %s\n", value);
+  dk_errors ve;
+  dk_errors_init(&ve);
+  dk_doc *vdoc = strchr(value, '\n') ? NULL : dk_load_string(text, origin, &ve);
+  free(text);
+  const dk_node *vnode = vdoc && !ve.n && vdoc->root->n == 1 ? vdoc->root->items[0] : NULL;
+  dk_errors_free(&ve);
+  bool ok = vnode != NULL;
+  if (!ok) dk_error_at(e, origin, 0, 0, "the value is not a YAML value on one line");
+  /* walk the path: key segments separated by '.', each with optional [N] suffixes */
+  dk_node *cur = doc->root, *parent = NULL;
+  dk_node *created_in = NULL; /* the map where the path's first new key was appended */
+  size_t slot = 0;
+  char seg[256];
+  const char *p = path;
+  if (ok && !*p) {
+    dk_error_at(e, origin, 0, 0, "no key path before '='");
+    ok = false;
+  }
+  while (ok && *p) {
+    size_t k = strcspn(p, ".[");
+    if (k == 0 || k >= sizeof seg) {
+      dk_error_at(e, origin, 0, 0, "a key path is names separated by '.', e.g. continuum.time.end");
+      ok = false;
+      break;
+    }
+    memcpy(seg, p, k);
+    seg[k] = 0;
+    p += k;
+    if (cur->kind != DK_MAP) {
+      char at[300];
+      node_where(cur, doc, at, sizeof at);
+      dk_error_at(e, origin, 0, 0, "%s (%s) is not a mapping: it has no key '%s'",
+                  cur->path[0] ? cur->path : "the deck", at, seg);
+      ok = false;
+      break;
+    }
+    size_t i = 0;
+    while (i < cur->n && strcmp(cur->keys[i], seg)) i++;
+    if (i == cur->n) { /* a new key: a mapping on the way, the value at the end */
+      if (!created_in) created_in = cur;
+      char *cp = dk_child_path(cur->path, seg, 0);
+      dk_node *m = dk_node_new(DK_MAP, 0, 0, cp);
+      m->origin = ms_strdup(origin);
+      free(cp);
+      dk_node_append(cur, seg, m, false, false);
+    }
+    parent = cur;
+    slot = i;
+    cur = cur->items[i];
+    while (ok && *p == '[') {
+      char *end;
+      long idx = strtol(p + 1, &end, 10);
+      if (end == p + 1 || *end != ']' || idx < 0) {
+        dk_error_at(e, origin, 0, 0, "a list index is [N] with N >= 0");
+        ok = false;
+        break;
+      }
+      p = end + 1;
+      if (cur->kind != DK_SEQ || (size_t)idx >= cur->n) {
+        char at[300];
+        node_where(cur, doc, at, sizeof at);
+        dk_error_at(e, origin, 0, 0, "%s (%s) has no item [%ld]", cur->path, at, idx);
+        ok = false;
+        break;
+      }
+      parent = cur;
+      slot = (size_t)idx;
+      cur = cur->items[idx];
+    }
+    if (ok && *p == '.') {
+      p++;
+      if (!*p) {
+        dk_error_at(e, origin, 0, 0, "the key path ends with '.'");
+        ok = false;
+      }
+    }
+  }
+  if (ok) {
+    dk_node *n = clone_node(vnode, cur->path, origin);
+    n->key_line = 0;
+    node_free(cur);
+    parent->items[slot] = n;
+    if (parent->kind == DK_MAP) parent->used[slot] = parent->is_default[slot] = false;
+    doc->overrides = ms_realloc(doc->overrides, doc->noverrides + 1, sizeof *doc->overrides);
+    doc->overrides[doc->noverrides++] = ms_strdup(origin + 6);
+  } else if (created_in) { /* a path that failed leaves no new keys behind (no knock-on errors) */
+    size_t last = --created_in->n;
+    node_free(created_in->items[last]);
+    free(created_in->keys[last]);
+  }
+  dk_free(vdoc);
+  free(origin);
+  return ok;
 }
 
 const dk_node *dk_root(const dk_doc *doc) { return doc->root; }
@@ -318,11 +525,62 @@ const char *dk_file(const dk_doc *doc) { return doc->file; }
 const char *dk_dir(const dk_doc *doc) { return doc->dir; }
 ms_unit_system dk_units(const dk_doc *doc) { return doc->units; }
 
+static bool file_exists(const char *path) { return access(path, F_OK) == 0; }
+
+const char *ms_data_dir(void) {
+  static char dir[4096];
+  static bool done = false;
+  if (done) return dir[0] ? dir : NULL;
+  done = true;
+  const char *env = getenv("MSCALE_DATA_DIR");
+  if (env && env[0]) {
+    snprintf(dir, sizeof dir, "%s", env);
+    return dir;
+  }
+  /* PREFIX/BINDIR/mscale -> PREFIX/DATADIR/mscale: a relocated install still finds its data */
+  char exe[4096];
+  ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n > 0) {
+    exe[n] = 0;
+    char *slash = strrchr(exe, '/');
+    if (slash) *slash = 0; /* the binary's directory */
+    size_t lb = strlen(MSCALE_INSTALL_BINDIR), le = strlen(exe);
+    if (le > lb && !strcmp(exe + le - lb, MSCALE_INSTALL_BINDIR) && exe[le - lb - 1] == '/') {
+      exe[le - lb - 1] = 0;
+      int w = snprintf(dir, sizeof dir, "%s/%s/mscale", exe, MSCALE_INSTALL_DATADIR);
+      if (w > 0 && (size_t)w < sizeof dir && file_exists(dir)) return dir;
+    }
+  }
+  snprintf(dir, sizeof dir, "%s", MSCALE_INSTALL_FULL_DATADIR "/mscale");
+  if (file_exists(dir)) return dir;
+  dir[0] = 0;
+  return NULL;
+}
+
+/* Relative to the deck's directory; if no such file exists, in the installed data directory
+ * (ms_data_dir): PATH without its leading "./" and "../" (a shipped deck's
+ * "../eos/data/al_osa_cold.txt" is DATA/eos/data/al_osa_cold.txt), then DATA/inputs/PATH (the
+ * history files beside the shipped decks). A deck copied out of share/mscale/inputs still runs. */
 char *dk_resolve_path(const dk_doc *doc, const char *path) {
   if (path[0] == '/' || !doc->dir[0]) return ms_strdup(path);
   size_t n = strlen(doc->dir) + strlen(path) + 2;
   char *p = ms_calloc(n, 1);
   snprintf(p, n, "%s/%s", doc->dir, path);
+  const char *data = file_exists(p) ? NULL : ms_data_dir();
+  if (!data) return p;
+  const char *rel = path;
+  while (!strncmp(rel, "./", 2) || !strncmp(rel, "../", 3)) rel += rel[1] == '/' ? 2 : 3;
+  const char *const sub[] = {"", "inputs/"};
+  for (int i = 0; i < 2; i++) {
+    size_t m = strlen(data) + strlen(sub[i]) + strlen(rel) + 2;
+    char *q = ms_calloc(m, 1);
+    snprintf(q, m, "%s/%s%s", data, sub[i], rel);
+    if (file_exists(q)) {
+      free(p);
+      return q;
+    }
+    free(q);
+  }
   return p;
 }
 
@@ -398,6 +656,41 @@ static size_t edit_distance(const char *a, const char *b) {
   return d[la][lb];
 }
 
+const char *dk_suggest(const char *word, const char *const *choices) {
+  if (!word || !choices) return NULL;
+  const char *best = NULL;
+  size_t len = strlen(word), best_d = len / 2 + 1 < 3 ? len / 2 + 1 : 3;
+  for (size_t i = 0; choices[i]; i++) {
+    size_t d = edit_distance(word, choices[i]);
+    if (d > 0 && d < best_d) {
+      best_d = d;
+      best = choices[i];
+    }
+  }
+  return best;
+}
+
+void dk_report_unknown_key(dk_errors *e, const dk_doc *doc, const dk_node *map, size_t i,
+                           const char *what, const char *const *allowed) {
+  if (!map || map->kind != DK_MAP || i >= map->n) return;
+  const char *key = map->keys[i], *hint = dk_suggest(key, allowed);
+  for (size_t k = 0; hint && k < map->n; k++) /* a close key written in the map is not meant */
+    if (!strcmp(map->keys[k], hint) && !map->is_default[k]) hint = NULL;
+  if (hint) {
+    char *about = dk_child_path(map->path, hint, 0);
+    dk_error_role(e, doc, map->items[i], 0, 0, DK_ROLE_MISSPELT, about,
+                  "%s: unknown key '%s' (did you mean '%s'?)", what, key, hint);
+    free(about);
+    return;
+  }
+  char list[600] = "";
+  for (size_t k = 0; allowed[k]; ++k) {
+    size_t len = strlen(list);
+    snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", allowed[k]);
+  }
+  dk_error(e, doc, map->items[i], "%s: unknown key '%s' (expected one of: %s)", what, key, list);
+}
+
 static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
   if (n->kind == DK_SEQ) {
     for (size_t i = 0; i < n->n; i++) report_unused(e, doc, n->items[i]);
@@ -417,18 +710,20 @@ static void report_unused(dk_errors *e, const dk_doc *doc, const dk_node *n) {
       snprintf(expected + len, sizeof expected - len, "%s%s", j ? ", " : "", n->asked[j]);
       size_t dist = edit_distance(n->keys[i], n->asked[j]);
       bool present = false;
-      for (size_t k = 0; k < n->n; k++)
-        if (!strcmp(n->keys[k], n->asked[j])) present = true;
+      for (size_t k = 0; k < n->n; k++) /* a default filled in by a reader was not written */
+        if (!strcmp(n->keys[k], n->asked[j]) && !n->is_default[k]) present = true;
       if (dist < best_d && !present) {
         best_d = dist;
         best = n->asked[j];
       }
     }
     const char *where = n->path[0] ? n->path : "top level";
-    if (best)
-      dk_error(e, doc, n->items[i], "%s: unknown key '%s' (did you mean '%s'?)", where, n->keys[i],
-               best);
-    else if (n->nasked)
+    if (best) {
+      char *about = dk_child_path(n->path, best, 0);
+      dk_error_role(e, doc, n->items[i], 0, 0, DK_ROLE_MISSPELT, about,
+                    "%s: unknown key '%s' (did you mean '%s'?)", where, n->keys[i], best);
+      free(about);
+    } else if (n->nasked)
       dk_error(e, doc, n->items[i], "%s: unknown key '%s' (expected one of: %s)", where, n->keys[i],
                expected);
     else
@@ -567,6 +862,11 @@ ms_status dk_write_resolved(const dk_doc *doc, const char *path) {
   if (s) return s;
   fprintf(af.f, "# Resolved deck written by mscale %s from %s\n", MSCALE_VERSION_STRING, doc->file);
   fprintf(af.f, "# Every key the run used, with defaults filled in (marked '# default').\n");
+  for (size_t i = 0; i < doc->noverrides; i++) {
+    fputs("# overridden on the command line: --set ", af.f);
+    for (const char *c = doc->overrides[i]; *c; c++) fputc(*c == '\n' ? ' ' : *c, af.f);
+    fputc('\n', af.f);
+  }
   emit(af.f, doc->root, 0, 0);
   return ms_afile_commit(&af);
 }
@@ -603,3 +903,5 @@ uint64_t dk_hash(const dk_doc *doc, const char *const *skip) {
 uint64_t dk_hash_doubles(uint64_t h, const double *v, size_t n) {
   return fnv1a(h, v, n * sizeof *v);
 }
+
+const char *dk_yaml_version(void) { return yaml_get_version_string(); }

@@ -18,16 +18,22 @@ struct dk_node {
   bool *is_default;      /* map: the value was filled in by a reader's default */
   char **asked;          /* map: every key a reader asked for (for "did you mean") */
   size_t nasked;
+  char *origin; /* set by a command-line override: messages name it instead of FILE:LINE:COL */
 };
 
 struct dk_doc {
   char *file, *dir;
   dk_node *root;
   ms_unit_system units;
+  char **overrides; /* the `--set PATH=VALUE` applied (dk_set), for the resolved deck */
+  size_t noverrides;
 };
 
 dk_node *dk_node_new(dk_kind kind, int line, int col, const char *path);
 void dk_node_append(dk_node *parent, const char *key, dk_node *child, bool used, bool is_default);
 char *dk_child_path(const char *parent, const char *key, size_t index);
+/* dk_error with a role (DK_ROLE_*) about a key path; line > 0 overrides the node's position. */
+void dk_error_role(dk_errors *e, const dk_doc *doc, const dk_node *at, int line, int col, int role,
+                   const char *about, const char *fmt, ...) __attribute__((format(printf, 8, 9)));
 
 #endif

@@ -17,12 +17,17 @@ static const char *where(const dk_node *map, const char *key, char *buf, size_t 
 
 static void missing(dk_errors *e, const dk_doc *doc, const dk_node *map, const char *key,
                     const char *expected) {
+  char *about = dk_child_path(map ? map->path : "", key, 0);
   if (map && map->path[0] && map->key_line > 0)
-    dk_error_at(e, doc->file, map->key_line, map->key_col, "%s: missing required key '%s' (%s)",
-                map->path, key, expected);
+    dk_error_role(e, doc, map, map->key_line, map->key_col, DK_ROLE_MISSING, about,
+                  "%s: missing required key '%s' (%s)", map->path, key, expected);
   else if (map && map->path[0])
-    dk_error(e, doc, map, "%s: missing required key '%s' (%s)", map->path, key, expected);
-  else dk_error(e, doc, map, "missing required top-level key '%s' (%s)", key, expected);
+    dk_error_role(e, doc, map, 0, 0, DK_ROLE_MISSING, about, "%s: missing required key '%s' (%s)",
+                  map->path, key, expected);
+  else
+    dk_error_role(e, doc, map, 0, 0, DK_ROLE_MISSING, about,
+                  "missing required top-level key '%s' (%s)", key, expected);
+  free(about);
 }
 
 /* Insert a default value into the tree so the resolved deck shows it. */
@@ -261,9 +266,14 @@ bool dk_read_enum(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key
         return true;
       }
   }
-  dk_error(e, doc, n, "%s: expected one of: %s; found %s%s%s", w, list,
-           n->kind == DK_SCALAR ? "'" : "", n->kind == DK_SCALAR ? n->value : "a collection",
-           n->kind == DK_SCALAR ? "'" : "");
+  const char *hint = n->kind == DK_SCALAR ? dk_suggest(n->value, choices) : NULL;
+  if (hint)
+    dk_error(e, doc, n, "%s: expected one of: %s; found '%s' (did you mean '%s'?)", w, list,
+             n->value, hint);
+  else
+    dk_error(e, doc, n, "%s: expected one of: %s; found %s%s%s", w, list,
+             n->kind == DK_SCALAR ? "'" : "", n->kind == DK_SCALAR ? n->value : "a collection",
+             n->kind == DK_SCALAR ? "'" : "");
   return false;
 }
 

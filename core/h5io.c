@@ -504,3 +504,9 @@ void ms_h5_entries_free(ms_h5_entry *items, size_t n) {
   for (size_t k = 0; k < n && items; k++) free(items[k].name);
   free(items);
 }
+
+void ms_h5_library_version(char *buf, size_t n) {
+  unsigned maj = 0, min = 0, rel = 0;
+  H5get_libversion(&maj, &min, &rel);
+  snprintf(buf, n, "%u.%u.%u", maj, min, rel);
+}

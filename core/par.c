@@ -337,3 +337,16 @@ void par_exchange_doubles(int nnbr, const int *ranks, const double *send, const 
   par_exchange_post(nnbr, ranks, send, scount, sdispl, recv, rcount, rdispl, 77);
   par_exchange_wait();
 }
+
+void par_mpi_library_version(char *buf, size_t n) {
+  char v[MPI_MAX_LIBRARY_VERSION_STRING] = "";
+  int len = 0;
+  if (MPI_Get_library_version(v, &len) != MPI_SUCCESS) v[0] = 0;
+  v[sizeof v - 1] = 0;
+  size_t k = strcspn(v, "\n\r");
+  v[k] = 0;
+  while (k > 0 && (v[k - 1] == ',' || v[k - 1] == ' ')) v[--k] = 0;
+  snprintf(buf, n, "%s", v);
+}
+
+int par_max_threads(void) { return omp_get_max_threads(); }

@@ -42,13 +42,7 @@ static void check_keys(dk_errors *e, const dk_doc *doc, const dk_node *map, cons
   for (size_t i = 0; i < dk_map_len(map); ++i) {
     const char *key = dk_map_key(map, i);
     if (in_list(key, allowed)) continue;
-    char list[400] = "";
-    for (size_t k = 0; allowed[k]; ++k) {
-      size_t len = strlen(list);
-      snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", allowed[k]);
-    }
-    dk_error(e, doc, dk_map_value(map, i), "%s: unknown key '%s' (expected one of: %s)", what, key,
-             list);
+    dk_report_unknown_key(e, doc, map, i, what, allowed);
     (void)dk_get(map, key);
   }
 }
@@ -186,13 +180,22 @@ const eos_material *eos_materials_find(const eos_materials *mats, const char *na
   if (!mats || !name) return NULL;
   const eos_material *m = find_material(mats, name);
   if (m || !e || is_broken(mats, name)) return m;
+  /* The names the deck defines, those with errors of their own included (they are defined,
+   * only not usable): "known: none defined" after one broken material misleads. */
   char known[600] = "";
-  for (size_t i = 0; i < mats->n; ++i) {
+  const char **names = ms_calloc(mats->n + mats->nbroken + 1, sizeof *names);
+  size_t nn = 0;
+  for (size_t i = 0; i < mats->n; ++i) names[nn++] = mats->m[i].name;
+  for (size_t i = 0; i < mats->nbroken; ++i) names[nn++] = mats->broken[i];
+  for (size_t i = 0; i < nn; ++i) {
     size_t len = strlen(known);
-    snprintf(known + len, sizeof known - len, "%s%s", i ? ", " : "", mats->m[i].name);
+    snprintf(known + len, sizeof known - len, "%s%s", i ? ", " : "", names[i]);
   }
-  dk_error(e, doc, where, "unknown material '%s' (known: %s)", name,
-           mats->n ? known : "none defined");
+  const char *hint = dk_suggest(name, names);
+  if (hint) dk_error(e, doc, where, "unknown material '%s' (did you mean '%s'?)", name, hint);
+  else
+    dk_error(e, doc, where, "unknown material '%s' (known: %s)", name, nn ? known : "none defined");
+  free(names);
   return NULL;
 }
 

@@ -47,7 +47,8 @@ int main(int argc, char **argv) {
   s.right.kind = CONT_BC_FREE;
   double w0 = ms_wall_time();
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   if (!g) {
     fprintf(stderr, "bench_cont: %s\n", msg);
     return 1;

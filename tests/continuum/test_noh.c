@@ -36,7 +36,8 @@ static void run_noh(cont_geometry geo, long NCELLS, double rho_exact, double rho
   s.right.fn.kind = CONT_FN_CONST;
   s.right.fn.value = -1.0;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   ms_status st = cont_grid_run_to(g, t_end);
   if (st != MS_OK) printf("%s\n", cont_grid_error(g));

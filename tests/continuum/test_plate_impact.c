@@ -47,7 +47,8 @@ static void test_symmetric_al_impact(void **state) {
   s.ntags = 1;
   s.tags = &tag;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
 
   /* Shocks travel ~6.7 km/s: at t = 0.06 (0.6 µs) the target shock is 0.4 cm in, the impactor

@@ -61,7 +61,8 @@ static rod_result run_rod(long ncells, double q_quad, double q_lin) {
   s.ntags = 1;
   s.tags = &tag;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   assert_int_equal(cont_grid_run_to(g, t_end), MS_OK);
   cont_history h = cont_grid_history(g, 0);

@@ -44,7 +44,8 @@ static void run_smooth(long n, double *err_w, double *err_u) {
   s.ntags = 1;
   s.tags = &tag;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   assert_int_equal(cont_grid_run_to(g, t_end), MS_OK);
   cont_history h = cont_grid_history(g, 0);

@@ -34,7 +34,8 @@ static void sod_errors(long n, const eos_t *gas, double err[3]) {
   s.layers = layers;
   s.nlayers = 2;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   assert_int_equal(cont_grid_run_to(g, t_end), MS_OK);
   assert_true(fabs(cont_grid_time(g) - t_end) < 1e-14);

@@ -177,12 +177,119 @@ static void test_resolved_deck(void **state) {
   dk_errors_free(&e);
 }
 
+/* Errors print sorted by file (first mention), line and column; a message recorded twice (two
+ * readers checking the same node) is kept once. */
+static void test_errors_sorted_once(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string("a: 1\nb: 2\nc: 3\n", "s.yaml", &e);
+  const dk_node *root = dk_root(doc);
+  dk_error(&e, doc, dk_get(root, "c"), "third");
+  dk_error_at(&e, "table.csv", 4, 1, "in a data file");
+  dk_error(&e, doc, dk_get(root, "a"), "first");
+  dk_error(&e, doc, dk_get(root, "c"), "third"); /* the same message again */
+  dk_error(&e, doc, NULL, "whole file");
+  dk_error(&e, doc, dk_get(root, "b"), "second");
+  assert_int_equal(e.n, 6);                 /* every error counts (readers compare counts) */
+  assert_int_equal(dk_errors_count(&e), 5); /* the repeat is not printed */
+  char buf[1024] = "";
+  FILE *f = fmemopen(buf, sizeof buf, "w");
+  assert_non_null(f);
+  dk_errors_print(&e, f);
+  fclose(f);
+  assert_string_equal(buf, "s.yaml: whole file\n"
+                           "s.yaml:1:4: first\n"
+                           "s.yaml:2:4: second\n"
+                           "s.yaml:3:4: third\n"
+                           "table.csv:4:1: in a data file\n");
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+/* A required key that is missing beside its misspelling is one message, in either order. */
+static void test_misspelt_required_key(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string("m:\n  gama: 1.4\n  q: 2\n", "t.yaml", &e);
+  const dk_node *m = dk_get(dk_root(doc), "m");
+  double g, r;
+  assert_false(dk_read_double(&e, doc, m, "gamma", MS_DIM_NONE, true, 0, 1, 3, &g));
+  assert_false(dk_read_double(&e, doc, m, "rho", MS_DIM_NONE, true, 0, 0, 3, &r));
+  dk_mark_used(m, "q");
+  dk_report_unused(&e, doc);
+  assert_int_equal(e.n, 3);
+  assert_int_equal(dk_errors_count(&e), 2);
+  char buf[1024] = "";
+  FILE *f = fmemopen(buf, sizeof buf, "w");
+  dk_errors_print(&e, f);
+  fclose(f);
+  assert_string_equal(buf, "t.yaml:1:1: m: missing required key 'rho' (a number in [0, 3])\n"
+                           "t.yaml:2:9: m: unknown key 'gama' (did you mean 'gamma'?)\n");
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+/* dk_suggest: close names only, never the word itself. */
+static void test_suggest(void **state) {
+  (void)state;
+  static const char *const names[] = {"planar", "cylindrical", "spherical", "check", NULL};
+  assert_string_equal(dk_suggest("planer", names), "planar");
+  assert_string_equal(dk_suggest("chek", names), "check");
+  assert_null(dk_suggest("planar", names));
+  assert_null(dk_suggest("xyz", names));
+  assert_null(dk_suggest("ab", names));
+}
+
+/* --set overrides: a new key, a list item, a replaced mapping, and messages naming them. */
+static void test_set_overrides(void **state) {
+  (void)state;
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string("m:\n  x: 1\n  l: [1, 2, 3]\n", "o.yaml", &e);
+  assert_true(dk_set(doc, "m.x", "2.5", &e));
+  assert_true(dk_set(doc, "m.l[2]", "7", &e));
+  assert_true(dk_set(doc, "m.new.deep", "[4, 5]", &e));
+  assert_false(dk_set(doc, "m.l[3]", "1", &e));
+  assert_false(dk_set(doc, "m.x.y", "1", &e));
+  assert_false(dk_set(doc, "m.", "1", &e));
+  const dk_node *m = dk_get(dk_root(doc), "m");
+  double x, *l = NULL, *deep = NULL;
+  size_t nl = 0, nd = 0;
+  assert_true(dk_read_double(&e, doc, m, "x", MS_DIM_NONE, true, 0, 0, 10, &x));
+  assert_true(x == 2.5);
+  assert_true(dk_read_double_list(&e, doc, m, "l", MS_DIM_NONE, true, &l, &nl));
+  assert_int_equal(nl, 3);
+  assert_true(l[2] == 7.0);
+  assert_true(
+      dk_read_double_list(&e, doc, dk_get(m, "new"), "deep", MS_DIM_NONE, true, &deep, &nd));
+  assert_int_equal(nd, 2);
+  assert_true(deep[1] == 5.0);
+  assert_int_equal(e.n, 3);
+  assert_true(has_error(&e, "--set m.l[3]=1: m.l (line 3 of o.yaml) has no item [3]"));
+  assert_true(has_error(&e, "--set m.x.y=1: m.x (from --set m.x=2.5) is not a mapping"));
+  assert_true(has_error(&e, "--set m.=1: the key path ends with '.'"));
+  /* a bad value is reported at the override */
+  assert_true(dk_set(doc, "m.x", "abc", &e));
+  assert_false(dk_read_double(&e, doc, m, "x", MS_DIM_NONE, true, 0, 0, 10, &x));
+  assert_true(has_error(&e, "--set m.x=abc: m.x: expected a number"));
+  free(l);
+  free(deep);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_values_and_positions),
                                      cmocka_unit_test(test_all_errors_with_lines),
                                      cmocka_unit_test(test_syntax_error_position),
                                      cmocka_unit_test(test_alias_bomb),
                                      cmocka_unit_test(test_si_units),
-                                     cmocka_unit_test(test_resolved_deck)};
+                                     cmocka_unit_test(test_resolved_deck),
+                                     cmocka_unit_test(test_errors_sorted_once),
+                                     cmocka_unit_test(test_suggest),
+                                     cmocka_unit_test(test_misspelt_required_key),
+                                     cmocka_unit_test(test_set_overrides)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -36,7 +36,8 @@ static cont_grid *air_column(eos_t *air, double L, long n) {
   s.left.kind = CONT_BC_WALL;
   s.right.kind = CONT_BC_WALL;
   char msg[256];
-  cont_grid *g = cont_grid_create(&s, msg, sizeof msg);
+  cont_grid *g = NULL;
+  cont_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   return g;
 }

@@ -12,6 +12,10 @@
 #                                  mention WORD (a problem type or subcommand not built yet)
 #   # also-run: yes                a deck: `mscale run CASE -o TMP` must fail the same way and
 #                                  create no output directory (refused before anything runs)
+#   # expect-count: N              exactly N stderr lines name CASE:LINE:COL (no knock-on
+#                                  errors, no message printed twice)
+# Lines naming CASE:LINE:COL must come in order of line and column (errors sorted by position),
+# and no stderr line may appear twice.
 # Passes if mscale exits with exactly 2, every expectation is met, and stderr shows no
 # sanitizer report (a crash is a signal: exit code > 128, never 2).
 # MSCALE_TEST_WRAPPER (e.g. "valgrind --error-exitcode=1 ...", tools/valgrind_unit.sh) is put in
@@ -84,6 +88,31 @@ check_result() {
     fi
   done < "$out.expect"
   rm -f "$out.expect"
+  count=$(printf '%s\n' "$directives" | sed -n 's/^expect-count: *//p')
+  if [ -n "$count" ]; then
+    got=$(awk -v p="$case:" 'index($0, p) == 1 && substr($0, length(p) + 1) ~ /^[0-9]/ { n++ }
+                             END { print n + 0 }' "$err")
+    if [ "$got" -ne "$count" ]; then
+      echo "FAIL: $got stderr lines name the case, expected $count"
+      fail=1
+    fi
+  fi
+  if ! awk -v p="$case:" 'index($0, p) == 1 {
+         split(substr($0, length(p) + 1), f, ":")
+         if (f[1] ~ /^[0-9]+$/ && f[2] ~ /^[0-9]+$/) {
+           k = f[1] * 100000 + f[2]
+           if (k < last) bad = 1
+           last = k
+         }
+       }
+       END { exit bad }' "$err"; then
+    echo "FAIL: the messages are not sorted by line and column"
+    fail=1
+  fi
+  if [ -n "$(sort "$err" | uniq -d)" ]; then
+    echo "FAIL: a line is printed twice: $(sort "$err" | uniq -d | head -1)"
+    fail=1
+  fi
   if [ "$nexpect" -eq 0 ]; then
     echo "FAIL: the case states no '# expect:' line"
     fail=1
