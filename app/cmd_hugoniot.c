@@ -150,6 +150,84 @@ static bool parse_inline_mixture(const char *spec, const eos_materials *mats, si
   return ok;
 }
 
+/* The Hugoniot of deck material `material` from (rho0, e0) (NaN: the EOS's reference state)
+ * into pts, its CSV title into title. Returns 0, or the exit code 2 with a message. */
+static int material_hugoniot(const eos_materials *mats, const char *deck, const char *material,
+                             double rho0_opt, double e0_opt, size_t nup, const double *up,
+                             eos_hugoniot_point *pts, char *title, size_t tlen, ms_status *st) {
+  const eos_material *m = eos_materials_find(mats, material, NULL, NULL, NULL);
+  if (!m) {
+    fprintf(stderr, "mscale hugoniot: %s has no material '%s' (known: ", deck, material);
+    list_materials(mats, stderr);
+    fprintf(stderr, ")\n");
+    return 2;
+  }
+  double rho0 = isnan(rho0_opt) ? eos_rho0(m->eos) : rho0_opt;
+  double e0 = isnan(e0_opt) ? eos_e0(m->eos) : e0_opt;
+  double p0 = eos_pressure(m->eos, rho0, e0);
+  if (!isfinite(p0)) {
+    fprintf(stderr,
+            "mscale hugoniot: the initial state rho0 = %g g/cm^3, e0 = %g kJ/g is "
+            "outside the domain of the EOS of '%s'\n",
+            rho0, e0, material);
+    return 2;
+  }
+  snprintf(title, tlen,
+           "Shock Hugoniot of %s (%s EOS) from rho0 = %.10g g/cm^3, e0 = %.10g kJ/g, "
+           "P0 = %.10g GPa (mscale %s)",
+           m->name, eos_kind_name(eos_get_kind(m->eos)), rho0, e0, p0, MSCALE_VERSION_STRING);
+  *st = eos_hugoniot(m->eos, rho0, e0, nup, up, pts);
+  return 0;
+}
+
+/* The Kuropatenko Hugoniot of `mixture` (a mixtures: entry or NAME:ALPHA,...) into pts, its
+ * CSV title into title. Returns 0, or the exit code 2 with a message. */
+static int mixture_hugoniot(const eos_materials *mats, const char *deck, const char *mixture,
+                            size_t nup, const double *up, eos_hugoniot_point *pts, char *title,
+                            size_t tlen, ms_status *st) {
+  size_t ncomp = 0;
+  const eos_t **comp = NULL;
+  double *alpha = NULL;
+  const eos_mixture *mx = eos_mixtures_find(mats, mixture);
+  char desc[700] = "";
+  bool ok = true;
+  if (mx) {
+    ncomp = mx->ncomp;
+    comp = ms_calloc(ncomp, sizeof *comp);
+    alpha = ms_calloc(ncomp, sizeof *alpha);
+    for (size_t i = 0; i < ncomp; ++i) {
+      comp[i] = mats->m[mx->comp[i]].eos;
+      alpha[i] = mx->alpha[i];
+    }
+  } else if (strchr(mixture, ':')) {
+    ok = parse_inline_mixture(mixture, mats, &ncomp, &comp, &alpha);
+  } else {
+    fprintf(stderr,
+            "mscale hugoniot: %s has no mixture '%s' (give a mixtures: entry or "
+            "NAME:ALPHA,NAME:ALPHA)\n",
+            deck, mixture);
+    ok = false;
+  }
+  if (!ok) {
+    free(comp), free(alpha);
+    return 2;
+  }
+  for (size_t i = 0; i < ncomp; ++i) {
+    const char *cname = "?";
+    for (size_t k = 0; k < mats->n; ++k)
+      if (mats->m[k].eos == comp[i]) cname = mats->m[k].name;
+    size_t len = strlen(desc);
+    snprintf(desc + len, sizeof desc - len, "%s%s %.6g", i ? ", " : "", cname, alpha[i]);
+  }
+  snprintf(title, tlen,
+           "Kuropatenko mixture Hugoniot, 1/(D-u) = sum alpha_i/(D_i-u_i), volume fractions: "
+           "%s (mscale %s)",
+           desc, MSCALE_VERSION_STRING);
+  *st = eos_kuropatenko_hugoniot(ncomp, comp, alpha, nup, up, pts);
+  free(comp), free(alpha);
+  return 0;
+}
+
 int cmd_hugoniot(int argc, char **argv) {
   if (app_wants_help(argc, argv)) {
     hugoniot_usage(stdout);
@@ -238,75 +316,12 @@ int cmd_hugoniot(int argc, char **argv) {
   eos_hugoniot_point *pts = ms_calloc(nup, sizeof *pts);
   char title[1024];
   ms_status st;
-  if (material) {
-    const eos_material *m = eos_materials_find(mats, material, NULL, NULL, NULL);
-    if (!m) {
-      fprintf(stderr, "mscale hugoniot: %s has no material '%s' (known: ", deck, material);
-      list_materials(mats, stderr);
-      fprintf(stderr, ")\n");
-      free(pts);
-      rc = 2;
-      goto done;
-    }
-    double rho0 = isnan(rho0_opt) ? eos_rho0(m->eos) : rho0_opt;
-    double e0 = isnan(e0_opt) ? eos_e0(m->eos) : e0_opt;
-    double p0 = eos_pressure(m->eos, rho0, e0);
-    if (!isfinite(p0)) {
-      fprintf(stderr,
-              "mscale hugoniot: the initial state rho0 = %g g/cm^3, e0 = %g kJ/g is "
-              "outside the domain of the EOS of '%s'\n",
-              rho0, e0, material);
-      free(pts);
-      rc = 2;
-      goto done;
-    }
-    snprintf(title, sizeof title,
-             "Shock Hugoniot of %s (%s EOS) from rho0 = %.10g g/cm^3, e0 = %.10g kJ/g, "
-             "P0 = %.10g GPa (mscale %s)",
-             m->name, eos_kind_name(eos_get_kind(m->eos)), rho0, e0, p0, MSCALE_VERSION_STRING);
-    st = eos_hugoniot(m->eos, rho0, e0, nup, up, pts);
-  } else {
-    size_t ncomp = 0;
-    const eos_t **comp = NULL;
-    double *alpha = NULL;
-    const eos_mixture *mx = eos_mixtures_find(mats, mixture);
-    char desc[700] = "";
-    bool ok = true;
-    if (mx) {
-      ncomp = mx->ncomp;
-      comp = ms_calloc(ncomp, sizeof *comp);
-      alpha = ms_calloc(ncomp, sizeof *alpha);
-      for (size_t i = 0; i < ncomp; ++i) {
-        comp[i] = mats->m[mx->comp[i]].eos;
-        alpha[i] = mx->alpha[i];
-      }
-    } else if (strchr(mixture, ':')) {
-      ok = parse_inline_mixture(mixture, mats, &ncomp, &comp, &alpha);
-    } else {
-      fprintf(stderr,
-              "mscale hugoniot: %s has no mixture '%s' (give a mixtures: entry or "
-              "NAME:ALPHA,NAME:ALPHA)\n",
-              deck, mixture);
-      ok = false;
-    }
-    if (!ok) {
-      free(comp), free(alpha), free(pts);
-      rc = 2;
-      goto done;
-    }
-    for (size_t i = 0; i < ncomp; ++i) {
-      const char *cname = "?";
-      for (size_t k = 0; k < mats->n; ++k)
-        if (mats->m[k].eos == comp[i]) cname = mats->m[k].name;
-      size_t len = strlen(desc);
-      snprintf(desc + len, sizeof desc - len, "%s%s %.6g", i ? ", " : "", cname, alpha[i]);
-    }
-    snprintf(title, sizeof title,
-             "Kuropatenko mixture Hugoniot, 1/(D-u) = sum alpha_i/(D_i-u_i), volume fractions: "
-             "%s (mscale %s)",
-             desc, MSCALE_VERSION_STRING);
-    st = eos_kuropatenko_hugoniot(ncomp, comp, alpha, nup, up, pts);
-    free(comp), free(alpha);
+  rc = material ? material_hugoniot(mats, deck, material, rho0_opt, e0_opt, nup, up, pts, title,
+                                    sizeof title, &st)
+                : mixture_hugoniot(mats, deck, mixture, nup, up, pts, title, sizeof title, &st);
+  if (rc != 0) {
+    free(pts);
+    goto done;
   }
   ms_csv_header(stdout, title, 5, names, units);
   for (size_t i = 0; i < nup; ++i) {

@@ -1,17 +1,13 @@
 /* mscale spectrum SNAPSHOT.h5 [--bond B]: the fragment spectrum N(g) of a particle snapshot as
  * CSV on stdout (header `g,count,mass`), docs/design.md §8. Snapshot layout: docs/coupling.md. */
 #include "commands.h"
+#include "cpl.h"
 
 #include <getopt.h>
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-#ifdef MSCALE_HAVE_COUPLING
-#include "cpl.h"
-
-int cmd_spectrum(int argc, char **argv);
 
 /* Default bond factor b: the cluster-dynamics cutoff R_c = 1.2 a of the benchmark
  * (docs/design.md §5.1), so fragments are the components of the interacting-pair graph. */
@@ -198,6 +194,48 @@ static ms_status snapshot_read(ms_h5r *h, const char *path, snapshot *s, dk_erro
   return ok ? MS_OK : MS_ERR_INPUT;
 }
 
+/* What the command line left open, from the snapshot's attributes: the lattice spacing (r0),
+ * the reference density (rho0), the periods and box origin. False if one is invalid (in e). */
+static bool snapshot_attrs(ms_h5r *h, const char *path, double *spacing, double *rho0,
+                           double period[3], cpl_fragment_opts *o, dk_errors *e) {
+  bool ok = true;
+  /* lattice spacing: command line, else the snapshot's r0 attribute */
+  if (isnan(*spacing)) {
+    double v;
+    if (ms_h5_read_attr_double(h, "/particles", "r0", &v, NULL) == MS_OK ||
+        ms_h5_read_attr_double(h, "/", "r0", &v, NULL) == MS_OK) {
+      *spacing = v;
+      if (!(isfinite(v) && v > 0)) {
+        dk_error_at(e, path, 0, 0,
+                    "attribute r0 (lattice spacing) must be a positive length, not %g", v);
+        ok = false;
+      }
+    } else {
+      dk_error_at(
+          e, path, 0, 0,
+          "no lattice spacing: the attribute r0 of '/particles' is missing (give --spacing A)");
+      ok = false;
+    }
+  }
+  if (isnan(*rho0)) {
+    double v;
+    if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0) *rho0 = v;
+  }
+  static const char *const pnames[3] = {"period_x", "period_y", "period_z"};
+  static const char *const lnames[3] = {"lo_x", "lo_y", "lo_z"};
+  for (int k = 0; k < 3; k++) {
+    double v = 0;
+    if (isnan(period[k]))
+      period[k] = ms_h5_read_attr_double(h, "/particles", pnames[k], &v, NULL) == MS_OK ? v : 0;
+    if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK) o->box.lo[k] = v;
+    if (!(period[k] >= 0) || !isfinite(period[k])) {
+      dk_error_at(e, path, 0, 0, "attribute %s must be >= 0 (0 = open axis)", pnames[k]);
+      ok = false;
+    }
+  }
+  return ok;
+}
+
 int cmd_spectrum(int argc, char **argv) {
   const char *path = NULL, *table_path = NULL;
   double bond = SPECTRUM_DEFAULT_BOND, spacing = NAN, rho0 = NAN;
@@ -259,42 +297,7 @@ int cmd_spectrum(int argc, char **argv) {
   ms_status st = h ? snapshot_read(h, path, &s, &e) : MS_ERR_INPUT;
   cpl_fragment_opts o;
   memset(&o, 0, sizeof o);
-  if (h) {
-    /* lattice spacing: command line, else the snapshot's r0 attribute */
-    if (isnan(spacing)) {
-      double v;
-      if (ms_h5_read_attr_double(h, "/particles", "r0", &v, NULL) == MS_OK ||
-          ms_h5_read_attr_double(h, "/", "r0", &v, NULL) == MS_OK) {
-        spacing = v;
-        if (!(isfinite(v) && v > 0)) {
-          dk_error_at(&e, path, 0, 0,
-                      "attribute r0 (lattice spacing) must be a positive length, not %g", v);
-          st = MS_ERR_INPUT;
-        }
-      } else {
-        dk_error_at(
-            &e, path, 0, 0,
-            "no lattice spacing: the attribute r0 of '/particles' is missing (give --spacing A)");
-        st = MS_ERR_INPUT;
-      }
-    }
-    if (isnan(rho0)) {
-      double v;
-      if (ms_h5_read_attr_double(h, "/particles", "rho0", &v, NULL) == MS_OK && v > 0) rho0 = v;
-    }
-    static const char *const pnames[3] = {"period_x", "period_y", "period_z"};
-    static const char *const lnames[3] = {"lo_x", "lo_y", "lo_z"};
-    for (int k = 0; k < 3; k++) {
-      double v = 0;
-      if (isnan(period[k]))
-        period[k] = ms_h5_read_attr_double(h, "/particles", pnames[k], &v, NULL) == MS_OK ? v : 0;
-      if (ms_h5_read_attr_double(h, "/particles", lnames[k], &v, NULL) == MS_OK) o.box.lo[k] = v;
-      if (!(period[k] >= 0) || !isfinite(period[k])) {
-        dk_error_at(&e, path, 0, 0, "attribute %s must be >= 0 (0 = open axis)", pnames[k]);
-        st = MS_ERR_INPUT;
-      }
-    }
-  }
+  if (h && !snapshot_attrs(h, path, &spacing, &rho0, period, &o, &e)) st = MS_ERR_INPUT;
   o.bond = bond;
   o.spacing = spacing;
   o.rho0 = isnan(rho0) ? 0.0 : rho0;
@@ -349,15 +352,3 @@ int cmd_spectrum(int argc, char **argv) {
   dk_errors_free(&e);
   return rc;
 }
-
-#else /* built without the coupling library */
-
-int cmd_spectrum(int argc, char **argv);
-int cmd_spectrum(int argc, char **argv) {
-  (void)argc;
-  (void)argv;
-  fprintf(stderr, "mscale spectrum: this build has no coupling library\n");
-  return 1;
-}
-
-#endif

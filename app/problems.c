@@ -1,21 +1,15 @@
 /* The problem types a deck can describe (`problem:` at top level) and the deck → materials →
  * problem reading that `run` and `check` share. Each problem type is a module's
  * read/run/free triple; its deck section has the same name as the type. */
+#include "cd.h"
 #include "commands.h"
+#include "cont.h"
+#include "cont2d.h"
+#include "cpl.h"
+#include "dm.h"
 
 #include <stdlib.h>
 #include <string.h>
-#ifdef MSCALE_HAVE_CONTINUUM
-#include "cont.h"
-#include "cont2d.h"
-#endif
-#if defined(MSCALE_HAVE_PARTICLES_CD) || defined(MSCALE_HAVE_PARTICLES_DM)
-#include "cd.h"
-#include "dm.h"
-#endif
-#ifdef MSCALE_HAVE_COUPLING
-#include "cpl.h"
-#endif
 
 typedef void *(*problem_read_fn)(dk_doc *, const dk_node *, const eos_materials *, dk_errors *);
 typedef ms_status (*problem_run_fn)(ms_ctx *, void *);
@@ -37,29 +31,21 @@ void hugoniot_problem_destroy(void **);
 static const problem_type problem_types[] = {
     {"hugoniot", "shock Hugoniots of deck materials (CSV + plot data)", false,
      hugoniot_problem_read, hugoniot_problem_run, hugoniot_problem_destroy},
-#ifdef MSCALE_HAVE_CONTINUUM
     {"continuum", "1D Lagrangian gas dynamics (cross scheme)", false,
      (problem_read_fn)cont_problem_read, (problem_run_fn)cont_problem_run,
      (problem_destroy_fn)cont_problem_destroy},
     {"grid2d", "2D Lagrangian quad grid, compatible discretisation (x-y, r-z)", false,
      (problem_read_fn)c2d_problem_read, (problem_run_fn)c2d_problem_run,
      (problem_destroy_fn)c2d_problem_destroy},
-#endif
-#ifdef MSCALE_HAVE_PARTICLES_CD
     {"cluster_dynamics", "cluster dynamics particles (pair potentials from the cold curve)", true,
      (problem_read_fn)cd_problem_read, (problem_run_fn)cd_problem_run,
      (problem_destroy_fn)cd_problem_destroy},
-#endif
-#ifdef MSCALE_HAVE_PARTICLES_DM
     {"discrete_model", "Hamiltonian discrete particle model with symplectic RKN schemes", true,
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
      (problem_destroy_fn)dm_problem_destroy},
-#endif
-#ifdef MSCALE_HAVE_COUPLING
     {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", true,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
      (problem_destroy_fn)cpl_problem_destroy},
-#endif
 };
 enum { N_PROBLEM_TYPES = sizeof problem_types / sizeof problem_types[0] };
 

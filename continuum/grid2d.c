@@ -1,5 +1,6 @@
 /* grid2d.c — the 2D staggered Lagrangian quad grid with the compatible discretisation
- * ([CBSW98], docs/continuum2d.md). Public API in cont2d.h.
+ * ([CBSW98], docs/continuum2d.md): the corner forces, the boundary conditions, the zone update
+ * and the time step. Public API in cont2d.h; set-up, tag lines and queries: grid2d_setup.c.
  *
  * Corner forces of zone z on its node p (k = 0..3 counter-clockwise), V the zone's area (x–y)
  * or per-radian volume ∫ r dA (r–z):
@@ -28,7 +29,7 @@
  * corners that touch them in a fixed order — no scatter, so results do not depend on the
  * number of threads.
  */
-#include "cont2d.h"
+#include "grid2d_impl.h"
 
 #include <float.h>
 #include <math.h>
@@ -38,93 +39,6 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
-
-typedef struct c2d_tagline {
-  char *name;
-  size_t nnodes, *node;
-  size_t n, cap;
-  double *t, *x, *y, *u, *v;
-} c2d_tagline;
-
-typedef struct c2d_run {
-  size_t first, n;
-  const eos_t *eos;
-} c2d_run;
-
-struct c2d_grid {
-  c2d_geometry geo;
-  size_t ni, nj, nn, nz;
-  /* nodes */
-  double *x, *y, *u, *v, *M;
-  double *xh, *yh, *uh, *vh; /* half-step positions, û */
-  double *fx, *fy, *rf;      /* summed scaled corner force, radius factor r̃ */
-  double *ex, *ey;           /* outside-pressure force on boundary nodes */
-  bool has_pressure;
-  double *rx0; /* radial piston: unit direction at t = 0 (x, y interleaved) */
-  /* zones */
-  double *m, *rho, *e, *p, *c, *vol, *eh, *rhoh, *ph, *ch, *vol_old;
-  double *mc;    /* 4 per zone: corner masses */
-  double *fc;    /* 8 per zone: corner forces (x, y), scaled by r̃ at the node */
-  double *ma;    /* 4 per zone: ρ_z A_c (r–z area mass) */
-  double *dumax; /* per zone: largest compressive |Δu| (time step) */
-  int *material;
-  size_t nruns;
-  c2d_run *runs;
-  c2d_bc bc[4];
-  double q1, q2, zeta, hg;
-  bool limiter, area_weighted;
-  double cfl, dv_max, dt_max, dt_min, dt_growth, dt_next;
-  double t, work;
-  long step;
-  size_t ntags, tag_cap;
-  c2d_tagline *tags;
-  int nthreads;
-  char err[512];
-};
-
-static void *xcalloc(size_t n, size_t sz) { return calloc(n ? n : 1, sz); }
-
-void c2d_setup_defaults(c2d_setup *s) {
-  memset(s, 0, sizeof *s);
-  s->geometry = C2D_XY;
-  s->q1 = 0.5;
-  s->q2 = 1.0;
-  s->q_gamma = 5.0 / 3.0;
-  s->use_limiter = true;
-  s->hg_coef = 0.0;
-  s->cfl = 0.5;
-  s->dv_max = 0.1;
-  s->dt_max = INFINITY;
-  s->dt_min = 1e-12;
-  s->dt_growth = 1.1;
-}
-
-/* Zone nodes, counter-clockwise. */
-static inline void zone_nodes(const c2d_grid *g, size_t z, size_t nd[4]) {
-  size_t i = z % g->ni, j = z / g->ni, w = g->ni + 1;
-  nd[0] = i + w * j;
-  nd[1] = nd[0] + 1;
-  nd[2] = nd[1] + w;
-  nd[3] = nd[0] + w;
-}
-
-static inline double quad_area(const double X[4], const double Y[4]) {
-  return 0.5 * ((X[0] - X[2]) * (Y[1] - Y[3]) - (X[1] - X[3]) * (Y[0] - Y[2]));
-}
-
-/* ∫ r dA over a polygon (per radian): (1/6) Σ (r_k + r_{k+1})(r_k z_{k+1} − r_{k+1} z_k). */
-static inline double quad_rvol(const double X[4], const double Y[4]) {
-  double s = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    int l = (k + 1) & 3;
-    s += (X[k] + X[l]) * (X[k] * Y[l] - X[l] * Y[k]);
-  }
-  return s / 6.0;
-}
-
-static inline double poly_volume(c2d_geometry geo, const double X[4], const double Y[4]) {
-  return geo == C2D_RZ ? quad_rvol(X, Y) : quad_area(X, Y);
-}
 
 /* ∂V/∂x_k of a 4-vertex polygon: planar area ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1}); in r–z the
  * per-radian volume V = (1/6) Σ (r_k + r_{k+1})(r_k z_{k+1} − r_{k+1} z_k) differentiated. */
@@ -141,30 +55,6 @@ static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y
       gx[k] = 0.5 * (Y[kn] - Y[kp]);
       gy[k] = 0.5 * (X[kp] - X[kn]);
     }
-  }
-}
-
-/* Corner quad of corner k: node, midpoint to next, centre, midpoint from previous. */
-static inline void corner_quad(const double X[4], const double Y[4], double xc, double yc, int k,
-                               double CX[4], double CY[4]) {
-  int kn = (k + 1) & 3, kp = (k + 3) & 3;
-  CX[0] = X[k];
-  CY[0] = Y[k];
-  CX[1] = 0.5 * (X[k] + X[kn]);
-  CY[1] = 0.5 * (Y[k] + Y[kn]);
-  CX[2] = xc;
-  CY[2] = yc;
-  CX[3] = 0.5 * (X[k] + X[kp]);
-  CY[3] = 0.5 * (Y[k] + Y[kp]);
-}
-
-static void gather(const c2d_grid *g, size_t z, const double *ax, const double *ay, double X[4],
-                   double Y[4]) {
-  size_t nd[4];
-  zone_nodes(g, z, nd);
-  for (int k = 0; k < 4; ++k) {
-    X[k] = ax[nd[k]];
-    Y[k] = ay[nd[k]];
   }
 }
 
@@ -214,7 +104,7 @@ static double edge_limiter(const c2d_grid *g, const double *px, const double *py
 
 /* Bilinear shape-function integrals over a quad (2 × 2 Gauss points, exact here):
  * mr[k] = ∫ N_k r dA and ma[k] = ∫ N_k dA (r = X). */
-static void fe_lumped(const double X[4], const double Y[4], double mr[4], double ma[4]) {
+void c2d_fe_lumped(const double X[4], const double Y[4], double mr[4], double ma[4]) {
   const double gp[2] = {-0.57735026918962576, 0.57735026918962576};
   for (int k = 0; k < 4; ++k) mr[k] = ma[k] = 0.0;
   for (int a = 0; a < 2; ++a)
@@ -242,14 +132,14 @@ static void fe_lumped(const double X[4], const double Y[4], double mr[4], double
 
 static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
   double mr[4], ma[4];
-  fe_lumped(X, Y, mr, ma);
+  c2d_fe_lumped(X, Y, mr, ma);
   for (int k = 0; k < 4; ++k) rb[k] = ma[k] > 0 ? mr[k] / ma[k] : 0.0;
 }
 
 /* Zone pass: planar corner forces (pressure pz, sub-zonal pressure, edge viscosity) at positions
  * (px, py) and velocities (pu, pv); densities rz, sound speeds cz. */
-static void zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
-                        const double *pv, const double *pz, const double *rz, const double *cz) {
+void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
+                     const double *pv, const double *pz, const double *rz, const double *cz) {
   const long ni = (long)g->ni;
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(g->nthreads) schedule(static)
@@ -441,7 +331,7 @@ static void boundary_pressure(c2d_grid *g, const double *px, const double *py, d
 
 /* Boundary conditions of node n at time t on the velocity (u, v). Returns true if the node is
  * constrained (its reaction does work). */
-static bool apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
+bool c2d_apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
   size_t w = g->ni + 1, i = n % w, j = n / w;
   bool on[4] = {i == 0, i == g->ni, j == 0, j == g->nj};
   bool con = false;
@@ -484,8 +374,8 @@ static ms_status fail_zone(c2d_grid *g, size_t z, const char *what, double value
 }
 
 /* Volumes, densities at positions (px, py); the EOS for (rho, e) → (p, c). */
-static ms_status zone_state(c2d_grid *g, const double *px, const double *py, const double *e,
-                            double *vol, double *rho, double *p, double *c) {
+ms_status c2d_zone_state(c2d_grid *g, const double *px, const double *py, const double *e,
+                         double *vol, double *rho, double *p, double *c) {
   size_t bad_zone = (size_t)-1;
   double bad_val = 0.0;
 #ifdef _OPENMP
@@ -521,7 +411,7 @@ static ms_status zone_state(c2d_grid *g, const double *px, const double *py, con
   return MS_OK;
 }
 
-static double stable_dt(const c2d_grid *g) {
+double c2d_stable_dt(const c2d_grid *g) {
   double dt = INFINITY;
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(g->nthreads) schedule(static) reduction(min : dt)
@@ -558,190 +448,6 @@ static double stable_dt(const c2d_grid *g) {
   return dt;
 }
 
-c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
-  if (s->ni < 1 || s->nj < 1 || !s->x || !s->y || !s->rho || !s->e || !s->eos) {
-    snprintf(err, errlen, "2D grid: need ni, nj ≥ 1 and node positions, ρ, e and an EOS per zone");
-    return NULL;
-  }
-  if (!(s->cfl > 0.0 && s->cfl < 1.0) || !(s->dt_growth > 1.0) || s->q1 < 0 || s->q2 < 0 ||
-      s->hg_coef < 0) {
-    snprintf(err, errlen, "2D grid: need 0 < cfl < 1, dt_growth > 1, q1, q2, hg ≥ 0");
-    return NULL;
-  }
-  c2d_grid *g = xcalloc(1, sizeof *g);
-  g->geo = s->geometry;
-  g->ni = s->ni;
-  g->nj = s->nj;
-  g->nn = (s->ni + 1) * (s->nj + 1);
-  g->nz = s->ni * s->nj;
-  size_t nn = g->nn, nz = g->nz;
-  double **na[] = {&g->x,  &g->y,  &g->u,  &g->v,  &g->M,  &g->xh,
-                   &g->yh, &g->uh, &g->vh, &g->fx, &g->fy, &g->rf};
-  for (size_t k = 0; k < sizeof na / sizeof na[0]; ++k) *na[k] = xcalloc(nn, sizeof(double));
-  g->rx0 = xcalloc(2 * nn, sizeof(double));
-  g->ex = xcalloc(nn, sizeof(double));
-  g->ey = xcalloc(nn, sizeof(double));
-  double **za[] = {&g->m,  &g->rho,  &g->e,  &g->p,  &g->c,       &g->vol,
-                   &g->eh, &g->rhoh, &g->ph, &g->ch, &g->vol_old, &g->dumax};
-  for (size_t k = 0; k < sizeof za / sizeof za[0]; ++k) *za[k] = xcalloc(nz, sizeof(double));
-  g->mc = xcalloc(4 * nz, sizeof(double));
-  g->ma = xcalloc(4 * nz, sizeof(double));
-  g->fc = xcalloc(8 * nz, sizeof(double));
-  g->material = xcalloc(nz, sizeof(int));
-  g->runs = xcalloc(nz, sizeof(c2d_run));
-  g->nthreads = 1;
-  memcpy(g->x, s->x, nn * sizeof(double));
-  memcpy(g->y, s->y, nn * sizeof(double));
-  if (s->u) memcpy(g->u, s->u, nn * sizeof(double));
-  if (s->v) memcpy(g->v, s->v, nn * sizeof(double));
-  g->q1 = s->q1;
-  g->q2 = s->q2;
-  g->zeta = 0.25 * (s->q_gamma + 1.0);
-  g->limiter = s->use_limiter;
-  g->area_weighted = s->geometry == C2D_RZ && s->rz_area_weighted;
-  g->hg = s->hg_coef;
-  g->cfl = s->cfl;
-  g->dv_max = s->dv_max > 0 ? s->dv_max : 0.1;
-  g->dt_max = s->dt_max > 0 ? s->dt_max : INFINITY;
-  g->dt_min = s->dt_min;
-  g->dt_growth = s->dt_growth;
-  const double side_normal[4][2] = {{1, 0}, {1, 0}, {0, 1}, {0, 1}};
-  for (int k = 0; k < 4; ++k) {
-    g->bc[k] = s->bc[k];
-    if (g->bc[k].kind == C2D_BC_PRESSURE) g->has_pressure = true;
-    cont_fn_copy(&g->bc[k].fn, &s->bc[k].fn);
-    if (g->bc[k].kind == C2D_BC_WALL && g->bc[k].normal[0] == 0.0 && g->bc[k].normal[1] == 0.0) {
-      g->bc[k].normal[0] = side_normal[k][0];
-      g->bc[k].normal[1] = side_normal[k][1];
-    }
-    double nl = hypot(g->bc[k].normal[0], g->bc[k].normal[1]);
-    if (nl > 0) {
-      g->bc[k].normal[0] /= nl;
-      g->bc[k].normal[1] /= nl;
-    }
-  }
-  for (size_t n = 0; n < nn; ++n) {
-    double r = hypot(g->x[n], g->y[n]);
-    if (r > 0) {
-      g->rx0[2 * n] = g->x[n] / r;
-      g->rx0[2 * n + 1] = g->y[n] / r;
-    }
-    if (g->geo == C2D_RZ && g->x[n] < 0.0) {
-      snprintf(err, errlen, "r–z grid: node %zu (i = %zu, j = %zu) has r = %.6g < 0", n,
-               n % (g->ni + 1), n / (g->ni + 1), g->x[n]);
-      c2d_grid_destroy(&g);
-      return NULL;
-    }
-  }
-  /* Zones: masses from the corner volumes; tangled zones are reported. */
-  for (size_t z = 0; z < nz; ++z) {
-    double X[4], Y[4];
-    gather(g, z, g->x, g->y, X, Y);
-    double a = quad_area(X, Y);
-    double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
-    bool ok = a > 0.0;
-    for (int k = 0; k < 4 && ok; ++k) {
-      double CX[4], CY[4];
-      corner_quad(X, Y, xc, yc, k, CX, CY);
-      if (!(quad_area(CX, CY) > 0.0)) ok = false;
-    }
-    if (!ok) {
-      snprintf(err, errlen,
-               "2D grid: zone %zu (i = %zu, j = %zu, near x = %.6g, y = %.6g) is tangled or "
-               "inverted (area %.6g, or a corner of non-positive area)",
-               z, z % g->ni, z / g->ni, xc, yc, a);
-      c2d_grid_destroy(&g);
-      return NULL;
-    }
-    if (!(s->rho[z] > 0.0) || !s->eos[z]) {
-      snprintf(err, errlen, "2D grid: zone %zu needs ρ > 0 and an EOS", z);
-      c2d_grid_destroy(&g);
-      return NULL;
-    }
-    g->rho[z] = s->rho[z];
-    g->e[z] = s->e[z];
-    g->material[z] = s->material ? s->material[z] : 0;
-    double mz = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      double CX[4], CY[4];
-      corner_quad(X, Y, xc, yc, k, CX, CY);
-      g->mc[4 * z + k] = s->rho[z] * poly_volume(g->geo, CX, CY);
-      mz += g->mc[4 * z + k];
-    }
-    g->m[z] = mz;
-    size_t nd[4];
-    zone_nodes(g, z, nd);
-    if (g->geo == C2D_RZ && !g->area_weighted) {
-      /* r–z control-volume form: node masses lumped with the bilinear shape functions,
-       * M_p += ρ0 ∫_z N_p r dA (2 × 2 Gauss points, exact for this integrand), the partition
-       * that matches the force P ∂V/∂x_p: a flow along z stays uniform across r (the median
-       * corner masses make the axis nodes 4/3 too light for their force — axis jetting). */
-      double mf[4], maf[4];
-      fe_lumped(X, Y, mf, maf);
-      /* scale so that Σ_p M_p = Σ_z m_z exactly (the quadrature is exact up to round-off) */
-      double sm = mf[0] + mf[1] + mf[2] + mf[3];
-      for (int k = 0; k < 4; ++k) g->M[nd[k]] += mz * mf[k] / sm;
-    } else {
-      for (int k = 0; k < 4; ++k) g->M[nd[k]] += g->mc[4 * z + k];
-    }
-    if (g->nruns == 0 || g->runs[g->nruns - 1].eos != s->eos[z]) {
-      g->runs[g->nruns].first = z;
-      g->runs[g->nruns].eos = s->eos[z];
-      g->runs[g->nruns].n = 0;
-      g->nruns++;
-    }
-    g->runs[g->nruns - 1].n++;
-  }
-  for (size_t n = 0; n < nn; ++n) {
-    if (!(g->M[n] > 0.0)) {
-      /* Degenerate r = 0 nodes of an r–z polar centre carry no mass; they must be fixed. */
-      g->M[n] = 0.0;
-    }
-  }
-  if (zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c) != MS_OK) {
-    snprintf(err, errlen, "2D grid at set-up: %s", g->err);
-    c2d_grid_destroy(&g);
-    return NULL;
-  }
-  for (size_t n = 0; n < nn; ++n) apply_bc(g, n, 0.0, &g->u[n], &g->v[n]);
-  zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
-  double dt = stable_dt(g);
-  g->dt_next = s->dt_initial > 0 ? s->dt_initial : 0.1 * dt;
-  if (!isfinite(g->dt_next)) g->dt_next = g->dt_max < INFINITY ? g->dt_max : 1e-6;
-  return g;
-}
-
-static void c2d_grid_release(c2d_grid *g) {
-  if (!g) return;
-  double *arr[] = {g->x,    g->y,  g->u,   g->v,       g->M,   g->xh, g->yh, g->uh,   g->vh,  g->fx,
-                   g->fy,   g->rf, g->rx0, g->m,       g->rho, g->e,  g->p,  g->c,    g->vol, g->eh,
-                   g->rhoh, g->ph, g->ch,  g->vol_old, g->mc,  g->ma, g->fc, g->dumax};
-  for (size_t k = 0; k < sizeof arr / sizeof arr[0]; ++k) free(arr[k]);
-  for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
-  free(g->ex);
-  free(g->ey);
-  for (size_t k = 0; k < g->ntags; ++k) {
-    c2d_tagline *tl = &g->tags[k];
-    free(tl->name);
-    free(tl->node);
-    free(tl->t);
-    free(tl->x);
-    free(tl->y);
-    free(tl->u);
-    free(tl->v);
-  }
-  free(g->tags);
-  free(g->material);
-  free(g->runs);
-  free(g);
-}
-
-void c2d_grid_destroy(c2d_grid **g) {
-  if (!g) return;
-  c2d_grid_release(*g);
-  *g = NULL;
-}
-
 /* Acceleration of node n from the gathered planar force. */
 static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *ay) {
   double M = g->M[n];
@@ -766,69 +472,6 @@ static inline double zone_work(const c2d_grid *g, size_t z, const double *wu, co
   return s;
 }
 
-static void tag_record(const c2d_grid *g, c2d_tagline *tl) {
-  if (tl->n + 1 > tl->cap) {
-    size_t cap = tl->cap ? 2 * tl->cap : 256;
-    tl->t = ms_realloc(tl->t, cap, sizeof(double));
-    double **cols[] = {&tl->x, &tl->y, &tl->u, &tl->v};
-    for (int c = 0; c < 4; ++c) *cols[c] = ms_realloc(*cols[c], cap * tl->nnodes, sizeof(double));
-    tl->cap = cap;
-  }
-  size_t r = tl->n * tl->nnodes;
-  tl->t[tl->n] = g->t;
-  for (size_t k = 0; k < tl->nnodes; ++k) {
-    size_t nd = tl->node[k];
-    tl->x[r + k] = g->x[nd];
-    tl->y[r + k] = g->y[nd];
-    tl->u[r + k] = g->u[nd];
-    tl->v[r + k] = g->v[nd];
-  }
-  tl->n++;
-}
-
-size_t c2d_grid_add_tag_line(c2d_grid *g, const char *name, bool along_i, size_t index) {
-  if (g->ntags == g->tag_cap) {
-    g->tag_cap = g->tag_cap ? 2 * g->tag_cap : 4;
-    g->tags = ms_realloc(g->tags, g->tag_cap, sizeof(c2d_tagline));
-  }
-  c2d_tagline *tl = &g->tags[g->ntags];
-  memset(tl, 0, sizeof *tl);
-  tl->name = ms_strdup(name ? name : "line");
-  size_t w = g->ni + 1;
-  if (along_i) {
-    if (index > g->nj) index = g->nj;
-    tl->nnodes = g->ni + 1;
-    tl->node = xcalloc(tl->nnodes, sizeof(size_t));
-    for (size_t i = 0; i <= g->ni; ++i) tl->node[i] = i + w * index;
-  } else {
-    if (index > g->ni) index = g->ni;
-    tl->nnodes = g->nj + 1;
-    tl->node = xcalloc(tl->nnodes, sizeof(size_t));
-    for (size_t j = 0; j <= g->nj; ++j) tl->node[j] = index + w * j;
-  }
-  tag_record(g, tl);
-  return g->ntags++;
-}
-
-size_t c2d_grid_ntag_lines(const c2d_grid *g) { return g->ntags; }
-
-c2d_line_history c2d_grid_line_history(const c2d_grid *g, size_t tag) {
-  c2d_line_history h;
-  memset(&h, 0, sizeof h);
-  if (tag >= g->ntags) return h;
-  const c2d_tagline *tl = &g->tags[tag];
-  h.name = tl->name;
-  h.nnodes = tl->nnodes;
-  h.node = tl->node;
-  h.n = tl->n;
-  h.t = tl->t;
-  h.x = tl->x;
-  h.y = tl->y;
-  h.u = tl->u;
-  h.v = tl->v;
-  return h;
-}
-
 ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   double dt = g->dt_next;
   if (dt > dt_limit) dt = dt_limit;
@@ -840,7 +483,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   const double t1 = g->t + dt;
   const size_t nn = g->nn, nz = g->nz;
   /* Predictor. */
-  zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
+  c2d_zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
   node_gather(g);
   boundary_pressure(g, g->x, g->y, g->t);
 #ifdef _OPENMP
@@ -850,7 +493,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     double ax, ay;
     node_accel(g, n, &ax, &ay);
     double us = g->u[n] + dt * ax, vs = g->v[n] + dt * ay;
-    apply_bc(g, n, t1, &us, &vs);
+    c2d_apply_bc(g, n, t1, &us, &vs);
     g->uh[n] = 0.5 * (g->u[n] + us);
     g->vh[n] = 0.5 * (g->v[n] + vs);
     g->xh[n] = g->x[n] + 0.5 * dt * g->uh[n];
@@ -861,10 +504,10 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
 #endif
   for (size_t z = 0; z < nz; ++z)
     g->eh[z] = g->e[z] - 0.5 * dt * zone_work(g, z, g->uh, g->vh) / g->m[z];
-  ms_status st = zone_state(g, g->xh, g->yh, g->eh, g->vol_old, g->rhoh, g->ph, g->ch);
+  ms_status st = c2d_zone_state(g, g->xh, g->yh, g->eh, g->vol_old, g->rhoh, g->ph, g->ch);
   if (st != MS_OK) return st;
   /* Corrector. */
-  zone_forces(g, g->xh, g->yh, g->uh, g->vh, g->ph, g->rhoh, g->ch);
+  c2d_zone_forces(g, g->xh, g->yh, g->uh, g->vh, g->ph, g->rhoh, g->ch);
   node_gather(g);
   boundary_pressure(g, g->xh, g->yh, g->t + 0.5 * dt);
   double work = 0.0;
@@ -875,7 +518,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     double ax, ay;
     node_accel(g, n, &ax, &ay);
     double u1 = g->u[n] + dt * ax, v1 = g->v[n] + dt * ay;
-    bool con = apply_bc(g, n, t1, &u1, &v1);
+    bool con = c2d_apply_bc(g, n, t1, &u1, &v1);
     double ub = 0.5 * (g->u[n] + u1), vb = 0.5 * (g->v[n] + v1);
     /* Reaction work at constrained nodes: ΔKE minus the work of the grid's own forces. */
     g->xh[n] = con ? g->M[n] * ((u1 - g->u[n]) * ub + (v1 - g->v[n]) * vb) -
@@ -898,11 +541,11 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     g->e[z] -= dt * zone_work(g, z, g->uh, g->vh) / g->m[z];
   }
   g->t = t1;
-  st = zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c);
+  st = c2d_zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c);
   if (st != MS_OK) return st;
   g->step++;
   /* Next step: Courant (with the viscosity's compressive |Δu| at tⁿ⁺¹), volume change, growth. */
-  double dtn = stable_dt(g);
+  double dtn = c2d_stable_dt(g);
   double dvr = 0.0;
   for (size_t z = 0; z < nz; ++z) {
     double r = fabs(g->vol[z] - g->vol_old[z]) / g->vol[z];
@@ -918,7 +561,7 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   for (size_t z = 0; z < nz; ++z)
     if (!isfinite(g->e[z]) || !isfinite(g->p[z]))
       return fail_zone(g, z, "non-finite energy or pressure", g->e[z]);
-  for (size_t k = 0; k < g->ntags; ++k) tag_record(g, &g->tags[k]);
+  for (size_t k = 0; k < g->ntags; ++k) c2d_tag_record(g, &g->tags[k]);
   return MS_OK;
 }
 
@@ -931,62 +574,4 @@ ms_status c2d_grid_run_to(c2d_grid *g, double t_end) {
     if (st != MS_OK) return st;
   }
   return MS_OK;
-}
-
-const char *c2d_grid_error(const c2d_grid *g) { return g->err; }
-double c2d_grid_time(const c2d_grid *g) { return g->t; }
-long c2d_grid_steps(const c2d_grid *g) { return g->step; }
-void c2d_grid_set_threads(c2d_grid *g, int nthreads) { g->nthreads = nthreads > 0 ? nthreads : 1; }
-
-c2d_view c2d_grid_view(const c2d_grid *g) {
-  c2d_view v = {g->ni, g->nj,  g->nn, g->nz, g->x, g->y, g->u,   g->v,
-                g->M,  g->rho, g->e,  g->p,  g->c, g->m, g->vol, g->material};
-  return v;
-}
-
-c2d_balance c2d_grid_balance(const c2d_grid *g) {
-  c2d_balance b = {0, 0, g->work};
-  for (size_t z = 0; z < g->nz; ++z) b.internal += g->m[z] * g->e[z];
-  for (size_t n = 0; n < g->nn; ++n)
-    b.kinetic += 0.5 * g->M[n] * (g->u[n] * g->u[n] + g->v[n] * g->v[n]);
-  return b;
-}
-
-void c2d_grid_hourglass(const c2d_grid *g, double *hg_rms, double *rho_spread) {
-  double s = 0.0, ms = 0.0, spread = 0.0;
-  for (size_t z = 0; z < g->nz; ++z) {
-    double X[4], Y[4];
-    gather(g, z, g->x, g->y, X, Y);
-    double a = quad_area(X, Y);
-    double hx = X[0] - X[1] + X[2] - X[3], hy = Y[0] - Y[1] + Y[2] - Y[3];
-    s += g->m[z] * (hx * hx + hy * hy) / a;
-    ms += g->m[z];
-    double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
-    double lo = INFINITY, hi = -INFINITY;
-    for (int k = 0; k < 4; ++k) {
-      double CX[4], CY[4];
-      corner_quad(X, Y, xc, yc, k, CX, CY);
-      double rc = g->mc[4 * z + k] / poly_volume(g->geo, CX, CY);
-      lo = rc < lo ? rc : lo;
-      hi = rc > hi ? rc : hi;
-    }
-    double sp = (hi - lo) / g->rho[z];
-    if (sp > spread) spread = sp;
-  }
-  *hg_rms = sqrt(s / ms);
-  *rho_spread = spread;
-}
-
-double c2d_grid_min_area(const c2d_grid *g, size_t *zone) {
-  double amin = INFINITY;
-  for (size_t z = 0; z < g->nz; ++z) {
-    double X[4], Y[4];
-    gather(g, z, g->x, g->y, X, Y);
-    double a = quad_area(X, Y);
-    if (a < amin) {
-      amin = a;
-      if (zone) *zone = z;
-    }
-  }
-  return amin;
 }

@@ -71,6 +71,82 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *k
   }
 }
 
+/* Node positions of mesh `type` (rect with its skew, polar, Saltzman). */
+static void mesh_nodes(int type, long ni, long nj, const double xr[2], const double yr[2],
+                       const double rr[2], const double th[2], double skew, double *x, double *y) {
+  if (type == 0) {
+    c2d_mesh_rect((size_t)ni, (size_t)nj, xr[0], xr[1], yr[0], yr[1], x, y);
+    if (skew != 0.0)
+      for (long j = 0; j <= nj; ++j)
+        for (long i = 0; i <= ni; ++i)
+          x[i + (ni + 1) * j] += skew * (double)(nj - j) * (yr[1] - yr[0]) / (double)nj *
+                                 sin(PI * (double)i / (double)ni);
+  } else if (type == 1) {
+    c2d_mesh_polar((size_t)ni, (size_t)nj, rr[0], rr[1], th[0] * PI / 180, th[1] * PI / 180, x, y);
+  } else {
+    c2d_mesh_saltzman((size_t)ni, (size_t)nj, x, y);
+  }
+}
+
+/* Regions: rectangles (zone centres) with their own state and material; the rest keeps the
+ * section's (rho0, e0, material mname). */
+static void read_regions(dk_errors *e, dk_doc *doc, const dk_node *regs, const eos_materials *mats,
+                         const char *mname, double rho0, double e0, long ni, size_t nz,
+                         const double *x, const double *y, double *rho, double *en,
+                         const eos_t **eos, int *mid) {
+  for (size_t r = 0; r < dk_seq_len(regs); ++r) {
+    const dk_node *rg = dk_seq_at(regs, r);
+    if (!dk_expect_map(e, doc, rg, "region")) continue;
+    double bx[2], by[2], rr0 = rho0, er = NAN, pr = NAN;
+    read_range(e, doc, rg, "x", MS_DIM_LENGTH, false, -INFINITY, INFINITY, bx);
+    read_range(e, doc, rg, "y", MS_DIM_LENGTH, false, -INFINITY, INFINITY, by);
+    dk_read_positive(e, doc, rg, "density", MS_DIM_DENSITY, false, rho0, &rr0);
+    const char *rm = mname;
+    dk_read_string(e, doc, rg, "material", false, mname, &rm);
+    const eos_material *m2 = eos_materials_find(mats, rm, e, doc, rg);
+    if (dk_get(rg, "pressure"))
+      dk_read_double(e, doc, rg, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &pr);
+    if (dk_get(rg, "energy"))
+      dk_read_double(e, doc, rg, "energy", MS_DIM_SPEC_ENERGY, true, 0, -INFINITY, INFINITY, &er);
+    if (!m2) continue;
+    if (!isnan(pr) && !cont_energy_from_pressure(m2->eos, rr0, pr, &er)) {
+      dk_error(e, doc, rg, "region %zu: no energy gives pressure %g at density %g", r, pr, rr0);
+      continue;
+    }
+    if (isnan(er)) er = e0;
+    for (size_t z = 0; z < nz; ++z) {
+      size_t i = z % (size_t)ni, j = z / (size_t)ni, a = i + (size_t)(ni + 1) * j, w = ni + 1;
+      double xc = 0.25 * (x[a] + x[a + 1] + x[a + w] + x[a + w + 1]);
+      double yc = 0.25 * (y[a] + y[a + 1] + y[a + w] + y[a + w + 1]);
+      if (xc >= bx[0] && xc <= bx[1] && yc >= by[0] && yc <= by[1]) {
+        rho[z] = rr0;
+        en[z] = er;
+        eos[z] = m2->eos;
+        mid[z] = (int)(m2 - mats->m);
+      }
+    }
+  }
+}
+
+/* Tag lines `tags: [{name, i | j}]` on the built grid. */
+static void read_tags(dk_errors *e, dk_doc *doc, const dk_node *tags, long ni, long nj,
+                      c2d_grid *g) {
+  for (size_t k = 0; tags && k < dk_seq_len(tags); ++k) {
+    const dk_node *tg = dk_seq_at(tags, k);
+    if (!dk_expect_map(e, doc, tg, "tag")) continue;
+    const char *tn = NULL;
+    long ii = -1, jj = -1;
+    dk_read_string(e, doc, tg, "name", true, NULL, &tn);
+    if (dk_get(tg, "i")) dk_read_int(e, doc, tg, "i", true, 0, 0, ni, &ii);
+    if (dk_get(tg, "j")) dk_read_int(e, doc, tg, "j", true, 0, 0, nj, &jj);
+    if ((ii < 0) == (jj < 0)) {
+      dk_error(e, doc, tg, "tag: give exactly one of i (a line i = const) or j");
+      continue;
+    }
+    if (tn) c2d_grid_add_tag_line(g, tn, jj >= 0, (size_t)(jj >= 0 ? jj : ii));
+  }
+}
+
 c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                               dk_errors *e) {
   size_t nerr0 = e->n;
@@ -94,7 +170,7 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   dk_read_enum(e, doc, mesh, "type", false, 0, types, &type);
   dk_read_int(e, doc, mesh, "ni", true, 0, 1, 100000000, &ni);
   dk_read_int(e, doc, mesh, "nj", true, 0, 1, 100000000, &nj);
-  double xr[2], yr[2], rr[2], th[2], skew = 0;
+  double xr[2] = {0, 0}, yr[2] = {0, 0}, rr[2] = {0, 0}, th[2] = {0, 0}, skew = 0;
   if (type == 0) {
     read_range(e, doc, mesh, "x", MS_DIM_LENGTH, true, 0, 1, xr);
     read_range(e, doc, mesh, "y", MS_DIM_LENGTH, true, 0, 1, yr);
@@ -158,18 +234,7 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
          *v = calloc(nn, sizeof *v), *rho = calloc(nz, sizeof *rho), *en = calloc(nz, sizeof *en);
   const eos_t **eos = calloc(nz, sizeof *eos);
   int *mid = calloc(nz, sizeof *mid);
-  if (type == 0) {
-    c2d_mesh_rect((size_t)ni, (size_t)nj, xr[0], xr[1], yr[0], yr[1], x, y);
-    if (skew != 0.0)
-      for (long j = 0; j <= nj; ++j)
-        for (long i = 0; i <= ni; ++i)
-          x[i + (ni + 1) * j] += skew * (double)(nj - j) * (yr[1] - yr[0]) / (double)nj *
-                                 sin(PI * (double)i / (double)ni);
-  } else if (type == 1) {
-    c2d_mesh_polar((size_t)ni, (size_t)nj, rr[0], rr[1], th[0] * PI / 180, th[1] * PI / 180, x, y);
-  } else {
-    c2d_mesh_saltzman((size_t)ni, (size_t)nj, x, y);
-  }
+  mesh_nodes(type, ni, nj, xr, yr, rr, th, skew, x, y);
   for (size_t n = 0; n < nn; ++n) {
     double r = hypot(x[n], y[n]);
     u[n] = vel[0] + (r > 0 ? vrad * x[n] / r : 0);
@@ -190,38 +255,7 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   /* Regions: rectangles (zone centres) with their own state and material. */
   const dk_node *regs = dk_get(sec, "regions");
   if (ok && regs && dk_expect_seq(e, doc, regs, "regions"))
-    for (size_t r = 0; r < dk_seq_len(regs); ++r) {
-      const dk_node *rg = dk_seq_at(regs, r);
-      if (!dk_expect_map(e, doc, rg, "region")) continue;
-      double bx[2], by[2], rr0 = rho0, er = NAN, pr = NAN;
-      read_range(e, doc, rg, "x", MS_DIM_LENGTH, false, -INFINITY, INFINITY, bx);
-      read_range(e, doc, rg, "y", MS_DIM_LENGTH, false, -INFINITY, INFINITY, by);
-      dk_read_positive(e, doc, rg, "density", MS_DIM_DENSITY, false, rho0, &rr0);
-      const char *rm = mname;
-      dk_read_string(e, doc, rg, "material", false, mname, &rm);
-      const eos_material *m2 = eos_materials_find(mats, rm, e, doc, rg);
-      if (dk_get(rg, "pressure"))
-        dk_read_double(e, doc, rg, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &pr);
-      if (dk_get(rg, "energy"))
-        dk_read_double(e, doc, rg, "energy", MS_DIM_SPEC_ENERGY, true, 0, -INFINITY, INFINITY, &er);
-      if (!m2) continue;
-      if (!isnan(pr) && !cont_energy_from_pressure(m2->eos, rr0, pr, &er)) {
-        dk_error(e, doc, rg, "region %zu: no energy gives pressure %g at density %g", r, pr, rr0);
-        continue;
-      }
-      if (isnan(er)) er = e0;
-      for (size_t z = 0; z < nz; ++z) {
-        size_t i = z % (size_t)ni, j = z / (size_t)ni, a = i + (size_t)(ni + 1) * j, w = ni + 1;
-        double xc = 0.25 * (x[a] + x[a + 1] + x[a + w] + x[a + w + 1]);
-        double yc = 0.25 * (y[a] + y[a + 1] + y[a + w] + y[a + w + 1]);
-        if (xc >= bx[0] && xc <= bx[1] && yc >= by[0] && yc <= by[1]) {
-          rho[z] = rr0;
-          en[z] = er;
-          eos[z] = m2->eos;
-          mid[z] = (int)(m2 - mats->m);
-        }
-      }
-    }
+    read_regions(e, doc, regs, mats, mname, rho0, e0, ni, nz, x, y, rho, en, eos, mid);
   c2d_problem *p = NULL;
   if (ok && e->n == nerr0) {
     s.ni = (size_t)ni;
@@ -239,20 +273,7 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     if (!g) {
       dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh entry */
     } else {
-      for (size_t k = 0; tags && k < dk_seq_len(tags); ++k) {
-        const dk_node *tg = dk_seq_at(tags, k);
-        if (!dk_expect_map(e, doc, tg, "tag")) continue;
-        const char *tn = NULL;
-        long ii = -1, jj = -1;
-        dk_read_string(e, doc, tg, "name", true, NULL, &tn);
-        if (dk_get(tg, "i")) dk_read_int(e, doc, tg, "i", true, 0, 0, ni, &ii);
-        if (dk_get(tg, "j")) dk_read_int(e, doc, tg, "j", true, 0, 0, nj, &jj);
-        if ((ii < 0) == (jj < 0)) {
-          dk_error(e, doc, tg, "tag: give exactly one of i (a line i = const) or j");
-          continue;
-        }
-        if (tn) c2d_grid_add_tag_line(g, tn, jj >= 0, (size_t)(jj >= 0 ? jj : ii));
-      }
+      read_tags(e, doc, tags, ni, nj, g);
       c2d_grid_set_threads(g, (int)nthreads);
       p = calloc(1, sizeof *p);
       p->grid = g;

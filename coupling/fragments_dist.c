@@ -125,19 +125,13 @@ static ms_status check_dist(const cpl_particles *p, size_t n_owned, const int32_
   return MS_OK;
 }
 
-ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size_t n_owned,
-                                  const int32_t *ghost_owner, const cpl_fragment_opts *o,
-                                  const ms_ctx *ctx) {
-  ms_status st = check_dist(p, n_owned, ghost_owner, o, ctx);
-  if (st == MS_OK) st = cpl_fragments_bond_search(f, p, o, n_owned);
-  st = par_agree_status(st);
-  if (st != MS_OK) return st;
-  const int P = ctx->size;
+/* 2. Labels, indexed by root (lab[n]): the smallest gid of each local component, then the
+ * min-label propagation with the ghosts' owners until no label changes (rounds counted).
+ * cnt: P ints of scratch. Collective. */
+static ms_status global_labels(const cpl_particles *p, size_t n_owned, const int32_t *ghost_owner,
+                               int P, cpl_uf *uf, int *cnt, int64_t *lab, int *rounds) {
   const size_t n = p->n, ng = n - n_owned;
-  cpl_uf *uf = &f->uf;
-
-  /* ---- 2. labels: smallest gid of the local component, indexed by root ---- */
-  int64_t *lab = ms_calloc(n ? n : 1, sizeof *lab);
+  ms_status st = MS_OK;
   for (size_t i = 0; i < n; ++i) lab[i] = INT64_MAX;
   for (size_t i = 0; i < n; ++i) {
     if (skipped(p, i)) continue;
@@ -145,7 +139,6 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
     if (p->gid[i] < lab[r]) lab[r] = p->gid[i];
   }
   /* active ghosts grouped by owner (stable), their gids to the owners */
-  int *cnt = ms_calloc((size_t)P, sizeof(int));
   for (size_t j = 0; j < ng; ++j)
     if (!skipped(p, n_owned + j)) cnt[ghost_owner[j]]++;
   plan gp;
@@ -188,9 +181,8 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
     free(keys);
   }
   st = par_agree_status(st);
-  int rounds = 0;
   while (st == MS_OK) {
-    ++rounds;
+    ++*rounds;
     int changed = 0;
     for (size_t q = 0; q < gp.ns; ++q) sl[q] = lab[cpl_uf_find(uf, gl[q])];
     plan_int64(&gp, false, sl, rl);
@@ -211,6 +203,51 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
   free(sl);
   free(rl);
   free(req);
+  return st;
+}
+
+/* A fragment's row on its label owner and in the gathered table: [acc1 | centre(3) | acc3]. */
+enum { ROW = CPL_ACC1 + 4, R_C = CPL_ACC1, R_ACC3 = CPL_ACC1 + 3 };
+
+/* 4. The table on every rank: the owners' rows (nF here, nper[r] on rank r, total in all)
+ * gathered in rank order. Collective. */
+static void gather_table(cpl_fragments *f, const double *row, size_t nF, const long *nper,
+                         long total, int P, const cpl_fragment_opts *o) {
+  int *gc = ms_calloc((size_t)P, sizeof(int)), *gd = ms_calloc((size_t)P, sizeof(int));
+  for (int r = 0, at = 0; r < P; ++r) {
+    gc[r] = (int)nper[r] * ROW;
+    gd[r] = at;
+    at += gc[r];
+  }
+  double *all = ms_calloc((size_t)total * ROW + 1, sizeof *all);
+  par_allgatherv_doubles(row, (int)nF * ROW, all, gc, gd);
+  f->n = (size_t)total;
+  cpl_fragments_reserve(f, f->n);
+  for (size_t k = 0; k < f->n; ++k) {
+    const double *rk = all + k * ROW;
+    cpl_fragment_set(f, k, rk, rk + R_C, rk[R_ACC3], o->rho0);
+  }
+  free(gc);
+  free(gd);
+  free(all);
+}
+
+ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size_t n_owned,
+                                  const int32_t *ghost_owner, const cpl_fragment_opts *o,
+                                  const ms_ctx *ctx) {
+  ms_status st = check_dist(p, n_owned, ghost_owner, o, ctx);
+  if (st == MS_OK) st = cpl_fragments_bond_search(f, p, o, n_owned);
+  st = par_agree_status(st);
+  if (st != MS_OK) return st;
+  const int P = ctx->size;
+  const size_t n = p->n;
+  cpl_uf *uf = &f->uf;
+
+  /* ---- 2. labels: smallest gid of the global fragment, indexed by root ---- */
+  int64_t *lab = ms_calloc(n ? n : 1, sizeof *lab);
+  int *cnt = ms_calloc((size_t)P, sizeof(int));
+  int rounds = 0;
+  st = global_labels(p, n_owned, ghost_owner, P, uf, cnt, lab, &rounds);
   if (st != MS_OK) {
     free(lab);
     free(cnt);
@@ -266,8 +303,7 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
     if (a == 0 || ord[a].key != ord[a - 1].key) ++nF;
     frag_of[ord[a].pos] = nF - 1;
   }
-  /* owner's rows: [acc1 | centre(3) | acc3], the layout gathered at the end */
-  enum { ROW = CPL_ACC1 + 4, R_C = CPL_ACC1, R_ACC3 = CPL_ACC1 + 3 };
+  /* owner's rows: [acc1 | centre(3) | acc3] (ROW), the layout gathered at the end */
   double *row = ms_calloc(nF * ROW + 1, sizeof *row);
   double *ref = ms_calloc(3 * nF + 1, sizeof *ref), *off = ms_calloc(3 * nF + 1, sizeof *off);
   double *sum3 = ms_calloc(3 * nF + 1, sizeof *sum3);
@@ -318,20 +354,7 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
   f->n_particles = n_owned;
 
   /* ---- 4. the table on every rank ---- */
-  int *gc = ms_calloc((size_t)P, sizeof(int)), *gd = ms_calloc((size_t)P, sizeof(int));
-  for (int r = 0, at = 0; r < P; ++r) {
-    gc[r] = (int)nper[r] * ROW;
-    gd[r] = at;
-    at += gc[r];
-  }
-  double *all = ms_calloc((size_t)total * ROW + 1, sizeof *all);
-  par_allgatherv_doubles(row, (int)nF * ROW, all, gc, gd);
-  f->n = (size_t)total;
-  cpl_fragments_reserve(f, f->n);
-  for (size_t k = 0; k < f->n; ++k) {
-    const double *rk = all + k * ROW;
-    cpl_fragment_set(f, k, rk, rk + R_C, rk[R_ACC3], o->rho0);
-  }
+  gather_table(f, row, nF, nper, total, P, o);
   f->rounds = rounds;
 
   plan_free(&fp);
@@ -350,8 +373,5 @@ ms_status cpl_fragments_find_dist(cpl_fragments *f, const cpl_particles *p, size
   free(loff);
   free(lsum);
   free(nper);
-  free(gc);
-  free(gd);
-  free(all);
   return MS_OK;
 }

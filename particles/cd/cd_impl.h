@@ -287,4 +287,17 @@ void cd_model_keys_read(dk_errors *e, dk_doc *doc, const dk_node *sec, int dim,
 const char *cd_key_or_alias(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key,
                             const char *old, const char *where, char *notes, size_t cap);
 
+/* ---- cd_sim.c internals that cd_relax.c calls ---- */
+/* List build (under MPI first the redistribution and ghost refresh, cd_par.c); `reorder` sorts
+ * the particles into cell order. */
+ms_status cd_rebuild_lists(cd_sim *s, bool reorder);
+/* Forces for the time step; in bonded mode also books broken bonds. */
+void cd_step_forces(cd_sim *s);
+/* Half lists (built at once) unless the full-list fit kernel serves the current settings. */
+ms_status cd_half_lists_unless_fit(cd_sim *s);
+/* Pairs inside R_c now, for the broken-pair energy of the plain cutoff. */
+void cd_count_inside0(cd_sim *s);
+/* Bonded mode: the partners are every pair closer than its R_c now (lists must be built). */
+ms_status cd_form_partners(cd_sim *s);
+
 #endif /* MSCALE_CD_IMPL_H */

@@ -49,6 +49,76 @@ static double image_delta(double d, double L, bool per) {
   return per ? d - L * nearbyint(d / L) : d;
 }
 
+/* Overlap removal across grain boundaries: a site closer than dmin·r0 to a kept site of
+ * another grain (or of its own grain across a seam) is removed, the sites taken in generation
+ * (grain) order; the kept sites are packed to the front of xyz and grain. Returns their count. */
+static size_t remove_overlaps(int nd, double r0, double dmin, const double lo[3],
+                              const double len[3], const bool per_ax[3], size_t n, double *xyz,
+                              const double *unwrapped, int32_t *grain) {
+  /* cell grid of width >= dmin·r0 (a periodic axis holds a whole number of cells, so the grid
+   * wraps) */
+  const double w = dmin * r0;
+  long nc[3] = {1, 1, 1};
+  double cw[3] = {w, w, w};
+  for (int a = 0; a < nd; a++) {
+    nc[a] = per_ax[a] ? (long)fmax(1.0, floor(len[a] / w)) : (long)floor(len[a] / w) + 1;
+    if (per_ax[a]) cw[a] = len[a] / (double)nc[a];
+  }
+  /* neighbour cells −1..1, fewer where a wrapped axis has under 3 cells (no cell twice) */
+  long dlo[3] = {0, 0, 0}, dhi[3] = {0, 0, 0};
+  for (int a = 0; a < nd; a++) {
+    dlo[a] = per_ax[a] && nc[a] < 3 ? 0 : -1;
+    dhi[a] = per_ax[a] && nc[a] < 3 ? nc[a] - 1 : 1;
+  }
+  size_t ncell = (size_t)(nc[0] * nc[1] * nc[2]);
+  int32_t *head = ms_calloc(ncell, sizeof *head), *next = ms_calloc(n + 1, sizeof *next);
+  for (size_t c = 0; c < ncell; c++) head[c] = -1;
+  bool *dead = ms_calloc(n + 1, sizeof *dead);
+  size_t kept = 0, q = 0;
+  for (size_t i = 0; i < n; i++) { /* sites in generation (grain) order: earlier grains win */
+    long k[3] = {0, 0, 0};
+    for (int a = 0; a < nd; a++) k[a] = (long)fmin((xyz[3 * i + a] - lo[a]) / cw[a], nc[a] - 1);
+    for (long dz = dlo[2]; dz <= dhi[2] && !dead[i]; dz++)
+      for (long dy = dlo[1]; dy <= dhi[1] && !dead[i]; dy++)
+        for (long dx = dlo[0]; dx <= dhi[0] && !dead[i]; dx++) {
+          long c[3] = {k[0] + dx, k[1] + dy, k[2] + dz};
+          bool outside = false;
+          for (int a = 0; a < 3; a++) {
+            if (per_ax[a]) c[a] = (c[a] + nc[a]) % nc[a];
+            outside |= c[a] < 0 || c[a] >= nc[a];
+          }
+          if (outside) continue;
+          for (int32_t j = head[(c[2] * nc[1] + c[1]) * nc[0] + c[0]]; j >= 0; j = next[j]) {
+            double d2 = 0, seam = 0;
+            for (int a = 0; a < nd; a++) {
+              const double d = image_delta(xyz[3 * i + a] - xyz[3 * j + a], len[a], per_ax[a]);
+              d2 += d * d;
+              seam += fabs(d - (unwrapped[3 * i + a] - unwrapped[3 * j + a]));
+            }
+            if (grain[j] == grain[i] && seam < 1e-6 * r0) continue; /* a lattice pair */
+            if (d2 < w * w) {
+              dead[i] = true;
+              break;
+            }
+          }
+        }
+    if (dead[i]) continue;
+    size_t c = (size_t)((k[2] * nc[1] + k[1]) * nc[0] + k[0]);
+    next[i] = head[c];
+    head[c] = (int32_t)i;
+    kept++;
+  }
+  for (size_t i = 0; i < n; i++)
+    if (!dead[i]) {
+      memmove(xyz + 3 * q, xyz + 3 * i, 3 * sizeof *xyz);
+      grain[q++] = grain[i];
+    }
+  free(head);
+  free(next);
+  free(dead);
+  return kept;
+}
+
 size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], const double hi[3],
                       const bool periodic[3], int ngrains, uint64_t seed, double dmin,
                       cd_site_filter keep, void *user, double **xyz_out, int32_t **grain_out,
@@ -134,65 +204,7 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
             grain[n++] = g;
           }
   }
-  /* overlap removal across grain boundaries: cell grid of width >= dmin·r0 (a periodic axis
-   * holds a whole number of cells, so the grid wraps) */
-  const double w = dmin * r0;
-  long nc[3] = {1, 1, 1};
-  double cw[3] = {w, w, w};
-  for (int a = 0; a < nd; a++) {
-    nc[a] = per_ax[a] ? (long)fmax(1.0, floor(len[a] / w)) : (long)floor(len[a] / w) + 1;
-    if (per_ax[a]) cw[a] = len[a] / (double)nc[a];
-  }
-  /* neighbour cells −1..1, fewer where a wrapped axis has under 3 cells (no cell twice) */
-  long dlo[3] = {0, 0, 0}, dhi[3] = {0, 0, 0};
-  for (int a = 0; a < nd; a++) {
-    dlo[a] = per_ax[a] && nc[a] < 3 ? 0 : -1;
-    dhi[a] = per_ax[a] && nc[a] < 3 ? nc[a] - 1 : 1;
-  }
-  size_t ncell = (size_t)(nc[0] * nc[1] * nc[2]);
-  int32_t *head = ms_calloc(ncell, sizeof *head), *next = ms_calloc(n + 1, sizeof *next);
-  for (size_t c = 0; c < ncell; c++) head[c] = -1;
-  bool *dead = ms_calloc(n + 1, sizeof *dead);
-  size_t kept = 0;
-  for (size_t i = 0; i < n; i++) { /* sites in generation (grain) order: earlier grains win */
-    long k[3] = {0, 0, 0};
-    for (int a = 0; a < nd; a++) k[a] = (long)fmin((xyz[3 * i + a] - lo[a]) / cw[a], nc[a] - 1);
-    for (long dz = dlo[2]; dz <= dhi[2] && !dead[i]; dz++)
-      for (long dy = dlo[1]; dy <= dhi[1] && !dead[i]; dy++)
-        for (long dx = dlo[0]; dx <= dhi[0] && !dead[i]; dx++) {
-          long c[3] = {k[0] + dx, k[1] + dy, k[2] + dz};
-          bool outside = false;
-          for (int a = 0; a < 3; a++) {
-            if (per_ax[a]) c[a] = (c[a] + nc[a]) % nc[a];
-            outside |= c[a] < 0 || c[a] >= nc[a];
-          }
-          if (outside) continue;
-          for (int32_t j = head[(c[2] * nc[1] + c[1]) * nc[0] + c[0]]; j >= 0; j = next[j]) {
-            double d2 = 0, seam = 0;
-            for (int a = 0; a < nd; a++) {
-              const double d = image_delta(xyz[3 * i + a] - xyz[3 * j + a], len[a], per_ax[a]);
-              d2 += d * d;
-              seam += fabs(d - (unwrapped[3 * i + a] - unwrapped[3 * j + a]));
-            }
-            if (grain[j] == grain[i] && seam < 1e-6 * r0) continue; /* a lattice pair */
-            if (d2 < w * w) {
-              dead[i] = true;
-              break;
-            }
-          }
-        }
-    if (dead[i]) continue;
-    size_t c = (size_t)((k[2] * nc[1] + k[1]) * nc[0] + k[0]);
-    next[i] = head[c];
-    head[c] = (int32_t)i;
-    kept++;
-  }
-  size_t q = 0;
-  for (size_t i = 0; i < n; i++)
-    if (!dead[i]) {
-      memmove(xyz + 3 * q, xyz + 3 * i, 3 * sizeof *xyz);
-      grain[q++] = grain[i];
-    }
+  const size_t kept = remove_overlaps(nd, r0, dmin, lo, len, per_ax, n, xyz, unwrapped, grain);
   const double vsite =
       cd_cluster_volume(dim == 2 ? CD_LATTICE_TRI2D : CD_LATTICE_FCC, r0, thickness);
   *porosity = 1.0 - (double)kept * vsite / (vbox * (dim == 2 ? thickness : 1.0));
@@ -200,8 +212,5 @@ size_t cd_polycrystal(int dim, double r0, double thickness, const double lo[3], 
   *grain_out = grain;
   free(seeds);
   free(unwrapped);
-  free(head);
-  free(next);
-  free(dead);
   return kept;
 }
