@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The main job: set up, build (Release), run the default deck, turn its outputs into plots.
 #   ./run.sh [DECK] [OUTDIR]
 set -euo pipefail

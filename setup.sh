@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs what mscale needs on a bare Debian 12 (run as root, or with sudo available).
 # Every dependency is a Debian package; nothing is downloaded from anywhere else.
 set -euo pipefail

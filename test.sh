@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The whole test suite: set up, build (Release), run every ctest test (unit, validation, mpi),
 # then rebuild with AddressSanitizer + UndefinedBehaviorSanitizer and run the unit tests again.
 #   ./test.sh            everything (what CI runs)

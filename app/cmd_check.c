@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale check DECK: validate only; exit 0, or 2 with FILE:LINE:COL: message lines. */
 #include "commands.h"
 

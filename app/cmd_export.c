@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale export SNAPSHOT.h5... --format extxyz|lammps-dump [-o FILE]: particle snapshots in the
  * formats OVITO, ASE and LAMMPS's tools read (docs/output.md). Every numeric per-particle dataset
  * of /particles is carried over: positions, velocities, mass, material, fragment id and the

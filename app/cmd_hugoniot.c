@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale hugoniot DECK --material NAME --up LIST: shock Hugoniot of a deck material as CSV on
  * stdout (docs/design.md §8); --mixture for the Kuropatenko rule (docs/eos.md). Only the deck's
  * `units:`, `materials:` and `mixtures:` are read; other sections are left alone. */

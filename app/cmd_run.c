@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale run DECK [-o OUTDIR] [--force]: validate, then run into OUTDIR, which receives the
  * resolved deck, run.log, run_info.yaml and the problem's data files. */
 #include "commands.h"

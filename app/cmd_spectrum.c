@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale spectrum SNAPSHOT.h5 [--bond B]: the fragment spectrum N(g) of a particle snapshot as
  * CSV on stdout (header `g,count,mass`), docs/design.md §8. Snapshot layout: docs/coupling.md. */
 #include "commands.h"

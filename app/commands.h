@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Subcommands of the mscale front end (docs/design.md §8). Each returns the process exit code:
  * 0 success, 1 the run failed, 2 bad usage or bad input. */
 #ifndef MSCALE_APP_COMMANDS_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* mscale — command-line front end (docs/design.md §8). */
 #include "commands.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Built-in problem `hugoniot`: shock Hugoniots of deck materials, one CSV per material
  * (the reference curves validation runs are compared with). */
 #include "commands.h"

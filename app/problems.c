@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The problem types a deck can describe (`problem:` at top level) and the deck → materials →
  * problem reading that `run` and `check` share. Each problem type is a module's
  * read/run/free triple; its deck section has the same name as the type. */

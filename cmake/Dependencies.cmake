@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Every dependency comes from a Debian package; a missing one stops configuration and names it.
 include(FindPackageHandleStandardArgs)
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cont.h — the one public header of the continuum library: the 1D Lagrangian "cross" scheme
  * (docs/design.md §4) in planar, cylindrical and spherical geometry.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cont2d.h — the 2D Lagrangian grid of the continuum library (issue 24, docs/continuum2d.md):
  * a staggered logical-rectangle quadrilateral mesh in plane (x–y) or axisymmetric (r–z)
  * geometry with the compatible ("energy-conserving") discretisation of [CBSW98].

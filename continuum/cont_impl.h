@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cont_impl.h — private layout of the continuum grid (for the continuum sources only). */
 #ifndef MSCALE_CONT_IMPL_H
 #define MSCALE_CONT_IMPL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cont_run.h — the deck problem's private state (deck.c reads it, run.c runs it). */
 #ifndef MSCALE_CONT_RUN_H
 #define MSCALE_CONT_RUN_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* deck.c — the `continuum:` deck section (docs/input-continuum.md) → cont_setup + run options.
  * Every problem is recorded with FILE:LINE:COL; reading continues after an error so that
  * `mscale check` reports all of them. */

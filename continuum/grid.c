@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid.c — building the grid from layers, its accessors, the energy budget and coupling hooks. */
 #include "cont_impl.h"
 

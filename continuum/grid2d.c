@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid2d.c — the 2D staggered Lagrangian quad grid with the compatible discretisation
  * ([CBSW98], docs/continuum2d.md): the corner forces, the boundary conditions, the zone update
  * and the time step. Public API in cont2d.h; set-up, tag lines and queries: grid2d_setup.c.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid2d_deck.c — the `grid2d` deck problem: read the section, build the 2D grid, run it with
  * HDF5 + XDMF snapshots (docs/continuum2d.md §8). */
 #include "cont2d.h"

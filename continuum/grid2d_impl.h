@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid2d_impl.h — private to the 2D grid (grid2d.c, the scheme; grid2d_setup.c, set-up and
  * queries): the grid's state, the zone geometry both use, and the scheme's passes that set-up
  * calls. Not for use outside continuum/.

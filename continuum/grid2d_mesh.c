@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid2d_mesh.c — logical-rectangle mesh builders for the 2D grid (cont2d.h). */
 #include "cont2d.h"
 

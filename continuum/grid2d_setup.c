@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* grid2d_setup.c — set-up and teardown of the 2D grid (node masses, boundary normals, the
  * first state and time step), its tag lines, and what callers read of it (cont2d.h). The
  * scheme itself: grid2d.c.

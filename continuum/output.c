@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* output.c — profiles (HDF5 + XDMF + CSV) and tagged-node histories (CSV + HDF5). All files
  * go through the atomic writers of core, so an interrupted run leaves no truncated file. */
 #include "cont_run.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* run.c — running a continuum deck: the time loop with output events, the x–t diagram data,
  * the energy/momentum balance in the log and the instability guard. */
 #include "cont_run.h"

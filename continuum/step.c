@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* step.c — one time step of the 1D Lagrangian cross scheme (docs/design.md §4), as phase functions
  * named verb + quantity + where (LULESH style): cont_calc_predicted_velocity_for_nodes,
  * cont_calc_half_step_for_cells, cont_calc_velocity_and_position_for_nodes,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* tags.c — tagged nodes: x(t), u(t) of a node and p, ρ of its two cells at every step.
  *
  * The predictor–corrector step leaves positions, velocities and cell states at the same time

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Atomic files: write "<path>.part", rename to <path> when complete. */
 #include "core.h"
 

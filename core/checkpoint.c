@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Checkpoint files shared by the restartable problems (docs/mpi.md, "Checkpoint/restart").
  *
  * A checkpoint is an HDF5 file written collectively (every rank adds its own segment of the

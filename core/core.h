@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* core.h — the one public header of mscale's core library.
  *
  * The core is what every physics folder stands on and nothing physical lives here:

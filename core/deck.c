@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Deck tree: libyaml's document model copied into nodes that remember their position, their
  * path in the deck (for messages) and which keys a reader asked for (for unknown-key reports).
  */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Private layout of the deck tree (core/deck.c, core/deck_read.c). */
 #ifndef MSCALE_DECK_IMPL_H
 #define MSCALE_DECK_IMPL_H

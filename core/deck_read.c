@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Typed deck readers: look a key up, convert, range-check, convert units, record every error
  * with FILE:LINE:COL, and write defaults back into the tree for the resolved deck. */
 #include "core.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* HDF5 output (temporary name + rename) and input for post-processing. */
 #include "core.h"
 #include "par_mpi.h"

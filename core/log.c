@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Logging, the run context and output directories. */
 #include "core.h"
 

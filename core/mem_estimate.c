@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Check-time memory estimate (core.h, "Check-time memory estimate"). */
 #include "core.h"
 

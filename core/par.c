@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The MPI layer: the only file of mscale that names MPI_COMM_WORLD. Every collective here is a
  * thin typed wrapper; physics code calls these and never MPI directly. The communicator is the
  * run context's (ms_ctx.comm, made by par_init); core/h5io.c reaches it through

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Progress: an updating line with ETA on a terminal, plain log lines otherwise. */
 #include "core.h"
 

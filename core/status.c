@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Status codes (one list) and the exit-code mapping of docs/design.md §8; checked allocation. */
 #include "core.h"
 

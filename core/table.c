@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Numeric tables (EOS tables, histories): CSV or whitespace separated, '#' comments, an
  * optional header line of column names. Every problem is reported as FILE:LINE. */
 #include "core.h"

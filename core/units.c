@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Units (docs/design.md §2). Internal system g, cm, 10 µs; decks may be written in SI. */
 #include "core.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* XDMF sidecar so ParaView opens the HDF5 snapshots (Polyvertex topology). */
 #include "core.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled.c — the `coupled` problem (docs/input-coupled.md, docs/coupling.md §6): a Lagrangian
  * grid computes the loading, a particle region represents the sample near its free surface,
  * fragments are found in it, feel the gas's drag and are transported to a detector. The drive

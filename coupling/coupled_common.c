@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_common.c — what the one-way and the two-way drive share: the streamed CSV files
  * (rank 0 writes), the particle region with its fragment search and drag buffers, the drag kick,
  * the transport of the ejecta to the detector, snapshots, and the handling of an unstable step. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_deck.c — the `coupled` deck section (docs/input-coupled.md): the grid (read twice:
  * one copy runs first through the continuum problem's loop, the other supplies the gas during
  * the particle phase), the drive, the particle region (its model's own reader,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_grid.c — the coupled problem's adapter over the grid (cont.h): the gas state the
  * fragments feel, the momentum and energy they return to it, the tag histories shared over the
  * ranks, and the check that the replicated grids stayed equal. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_impl.h — private to the `coupled` problem's files (docs/input-coupled.md,
  * docs/coupling.md §6):
  *   coupled_deck.c     the deck section and its consistency with the grid;

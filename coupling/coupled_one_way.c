@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_one_way.c — the one-way drive of docs/design.md §6 (docs/coupling.md §6). The grid
  * runs first through the continuum problem's own loop (its outputs land in the run directory);
  * the velocity history U(t) of the drive tag then drives the piston of the particle region that

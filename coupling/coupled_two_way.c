@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* coupled_two_way.c — two-way coupling (docs/coupling.md §6): the grid ends at the interface
  * node and runs through the continuum problem's own loop with hooks before and after each of
  * its steps; the particle region beyond the node sub-cycles over each grid step and hands the

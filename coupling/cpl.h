@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cpl.h — the one public header of the coupling library (docs/design.md §6, docs/coupling.md).
  *
  * What lives here:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cpl_checkpoint.c — checkpoint/restart of the `coupled` run (docs/coupling.md §7b).
  *
  * OUTDIR/coupled_checkpoint.h5 (core/checkpoint.c: atomic, deck hash, rank count) holds

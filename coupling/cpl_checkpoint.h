@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cpl_checkpoint.h — private to coupling/: checkpoint/restart of the `coupled` run, one-way and
  * two-way (coupling/cpl_checkpoint.c, docs/coupling.md "Checkpoint/restart"). */
 #ifndef MSCALE_CPL_CHECKPOINT_H

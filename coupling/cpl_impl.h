@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cpl_impl.h — internal helpers shared by the coupling sources (not part of the API). */
 #ifndef MSCALE_CPL_IMPL_H
 #define MSCALE_CPL_IMPL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Gas drag on fragments (docs/design.md §6): Schiller–Naumann, as in the Logos multiphase paper
  * ([Logos]: C_D = 24/Re (1 + 0.15 Re^0.687) for Re < 1000, 0.44 above; τ_p = ρ_p d²/(18 μ)). */
 #include "cpl_impl.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Fragment spectra and the distributions ejecta experiments report (docs/design.md §6):
  * N(g), per-fragment table, cumulative N(≥m), mass/diameter histograms, ejected mass vs
  * velocity. Every table is a CSV with core's units header. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Fragments: bonds |r_i − r_k| ≤ b·a ([Davydov] §4.2, docs/design.md §6), connected components by
  * union–find, per-fragment statistics. docs/coupling.md describes the algorithm. */
 #define _GNU_SOURCE /* qsort_r */

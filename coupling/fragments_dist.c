@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* fragments_dist.c — fragments of particles distributed over MPI ranks (docs/mpi.md
  * "Fragments on MPI ranks"). MPI only through core's par_* wrappers.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Piston velocity from a tagged grid node's history, preserving the node's displacement
  * (the one-way drive of docs/design.md §6; formula in cpl.h and docs/coupling.md). */
 #include "cpl_impl.h"

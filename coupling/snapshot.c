@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Particle snapshots with fragment ids (docs/coupling.md §2): the datasets cd_write_snapshot
  * writes (x, v, mass, gid when the view has gids) plus the fragment of each particle, as int64
  * (/particles/fragment) and as a double copy for the XDMF sidecar (ParaView colours by it), and

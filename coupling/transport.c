@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Transport of detached fragments as point masses through the gas to a detector plane
  * (docs/design.md §6). Each fragment obeys
  *   dx/dt = v,   dv/dt = F_drag(x, v, t)/m,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos.c — dispatch through the ops table, the common domain policy, and numerical helpers
  * shared by the EOS kinds (cubic Hermite curves, isentrope tabulation, Brent's method). */
 #include "eos_impl.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos.h — equations of state, materials, Hugoniots and mixtures (docs/design.md §3).
  *
  * Internal units (docs/design.md §2): ρ g/cm³, e kJ/g, P GPa, c km/s.

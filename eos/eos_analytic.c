@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos_analytic.c — the analytic EOS kinds (docs/design.md §3, docs/eos.md):
  *   Mie–Grüneisen cold-curve form, Mie–Grüneisen linear Us–up form, ideal gas, linear elastic. */
 #include "eos_impl.h"

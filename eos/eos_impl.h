@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos_impl.h — private to eos/: the operations table behind eos_t and shared helpers.
  *
  * Every EOS kind fills an eos_ops table. The public functions in eos.c dispatch through it and

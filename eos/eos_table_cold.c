@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos_table_cold.c — tabulated cold curve in the format of Table 1 of [Davydov] (docs/eos.md):
  * columns delta, rho [g/cm³], eps_x [kJ/g], P_x [GPa]; Mie–Grüneisen thermal part around it.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* eos_table_full.c — a full EOS P(ρ, e) on a rectangular (ρ, e) grid (docs/eos.md).
  *
  * Interpolation is bilinear in (ρ, e) for P and for c² (given in the file, or from centred

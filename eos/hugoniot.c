@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* hugoniot.c — Rankine–Hugoniot states for any EOS (docs/design.md §3) and the Kuropatenko mixture
  * rule ([Davydov] §1.2). docs/eos.md describes the method.
  *

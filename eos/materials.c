@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* materials.c — the deck's `materials:` list (and optional `mixtures:` list), docs/eos.md.
  *
  * Every value goes through the dk_read_* readers with its dimension, so `units: si` decks are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* textfile.c — plain numeric text tables with line numbers, for EOS data files
  * (format in eos_impl.h and docs/eos.md). Every problem is reported as FILE:LINE:COL. */
 

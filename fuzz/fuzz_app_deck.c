@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: the whole deck path of `mscale check` (app_deck_read in app/problems.c:
  * parser, units, problem type, materials and EOS readers including the table files they name,
  * the problem section, unknown keys). The input is written to a scratch file in $TMPDIR and

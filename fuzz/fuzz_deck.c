@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: the deck parser (dk_load_string) and the typed readers.
  *
  * The input is the deck text. After parsing, a generic walk visits every mapping and list and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: the EOS table readers on text files — eos_create_table_cold (Table-1
  * format) and eos_create_table_full (text (rho, e) grid), docs/eos.md. Byte 0 chooses the
  * reader and the Grüneisen options, the rest is the file. A table that is accepted is then

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: the HDF5 readers (ms_h5_open_read, ms_h5_exists, ms_h5_read_doubles) and
  * the HDF5 form of the full EOS table (eos_create_table_full on a .h5 file).
  *

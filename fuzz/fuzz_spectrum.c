@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: `mscale spectrum SNAPSHOT.h5` (app/cmd_spectrum.c: the snapshot reader,
  * attributes, the fragment search of coupling/ and the CSV writer).
  *

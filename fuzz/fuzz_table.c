@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* libFuzzer harness: the numeric table reader ms_read_table (histories, generic tables).
  * Byte 0 chooses the minimum column count, the rest is the file. Oracles: no sanitizer report;
  * on success at least one row, at least min_cols columns, all values finite; on failure at

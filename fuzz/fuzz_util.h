@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Shared helpers of the libFuzzer harnesses (fuzz/fuzz_*.c): a scratch file that each input is
  * written to (readers that take a path), and the oracle every harness applies to the error
  * list: each message names the file it is about, positions are positive, nothing is empty. */

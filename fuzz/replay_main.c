@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A main() for the fuzz harnesses without libFuzzer: runs LLVMFuzzerTestOneInput once on each
  * file named on the command line (directories: on each file inside, sorted). The regression
  * tests (tests/reliability/CMakeLists.txt) build every harness with this main under gcc and

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # Run one libFuzzer harness at low priority, one process, for a fixed time (docs/reliability.md).
 # FUZZ_TIMEOUT (s, default 10): per-input limit; libFuzzer measures wall time, so on a loaded
 # machine at nice 19 raise it (60) or starved inputs are reported as hangs.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl.h — what the particle models share (docs/developing.md): the structure-of-arrays
  * particle state, the counter-based random generator and the symplectic RKN integrators.
  * Cluster dynamics (particles/cd/cd.h) and the discrete model (particles/dm/dm.h) build on it. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_partition.c — the one METIS call of mscale (ptl.h): cluster dynamics partitions its
  * coarse-cell graph with it (cd/cd_partition.c), the discrete model its bond graph
  * (dm/dm_par.c). */

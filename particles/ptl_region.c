@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_region.c — the public calls of ptl_region.h, dispatched to the region's model. */
 #include "ptl_region_impl.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_region.h — the particle-region interface (docs/design.md §6, docs/developing.md "The
  * particle-region interface"): what the coupling needs from a particle model, and nothing of
  * its internals. A region is a slab of the sample between a driven face at x_drive and a free

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_region_impl.h — for the implementations of ptl_region.h only (cd_region.c): the model's
  * table of functions, and the first member of a region and of its parameters. ptl_region.c
  * dispatches the public calls through it. */

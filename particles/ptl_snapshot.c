@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c), of
  * the discrete model (dm/dm_output.c) and of the coupled problem's fragment snapshots
  * (coupling/snapshot.c): positions, velocities and masses as [n][3] and [n] datasets, the

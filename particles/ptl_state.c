@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* ptl_state.c — structure-of-arrays particle storage, sized once (ptl.h). */
 #include "ptl.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* regions.c — the particle models that implement ptl_region.h, by their deck names. */
 #include "cd.h"
 #include "dm.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* rkn.c — explicit symplectic Runge–Kutta–Nyström integrators (docs/design.md §5.2, [Sofronov] §2).
  *
  * Coefficients: Verlet α = ½, γ = 1. SIA4 (Candy & Rozmus 1991) as printed in [Sofronov].

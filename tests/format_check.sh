@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Fails if a tracked C file is not formatted as .clang-format says (docs/developing.md).
 # Usage: tests/format_check.sh SOURCE_DIR
 set -euo pipefail

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Point sets for the fragment-finder tests (tests/coupling/test_fragments.c,
  * tests/mpi/test_frag_mpi.c): structure-of-arrays positions, velocities, masses, skip flags and
  * gids, and the finder's view of them. */

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Fails if a library source includes a header it may not see (docs/developing.md, "Layout").
 
 Each library may include its own headers and the public headers of the libraries below it;
@@ -26,12 +27,15 @@ LIBS = {
 # The implementations of ptl_region.h see its table of functions; regions.c names them.
 EXTRA = {"ptl_impl": {"ptl_region_impl.h"}}
 FILE_LIBS = {"particles/regions.c": ["core", "eos", "ptl", "cd", "dm"]}
+# Headers the build generates (cmake/GitVersion.cmake, the configured build facts): the app's.
+GENERATED = {"mscale_build_config.h": "app", "mscale_git.h": "app"}
 
 root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".")
 own = {}  # header name -> library
 for lib, (folder, _, _) in LIBS.items():
     for h in (root / folder).glob("*.h"):
         own[h.name] = lib
+own.update(GENERATED)
 for lib, hs in EXTRA.items():
     for h in hs:
         own[h] = lib

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # include_check.py must catch a violation: a copy of the library folders in which the coupled
 # problem includes cluster dynamics' header (and, separately, continuum's private one).
 set -euo pipefail

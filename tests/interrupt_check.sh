@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Interrupts and --continue (docs/reliability.md "Interrupts"):
 #  1. the deck runs to its end (checkpoints on) -> full/;
 #  2. the same run -> cut/, with run_info.yaml saying `status: running` while it runs; SIGTERM

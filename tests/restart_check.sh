@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Checkpoint/restart of a deck through `mscale run` (docs/mpi.md, "Checkpoint/restart"):
 #  1. the deck runs to its end (checkpoints on) -> full/;
 #  2. if HALF_SED is not "-": the deck edited by HALF_SED (an earlier end) runs -> half/, and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Small helpers shared by the cmocka tests (tests/<module>/ include it as "test_util.h"). */
 #ifndef MSCALE_TEST_UTIL_H
 #define MSCALE_TEST_UTIL_H

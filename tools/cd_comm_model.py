@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Communication-volume model of distributed cluster dynamics for 10^3-10^5 ranks
 (docs/benchmarks.md "CD communication model").
 

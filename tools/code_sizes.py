@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Library source files over a line budget and functions over a length budget (docs/developing.md:
 "no library source file over ~800 lines, no function over ~150 lines").
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Runs a fixed list of decks with two mscale binaries and compares every output: CSV and XDMF
 # byte for byte, HDF5 by value (h5diff, no tolerance), deck.resolved.yaml without the defaults the
 # readers filled in. The evidence for a change that must keep results bitwise equal

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plots of a `coupled` run (docs/coupling.md): the drive and the particle snapshots.
 
 Usage: /usr/bin/python3 tools/plot_coupled.py RUNDIR        # PNGs into RUNDIR/plots/

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plots of a `cluster_dynamics` or `discrete_model` run: energies and binned profiles.
 
 Usage: /usr/bin/python3 tools/plot_particles.py RUNDIR        # PNGs into RUNDIR/plots/

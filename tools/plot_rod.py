@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plots for the Hamiltonian discrete model's paper-000 tests (docs/validation.md).
 
   plot_rod.py rod OUTDIR [OUTDIR2 ...] -o rod.png [--cross HISTORY.csv[:LABEL] ...]

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Turn an mscale run directory into PNG plots (written next to the data, under plots/).
 
 Usage: /usr/bin/python3 tools/plot_run.py OUTDIR

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Figures of the Rz80/Rz20 comparison (docs/coupling.md §9, docs/validation.md).
 
     /usr/bin/python3 tools/plot_rz.py -o docs/img/coupling-rz OUT1:LABEL1 OUT2:LABEL2 ...

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Plot fragment spectra, size/velocity distributions and detector arrivals (docs/coupling.md).
 
 Usage:

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """x–t diagram of a continuum run (density or pressure on the moving Lagrangian grid).
 
 Usage:  /usr/bin/python3 tools/plot_xt.py OUTDIR [--quantity density|pressure] [--log]

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # Valgrind memcheck of every `unit`-labelled test (docs/reliability.md §6).
 #   tools/valgrind_unit.sh [BUILD_DIR [CTEST_ARGS...]]    default BUILD_DIR: build-valgrind
 # Builds without -march=native (valgrind does not know every AVX-512 instruction) and with

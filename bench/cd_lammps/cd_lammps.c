@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_lammps.c — problems A (bulk) and B (piston) of the LAMMPS anchor, reproduced exactly
  * (cd_lammps.md: same particles and order, splitmix64 velocities, potential, R_c = 1.2 r0 hard
  * cutoff, skin 0.1 r0, Δt = 0.02 r0/c0, steps), timed like LAMMPS's "Loop time".

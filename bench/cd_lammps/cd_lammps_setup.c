@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_lammps_setup.c — the LAMMPS anchor's problems as a cd_sim (cd_lammps_setup.h). */
 #include "cd_lammps_setup.h"
 

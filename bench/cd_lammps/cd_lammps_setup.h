@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_lammps_setup.h — problems A (bulk) and B (piston) of the LAMMPS anchor
  * (bench/problems/cd_lammps.md) as a cd_sim, shared by bench/cd_lammps and bench/cd_mpi. */
 #ifndef CD_LAMMPS_SETUP_H

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Time mscale's cluster dynamics against LAMMPS on problems A and B of
 # bench/problems/cd_lammps.md, alternating the two codes in one session (docs/benchmarks.md).
 #   bench/cd_lammps/run_compare.sh BUILD_DIR LAMMPS_DIR [REPS] [CASES] [THREADS]

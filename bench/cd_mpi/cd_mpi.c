@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_mpi.c — strong scaling of cluster dynamics over MPI ranks (docs/mpi.md, benchmarks.md):
  * problem A (256,000 particles, periodic bulk) or B (320,000, piston) of the LAMMPS anchor,
  * built by bench/cd_lammps's set-up, run on as many ranks as mpirun gives (1 rank: the serial

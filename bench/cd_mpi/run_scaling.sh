@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Strong scaling 1 -> 2 ranks of cd_mpi_bench (docs/benchmarks.md): REPS interleaved rounds of
 # {1 rank, 2 ranks auto (the decks' default), 2 ranks METIS, 2 ranks slab}; prints each run's
 # SCALING line (and the per-rank lines of the 2-rank runs) and the medians:

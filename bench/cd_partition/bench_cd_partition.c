@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Partition quality of the cluster-dynamics coarse-cell graph (docs/benchmarks.md "CD
  * partition"): METIS vs plain slabs (cd_partition_cells).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bench_cont — cell-steps per second of the continuum step on a large planar Mie–Grüneisen
  * problem (issue 3: 10⁶ cells, aim ≥ 1e8 cell-steps/s on one core).
  *

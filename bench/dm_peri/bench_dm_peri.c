@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* bench_dm_peri — particle-steps per second of the Hamiltonian discrete model on the benchmark
  * of bench/problems/dm_lammps.md (simple cubic 50³, horizon 3.015 h, Verlet, 300 steps).
  *

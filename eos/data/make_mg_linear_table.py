@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Write a full (rho, e) EOS table in mscale's text format (docs/eos.md) sampled from the
 Mie-Grueneisen linear Us-up form: P = P_H + G0 rho0 (e - e_H), eta = 1 - rho0/rho,
 P_H = rho0 c0^2 eta / (1 - s eta)^2, e_H = P_H eta / (2 rho0)   (docs/design.md §3).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd.h — the public header of the cluster-dynamics library (particles/cd/).
  *
  * Cluster dynamics ([Davydov], docs/design.md §5.1): particles ("clusters") of size r0 on a

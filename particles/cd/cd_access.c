@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_access.c — what callers may read of a cd_sim (cd.h). */
 #include "cd_impl.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_checkpoint.c — the cluster-dynamics state in a checkpoint file (docs/mpi.md).
  *
  * Group /cd of a checkpoint (core/checkpoint.c makes the file):

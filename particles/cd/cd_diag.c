@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_diag.c — binned profiles, shock-front tracking and HDF5/XDMF particle snapshots.
  *
  * Profile stress (compression positive, i.e. the pressure tensor; Cauchy stress = −P):

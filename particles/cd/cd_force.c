@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_force.c — pair forces, energies, virials and the relative-velocity damping.
  *
  * Pair term ([Davydov] eqs. 1–2, tabulated in cd_potential.c): for a pair at d = x_i − x_j,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_force_fit.c — the fit kernel, scalar: the readable reference of cd_force_fit_avx512.c
  * (cd_force_fit.h), and the kernel of builds without AVX-512. */
 #include "cd_force_fit.h"

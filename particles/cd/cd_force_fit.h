@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_force_fit.h — private to the fit kernel of cd_force.c (full lists, F/r from the fit of
  * cd_potential.c, forces only; the benchmark's model, bench/cd_lammps).
  *

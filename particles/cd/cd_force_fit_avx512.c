@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_force_fit_avx512.c — the fit kernel in AVX-512 (cd_force_fit.h): per lane the operations
  * of the scalar reference cd_force_fit.c, in the same order. */
 #include "cd_force_fit.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_impl.h — private to the cluster-dynamics files of particles/: the neighbour-list layout
  * shared by neighbour.c (build), cd_force.c (kernels) and cd_sim.c (time step).
  *

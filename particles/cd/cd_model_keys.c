@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_model_keys.c — the model keys of a cluster-dynamics section (docs/input-cd.md), read the
  * same way for the `cluster_dynamics` problem and for the coupled problem's particle region
  * (docs/input-coupled.md "particles"). The region's older key names are accepted as aliases,

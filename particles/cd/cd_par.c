@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_par.c — cluster dynamics on MPI ranks: coarse-cell ownership, migration, ghosts
  * (docs/mpi.md, "Cluster dynamics on MPI ranks").
  *

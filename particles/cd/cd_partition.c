@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_partition.c — partition of the cluster-dynamics coarse-cell grid over MPI ranks
  * (docs/mpi.md "Partitioning the cluster-dynamics region").
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_potential.c — pair potentials from an EOS cold curve ([Davydov] eqs. 1–2, docs/design.md §5.1).
  *
  * fcc (12 neighbours, 6 bonds per particle, volume per particle r0³/√2):

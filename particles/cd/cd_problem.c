@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_problem.c — the `cluster_dynamics` deck problem (docs/input-cd.md): read and check the
  * section, fill the regions with a lattice, run, and write energy balance, profiles, front
  * positions and HDF5/XDMF snapshots into the output directory.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_region.c — cluster dynamics as a particle region of the coupled problem (ptl_region.h,
  * docs/input-coupled.md "particles"): the deck section, the lattice slab with its surface
  * profile, piston and surface layers, and the interface's calls on a cd_sim.

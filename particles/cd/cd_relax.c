@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_relax.c — what a cluster-dynamics run measures of its sample (the energy balance, the
  * virial stress, the free-surface velocity) and the relaxation stage before the run, which
  * drives the sample to rest and its mean stress toward zero with those measurements. The time

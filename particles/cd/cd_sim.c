@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_sim.c — the cluster-dynamics run: set-up, time step, piston, walls. The energy balance,
  * the virial stress and the relaxation stage are cd_relax.c's.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* lattice.c — perfect close-packed lattices (fcc in 3D, triangular in 2D). */
 #include "cd.h"
 

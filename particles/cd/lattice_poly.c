@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* lattice_poly.c — Voronoi polycrystal packings ([Davydov] §2, docs/design.md §5.1).
  *
  * Grains: `ngrains` seed points uniform in the box; grain g owns the points nearer to its seed

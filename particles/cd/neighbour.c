@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* neighbour.c — link cells and Verlet half lists with a skin (layout in cd_impl.h).
  *
  * A list built at time t_b holds every pair closer than r_list = R_c + skin. It stays valid

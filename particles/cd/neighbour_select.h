@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* neighbour_select.h — private to neighbour.c: the candidate selection of the list builder.
  *
  * select_range: the candidates at sorted positions q0 .. q1 − 1 inside r_list of (xi, yi, zi),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* neighbour_select_simd.h — the list builder's candidate selection (neighbour_select.h) in
  * AVX-512 (sixteen candidates per instruction) and AVX2 (eight); included by
  * neighbour_select.h only, which documents the contract and holds the scalar reference. Both

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm.h — the public header of the discrete-model library (particles/dm/). */
 #ifndef MSCALE_DM_H
 #define MSCALE_DM_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_analysis.c — the discrete-model problem's comparisons with the exact solutions of
  * [Sofronov] §5 (dm_exact.c): rod (probe history), contact (σ_xx profile), sphere (radial w
  * and u); the results go into the run summary. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_checkpoint.c — checkpoint and restart of the discrete-model problem (docs/mpi.md): the
  * global state in particle order (the same file for every rank count) and the diagnostics
  * recorded so far, so that a restarted run continues bit for bit. */

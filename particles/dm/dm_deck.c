@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_deck.c — the deck reader of the problem type `discrete_model` (docs/input-dm.md): every
  * key is checked and located (FILE:LINE:COL) before anything runs. */
 #include "dm_problem_impl.h"

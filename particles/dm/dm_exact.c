@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_exact.c — exact reference solutions of [Sofronov] §5 (units g, cm, 10 µs). */
 #include "dm.h"
 

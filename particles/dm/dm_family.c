@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_family.c — families of the Hamiltonian discrete model ([Sofronov] §1, §3; docs/design.md §5.2).
  *
  * N_i = {k ≠ i : |X_k − X_i| < δ_r} in the reference configuration, built once with a cell

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_finite.c — the discrete model at finite deformation (docs/particles-dm.md, "Finite
  * deformation"): least-squares F over the reference family, pressure from the material's EOS,
  * a hypoelastic (Jaumann) deviator with J2 radial return, a bulk viscosity, the first

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_impl.h — internals shared by the discrete-model sources (not part of the public API). */
 #ifndef MSCALE_DM_IMPL_H
 #define MSCALE_DM_IMPL_H

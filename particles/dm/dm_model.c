@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_model.c — strain, stress, energy and the exact Hamiltonian force of the discrete model
  * ([Sofronov] §1 with the correction of docs/design.md §5.2).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_output.c — the files of the discrete-model problem: profiles (CSV), particle snapshots
  * (HDF5 + XDMF through ptl_write_snapshot), the sphere's radial profile, the probe and energy
  * histories and the run summary; and the report of an unstable step. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_par.c — the discrete model on MPI ranks (docs/mpi.md).
  *
  * The bond graph of the Hamiltonian model is fixed, so it is partitioned once, at set-up, with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_problem.c — the deck problem type `discrete_model` (docs/input-dm.md): builds a lattice of
  * particles in a box with per-face boundaries, material layers, initial data of [Sofronov] §5
  * or random velocities (benchmark), an optional spherical displacement source, integrates with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_problem_finite.c — the run of the discrete-model problem with response: eos: the
  * finite-deformation model (dm_finite.c), on one rank. */
 #include "dm_problem_impl.h"

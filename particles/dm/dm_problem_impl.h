@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_problem_impl.h — internals of the deck problem type `discrete_model` (docs/input-dm.md),
  * shared by its sources: dm_deck.c reads the deck, dm_problem.c sets up and runs the linear
  * model, dm_problem_finite.c runs the finite-deformation one (response: eos), dm_output.c

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_region.c — the finite-deformation discrete model (dm_finite.c) as a particle region of the
  * coupled problem (ptl_region.h, docs/input-coupled.md "particles", docs/particles-dm.md
  * "The discrete model as the coupled problem's particle region"): the deck section, a

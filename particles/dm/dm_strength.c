@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_strength.c — the Steinberg–Guinan strength model for the finite-deformation discrete model
  * (docs/particles-dm.md, "Strength: Steinberg–Guinan"; [SCG1980] for the model, [Steinberg1996]
  * for the parameter sets): shear modulus and yield stress of a particle from its density,

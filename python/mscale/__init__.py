@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """mscale's outputs in Python: a run directory as numpy arrays (or pandas DataFrames) with units.
 
 Use it from the repository (or an install's ``share/mscale/python``) with Debian's python::

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``PYTHONPATH=python /usr/bin/python3 -m mscale RUNDIR...``: what a run directory holds, as
 the package reads it (problem, status, every table with its rows and units, the snapshots)."""
 import sys

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """A run directory of ``mscale run DECK -o DIR`` as Python objects.
 
 >>> run = Run("out/default")

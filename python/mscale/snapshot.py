@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Particle snapshots: the HDF5 files of the particle problems (``particles_NNNN.h5`` of the
 coupled problem, ``cd_snap_NNNNNN.h5`` of cluster dynamics, the discrete model's snapshots),
 read with h5py, and their extended-XYZ export.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Tables: mscale's CSV files (and HDF5 groups of equal-length datasets) as numpy structured
 arrays with units, convertible to pandas DataFrames.
 

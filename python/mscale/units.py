@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Units as mscale writes them, and the few conversions the plots need.
 
 Every mscale output names its units: a CSV table in its ``# units: name [unit], ...`` line, an

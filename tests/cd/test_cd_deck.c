@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The `cluster_dynamics` deck section (docs/input-cd.md): a good deck reads and runs; bad input
  * gives clear deck errors with FILE:LINE:COL — overlapping regions of different materials,
  * fewer than 2 lattice periods across a periodic dimension, R_c not above the nearest-neighbour

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Dusting check ([Davydov] §3, Figs. 18–20): a plane shock (piston u = 2 km/s, R_c = 1.1 r0)
  * reaches the smooth free surface of an aluminium slab with a periodic cross-section of two
  * lattice periods. Without damping, the anharmonic lattice throws single clusters off the

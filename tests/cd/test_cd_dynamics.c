@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Cluster-dynamics time stepping (docs/particles-cd.md): NVE energy conservation, the energy
  * balance with relative-velocity damping (eq. 6 of [Davydov]), momentum conservation, forces
  * from the Verlet lists vs brute force after many rebuilds, results independent of the number

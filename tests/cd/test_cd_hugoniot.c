@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Hugoniot validation of cluster dynamics ([Davydov] §1.1, docs/design.md §5.1): a piston driven at
  * up into an fcc aluminium slab (shock along [001] unless --orient; periodic cross-section, free
  * far end). Cold curves: Table 1 of [Davydov] (OSA, eos/data/al_osa_cold.txt) and the

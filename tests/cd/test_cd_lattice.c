@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Homogeneous compression/tension of perfect lattices (docs/design.md §5.1): the virial stress of a
  * uniformly strained fcc (3D) or triangular (2D) lattice must equal the input cold curve
  * P_x(δ), for δ in [0.6, 2], with the analytic Mie–Grüneisen cold curve and with Table 1's

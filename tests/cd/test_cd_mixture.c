@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Heterogeneous material ([Davydov] §1.2): B4C and h-BN grains (cold-curve Mie–Grüneisen
  * parameters of the paper), shocked by a piston; the measured D(u) is compared with the
  * Kuropatenko mixture rule 1/(D − u) = Σ α_i/(D_i − u_i) (eos_kuropatenko). Grains: Voronoi

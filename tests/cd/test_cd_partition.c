@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* cd_partition_cells (particles/cd_partition.c): slab balance on known weights, METIS against
  * slabs, determinism, the periodic wrap of the 26-neighbour stencil, and the reported
  * imbalance / edge cut / halo cells against a brute-force count over all cell pairs. */

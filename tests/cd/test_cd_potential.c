@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Cluster-dynamics pair potentials (docs/design.md §5.1, [Davydov] eqs. 1–2, Table 1):
  * tabulated force vs the analytic formula, force = −dE/dr of the tabulated energy, Table 1's
  * E and f columns from its ε_x and P_x columns, the 2D potential, the mixing rule. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Cluster dynamics behind the particle-region interface (ptl_region.h, particles/cd/cd_region.c):
  *   - the coupled problem's `particles:` section with the cluster_dynamics key names builds the
  *     same region (particles, time step, geometry) as with the old names, which are accepted as

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* riemann_exact.h — exact solution of the Riemann problem for an ideal gas (Toro, "Riemann
  * Solvers and Numerical Methods for Fluid Dynamics", ch. 4), written for the continuum tests. */
 #ifndef CONT_TEST_RIEMANN_EXACT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Conservation over 10⁴ steps (issue 3): total energy Σ(m e + ½ m u²) minus the work done by
  * the boundaries and by coupling forces, and (planar) momentum minus boundary impulse, stay
  * constant to round-off. Shocks, contacts, walls, free surfaces, pistons, pressure pulses and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Unit checks of the continuum grid's pieces: time functions, grading, energy from pressure,
  * sampling and nearest node, rest and uniform-motion states in every geometry. */
 #include <math.h>

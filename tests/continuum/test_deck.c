@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The `continuum:` deck section: bad input gives located deck errors (zero cells, overlapping
  * layers, non-monotone history file, CFL >= 1, unknown material), a good deck runs and writes
  * its outputs, and a run that breaks the time-step floor stops with MS_ERR_UNSTABLE, a message

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Noh implosion (γ = 5/3, ρ0 = 1, u0 = −1, p0 = 0) in planar, cylindrical and spherical
  * geometry: post-shock density (γ+1)/(γ−1))^d = 4, 16, 64 and shock speed 1/3 (issue 3). */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Symmetric plate impact, Al on Al at 2 km/s, Mie–Grüneisen Us–up EOS (issue 3): particle
  * velocity v/2 behind both shocks, shock pressure and speed within 1 % of the Hugoniot tool
  * (eos_hugoniot), and the tagged contact node's history consistent with the grid. */

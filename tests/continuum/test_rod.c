@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The rod problem of [Sofronov] §5.1/§6.1: linear-elastic rod 0 < X < 2L (L = 1, ρ = 7.85,
  * E = 200, ν = 0), triangular initial displacement w = εX / ε(2L − X), ε = 1e-3, fixed ends,
  * run to t = 250 L/c. The amplitude of w(L/2, t) over 240 < tc/L < 250 is compared with the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Second-order accuracy on smooth flow, and of the tagged-node histories: the smooth rod of
  * [Sofronov] §5.1 (standing wave w = εL sin(πX/2L) cos(πct/2L), fixed ends), without artificial
  * viscosity. The history x(t), u(t) of the node at X = L/2 is compared with the exact solution

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Sod shock tube (ideal gas γ = 1.4) against the exact Riemann solution: L1 errors of ρ, u, p
  * at 100, 200, 400, 800 cells and the measured convergence order (issue 3). */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Zone-steps per second of the 2D grid (issue 24): an aluminium block (Mie–Grüneisen, the
  * repository's `al`, docs/design.md §3) of N × N zones hit by a 1 km/s piston, walls elsewhere,
  * K steps. Usage: c2d_speed [N=1000] [K=20] [threads=1] [limiter=1]. Not a test: prints one line. */

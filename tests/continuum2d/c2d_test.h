@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Shared helpers of the 2D-grid tests (tests/continuum2d). */
 #ifndef C2D_TEST_H
 #define C2D_TEST_H

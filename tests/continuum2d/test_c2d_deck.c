@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The `grid2d` deck problem (issue 24): a deck builds the grid; a tangled mesh (skew too large),
  * an inverted mesh (x range reversed) and r < 0 in r–z are located deck errors at the mesh entry
  * (FILE:LINE:COL), reported before anything runs. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* 2D grid unit tests (issue 24): a uniform state at rest stays at rest to round-off in x–y and
  * r–z (corner forces of a uniform pressure cancel at every interior node); a random-velocity
  * state conserves internal + kinetic energy to 1e-12 (closed box); bad meshes are refused with

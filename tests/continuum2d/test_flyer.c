@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Finite flyer on a wide target in r–z (issue 24): an aluminium flyer (radius 1 cm, 0.4 cm
  * thick, 2 km/s) on an aluminium target (radius 1.5 cm, 1 cm thick), the same Mie–Grüneisen `al`
  * as inputs/eos-materials.yaml (docs/design.md §3). Beside the flyer (r > 1, z > 0) a light ideal

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Noh implosion on a polar mesh (γ = 5/3, ρ0 = 1, u0 = −r̂, p0 ≈ 0), t = 0.6 [Noh]: cylindrical
  * in x–y, post-shock density ((γ+1)/(γ−1))² = 16, spherical in r–z, 64; shock radius t/3 = 0.2
  * (issue 24). */

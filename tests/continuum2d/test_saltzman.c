@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Saltzman piston (Dukowicz & Meltz 1992, [Saltzman]): γ = 5/3 gas at rest, ρ0 = 1, p0 ≈ 0, on the
  * skewed 100 × 10 mesh, piston u = 1 from the left, walls elsewhere; t = 0.6. Exact: plateau
  * density (γ+1)/(γ−1) = 4, shock at x = (4/3) t = 0.8 (issue 24). The run with and without the

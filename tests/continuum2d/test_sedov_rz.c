@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Sedov point blast, spherical, γ = 1.4, in r–z on a polar (spherical-section) mesh: r ≥ 0,
  * z ≥ 0, symmetry at z = 0 and on the axis. E = 0.851072 (whole sphere) in ρ0 = 1 puts the shock
  * at R = (E t²/(α ρ0))^{1/5} = 1 at t = 1 with α = 0.851072 (ξ0 = α^{-1/5} ≈ 1.0328,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Sod shock tube along x on a 2D x–y mesh (γ = 1.4, t = 0.2): every row of zones stays equal to
  * the first (the flow is 1D), the L1 errors against the exact Riemann solution are of the size of
  * the 1D grid's at the same resolution, and total energy is conserved to 1e-12 (issue 24). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Deck reader: positions in messages, every error collected, unknown keys, defaults written
  * back, unit conversion. */
 #include <math.h>

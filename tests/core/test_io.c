@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Output and input helpers: atomic files, tables with FILE:LINE errors, HDF5 round trip. */
 #include <math.h>
 #include <setjmp.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Helpers shared by the coupling tests (include after <cmocka.h>). */
 #ifndef MSCALE_CPL_TEST_H
 #define MSCALE_CPL_TEST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The `coupled` problem end to end (one-way drive, docs/coupling.md §6):
  *  1. symmetric plate impact (Pb on Pb, 0.5 km/s): the grid's U(t) at a node 0.02 cm below the
  *     free surface drives a flat 2D cluster-dynamics slab; the particle free-surface velocity

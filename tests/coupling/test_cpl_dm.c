@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The coupled problem on the finite-deformation discrete model (particles.model:
  * discrete_model, particles/dm/dm_region.c), one-way drive, end to end:
  *  1. symmetric Al plate impact (2 km/s, u_p = 1 km/s, ~16 GPa): the grid's U(t) at a node

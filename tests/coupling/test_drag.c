@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Drag and transport: Schiller–Naumann coefficients, the force formula, a single fragment in
  * still gas against the Stokes-limit exact solution and against a high-accuracy RK4 solution
  * of the full Schiller–Naumann ODE, relaxation to a uniform gas flow with τ = ρ_p d²/(18 μ),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Fragments: union–find over the cell-list pair search against a brute-force component search
  * (O(n²) adjacency + breadth-first search) on random point sets and constructed cases.
  * The partitions must be identical (same fragment id for every particle: both number fragments

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Momentum and energy returned to the gas (docs/coupling.md §4): the continuum cell source
  * cont_grid_add_cell_source on its own, then lead fragments flying through an air column with
  * the transport handing −dp and −de of every CVODE step to the gas cell they are in. The

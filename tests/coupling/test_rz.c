@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Rz80 / Rz20 at reduced size ([Davydov] §4.2; docs/coupling.md §9), CI-sized: the decks
  * inputs/coupled-rz80.yaml and inputs/coupled-rz20.yaml as documented, with the particle phase
  * cut to t = 0.10 (1 µs, ~0.7 µs after breakout) and no transport. The measure is the run's

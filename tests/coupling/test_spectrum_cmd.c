@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* `mscale spectrum SNAPSHOT.h5`: app/cmd_spectrum.c called in-process on snapshots written
  * with core's HDF5 writer in the layout of docs/coupling.md (the one cd_write_snapshot uses).
  * A good snapshot gives exactly the library's spectrum with the header `g,count,mass`; bad

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The `discrete_model` deck section: every error located and collected, run-time refusals
  * (unstable time step, singular shape matrices) as input errors, a small deck that runs. */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_dm_hugoniot.c — the finite-deformation discrete model (particles/dm/dm_finite.c) against
  * the EOS library's Hugoniot: a piston driving a planar shock into Al (mg_linear) and Pb
  * (mg_cold), yield none; and the discrete energy balance with viscosity and plasticity on

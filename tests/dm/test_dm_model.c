@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Hamiltonian discrete model (docs/design.md §5.2): force = −∇H, conservation laws, bounded energy,
  * linear-field exactness, detection of singular shape matrices, thread-count independence. */
 #include <math.h>

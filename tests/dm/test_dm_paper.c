@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* [Sofronov] §6 with the Hamiltonian discrete model, through the `discrete_model` deck problem
  * (decks in inputs/dm-*.yaml; numbers recorded in docs/validation.md):
  *   §6.1 rod, triangle data, 200 particles, t = 250 L/c: amplitude error < 5 %;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The finite-deformation discrete model behind the particle-region interface (ptl_region.h,
  * particles/dm/dm_region.c), without a grid (the region is built between x = 0 and a depth):
  *   - the slab: piston and surface layers flagged, the sine profile cuts it, the fixed step is

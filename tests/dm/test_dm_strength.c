@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_dm_strength.c — the Steinberg–Guinan strength model of the finite-deformation discrete
  * model (particles/dm/dm_strength.c, docs/particles-dm.md "Strength: Steinberg–Guinan"):
  * the closed forms of [SCG1980] against the built-in sets, the deck's located errors, and

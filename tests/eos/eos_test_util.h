@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Small helpers shared by the EOS tests. */
 #ifndef MSCALE_EOS_TEST_UTIL_H
 #define MSCALE_EOS_TEST_UTIL_H

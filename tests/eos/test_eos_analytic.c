@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Analytic EOS kinds and the tabulated cold curve of [Davydov] (docs/eos.md):
  * Table 1 of [Davydov] reproduced, f = −dE/dr, ε_x vs ∫P_x, sound speed vs the isentrope. */
 #include <math.h>

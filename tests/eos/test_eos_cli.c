@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* `mscale hugoniot` through the built binary ($MSCALE_BINARY): CSV format, values, mixtures,
  * and exit codes with FILE:LINE:COL messages for broken decks (docs/design.md §8). */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Hugoniot solver and Kuropatenko mixtures (docs/eos.md "Hugoniot"). */
 #include <math.h>
 

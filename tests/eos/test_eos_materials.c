@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The deck's materials: and mixtures: sections (docs/eos.md "Materials"): every EOS type, SI
  * conversion, and broken decks that must each give a FILE:LINE:COL error naming the problem. */
 #include <math.h>

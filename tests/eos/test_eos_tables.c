@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Table readers (cold-curve and full (ρ, e) tables): formats, round trips through text and
  * HDF5, interpolation properties, and FILE:LINE errors for broken files (docs/eos.md). */
 #include <math.h>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """mscale export: an extended-XYZ export of a coupled snapshot read back by ASE (python3-ase)
 and a LAMMPS text dump read back by parsing, both against the HDF5 snapshot read by h5py.
 

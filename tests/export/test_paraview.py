@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """ParaView (Debian's python3-paraview, run by pvpython offscreen) opens a run's temporal XDMF
 collections: the coupled problem's particles.xmf and a continuum run's profiles.xmf.
 

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # `mscale run` of a shrunken inputs/cd-piston-al.yaml (bonded cutoff, thermal noise, piston,
 # periodic x/y, free z) serially and under mpirun -np 2 and 3 (docs/mpi.md, "Cluster dynamics
 # on MPI ranks"): the CSV files must agree with the serial ones to the printed digits (relative

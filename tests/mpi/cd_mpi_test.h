@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Set-up shared by the cluster-dynamics MPI tests (test_cd_mpi.c, test_frag_cd_mpi.c): every rank
  * generates the same system; the distributed run keeps this rank's contiguous block of it
  * (cd_sim_init then migrates the particles to the owners of their coarse cells), the in-process

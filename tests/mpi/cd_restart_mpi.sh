@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Checkpoint/restart of cluster_dynamics under mpirun (docs/mpi.md, "Checkpoint/restart"):
 #  1. on 2 ranks: run to the end; run to half-way, restart from its checkpoint to the end: the
 #     CSV files and the final snapshot are byte-identical (the checkpoint holds the coarse-cell

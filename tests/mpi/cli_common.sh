@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Sourced by the `mscale run` MPI tests (tests/mpi/*.sh, arguments MSCALE MPIEXEC DECK): strict
 # mode, the arguments, a scratch directory removed on exit, one OpenMP thread per rank (the
 # ranks share 2 cores), and `mpirun NP CMD...` (oversubscribed; --allow-run-as-root is

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Compare two cluster_dynamics run directories made on different rank counts (tests/mpi/*.sh):
 the CSV files must agree to relative 1e-8 of each column's scale (the runs differ by force
 summation order only: ~1e-13 after the tests' steps), and the last snapshot must hold every

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Compare two coupled-problem run directories made on different rank counts (tests/mpi/cpl_cli.sh,
 tests/mpi/cpl_two_way.sh; docs/mpi.md "The coupled problem on MPI ranks"):
 - spectra (spectrum.csv, spectrum_detector.csv, every spectrum_NNNN.csv): counts exact, masses

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # `mscale run` of the coupled problem (tests/mpi/data/cpl_mpi.yaml: transmitting one-way drive,
 # grooved surface, fragments, drag from the air layer with gas return, transport) serially and
 # under mpirun

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # `mscale run` of a two-way coupled deck (tests/mpi/data/cpl_two_way_mpi.yaml: grid up to the
 # interface node, ~200 particles beyond it with a grooved free surface, a gas grid beyond that,
 # fragments, drag returned to the gas, transport) serially and under mpirun -np 1, 2, 3

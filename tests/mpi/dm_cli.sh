@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # `mscale run` of a discrete_model deck under mpirun (docs/mpi.md):
 #  1. mpirun -np 2 gives the same dm_energy.csv, dm_probes.csv and summary numbers (all but the
 #     timing and partition columns) as the serial run, byte for byte (the distributed model is

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: MIT
 # Fragment outputs of a cluster-dynamics run on MPI ranks equal the serial ones (docs/mpi.md
 # "Fragments on MPI ranks"): inputs/cd-grooves-2d.yaml run to t = 6e-3 (3210 steps; a jet tip
 # breaks off the grooved surface: fragments of 4 and 1853 particles) serially and under

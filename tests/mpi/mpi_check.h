@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* CHECK for the MPI test programs (no cmocka under mpirun): a failed condition prints its
  * message and counts; main sums the counts over ranks (par_sum_long) for the exit code. */
 #ifndef MSCALE_MPI_CHECK_H

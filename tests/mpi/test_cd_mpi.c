@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Cluster dynamics on MPI ranks (docs/mpi.md, "Cluster dynamics on MPI ranks"), run under
  * mpirun -np 1, 2, 3, 4. Each rank also runs every case serially in-process (no decomposition)
  * and the distributed run must reproduce it:

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The discrete model on MPI ranks (docs/mpi.md), run under mpirun -np 1, 2, 3:
  *  - a 3D block with random velocities, every boundary kind at once (clamped wall and
  *    symmetry mirrors, a fixed layer, a periodic axis, hourglass stabilisation, a 3-stage

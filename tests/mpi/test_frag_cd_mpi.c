@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Fragments of a distributed cluster-dynamics run (cd_sim on MPI ranks, particles/cd_par.c)
  * found by cpl_fragments_find_dist from the run's owned particles, ghosts and ghost owners
  * (cd_sim_ghost_owners), against the serial finder on an in-process serial run of the same

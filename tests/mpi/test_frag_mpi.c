@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Distributed fragments (coupling/fragments_dist.c) against the serial finder: every rank builds
  * the same global particle sets, the serial cpl_fragments_find on all of them (gid = global
  * index) is the reference, then each rank keeps its share — by x slabs with ghosts exactly the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The MPI layer and parallel HDF5: reductions agree with the serial formula (the fixed-order sum
  * bit for bit with the rank-order sum), and a dataset written collectively by any number of
  * ranks holds the same bytes as a serial write. */

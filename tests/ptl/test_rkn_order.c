@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Symplectic RKN integrators: coefficient conditions, measured convergence order, bounded
  * energy error (docs/design.md §5.2, [Sofronov] §2). */
 #include <math.h>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The Python package (python/mscale): Run(dir) on a continuum run and on a coupled run.
 
     /usr/bin/python3 tests/python/test_package.py MSCALE_BINARY SOURCE_DIR WORKDIR

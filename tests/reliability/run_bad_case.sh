@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: MIT
 # One case of the bad-input corpus (tests/reliability/bad/, docs/reliability.md):
 #   run_bad_case.sh MSCALE CASE
 # CASE is a deck (*.yaml, run as `mscale check CASE`) or a *.case file; its leading comment

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """A run directory records the deck, version, command line, rank count and wall time (issue 8),
 for every problem type: run_dir_records.py MSCALE DECK...
 

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """One instability case (tests/reliability/unstable/, docs/reliability.md section 5):
     run_unstable_case.py MSCALE CASE
 

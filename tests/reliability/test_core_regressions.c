@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Regression tests for core bugs found by fuzzing (docs/reliability.md, "Findings").
  * Each test names the fuzz harness and the crash input kept under crashes/<harness>/. */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The cluster-dynamics instability guard (cd_sim_guard, docs/reliability.md section 5), one test
  * per finding it can make, each on a small fcc block: a non-finite position or velocity, a
  * particle faster than half a lattice spacing per step, a particle beyond a wall. The message

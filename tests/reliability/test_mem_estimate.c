@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Check-time memory estimate (core/mem_estimate.c): a deck asking for more memory than the
  * machine has is rejected with an estimate that names the deck position and the largest items. */
 #include <math.h>

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: MIT
 """Writes the HDF5 files of the bad-input corpus (tests/reliability/bad/data/*.h5).
 Run with Debian's python: /usr/bin/python3 make_bad_h5.py  (needs h5py, numpy).
 Full EOS tables (docs/eos.md: datasets rho [nr], e [ne], P [nr][ne], c [nr][ne], rho0 [1])
