@@ -206,9 +206,77 @@ static size_t flush_group(cd_neigh *nl, int32_t *buf, size_t cap, size_t len, in
   return len;
 }
 
+/* The stencil of cell c (its layer's cell, axes ax): the ranges of sorted positions of its
+ * 3 x 3 x 3 neighbour cells with their image codes, in the order the lists are built; returns
+ * their number (at most 27). */
+static int cell_stencil(const cd_neigh *nl, const bool per[3], const int ax[3], int32_t c,
+                        stencil_range st[27]) {
+  const int n0 = nl->ncell[ax[0]], n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
+  const int32_t *cs = nl->cell_start;
+  const int k[3] = {c / (n1 * n2), (c / n2) % n1, c % n2};
+  int nst = 0;
+  for (int o0 = -1; o0 <= 1; o0++) {
+    int m0 = k[0] + o0, s0 = 0;
+    if (m0 < 0) {
+      if (!per[0]) continue;
+      m0 += n0;
+      s0 = -1;
+    }
+    if (m0 >= n0) {
+      if (!per[0]) continue;
+      m0 -= n0;
+      s0 = 1;
+    }
+    bool same_layer = (m0 == k[0]) && (s0 == 0 || n0 == 1);
+    bool next_layer = false;
+    if (nl->colour) {
+      int nxt = k[0] + 1;
+      if (nxt == n0) nxt = per[0] ? 0 : -1;
+      next_layer = (m0 == nxt) && !same_layer;
+      if (!same_layer && !next_layer && !nl->full) continue;
+    }
+    for (int o1 = -1; o1 <= 1; o1++) {
+      int m1 = k[1] + o1, s1 = 0;
+      if (m1 < 0) {
+        if (!per[1]) continue;
+        m1 += n1;
+        s1 = -1;
+      }
+      if (m1 >= n1) {
+        if (!per[1]) continue;
+        m1 -= n1;
+        s1 = 1;
+      }
+      const bool same = !next_layer && !nl->full; /* full lists keep q < p too */
+      const int32_t row = (m0 * n1 + m1) * n2;
+      if (k[2] >= 1 && k[2] + 1 < n2) { /* the row's three cells are contiguous: one range */
+        add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2], stencil_code(ax, s0, s1, 0),
+                  same, cs[c]);
+        continue;
+      }
+      for (int o2 = -1; o2 <= 1; o2++) {
+        int m2 = k[2] + o2, s2 = 0;
+        if (m2 < 0) {
+          if (!per[2]) continue;
+          m2 += n2;
+          s2 = -1;
+        }
+        if (m2 >= n2) {
+          if (!per[2]) continue;
+          m2 -= n2;
+          s2 = 1;
+        }
+        add_range(st, &nst, cs[row + m2], cs[row + m2 + 1], stencil_code(ax, s0, s1, s2), same,
+                  cs[c]);
+      }
+    }
+  }
+  return nst;
+}
+
 static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
                           const int ax[3], const int32_t *partners, float rl2) {
-  const int n0 = nl->ncell[ax[0]], n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
+  const int n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
   const bool per[3] = {box->bc[ax[0]] == CD_BC_PERIODIC, box->bc[ax[1]] == CD_BC_PERIODIC,
                        box->bc[ax[2]] == CD_BC_PERIODIC};
   const int32_t nloc = (int32_t)p->nlocal;
@@ -222,68 +290,10 @@ static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, i
   /* the stencil of one cell: ranges of sorted positions with their image code; `same` ranges
    * (same layer, or no colouring) keep only q > p (cd_impl.h) */
   stencil_range st[27];
-  const int32_t *cs = nl->cell_start;
   const int32_t c_begin = (int32_t)layer * n1 * n2, c_end = c_begin + n1 * n2;
   for (int32_t c = c_begin; c < c_end; c++) {
     if (nl->cell_start[c] == nl->cell_start[c + 1]) continue;
-    const int k[3] = {c / (n1 * n2), (c / n2) % n1, c % n2};
-    int nst = 0;
-    for (int o0 = -1; o0 <= 1; o0++) {
-      int m0 = k[0] + o0, s0 = 0;
-      if (m0 < 0) {
-        if (!per[0]) continue;
-        m0 += n0;
-        s0 = -1;
-      }
-      if (m0 >= n0) {
-        if (!per[0]) continue;
-        m0 -= n0;
-        s0 = 1;
-      }
-      bool same_layer = (m0 == k[0]) && (s0 == 0 || n0 == 1);
-      bool next_layer = false;
-      if (nl->colour) {
-        int nxt = k[0] + 1;
-        if (nxt == n0) nxt = per[0] ? 0 : -1;
-        next_layer = (m0 == nxt) && !same_layer;
-        if (!same_layer && !next_layer && !nl->full) continue;
-      }
-      for (int o1 = -1; o1 <= 1; o1++) {
-        int m1 = k[1] + o1, s1 = 0;
-        if (m1 < 0) {
-          if (!per[1]) continue;
-          m1 += n1;
-          s1 = -1;
-        }
-        if (m1 >= n1) {
-          if (!per[1]) continue;
-          m1 -= n1;
-          s1 = 1;
-        }
-        const bool same = !next_layer && !nl->full; /* full lists keep q < p too */
-        const int32_t row = (m0 * n1 + m1) * n2;
-        if (k[2] >= 1 && k[2] + 1 < n2) { /* the row's three cells are contiguous: one range */
-          add_range(st, &nst, cs[row + k[2] - 1], cs[row + k[2] + 2], stencil_code(ax, s0, s1, 0),
-                    same, cs[c]);
-          continue;
-        }
-        for (int o2 = -1; o2 <= 1; o2++) {
-          int m2 = k[2] + o2, s2 = 0;
-          if (m2 < 0) {
-            if (!per[2]) continue;
-            m2 += n2;
-            s2 = -1;
-          }
-          if (m2 >= n2) {
-            if (!per[2]) continue;
-            m2 -= n2;
-            s2 = 1;
-          }
-          add_range(st, &nst, cs[row + m2], cs[row + m2 + 1], stencil_code(ax, s0, s1, s2), same,
-                    cs[c]);
-        }
-      }
-    }
+    const int nst = cell_stencil(nl, per, ax, c, st);
     for (int32_t pos = nl->cell_start[c]; pos < nl->cell_start[c + 1]; pos++) {
       const int32_t i = nl->sorted[pos];
       const float xi = nl->xs[pos], yi = nl->ys[pos], zi = nl->zs[pos];
@@ -404,12 +414,13 @@ static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int
   for (size_t q = 0; q < n; q++) nl->sorted[q] = (int32_t)q;
 }
 
-ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
-                         bool reorder) {
+/* The cell grid of a build: along a periodic axis the box (positions wrapped into it), else the
+ * extent of the particles; about r_list wide cells, at most ~2 n + 64 of them; the image
+ * shifts. MS_ERR_INPUT: a periodic axis shorter than 2 r_list. */
+static ms_status grid_extent(cd_neigh *nl, ptl_state *p, const cd_box *box, double L[3],
+                             double lo[3], int nc[3]) {
   const size_t n = p->n;
   double *pos[3] = {p->x, p->y, p->z};
-  double L[3] = {0, 0, 0}, lo[3] = {0, 0, 0};
-  int nc[3];
   for (int a = 0; a < 3; a++) {
     if (box->bc[a] == CD_BC_PERIODIC) {
       lo[a] = box->lo[a];
@@ -461,14 +472,12 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
     int s[3] = {c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1};
     for (int a = 0; a < 3; a++) nl->shift[c][a] = s[a] * L[a];
   }
-  int ax[3] = {2, 0, 1}; /* slab axis: most cells, z on ties */
-  if (nc[1] > nc[ax[0]]) ax[0] = 1;
-  if (nc[0] > nc[ax[0]]) ax[0] = 0;
-  for (int a = 0, k = 1; a < 3; a++)
-    if (a != ax[0]) ax[k++] = a;
-  nl->slab_axis = ax[0];
-  const int n0 = nc[ax[0]], n1 = nc[ax[1]], n2 = nc[ax[2]];
-  size_t ncells = (size_t)n0 * n1 * n2;
+  return MS_OK;
+}
+
+/* The cell starts of ncells cells and the per-layer buffers of n0 layers (grown, never
+ * shrunk). */
+static void grid_storage(cd_neigh *nl, size_t ncells, int n0) {
   if (ncells + 1 > nl->cells_cap) {
     free(nl->cell_start);
     nl->cells_cap = ncells + 1 + ncells / 4;
@@ -490,6 +499,48 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
     nl->layers_cap = cap;
   }
   nl->nlayer = n0;
+}
+
+/* Colouring (cd_impl.h): the phases of layers that may be built and used in parallel. */
+static void set_colouring(cd_neigh *nl, int n0, bool per0) {
+  nl->colour = n0 >= 4;
+  if (nl->colour) {
+    int k = 0;
+    nl->phase_start[0] = 0;
+    int last_alone = per0 && (n0 % 2 == 1);
+    for (int l = 0; l < n0; l += 2)
+      if (!(last_alone && l == n0 - 1)) nl->phase_layer[k++] = l;
+    nl->phase_start[1] = k;
+    for (int l = 1; l < n0; l += 2) nl->phase_layer[k++] = l;
+    nl->phase_start[2] = k;
+    if (last_alone) nl->phase_layer[k++] = n0 - 1;
+    nl->phase_start[3] = k;
+    nl->nphase = last_alone ? 3 : 2;
+  } else {
+    for (int l = 0; l < n0; l++) nl->phase_layer[l] = l;
+    nl->phase_start[0] = 0;
+    nl->phase_start[1] = n0;
+    nl->nphase = 1;
+  }
+}
+
+ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
+                         bool reorder) {
+  const size_t n = p->n;
+  double *pos[3] = {p->x, p->y, p->z};
+  double L[3] = {0, 0, 0}, lo[3] = {0, 0, 0};
+  int nc[3];
+  ms_status st = grid_extent(nl, p, box, L, lo, nc);
+  if (st != MS_OK) return st;
+  int ax[3] = {2, 0, 1}; /* slab axis: most cells, z on ties */
+  if (nc[1] > nc[ax[0]]) ax[0] = 1;
+  if (nc[0] > nc[ax[0]]) ax[0] = 0;
+  for (int a = 0, k = 1; a < 3; a++)
+    if (a != ax[0]) ax[k++] = a;
+  nl->slab_axis = ax[0];
+  const int n0 = nc[ax[0]], n1 = nc[ax[1]], n2 = nc[ax[2]];
+  const size_t ncells = (size_t)n0 * n1 * n2;
+  grid_storage(nl, ncells, n0);
 
   /* Bin: stable counting sort into cell order. */
   int32_t *cs = nl->cell_start;
@@ -539,25 +590,7 @@ ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t 
 
   /* Colouring (cd_impl.h). */
   const bool per0 = box->bc[ax[0]] == CD_BC_PERIODIC;
-  nl->colour = n0 >= 4;
-  if (nl->colour) {
-    int k = 0;
-    nl->phase_start[0] = 0;
-    int last_alone = per0 && (n0 % 2 == 1);
-    for (int l = 0; l < n0; l += 2)
-      if (!(last_alone && l == n0 - 1)) nl->phase_layer[k++] = l;
-    nl->phase_start[1] = k;
-    for (int l = 1; l < n0; l += 2) nl->phase_layer[k++] = l;
-    nl->phase_start[2] = k;
-    if (last_alone) nl->phase_layer[k++] = n0 - 1;
-    nl->phase_start[3] = k;
-    nl->nphase = last_alone ? 3 : 2;
-  } else {
-    for (int l = 0; l < n0; l++) nl->phase_layer[l] = l;
-    nl->phase_start[0] = 0;
-    nl->phase_start[1] = n0;
-    nl->nphase = 1;
-  }
+  set_colouring(nl, n0, per0);
 
   /* Lists, layer by layer; grow the buffers that were too small and redo those layers. */
   for (int l = 0; l < n0; l++) {
