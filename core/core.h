@@ -78,9 +78,7 @@ typedef struct ms_ctx {
  * with MS_INTERRUPTED — at their next checkpoint when checkpoints are on, so that
  * `mscale run --continue` reproduces the uninterrupted run bit for bit. */
 void ms_interrupts_install(void);
-bool ms_interrupt_requested(void); /* this process's flag */
-/* Any rank's flag (collective on MPI ranks: every rank must call it at the same point). */
-bool ms_interrupt_pending(const ms_ctx *ctx);
+bool ms_interrupt_requested(void); /* this process's flag (loops agree on it over the ranks) */
 
 /* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
 void ms_ctx_init_serial(ms_ctx *ctx);

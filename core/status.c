@@ -98,8 +98,3 @@ void ms_interrupts_install(void) {
 }
 
 bool ms_interrupt_requested(void) { return interrupt_flag != 0; }
-
-bool ms_interrupt_pending(const ms_ctx *ctx) {
-  const int mine = interrupt_flag != 0;
-  return ctx->size > 1 ? par_max_int(mine) != 0 : mine;
-}
