@@ -190,10 +190,10 @@ static void flyer_case(const fcase *fc, void **state) {
 /* b. The rarefaction fan's velocity profile: the target at t = 1.5 t_b, after the breakout
  * t_b = Lt/D (exact), fan centred at the free surface X_fs = Lt + Lf. Measure: relative L1
  * ∫|u − u_ex| dX / ((u_fs − u1) W) over the target, W = ρ1 c1 (t − t_b)/ρ0 the fan's width. */
-static void fan_case(const fcase *fc, double tol) {
+static double fan_case(const fcase *fc, double h) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
-  const double h = 0.0025, Lt = 0.2, Lf = 0.4;
+  const double Lt = 0.2, Lf = 0.4;
   const long nt = lround(Lt / h), nf = lround(Lf / h);
   const double rho0 = eos_rho0(fc->eos), e0 = eos_e0(fc->eos), u1 = 0.5 * fc->v;
   eos_hugoniot_point hp;
@@ -223,15 +223,19 @@ static void fan_case(const fcase *fc, double tol) {
   }
   l1 /= (rl.ufs - u1) * W;
   if (print_on())
-    printf("%s v %.2f fan at t = 1.5 t_b: width %.4f cm (%.0f spacings), relative L1 %.4f\n",
-           fc->name, fc->v, W, W / h, l1);
+    printf("%s v %.2f h %.5f fan at t = 1.5 t_b: width %.4f cm (%.0f spacings), relative L1 "
+           "%.4f = %.2f spacings / W\n",
+           fc->name, fc->v, h, W, W / h, l1, l1 * W / h);
   if (getenv("DM_FLYER_PROFILE"))
     for (long ix = nf; ix < nf + nt; ++ix)
       printf("%.6f %.6f %.6f\n", r.profile[8 * ix], r.profile[8 * ix + 2],
              release_u(&rl, r.profile[8 * ix], Xfs, t, tb));
-  assert_true(l1 < tol);
+  /* a fan computed with a shock viscosity 2–4 spacings wide (docs/particles-dm.md) is smeared
+   * and displaced by about that many spacings; a displacement δ costs δ/W in this measure */
+  assert_true(l1 < 3.0 * h / W);
   free(r.hist), free(r.profile);
   ms_ctx_close(&ctx);
+  return l1;
 }
 
 static fcase al_case(void) {
@@ -253,19 +257,22 @@ static void test_pb(void **state) {
   flyer_case(&c, state);
   eos_destroy(&c.eos);
 }
-/* The fan's smearing: viscosity spreads the fan's head and tail corners over ~3 spacings each
- * and the shock's ringing leaves ~1 % wiggles; on a fan of W ≈ 50 spacings this is
- * ≈ 2·3/50 · 1/4 (a corner's triangle) ≈ 3 %; 5 % bounds it. */
+/* The fan at h and h/2: each within 3 spacings / W, and the error first order in h (it falls by
+ * at least 1.5 when h halves: the smearing is proportional to the spacing). */
+static void fan_pair(const fcase *c) {
+  const double l1a = fan_case(c, 0.0025), l1b = fan_case(c, 0.00125);
+  assert_true(l1b < l1a / 1.5);
+}
 static void test_fan_al(void **state) {
   (void)state;
   fcase c = al_case();
-  fan_case(&c, 0.05);
+  fan_pair(&c);
   eos_destroy(&c.eos);
 }
 static void test_fan_pb(void **state) {
   (void)state;
   fcase c = pb_case();
-  fan_case(&c, 0.05);
+  fan_pair(&c);
   eos_destroy(&c.eos);
 }
 
