@@ -32,8 +32,9 @@ static dm_fin_params default_par(double h) {
  * u + ∫ c dρ/ρ is constant, so u(ρ) = u1 + ∫_ρ^ρ1 c/ρ' dρ' and the free surface moves at
  * u(ρ_r), p(ρ_r, e_r) = 0. In the reference coordinate X the fan's characteristics leave
  * (X_fs, t_b) with dX/dt = −ρ c/ρ0. */
+([Courant - Friedrichs] ch.III)
 #define NIS 4000
-typedef struct release {
+    typedef struct release {
   double rho[NIS + 1], u[NIS + 1], cl[NIS + 1]; /* along the isentrope, ρ1 down to ρ_r */
   int n;
   double u1, ufs;
@@ -133,8 +134,7 @@ typedef struct fcase {
 /* Symmetric impact: flyer Lf = 2 Lt so that the flyer's rear release reaches the free surface
  * only after ≈ 4 t_a (t_a = Lt/D the breakout): the plateau window [1.2 t_a, 2.5 t_a] lies
  * between the arrival's rise and that release, for both materials. */
-static void flyer_case(const fcase *fc, void **state) {
-  (void)state;
+static void flyer_case(const fcase *fc, int dim, long nlat) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   const double h = 0.0025, Lt = 0.2, Lf = 0.4;
@@ -146,11 +146,11 @@ static void flyer_case(const fcase *fc, void **state) {
   release_solve(fc->eos, hp.rho, hp.e, u1, &rl);
   const double ta_ex = Lt / hp.us, t_end = 2.6 * ta_ex;
 
-  dm_flyer_spec sp = {.dim = 1,
+  dm_flyer_spec sp = {.dim = dim,
                       .nflyer = nf,
                       .ntarget = nt,
-                      .ny = 1,
-                      .nz = 1,
+                      .ny = nlat,
+                      .nz = nlat,
                       .h = h,
                       .horizon = 1.5,
                       .mat = {{.eos = fc->eos}, {.eos = fc->eos}},
@@ -170,11 +170,12 @@ static void flyer_case(const fcase *fc, void **state) {
   const double up_p = window_mean(r.hist, r.nhist, 1.2 * ta_ex, 2.5 * ta_ex);
   const double up_g = window_mean(gh, ng, 1.2 * ta_ex, 2.5 * ta_ex);
   if (print_on())
-    printf("%s v %.2f: u_fs particles %.5f grid %.5f exact %.5f (%+.3f %% vs grid, %+.3f %% vs "
+    printf("%s %dD v %.2f: u_fs particles %.5f grid %.5f exact %.5f (%+.3f %% vs grid, %+.3f %% vs "
            "exact); arrival particles %.6f grid %.6f (%+.3f %%), Lt/D %.6f; energy %.2e of K0, "
            "E_hg/K0 %.2e, %ld steps\n",
-           fc->name, fc->v, up_p, up_g, rl.ufs, 100 * (up_p / up_g - 1), 100 * (up_p / rl.ufs - 1),
-           ta_p, ta_g, 100 * (ta_p / ta_g - 1), ta_ex, r.energy_err, r.hg_ratio, r.steps);
+           fc->name, dim, fc->v, up_p, up_g, rl.ufs, 100 * (up_p / up_g - 1),
+           100 * (up_p / rl.ufs - 1), ta_p, ta_g, 100 * (ta_p / ta_g - 1), ta_ex, r.energy_err,
+           r.hg_ratio, r.steps);
   /* a. the criteria: plateau 0.5 %, arrival 1 % */
   assert_true(fabs(up_p / up_g - 1) < 5e-3);
   assert_true(fabs(ta_p / ta_g - 1) < 1e-2);
@@ -248,13 +249,29 @@ static fcase pb_case(void) {
 }
 
 static void test_al(void **state) {
+  (void)state;
   fcase c = al_case();
-  flyer_case(&c, state);
+  flyer_case(&c, 1, 1);
   eos_destroy(&c.eos);
 }
 static void test_pb(void **state) {
+  (void)state;
   fcase c = pb_case();
-  flyer_case(&c, state);
+  flyer_case(&c, 1, 1);
+  eos_destroy(&c.eos);
+}
+/* The same planar problem on a 2D (5 periodic rows) and a 3D (5 × 5) lattice: the periodic
+ * width must exceed 3 horizons */
+static void test_al_2d(void **state) {
+  (void)state;
+  fcase c = al_case();
+  flyer_case(&c, 2, 5);
+  eos_destroy(&c.eos);
+}
+static void test_pb_3d(void **state) {
+  (void)state;
+  fcase c = pb_case();
+  flyer_case(&c, 3, 5);
   eos_destroy(&c.eos);
 }
 /* The fan at h and h/2: each within 3 spacings / W, and the error first order in h (it falls by
@@ -277,7 +294,8 @@ static void test_fan_pb(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_al), cmocka_unit_test(test_pb),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_al),     cmocka_unit_test(test_pb),
+                                     cmocka_unit_test(test_al_2d),  cmocka_unit_test(test_pb_3d),
                                      cmocka_unit_test(test_fan_al), cmocka_unit_test(test_fan_pb)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
