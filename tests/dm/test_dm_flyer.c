@@ -31,10 +31,9 @@ static dm_fin_params default_par(double h) {
  * free surface is a centred simple wave: on the isentrope de/dρ = p/ρ² the C+ invariant
  * u + ∫ c dρ/ρ is constant, so u(ρ) = u1 + ∫_ρ^ρ1 c/ρ' dρ' and the free surface moves at
  * u(ρ_r), p(ρ_r, e_r) = 0. In the reference coordinate X the fan's characteristics leave
- * (X_fs, t_b) with dX/dt = −ρ c/ρ0. */
-([Courant - Friedrichs] ch.III)
+ * (X_fs, t_b) with dX/dt = −ρ c/ρ0 ([Courant-Friedrichs] ch. III). */
 #define NIS 4000
-    typedef struct release {
+typedef struct release {
   double rho[NIS + 1], u[NIS + 1], cl[NIS + 1]; /* along the isentrope, ρ1 down to ρ_r */
   int n;
   double u1, ufs;
