@@ -318,4 +318,30 @@ ms_status dm_piston_run(const dm_piston_spec *spec, const ms_ctx *ctx, dm_piston
  * particle region"). */
 const ptl_region_model *dm_region_model_get(void);
 
+/* A flyer onto a target along x (dm_flyer.c): two bodies in contact at t = 0, a flyer of
+ * nflyer x layers (material mat[0], velocity u[0] along x) and a target of ntarget layers
+ * (mat[1], u[1]), nx × ny × nz simple-cubic lattice (spacing h), both x ends free, periodic in
+ * y and z. No driven particles: K + U + E_hg is conserved. */
+typedef struct dm_flyer_spec {
+  int dim;
+  long nflyer, ntarget, ny, nz;
+  double h, horizon; /* horizon in spacings */
+  dm_fin_material mat[2];
+  double u[2]; /* initial x velocities of flyer and target (km/s) */
+  dm_fin_params par;
+  double t_end;
+  size_t nhist; /* rows of the free-surface history kept (>= 2; thinned by 2 when full) */
+} dm_flyer_spec;
+typedef struct dm_flyer_result {
+  double K0;         /* initial kinetic energy (kJ) */
+  double energy_err; /* max |K + U + E_hg − E0| / K0 over the run */
+  double hg_ratio;   /* E_hg / K0 at t_end (zero-energy-mode indicator) */
+  long steps;
+  ms_status status;
+  double *hist; /* [nhist][2]: t, mean u_x of the target's last x layer (owned: free) */
+  size_t nhist;
+  double *profile; /* [nx][8] layer means at t_end: X, x, u_x, ρ, p, q, −σ_xx, e (free) */
+} dm_flyer_result;
+ms_status dm_flyer_run(const dm_flyer_spec *spec, const ms_ctx *ctx, dm_flyer_result *res);
+
 #endif /* MSCALE_DM_H */

@@ -58,6 +58,14 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
     }
     dk_read_enum(e, doc, it, "response", false, RESP_LINEAR, response_names, &ly->response);
     dk_read_enum(e, doc, it, "yield", false, DM_YIELD_NONE, yield_names, &ly->yield);
+    if (dk_get(it, "velocity")) { /* a body's initial x velocity (the flyer problem) */
+      ly->has_u0 = 1;
+      dk_read_double(e, doc, it, "velocity", MS_DIM_VELOCITY, true, 0, -1e3, 1e3, &ly->u0);
+      if (ly->response != RESP_EOS)
+        dk_error(e, doc, dk_get(it, "velocity"),
+                 "discrete_model.layers: 'velocity' (a body's initial velocity) needs response: "
+                 "eos");
+    }
     const eos_material *mm = mname && mats && ly->name && strcmp(ly->name, "direct")
                                  ? eos_materials_find(mats, mname, NULL, doc, it)
                                  : NULL;
@@ -286,6 +294,11 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
       dk_error(e, doc, ini ? ini : sec,
                "discrete_model.initial: response: eos takes profile none or random_velocity");
     if (p->has_source) dk_error(e, doc, src, "discrete_model.source: not with response: eos");
+    for (size_t i = 0; i < p->nlayers; ++i)
+      if (p->layers[i].has_u0 && p->profile == PROF_RANDOM_VELOCITY)
+        dk_error(e, doc, ini ? ini : sec,
+                 "discrete_model.initial: random_velocity and a layer 'velocity' exclude each "
+                 "other (give one initial velocity)");
   }
 }
 

@@ -21,6 +21,11 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   dmp_build_particles(p, &s);
   const size_t nreal = (size_t)(p->ncell[0] * p->ncell[1] * p->ncell[2]);
   dmp_set_initial(p, &s, nreal);
+  int flyer = 0; /* some layer has a 'velocity': the flyer problem, with its free-surface history */
+  for (size_t i = 0; i < nreal; ++i) {
+    const dm_layer *ly = dmp_layer_at(p, s.X[3 * i]);
+    if (ly->has_u0) s.u[3 * i] = ly->u0, flyer = 1;
+  }
   if (p->has_piston)
     for (size_t i = 0; i < nreal; ++i)
       if ((long)(i % (size_t)p->ncell[0]) < p->piston_layers) {
@@ -67,6 +72,12 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   double *eh = ms_calloc(nemax * 7, sizeof(double));
   size_t ne = 0;
   char *done = ms_calloc(p->nprofile_times + 1, 1);
+  /* free-surface history: mean u_x of the last x layer of real particles, every step, thinned by
+   * 2 (every other row dropped, the stride doubled) whenever the fixed buffer is full */
+  const size_t nfsmax = 8192;
+  double *fs = flyer ? ms_calloc(2 * nfsmax, sizeof(double)) : NULL;
+  size_t nfs = 0;
+  long fs_stride = 1;
   double K, U, H;
   dm_fin_energies(f, &K, &U, &H);
   const double E0 = K + U + H;
@@ -87,6 +98,19 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
         dmp_write_fin_profile(ctx, p, f, nreal, t, (int)q, bins);
         done[q] = 1;
       }
+    if (fs && step % fs_stride == 0) {
+      if (nfs == nfsmax) {
+        for (size_t r = 0; r < nfs / 2; ++r) memmove(&fs[2 * r], &fs[4 * r], 2 * sizeof(double));
+        nfs /= 2, fs_stride *= 2;
+      }
+      if (step % fs_stride == 0) {
+        const long nyz = p->ncell[1] * p->ncell[2];
+        double ux = 0;
+        for (long j = 0; j < nyz; ++j) ux += s.u[3 * (size_t)(j * nx + nx - 1)];
+        fs[2 * nfs] = t, fs[2 * nfs + 1] = ux / (double)nyz;
+        ++nfs;
+      }
+    }
     if (last) break;
     if (t + f->dt_next > t_end) f->dt_next = t_end - t;
     const double dt = f->dt_next, w0 = ms_wall_time();
@@ -105,13 +129,15 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   sum->steps = f->step, sum->t_end = t, sum->wall_s = wall;
   sum->particle_steps_per_s = wall > 0 ? (double)nreal * f->step / wall : 0;
   sum->energy_err_max = f->work != 0 ? dEmax / fabs(f->work) : dEmax / fmax(fabs(E0), 1e-300);
-  sum->hourglass_last = f->work != 0 ? H / fabs(f->work) : NAN;
+  /* no driven particles (a flyer): both relative to the initial energy E0 (kinetic) instead */
+  sum->hourglass_last = f->work != 0 ? H / fabs(f->work) : H / fmax(fabs(E0), 1e-300);
   sum->kinetic_end = K, sum->potential_end = U;
   ms_log(ctx, MS_LOG_INFO,
          "discrete model (response eos): %ld steps to t = %.6g in %.3f s (%.4g particle-steps/s); "
-         "energy balance max |K + U + E_hg - W - E0| = %.3g of the piston work %.6g kJ; "
-         "bond-penalty energy / work = %.3g",
-         f->step, t, wall, sum->particle_steps_per_s, sum->energy_err_max, f->work,
+         "energy balance max |K + U + E_hg - W - E0| = %.3g of %s %.6g kJ; "
+         "bond-penalty energy / that = %.3g",
+         f->step, t, wall, sum->particle_steps_per_s, sum->energy_err_max,
+         f->work != 0 ? "the piston work" : "the initial energy E0", f->work != 0 ? f->work : E0,
          sum->hourglass_last);
   {
     const char *nm[] = {"t",           "kinetic", "internal", "bond_penalty",
@@ -124,7 +150,13 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
         "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0", 6, nm, un,
         eh, ne);
   }
-  free(bins), free(eh), free(done), free(mat), free(imat);
+  if (fs) {
+    const char *nm[] = {"t", "u_free_surface"}, *un[] = {"10 us", "km/s"};
+    dmp_write_series(ctx, "dm_fin_free_surface.csv",
+                     "free-surface velocity: mean x velocity of the last x layer of particles", 2,
+                     nm, un, fs, nfs);
+  }
+  free(fs), free(bins), free(eh), free(done), free(mat), free(imat);
   dm_fin_destroy(&f);
   dm_model_destroy(&m);
   dm_state_free(&s);

@@ -29,6 +29,8 @@ typedef struct dm_layer {
   double Y0;           /* yield stress (GPa), elastic_plastic */
   dm_sg sg;            /* steinberg_guinan (dm_strength.c) */
   const eos_t *eos;    /* the material's EOS (response eos) */
+  int has_u0;          /* 'velocity' given (response eos: a flyer or target body) */
+  double u0;           /* its initial x velocity (km/s) */
 } dm_layer;
 
 struct dm_problem {

@@ -192,6 +192,54 @@ static void test_finite_errors(void **state) {
   dk_errors_free(&e);
 }
 
+/* The flyer problem's per-layer 'velocity': a number in km/s within ±1000, only with
+ * response: eos, not together with random_velocity; each error located. */
+static void test_flyer_errors(void **state) {
+  (void)state;
+  static const char *eos_deck =
+      "problem: discrete_model\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2.703, c0: 5.35, s: 1.34, gamma0: 2.0}\n"
+      "discrete_model:\n"
+      "  spacing: 0.1\n"
+      "  domain: {lo: [0], hi: [3.0]}\n"
+      "  layers:\n"
+      "    - {material: al, x_max: 1, response: eos, velocity: 5000}\n"
+      "    - {material: al, x_max: 2, response: eos, velocity: fast}\n"
+      "    - {material: al, response: eos, velocity: 1.0}\n"
+      "  initial: {profile: random_velocity, amplitude: 0.1}\n"
+      "  t_end: 1.0\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(eos_deck, "deck.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
+  dk_errors_print(&e, stderr);
+  assert_null(p);
+  assert_true(has_error(&e, "deck.yaml:9:"));  /* 5000 km/s: out of range */
+  assert_true(has_error(&e, "deck.yaml:10:")); /* not a number */
+  assert_true(has_error(&e, "exclude each other"));
+  eos_materials_destroy(&mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+  loaded L; /* the linear model has no per-body velocity */
+  load(&L, "discrete_model:\n"
+           "  spacing: 0.1\n"
+           "  domain: {lo: [0], hi: [3.0]}\n"
+           "  layers:\n"
+           "    - {material: steel, velocity: 1.0}\n"
+           "  t_end: 1.0\n");
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:10:"));
+  assert_true(has_error(&L.e, "'velocity' (a body's initial velocity) needs response: eos"));
+  unload(&L);
+}
+
 /* A piston far beyond what the time step resolves (courant 20) inverts a family: the run stops
  * with MS_ERR_UNSTABLE naming the particle, not with NaN. */
 static void test_finite_degenerate_stops(void **state) {
@@ -307,10 +355,10 @@ static void test_snapshot_layout(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_errors_collected),          cmocka_unit_test(test_finite_errors),
-      cmocka_unit_test(test_finite_degenerate_stops),   cmocka_unit_test(test_unstable_dt_refused),
-      cmocka_unit_test(test_singular_geometry_refused), cmocka_unit_test(test_small_runs),
-      cmocka_unit_test(test_snapshot_layout),
+      cmocka_unit_test(test_errors_collected),    cmocka_unit_test(test_finite_errors),
+      cmocka_unit_test(test_flyer_errors),        cmocka_unit_test(test_finite_degenerate_stops),
+      cmocka_unit_test(test_unstable_dt_refused), cmocka_unit_test(test_singular_geometry_refused),
+      cmocka_unit_test(test_small_runs),          cmocka_unit_test(test_snapshot_layout),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
