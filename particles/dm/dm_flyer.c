@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* dm_flyer.c — the flyer-plate problem of the finite-deformation discrete model
  * (docs/particles-dm.md, "Flyer onto a target"): two bodies along x with their own materials
  * and velocities, free x ends, periodic sides; records the target's free-surface velocity. */

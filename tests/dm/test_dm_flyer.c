@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* test_dm_flyer.c — the flyer-plate problem of the finite-deformation discrete model
  * (particles/dm/dm_flyer.c, docs/particles-dm.md "Flyer onto a target"), yield none:
  *  a. the same flyer-plate problem run by the 1D Lagrangian grid (continuum) and by the
