@@ -285,6 +285,12 @@ void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
 ms_status dm_fin_step(dm_fin *f);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
+/* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under
+ * `group` of a serial checkpoint file, and back into a model built for the same particles
+ * (same n; a mismatch is an error in e). */
+ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group);
+ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
+                                 dk_errors *e);
 
 /* A piston driving a planar shock into a slab along x (dm_finite.c): nx × ny × nz simple-cubic
  * lattice (spacing h, periodic in y, z), the first npiston x layers move at up. */

@@ -90,22 +90,6 @@ static void read_surface(dm_region_params *p, dk_doc *doc, const dk_node *S, dk_
 /* Checkpoints of the coupled run are not implemented for this model: refuse the deck's
  * time.checkpoint_every / checkpoint_time (nonzero) where they stand, if the section is the
  * coupled problem's (root → coupled → particles). */
-static void refuse_checkpoints(dk_doc *doc, const dk_node *P, dk_errors *e) {
-  const dk_node *C = dk_get(dk_root(doc), "coupled");
-  if (!C || dk_get(C, "particles") != P) return;
-  const dk_node *T = dk_get(C, "time");
-  static const char *const keys[] = {"checkpoint_every", "checkpoint_time"};
-  for (int k = 0; k < 2; k++) {
-    const dk_node *v = T ? dk_get(T, keys[k]) : NULL;
-    const char *s = v ? dk_scalar(v) : NULL;
-    if (s && strtod(s, NULL) != 0.0)
-      dk_error(e, doc, v,
-               "time.%s: checkpoints of the coupled run are not implemented for "
-               "particles.model discrete_model yet (remove the key or use cluster_dynamics)",
-               keys[k]);
-  }
-}
-
 static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *e) {
   const size_t nerr0 = e->n;
   dm_region_params *p = ms_calloc(1, sizeof *p);
@@ -172,7 +156,6 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
     dk_error(e, doc, dk_get(P, "width"),
              "particles.width (%g cm) must hold at least one surface wavelength (%g cm)", p->width,
              p->surf_wavelength);
-  refuse_checkpoints(doc, P, e);
   if (e->n != nerr0) {
     free(p);
     return NULL;
@@ -290,11 +273,11 @@ static void region_free(dm_region *r) {
 static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, const eos_t *eos,
                                double x_drive, double depth, ptl_region **out) {
   const dm_region_params *p = (const dm_region_params *)pp;
-  if (ctx->size > 1 || ctx->restart) {
+  if (ctx->size > 1) {
     ms_log(ctx, MS_LOG_ERROR,
-           "coupled: particles.model discrete_model runs on one rank without restart for now "
-           "(%s): use cluster_dynamics for MPI ranks and checkpoints",
-           ctx->size > 1 ? "this run has more ranks" : "this run restarts from a checkpoint");
+           "coupled: particles.model discrete_model runs on one rank for now (this run has %d): "
+           "use cluster_dynamics for MPI ranks",
+           ctx->size);
     return MS_ERR_INPUT;
   }
   const int dim = (int)p->dim;
@@ -589,23 +572,50 @@ static ms_status region_refresh(ptl_region *r) {
   return MS_OK;
 }
 
-static ms_status region_checkpoint_write(const ptl_region *r, ms_h5 *h, const ms_ctx *ctx) {
-  (void)r;
-  (void)h;
-  ms_log(ctx, MS_LOG_ERROR,
-         "coupled: checkpoints of particles.model discrete_model are not supported yet");
-  return MS_ERR_INPUT;
+/* The model's state (dm_fin_checkpoint.c) and the region's clock; the particle view's
+ * velocities replace u, since the coupling may have kicked them (drag) since the step. The
+ * piston needs nothing: the drivers hold it again before every step. */
+static ms_status region_checkpoint_write(const ptl_region *rr, ms_h5 *h, const ms_ctx *ctx) {
+  (void)ctx;
+  const dm_region *r = cdmr(rr);
+  const ptl_state *ps = r->ps;
+  double *u = r->s.u;
+  for (size_t i = 0; i < r->s.n; i++)
+    if (r->s.bc[i] != DM_PRESCRIBED)
+      u[3 * i] = ps->vx[i], u[3 * i + 1] = ps->vy[i], u[3 * i + 2] = ps->dim == 3 ? ps->vz[i] : 0;
+  ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm");
+  int64_t *flags = ms_calloc(r->s.n + 1, sizeof *flags);
+  for (size_t i = 0; i < r->s.n; i++) flags[i] = ps->flags[i];
+  if (st == MS_OK) st = ms_h5_write_ints(h, "/dm/flags", r->s.n, flags);
+  free(flags);
+  if (st == MS_OK) st = ms_h5_attr_double(h, "/dm/flags", "t", r->t);
+  if (st == MS_OK) st = ms_h5_attr_double(h, "/dm/flags", "dt", r->dt);
+  return st;
 }
 
-static ms_status region_restore(ptl_region *r, ms_h5r *h, const ms_ctx *ctx, long *step,
+static ms_status region_restore(ptl_region *rr, ms_h5r *h, const ms_ctx *ctx, long *step,
                                 dk_errors *e) {
-  (void)r;
-  (void)h;
-  (void)e;
-  *step = 0;
-  ms_log(ctx, MS_LOG_ERROR,
-         "coupled: restart of particles.model discrete_model is not supported yet");
-  return MS_ERR_INPUT;
+  (void)ctx;
+  dm_region *r = dmr(rr);
+  ms_status st = dm_fin_checkpoint_read(r->f, &r->s, h, "/dm", e);
+  int64_t *flags = NULL;
+  size_t nr = 0, nc = 0;
+  if (st == MS_OK) st = ms_h5_read_ints_rows(h, "/dm/flags", 0, SIZE_MAX, &flags, &nr, &nc, e);
+  if (st == MS_OK && nr != r->s.n) {
+    dk_error_at(e, "checkpoint", 0, 0, "'/dm/flags' has %zu particles, this region %zu", nr,
+                r->s.n);
+    st = MS_ERR_INPUT;
+  }
+  if (st == MS_OK)
+    for (size_t i = 0; i < nr; i++) r->ps->flags[i] = (uint8_t)flags[i];
+  free(flags);
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, "/dm/flags", "t", &r->t, e);
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, "/dm/flags", "dt", &r->dt, e);
+  if (st != MS_OK) return st;
+  r->geo.dt = r->dt;
+  sync_state(r);
+  *step = r->f->step;
+  return MS_OK;
 }
 
 static const ptl_region_model dm_region_model = {

@@ -133,8 +133,6 @@ static void test_deck_errors(void **state) {
   /* line 26: the particles section's first own key after model, r0, width */
   expect_error(deck("velocity", "    response: linear_elastic\n", ""), "test.yaml:26:15",
                "takes response: eos only");
-  expect_error(deck("velocity", "", ", checkpoint_every: 100"), "test.yaml:26:51",
-               "checkpoints of the coupled run are not implemented");
   expect_error(deck("velocity", "    yield: elastic_plastic\n", ""), "test.yaml", "shear_modulus");
 }
 

@@ -10,8 +10,7 @@
  *   - velocities changed between steps (the coupling's drag kicks) are taken up by the model;
  *   - a step that would outrun the model's own stability limit stops with MS_ERR_UNSTABLE;
  *   - deck errors are located: response other than eos, elastic_plastic without its keys, a
- *     width below 3 horizons, steinberg_guinan without its parameters, checkpoints of the
- *     coupled run;
+ *     width below 3 horizons, steinberg_guinan without its parameters;
  *   - strength (elastic_plastic, steinberg_guinan): the elastic precursor runs at c_L. */
 #include <math.h>
 #include <setjmp.h>
@@ -380,10 +379,6 @@ static void test_deck_errors(void **state) {
                "needs yield: elastic_plastic");
   expect_error("particles:\n  r0: 1.0e-3\n  width: 0.004\n", "region.yaml:3:10",
                "at least 3 horizons");
-  expect_error("coupled:\n"
-               "  particles:\n    r0: 1.0e-3\n    width: 0.005\n"
-               "  time:\n    end: 0.1\n    checkpoint_every: 100\n",
-               "region.yaml:7:23", "checkpoints of the coupled run are not implemented");
 }
 
 int main(void) {

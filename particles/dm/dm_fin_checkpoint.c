@@ -1,0 +1,98 @@
+/* SPDX-License-Identifier: MIT */
+/* dm_fin_checkpoint.c — the state of the finite-deformation model (dm_finite.c) into a
+ * checkpoint and back, every array the next step reads (the stress and forces of the last
+ * evaluation included), so that a restarted run continues bit for bit (docs/particles-dm.md
+ * "Checkpoints"). */
+#include "dm_impl.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct fin_array {
+  const char *name, *units;
+  size_t ncomp;
+  double *data;
+} fin_array;
+
+/* Every per-particle array of dm_fin; a field added to dm_fin that a step reads belongs here. */
+static size_t fin_arrays(const dm_fin *f, fin_array a[16]) {
+  size_t k = 0;
+  a[k++] = (fin_array){"e", "kJ/g", 1, f->e};
+  a[k++] = (fin_array){"rho", "g/cm^3", 1, f->rho};
+  a[k++] = (fin_array){"p", "GPa", 1, f->p};
+  a[k++] = (fin_array){"q", "GPa", 1, f->q};
+  a[k++] = (fin_array){"J", "1", 1, f->J};
+  a[k++] = (fin_array){"eps_p", "1", 1, f->eps_p};
+  a[k++] = (fin_array){"e_hourglass", "kJ", 1, f->ehg};
+  a[k++] = (fin_array){"F", "1", 9, f->F};
+  a[k++] = (fin_array){"s", "GPa", 9, f->s};
+  a[k++] = (fin_array){"QP", "GPa cm^3/cm^2", 9, f->QP};
+  a[k++] = (fin_array){"sigma", "GPa", 9, f->sig};
+  a[k++] = (fin_array){"force", "g cm/(10 us)^2", 3, f->frc};
+  a[k++] = (fin_array){"vbar", "km/s", 3, f->vbar};
+  return k;
+}
+
+static void path(char *buf, size_t len, const char *group, const char *name) {
+  snprintf(buf, len, "%s/%s", group, name);
+}
+
+ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group) {
+  fin_array a[16];
+  const size_t na = fin_arrays(f, a);
+  char name[256];
+  ms_status st = MS_OK;
+  for (size_t k = 0; k < na && st == MS_OK; ++k) {
+    path(name, sizeof name, group, a[k].name);
+    st = ms_h5_write_doubles(h, name, f->n, a[k].ncomp, a[k].data, a[k].units);
+  }
+  if (st == MS_OK)
+    path(name, sizeof name, group, "w"), st = ms_h5_write_doubles(h, name, s->n, 3, s->w, "cm");
+  if (st == MS_OK)
+    path(name, sizeof name, group, "u"), st = ms_h5_write_doubles(h, name, s->n, 3, s->u, "km/s");
+  /* the scalars as attributes of the group's e dataset: the step count exactly (< 2^53) */
+  path(name, sizeof name, group, "e");
+  if (st == MS_OK) st = ms_h5_attr_double(h, name, "work", f->work);
+  if (st == MS_OK) st = ms_h5_attr_double(h, name, "dt_next", f->dt_next);
+  if (st == MS_OK) st = ms_h5_attr_double(h, name, "step", (double)f->step);
+  return st;
+}
+
+static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, double *dst,
+                           dk_errors *e) {
+  double *v = NULL;
+  size_t nr = 0, nc = 0;
+  ms_status st = ms_h5_read_doubles_rows(h, name, 0, SIZE_MAX, &v, &nr, &nc, e);
+  if (st == MS_OK && (nr != n || nc != ncomp)) {
+    dk_error_at(e, "checkpoint", 0, 0,
+                "'%s' has %zu rows of %zu values; this run's discrete model needs %zu of %zu "
+                "(a checkpoint of another particle region?)",
+                name, nr, nc, n, ncomp);
+    st = MS_ERR_INPUT;
+  }
+  if (st == MS_OK) memcpy(dst, v, n * ncomp * sizeof *dst);
+  free(v);
+  return st;
+}
+
+ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
+                                 dk_errors *e) {
+  fin_array a[16];
+  const size_t na = fin_arrays(f, a);
+  char name[256];
+  ms_status st = MS_OK;
+  for (size_t k = 0; k < na && st == MS_OK; ++k) {
+    path(name, sizeof name, group, a[k].name);
+    st = read_into(h, name, f->n, a[k].ncomp, a[k].data, e);
+  }
+  if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, s->n, 3, s->w, e);
+  if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, s->n, 3, s->u, e);
+  double step = 0;
+  path(name, sizeof name, group, "e");
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "work", &f->work, e);
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "dt_next", &f->dt_next, e);
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "step", &step, e);
+  f->step = (long)step;
+  return st;
+}
