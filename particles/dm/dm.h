@@ -286,9 +286,11 @@ ms_status dm_fin_step(dm_fin *f);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
 /* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under
- * `group` of a serial checkpoint file, and back into a model built for the same particles
+ * `group` of a checkpoint file (serial or collective; on ranks every rank calls it, `owner`
+ * on the one rank whose rows are written), and back into a model built for the same particles
  * (same n; a mismatch is an error in e). */
-ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group);
+ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group,
+                                  bool owner);
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e);
 

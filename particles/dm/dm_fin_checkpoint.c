@@ -5,6 +5,7 @@
  * "Checkpoints"). */
 #include "dm_impl.h"
 
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,19 +39,21 @@ static void path(char *buf, size_t len, const char *group, const char *name) {
   snprintf(buf, len, "%s/%s", group, name);
 }
 
-ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group) {
+ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group,
+                                  bool owner) {
+  const size_t n = owner ? f->n : 0; /* rows this rank adds (a replicated model: the owner's) */
   fin_array a[16];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
   for (size_t k = 0; k < na && st == MS_OK; ++k) {
     path(name, sizeof name, group, a[k].name);
-    st = ms_h5_write_doubles(h, name, f->n, a[k].ncomp, a[k].data, a[k].units);
+    st = ms_h5_write_doubles_dist(h, name, n, a[k].ncomp, a[k].data, a[k].units);
   }
   if (st == MS_OK)
-    path(name, sizeof name, group, "w"), st = ms_h5_write_doubles(h, name, s->n, 3, s->w, "cm");
+    path(name, sizeof name, group, "w"), st = ms_h5_write_doubles_dist(h, name, n, 3, s->w, "cm");
   if (st == MS_OK)
-    path(name, sizeof name, group, "u"), st = ms_h5_write_doubles(h, name, s->n, 3, s->u, "km/s");
+    path(name, sizeof name, group, "u"), st = ms_h5_write_doubles_dist(h, name, n, 3, s->u, "km/s");
   /* the scalars as attributes of the group's e dataset: the step count exactly (< 2^53) */
   path(name, sizeof name, group, "e");
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "work", f->work);

@@ -59,7 +59,7 @@ typedef struct dm_region {
   ptl_region_geometry geo;
   double t, dt, dt0_limit;
   piston pis;
-  bool mpi_refused;
+  int rank, nranks; /* replicated on MPI ranks: rank 0 owns the particles (region_distribute) */
   char err[512];
 } dm_region;
 
@@ -273,13 +273,6 @@ static void region_free(dm_region *r) {
 static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, const eos_t *eos,
                                double x_drive, double depth, ptl_region **out) {
   const dm_region_params *p = (const dm_region_params *)pp;
-  if (ctx->size > 1) {
-    ms_log(ctx, MS_LOG_ERROR,
-           "coupled: particles.model discrete_model runs on one rank for now (this run has %d): "
-           "use cluster_dynamics for MPI ranks",
-           ctx->size);
-    return MS_ERR_INPUT;
-  }
   const int dim = (int)p->dim;
   const double h = p->h, rho0 = eos_rho0(eos), e0 = eos_e0(eos);
   const double c0 = eos_sound_speed(eos, rho0, e0);
@@ -441,14 +434,19 @@ static void region_hold_piston(ptl_region *rr, double u, double span) {
 
 static void region_set_dt(ptl_region *r, double dt) { dmr(r)->dt = dt; }
 
-/* One rank only for now: every rank refuses at create (region_create). */
-static void region_distribute(ptl_region *r, const ms_ctx *ctx) {
-  dmr(r)->mpi_refused = ctx->size > 1;
+/* On MPI ranks the region is replicated: every rank steps all particles, bit for bit the same
+ * (the step is deterministic and thread-count independent); rank 0 owns them for the coupling
+ * (fragments, snapshots, the driven-layer force, checkpoints), the others show an empty view.
+ * The coupling's velocity kicks (drag) reach the owner only, so region_step takes rank 0's
+ * velocities first. Cost: the serial region's time on every rank (docs/particles-dm.md). */
+static void region_distribute(ptl_region *rr, const ms_ctx *ctx) {
+  dm_region *r = dmr(rr);
+  r->rank = ctx->rank, r->nranks = ctx->size;
+  if (r->rank > 0) r->ps->n = r->ps->nlocal = 0;
 }
 
 /* The forces at t = 0 were computed by dm_fin_create. */
 static ms_status region_init(ptl_region *r) {
-  if (dmr(r)->mpi_refused) return MS_ERR_INPUT;
   sync_state(dmr(r));
   return MS_OK;
 }
@@ -462,6 +460,11 @@ static ms_status region_step(ptl_region *rr) {
   /* velocities the coupling changed (drag kicks) back into the model; the driven layer moves
    * with the piston's mean velocity over the step */
   const double up = piston_mean(&r->pis, r->t, r->t + dt);
+  if (r->nranks > 1) {
+    par_bcast_doubles(r->ps->vx, s->n, 0);
+    par_bcast_doubles(r->ps->vy, s->n, 0);
+    if (three) par_bcast_doubles(r->ps->vz, s->n, 0);
+  }
   for (size_t i = 0; i < s->n; i++) {
     double *u = &s->u[3 * i];
     if (s->bc[i] == DM_PRESCRIBED) {
@@ -504,6 +507,7 @@ static const char *region_error(const ptl_region *r) { return cdmr(r)->err; }
 static double region_driven_force(const ptl_region *rr) {
   const dm_region *r = cdmr(rr);
   double f = 0;
+  if (r->rank > 0) return 0.0; /* the drivers sum it over ranks; the owner's is the whole */
   for (size_t i = 0; i < r->s.n; i++)
     if (r->s.bc[i] == DM_PRESCRIBED) f += r->f->frc[3 * i];
   return f;
@@ -543,6 +547,7 @@ static void region_ghost_owners(const ptl_region *r, int32_t *owner) {
 
 static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
   dm_region *r = dmr(rr);
+  if (r->rank > 0) return MS_OK; /* replicated: the owner writes */
   const ptl_state *ps = r->ps;
   const dm_fin *f = r->f;
   const ptl_snapshot_data data[] = {{"particles/pressure", f->p, NULL, 1, "GPa"},
@@ -550,7 +555,7 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
                                     {"particles/energy", f->e, NULL, 1, "kJ/g"},
                                     {"particles/J", f->J, NULL, 1, NULL},
                                     {"particles/gid", NULL, ps->gid, 1, NULL}};
-  ptl_snapshot snap = ptl_snapshot_of_state(ps, ps->n, r->t, false);
+  ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
   ptl_snapshot_attr_add(&snap, "time", r->t);
   ptl_snapshot_attr_add(&snap, "step", (double)f->step);
   ptl_snapshot_attr_add(&snap, "r0", r->geo.spacing);
@@ -583,10 +588,10 @@ static ms_status region_checkpoint_write(const ptl_region *rr, ms_h5 *h, const m
   for (size_t i = 0; i < r->s.n; i++)
     if (r->s.bc[i] != DM_PRESCRIBED)
       u[3 * i] = ps->vx[i], u[3 * i + 1] = ps->vy[i], u[3 * i + 2] = ps->dim == 3 ? ps->vz[i] : 0;
-  ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm");
+  ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm", r->rank == 0);
   int64_t *flags = ms_calloc(r->s.n + 1, sizeof *flags);
   for (size_t i = 0; i < r->s.n; i++) flags[i] = ps->flags[i];
-  if (st == MS_OK) st = ms_h5_write_ints(h, "/dm/flags", r->s.n, flags);
+  if (st == MS_OK) st = ms_h5_write_ints_dist(h, "/dm/flags", r->rank == 0 ? r->s.n : 0, flags);
   free(flags);
   if (st == MS_OK) st = ms_h5_attr_double(h, "/dm/flags", "t", r->t);
   if (st == MS_OK) st = ms_h5_attr_double(h, "/dm/flags", "dt", r->dt);
