@@ -74,9 +74,10 @@ void c2d_setup_defaults(c2d_setup *s);
 
 typedef struct c2d_grid c2d_grid;
 
-/* NULL with a message in err (the zone and the problem) on impossible input: a zone of
- * non-positive area (tangled or inverted), r < 0 in r–z, ρ ≤ 0, an EOS failure. */
-c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen);
+/* MS_ERR_INPUT (*out NULL) with a message in err (the zone and the problem) on impossible
+ * input: a zone of non-positive area (tangled or inverted), r < 0 in r–z, ρ ≤ 0, an EOS
+ * failure. */
+ms_status c2d_grid_create(const c2d_setup *s, c2d_grid **out, char *err, size_t errlen);
 void c2d_grid_destroy(c2d_grid **g); /* null-safe; sets *g = NULL */
 ms_status c2d_grid_step(c2d_grid *g, double dt_limit);
 ms_status c2d_grid_run_to(c2d_grid *g, double t_end);

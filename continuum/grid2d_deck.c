@@ -270,7 +270,8 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     s.eos = eos;
     s.material = mid;
     char msg[512];
-    c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+    c2d_grid *g = NULL;
+    c2d_grid_create(&s, &g, msg, sizeof msg);
     if (!g) {
       dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh entry */
     } else {

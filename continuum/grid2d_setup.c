@@ -90,7 +90,7 @@ static bool init_zones(c2d_grid *g, const c2d_setup *s, char *err, size_t errlen
   return true;
 }
 
-c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
+static c2d_grid *grid_make(const c2d_setup *s, char *err, size_t errlen) {
   if (s->ni < 1 || s->nj < 1 || !s->x || !s->y || !s->rho || !s->e || !s->eos) {
     snprintf(err, errlen, "2D grid: need ni, nj ≥ 1 and node positions, ρ, e and an EOS per zone");
     return NULL;
@@ -187,6 +187,11 @@ c2d_grid *c2d_grid_create(const c2d_setup *s, char *err, size_t errlen) {
   g->dt_next = s->dt_initial > 0 ? s->dt_initial : 0.1 * dt;
   if (!isfinite(g->dt_next)) g->dt_next = g->dt_max < INFINITY ? g->dt_max : 1e-6;
   return g;
+}
+
+ms_status c2d_grid_create(const c2d_setup *s, c2d_grid **out, char *err, size_t errlen) {
+  *out = grid_make(s, err, errlen);
+  return *out ? MS_OK : MS_ERR_INPUT;
 }
 
 static void c2d_grid_release(c2d_grid *g) {

@@ -29,7 +29,8 @@ int main(int argc, char **argv) {
   s.bc[C2D_ILO].fn.value = 1.0;
   s.bc[C2D_IHI].kind = s.bc[C2D_JLO].kind = s.bc[C2D_JHI].kind = C2D_BC_WALL;
   char msg[256];
-  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  c2d_grid *g = NULL;
+  c2d_grid_create(&s, &g, msg, sizeof msg);
   if (!g) {
     fprintf(stderr, "%s\n", msg);
     return 1;

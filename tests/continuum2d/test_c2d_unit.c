@@ -38,7 +38,8 @@ static void test_uniform_rest(void **state) {
     for (size_t j = 1; j < 8; ++j)
       for (size_t i = 1; i < 8; ++i) f.x[i + 9 * j] += 0.02 * sin(1.0 * (double)(i * j));
     char msg[256];
-    c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+    c2d_grid *g = NULL;
+    c2d_grid_create(&s, &g, msg, sizeof msg);
     assert_non_null(g);
     assert_int_equal(c2d_grid_run_to(g, 1.0), MS_OK);
     c2d_view v = c2d_grid_view(g);
@@ -70,7 +71,8 @@ static void test_energy_random(void **state) {
           f.v[i + 17 * j] = 0.5 * ((double)rand() / RAND_MAX - 0.5);
         }
       char msg[256];
-      c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+      c2d_grid *g = NULL;
+      c2d_grid_create(&s, &g, msg, sizeof msg);
       assert_non_null(g);
       double e0 = energy_total(g);
       assert_int_equal(c2d_grid_run_to(g, 0.5), MS_OK);
@@ -92,14 +94,17 @@ static void test_bad_mesh(void **state) {
   char msg[256];
   make_box(&f, &s, 4, C2D_XY, gas);
   f.x[2 + 5 * 2] = 0.9; /* node (2,2) pushed past its neighbours: zones around it tangle */
-  assert_null(c2d_grid_create(&s, msg, sizeof msg));
+  c2d_grid *bad = NULL;
+  assert_int_equal(c2d_grid_create(&s, &bad, msg, sizeof msg), MS_ERR_INPUT);
+  assert_null(bad);
   printf("%s\n", msg);
   assert_non_null(strstr(msg, "tangled or inverted"));
   assert_non_null(strstr(msg, "i = 2, j = 1")); /* the first zone (in index order) touching it */
   fixture_free(&f);
   make_box(&f, &s, 4, C2D_RZ, gas);
   for (size_t n = 0; n < 25; ++n) f.x[n] -= 0.5; /* r from −0.5 */
-  assert_null(c2d_grid_create(&s, msg, sizeof msg));
+  assert_int_equal(c2d_grid_create(&s, &bad, msg, sizeof msg), MS_ERR_INPUT);
+  assert_null(bad);
   printf("%s\n", msg);
   assert_non_null(strstr(msg, "r = -0.5 < 0"));
   fixture_free(&f);
@@ -126,7 +131,8 @@ static void test_pressure_bc(void **state) {
         s.bc[k].fn.value = squeeze ? 2.0 * p_gas : p_gas;
       }
       char msg[256];
-      c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+      c2d_grid *g = NULL;
+      c2d_grid_create(&s, &g, msg, sizeof msg);
       assert_non_null(g);
       double e0 = energy_total(g);
       assert_int_equal(c2d_grid_run_to(g, 1.0), MS_OK);
@@ -169,7 +175,8 @@ static void test_runtime_inversion(void **state) {
   s.bc[C2D_ILO].fn.value = 5.0;
   s.bc[C2D_IHI].kind = s.bc[C2D_JLO].kind = s.bc[C2D_JHI].kind = C2D_BC_WALL;
   char msg[256];
-  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  c2d_grid *g = NULL;
+  c2d_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   ms_status st = c2d_grid_run_to(g, 0.15);
   printf("no viscosity: %s\n", st == MS_OK ? "ran (no inversion)" : c2d_grid_error(g));
@@ -207,7 +214,8 @@ static void test_threads(void **state) {
     s.bc[C2D_ILO].fn.value = 1.0;
     s.bc[C2D_IHI].kind = s.bc[C2D_JLO].kind = s.bc[C2D_JHI].kind = C2D_BC_WALL;
     char msg[256];
-    c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+    c2d_grid *g = NULL;
+    c2d_grid_create(&s, &g, msg, sizeof msg);
     assert_non_null(g);
     c2d_grid_set_threads(g, t + 1);
     assert_int_equal(c2d_grid_run_to(g, 0.3), MS_OK);

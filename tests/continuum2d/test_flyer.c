@@ -49,7 +49,8 @@ static void test_flyer(void **state) {
   s.hg_coef = 1.0;
   s.bc[C2D_ILO].kind = C2D_BC_WALL; /* the axis; the other sides are free */
   char msg[256];
-  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  c2d_grid *g = NULL;
+  c2d_grid_create(&s, &g, msg, sizeof msg);
   assert_non_null(g);
   double e0 = energy_total(g);
   size_t jd[2], ns = 0;

@@ -38,7 +38,8 @@ static void run_saltzman(double hg, double *hg_rms, double *spread) {
   s.bc[C2D_JLO].kind = C2D_BC_WALL;
   s.bc[C2D_JHI].kind = C2D_BC_WALL;
   char msg[256];
-  c2d_grid *g = c2d_grid_create(&s, msg, sizeof msg);
+  c2d_grid *g = NULL;
+  c2d_grid_create(&s, &g, msg, sizeof msg);
   if (!g) printf("%s\n", msg);
   assert_non_null(g);
   double h0, s0;
