@@ -185,7 +185,13 @@ static inline int32_t *cd_image_list(const cd_neigh *nl, int layer, int32_t pos)
   return nl->buf[layer] + nl->first[pos] + (nl->full ? 0 : nl->nplain[pos]);
 }
 
-cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin);
+/* Lists for up to cap particles, list radius rlist = R_c,max + skin (rebuilt when a particle
+ * has moved skin/2). MS_ERR_INPUT (*out NULL) unless rlist > skin ≥ 0. */
+typedef struct cd_neigh_params {
+  size_t cap;
+  double rlist, skin;
+} cd_neigh_params;
+ms_status cd_neigh_create(const cd_neigh_params *p, cd_neigh **out);
 void cd_neigh_destroy(cd_neigh **nl); /* null-safe; sets *nl = NULL */
 /* Wraps positions into periodic axes, bins, builds the half lists (bonded flags from
  * `partners` when non-NULL). MS_ERR_INPUT if a periodic period is below 2 r_list. */

@@ -328,7 +328,11 @@ ms_status cd_sim_init(cd_sim *s) {
     ms_status st = cd_dd_create(s); /* grows p to the global count */
     if (st != MS_OK) return st;
   }
-  s->nl = cd_neigh_create(p->cap, s->rc_max + s->cfg.skin, s->cfg.skin);
+  ms_must(
+      cd_neigh_create(
+          &(cd_neigh_params){.cap = p->cap, .rlist = s->rc_max + s->cfg.skin, .skin = s->cfg.skin},
+          &s->nl),
+      "cd_neigh_create");
   s->nl->full = fit_path(s);
   ms_status st = rebuild(s);
   if (st != MS_OK) return st;

@@ -16,7 +16,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
+ms_status cd_neigh_create(const cd_neigh_params *par, cd_neigh **out) {
+  *out = NULL;
+  if (!(par->rlist > par->skin) || !(par->skin >= 0)) return MS_ERR_INPUT;
+  const size_t cap = par->cap;
+  const double rlist = par->rlist, skin = par->skin;
   cd_neigh *nl = ms_calloc(1, sizeof *nl);
   nl->rlist = rlist;
   nl->skin = skin;
@@ -37,7 +41,8 @@ cd_neigh *cd_neigh_create(size_t cap, double rlist, double skin) {
 #if defined(CD_SELECT_AVX2)
   if (!compress_lut[255][7]) fill_compress_lut();
 #endif
-  return nl;
+  *out = nl;
+  return MS_OK;
 }
 
 static void cd_neigh_free(cd_neigh *nl) {

@@ -217,7 +217,9 @@ static void test_lists_moving_block(void **state) {
   eos_destroy(&eos);
 
   /* four particles displaced from build positions at 0 (skin 0.1: skin/2 = 0.05; xb_err 0) */
-  cd_neigh *nl = cd_neigh_create(4, 1.1, 0.1);
+  cd_neigh *nl = NULL;
+  ms_must(cd_neigh_create(&(cd_neigh_params){.cap = 4, .rlist = 1.1, .skin = 0.1}, &nl),
+          "cd_neigh_create");
   ptl_state *p = NULL;
   ms_must(ptl_state_create(&(ptl_state_params){.cap = 4, .dim = 3}, &p), "ptl_state_create");
   p->n = 4;
