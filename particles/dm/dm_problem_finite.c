@@ -7,6 +7,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The layers' initial velocities (returns 1 if some layer has one: the flyer problem, with its
+ * free-surface history), the piston's driven layers, ghosts at rest. */
+static int set_velocities(const dm_problem *p, dm_state *s, size_t nreal) {
+  int flyer = 0;
+  for (size_t i = 0; i < nreal; ++i) {
+    const dm_layer *ly = dmp_layer_at(p, s->X[3 * i]);
+    if (ly->has_u0) s->u[3 * i] = ly->u0, flyer = 1;
+  }
+  if (p->has_piston)
+    for (size_t i = 0; i < nreal; ++i)
+      if ((long)(i % (size_t)p->ncell[0]) < p->piston_layers) {
+        s->bc[i] = DM_PRESCRIBED;
+        s->u[3 * i] = p->piston_u, s->u[3 * i + 1] = s->u[3 * i + 2] = 0.0;
+      }
+  for (size_t i = nreal; i < s->n; ++i) s->u[3 * i] = s->u[3 * i + 1] = s->u[3 * i + 2] = 0.0;
+  return flyer;
+}
+
 ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   dm_run_summary *sum = &p->sum;
   if (ctx->size > 1) {
@@ -21,18 +39,7 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   dmp_build_particles(p, &s);
   const size_t nreal = (size_t)(p->ncell[0] * p->ncell[1] * p->ncell[2]);
   dmp_set_initial(p, &s, nreal);
-  int flyer = 0; /* some layer has a 'velocity': the flyer problem, with its free-surface history */
-  for (size_t i = 0; i < nreal; ++i) {
-    const dm_layer *ly = dmp_layer_at(p, s.X[3 * i]);
-    if (ly->has_u0) s.u[3 * i] = ly->u0, flyer = 1;
-  }
-  if (p->has_piston)
-    for (size_t i = 0; i < nreal; ++i)
-      if ((long)(i % (size_t)p->ncell[0]) < p->piston_layers) {
-        s.bc[i] = DM_PRESCRIBED;
-        s.u[3 * i] = p->piston_u, s.u[3 * i + 1] = s.u[3 * i + 2] = 0.0;
-      }
-  for (size_t i = nreal; i < s.n; ++i) s.u[3 * i] = s.u[3 * i + 1] = s.u[3 * i + 2] = 0.0;
+  const int flyer = set_velocities(p, &s, nreal);
   dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = 0.0};
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
