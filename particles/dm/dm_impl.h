@@ -41,7 +41,7 @@ double dm_sg_temperature(const dm_sg *sg, const eos_t *eos, double rho, double e
 /* G and Y (GPa) at η = ρ/ρ0, pressure p (GPa), temperature T (K), plastic strain ε_p. */
 void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p, double *G,
                   double *Y);
-/* Johnson–Cook [JC1983]: Y (GPa) at plastic strain ε_p, equivalent strain rate (1/code time) and
+/* Johnson–Cook [JohnsonCook1983]: Y (GPa) at plastic strain ε_p, equivalent strain rate (1/code time) and
  * T (K); ε̇* = max(rate/ε̇0, 1), ε̇0 = 1/s; T* = (T − T0)/(Tm0 − T0) clamped to [0, 1]; 0 for NaN T.
  * dm_jc_set: the built-in set (Cu_OFHC_JC) by name, false if unknown. */
 double dm_jc_yield(const dm_sg *sg, double eps_p, double rate, double T);

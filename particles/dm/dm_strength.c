@@ -73,9 +73,9 @@ void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p,
   *Y = (f < sg->Ymax ? f : sg->Ymax) * *G / sg->G0;
 }
 
-/* ---- Johnson–Cook [JC1983] ---- */
+/* ---- Johnson–Cook [JohnsonCook1983] ---- */
 
-/* OFHC copper of [JC1983]: A 90 MPa, B 292 MPa, n 0.31, C 0.025, m 1.09, T_melt 1356 K. G0 and c_v
+/* OFHC copper of [JohnsonCook1983]: A 90 MPa, B 292 MPa, n 0.31, C 0.025, m 1.09, T_melt 1356 K. G0 and c_v
  * (for T(ρ, e)) are not JC constants: G0 47.7 GPa and c_v 383 J/(kg·K) of the Cu_OFHC set of
  * [Steinberg1996] above; T_room = 300 K, the temperature route's reference (T* = 0 at (ρ0, e0)). */
 bool dm_jc_set(const char *name, dm_sg *out) {

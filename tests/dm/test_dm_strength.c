@@ -416,7 +416,7 @@ static void test_piston_pb_melt(void **state) {
   eos_destroy(&eos);
 }
 
-/* Johnson–Cook closed form [JC1983] for Cu_OFHC_JC (A 0.090, B 0.292 GPa, n 0.31, C 0.025,
+/* Johnson–Cook closed form [JohnsonCook1983] for Cu_OFHC_JC (A 0.090, B 0.292 GPa, n 0.31, C 0.025,
  * m 1.09, T_melt 1356 K, T_room 300 K); the values computed by hand (6 digits):
  *  ε_p 0,   ε̇ ≤ 1/s,   T 300: Y = A = 0.0900000
  *  ε_p 0.1, ε̇ 1/s,     T 300: 0.1^0.31 = 0.489779, Y = 0.09 + 0.292·0.489779 = 0.233015
