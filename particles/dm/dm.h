@@ -235,14 +235,15 @@ size_t dm_problem_final_state(const dm_problem *p, const double **w, const doubl
 typedef enum dm_yield {
   DM_YIELD_NONE = 0,
   DM_YIELD_ELASTIC_PLASTIC = 1,
-  DM_YIELD_STEINBERG_GUINAN = 2 /* G(P, T), Y(ε_p, P, T), melt (dm_strength.c) */
+  DM_YIELD_STEINBERG_GUINAN = 2, /* G(P, T), Y(ε_p, P, T), melt (dm_strength.c) */
+  DM_YIELD_JOHNSON_COOK = 3      /* G0, Y(ε_p, ε̇, T) (dm_strength.c) */
 } dm_yield;
 typedef struct dm_sg dm_sg; /* Steinberg–Guinan parameters (dm_impl.h) */
 typedef struct dm_fin_material {
   const eos_t *eos; /* not owned */
   int yield;        /* dm_yield */
   double G, Y0;     /* shear modulus, yield stress (GPa); G0, Y0 for steinberg_guinan */
-  const dm_sg *sg;  /* steinberg_guinan: its parameters (not owned), else NULL */
+  const dm_sg *sg;  /* steinberg_guinan, johnson_cook: its parameters (not owned), else NULL */
 } dm_fin_material;
 typedef struct dm_fin_params {
   double cq, cl;    /* quadratic and linear viscosity coefficients */

@@ -14,7 +14,8 @@ static const char *const profile_names[] = {
     "none", "rod_triangle", "rod_sine", "contact_harmonic", "random_velocity", NULL};
 
 static const char *const response_names[] = {"linear_elastic", "eos", NULL};
-static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan",
+                                          "johnson_cook", NULL};
 
 static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                         dk_errors *e) {
@@ -92,15 +93,19 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
                  "meaning",
                  ly->name);
       if (ly->yield == DM_YIELD_STEINBERG_GUINAN) ly->G = ly->sg.G0, ly->Y0 = ly->sg.Y0;
+      else if (ly->yield == DM_YIELD_JOHNSON_COOK) ly->G = ly->sg.G0, ly->Y0 = ly->sg.jA;
       else if (!(ly->G > 0))
         dk_error(e, doc, it,
                  "discrete_model.layers: yield: elastic_plastic needs the material's "
                  "shear_modulus > 0 (GPa), got %g",
                  ly->G);
-      if (ly->yield == DM_YIELD_STEINBERG_GUINAN) {
+      if (ly->yield >= DM_YIELD_STEINBERG_GUINAN) {
         if (dk_get(it, "yield_stress"))
-          dk_error(e, doc, dk_get(it, "yield_stress"),
-                   "discrete_model.layers: with steinberg_guinan give Y0 as strength.yield_stress");
+          dk_error(e, doc, dk_get(it, "yield_stress"), "%s",
+                   ly->yield == DM_YIELD_STEINBERG_GUINAN
+                       ? "discrete_model.layers: with steinberg_guinan give Y0 as "
+                         "strength.yield_stress"
+                       : "discrete_model.layers: 'yield_stress' needs yield: elastic_plastic");
       } else if (!dk_get(it, "yield_stress"))
         dk_error(e, doc, it, "discrete_model.layers: yield: elastic_plastic needs 'yield_stress'");
       else dk_read_positive(e, doc, it, "yield_stress", MS_DIM_PRESSURE, true, 0, &ly->Y0);

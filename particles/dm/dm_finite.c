@@ -82,14 +82,21 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   const double q = trD < 0 ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
-  double G = mt->G, Y = mt->Y0;                 /* elastic_plastic: constants */
-  if (mt->yield == DM_YIELD_STEINBERG_GUINAN) { /* G(p, T), Y(ε_p, p, T) of this state */
+  double G = mt->G, Y = mt->Y0; /* elastic_plastic: constants */
+  if (mt->yield >=
+      DM_YIELD_STEINBERG_GUINAN) { /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T) */
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
     if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
       return -1.0;
     }
-    dm_sg_moduli(mt->sg, rho / eos_rho0(mt->eos), p, T, f->eps_p[i], &G, &Y);
+    if (mt->yield == DM_YIELD_JOHNSON_COOK) { /* rate: √(2/3 D′:D′) of this step's L */
+      double dd = 0;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) dd += 0.25 * pow(L[3 * a + b] + L[3 * b + a], 2);
+      const double rate = sqrt(2.0 / 3.0 * fmax(dd - trD * trD / 3.0, 0.0));
+      G = mt->sg->G0, Y = dm_jc_yield(mt->sg, f->eps_p[i], rate, T);
+    } else dm_sg_moduli(mt->sg, rho / eos_rho0(mt->eos), p, T, f->eps_p[i], &G, &Y);
   }
   if (strength && dt > 0) {
     /* Jaumann: ṡ = 2G D′ + W s − s W (D = sym L, W = skew L) */
@@ -270,7 +277,7 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
     return MS_ERR_INPUT;
   for (size_t i = 0; i < st->n; ++i)
-    if (mat[imat[i]].yield == DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) return MS_ERR_INPUT;
+    if (mat[imat[i]].yield >= DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) return MS_ERR_INPUT;
   dm_fin *f = ms_calloc(1, sizeof *f);
   size_t n = st->n, n1 = n ? n : 1;
   f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;

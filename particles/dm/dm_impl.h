@@ -27,6 +27,9 @@ struct dm_sg {
   double beta, n, eps_i; /* hardening */
   double Tm0, gamma0, a; /* melt curve (K, −, −) */
   double cv, T0;         /* specific heat kJ/(g·K), reference temperature K */
+  /* johnson_cook (dm_jc_yield): Y = (A + B ε_p^n)(1 + C ln ε̇*)(1 − T*^m), T_melt in Tm0, T_room
+   * in T0, G0 constant, the same T(ρ, e) route (cv, T0) as steinberg_guinan */
+  double jA, jB, jn, jC, jm; /* GPa, GPa, −, −, − */
 };
 /* A built-in parameter set by name (Al6061_T6, Cu_OFHC, Pb, Sn; docs/particles-dm.md); false if
  * unknown. dm_sg_set_names: the names, comma-separated (for messages). */
@@ -38,6 +41,11 @@ double dm_sg_temperature(const dm_sg *sg, const eos_t *eos, double rho, double e
 /* G and Y (GPa) at η = ρ/ρ0, pressure p (GPa), temperature T (K), plastic strain ε_p. */
 void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p, double *G,
                   double *Y);
+/* Johnson–Cook [JohnsonCook1983]: Y (GPa) at plastic strain ε_p, equivalent strain rate (1/code time) and
+ * T (K); ε̇* = max(rate/ε̇0, 1), ε̇0 = 1/s; T* = (T − T0)/(Tm0 − T0) clamped to [0, 1]; 0 for NaN T.
+ * dm_jc_set: the built-in set (Cu_OFHC_JC) by name, false if unknown. */
+double dm_jc_yield(const dm_sg *sg, double eps_p, double rate, double T);
+bool dm_jc_set(const char *name, dm_sg *out);
 /* The deck keys of one discrete_model layer: `strength_set` and/or `strength: {...}` with
  * yield: steinberg_guinan (errors otherwise), every value checked, located errors in *e.
  * eos may be NULL (already reported). */

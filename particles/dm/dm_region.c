@@ -23,7 +23,8 @@
 enum { SURF_FLAT = 0, SURF_SINE };
 static const char *const surface_names[] = {"flat", "sine", NULL};
 static const char *const response_names[] = {"eos", "linear_elastic", NULL};
-static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan", NULL};
+static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan",
+                                          "johnson_cook", NULL};
 
 typedef struct dm_region_params {
   ptl_region_params base;
@@ -128,6 +129,7 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
   /* the sample's EOS is not known here: its cold curve (the temperature) is checked at create */
   dm_sg_read(e, doc, P, p->yield, NULL, &p->sg);
   if (p->yield == DM_YIELD_STEINBERG_GUINAN) p->G = p->sg.G0, p->Y0 = p->sg.Y0;
+  if (p->yield == DM_YIELD_JOHNSON_COOK) p->G = p->sg.G0, p->Y0 = p->sg.jA;
   p->cq = 2.0, p->cl = 0.5;
   const dk_node *V = dk_get(P, "viscosity");
   if (V && dk_expect_map(e, doc, V, "particles.viscosity")) {
@@ -345,13 +347,13 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
     return st;
   }
   r->mat = (dm_fin_material){.eos = eos, .yield = p->yield, .G = p->G, .Y0 = p->Y0};
-  if (p->yield == DM_YIELD_STEINBERG_GUINAN) {
+  if (p->yield >= DM_YIELD_STEINBERG_GUINAN) {
     r->mat.sg = &p->sg; /* the parameters outlive the region (the deck's) */
     if (!isfinite(dm_sg_temperature(&p->sg, eos, rho0, e0))) {
       ms_log(ctx, MS_LOG_ERROR,
-             "coupled: particles: yield: steinberg_guinan takes the temperature from the EOS's "
+             "coupled: particles: yield: %s takes the temperature from the EOS's "
              "cold curve, and the sample's EOS (%s) has none",
-             eos_kind_name(eos_get_kind(eos)));
+             yield_names[p->yield], eos_kind_name(eos_get_kind(eos)));
       region_free(r);
       return MS_ERR_INPUT;
     }

@@ -73,6 +73,38 @@ void dm_sg_moduli(const dm_sg *sg, double eta, double p, double T, double eps_p,
   *Y = (f < sg->Ymax ? f : sg->Ymax) * *G / sg->G0;
 }
 
+/* ---- Johnson–Cook [JohnsonCook1983] ---- */
+
+/* OFHC copper of [JohnsonCook1983]: A 90 MPa, B 292 MPa, n 0.31, C 0.025, m 1.09, T_melt 1356 K. G0 and c_v
+ * (for T(ρ, e)) are not JC constants: G0 47.7 GPa and c_v 383 J/(kg·K) of the Cu_OFHC set of
+ * [Steinberg1996] above; T_room = 300 K, the temperature route's reference (T* = 0 at (ρ0, e0)). */
+bool dm_jc_set(const char *name, dm_sg *out) {
+  if (!name || strcmp(name, "Cu_OFHC_JC")) return false;
+  *out = (dm_sg){.G0 = 47.7,
+                 .jA = 0.090,
+                 .jB = 0.292,
+                 .jn = 0.31,
+                 .jC = 0.025,
+                 .jm = 1.09,
+                 .Tm0 = 1356.0,
+                 .cv = 383.0 * 1e-6,
+                 .T0 = 300.0};
+  return true;
+}
+
+/* ε̇0 = 1/s in the code's time unit (10 µs, core/units.c): 1e-5 per unit */
+#define JC_RATE0 1e-5
+
+double dm_jc_yield(const dm_sg *sg, double eps_p, double rate, double T) {
+  if (!(T == T)) return 0.0; /* unknown T: no strength (as steinberg_guinan) */
+  double ts = (T - sg->T0) / (sg->Tm0 - sg->T0);
+  ts = ts < 0 ? 0 : ts > 1 ? 1 : ts;
+  const double r = rate / JC_RATE0 > 1.0 ? rate / JC_RATE0 : 1.0;
+  const double h = sg->jA + sg->jB * (eps_p > 0 ? pow(eps_p, sg->jn) : 0.0);
+  const double y = h * (1.0 + sg->jC * log(r)) * (1.0 - pow(ts, sg->jm));
+  return y > 0 ? y : 0.0;
+}
+
 /* ---- deck ---- */
 
 static void rd(dk_errors *e, dk_doc *doc, const dk_node *map, const char *key, ms_dim dim, bool req,
@@ -85,10 +117,75 @@ static void rd_pos(dk_errors *e, dk_doc *doc, const dk_node *map, const char *ke
   if (map) dk_read_positive(e, doc, map, key, dim, req, *v, v);
 }
 
+static void cold_curve_check(dk_errors *e, dk_doc *doc, const dk_node *layer, const eos_t *eos,
+                             const dm_sg *out, const char *model) {
+  if (eos && out->cv > 0 && !isfinite(dm_sg_temperature(out, eos, eos_rho0(eos), eos_e0(eos))))
+    dk_error(e, doc, layer,
+             "discrete_model.layers: yield: %s takes the temperature from the EOS's cold curve, "
+             "and this EOS (%s) has none",
+             model, eos_kind_name(eos_get_kind(eos)));
+}
+
+/* yield: johnson_cook: `strength_set: Cu_OFHC_JC` and/or `johnson_cook: {A, B, n, C, m, T_melt,
+ * T_room, shear_modulus, cv}` (keys override the set; all but T_room required without it). */
+static void jc_read(dk_errors *e, dk_doc *doc, const dk_node *layer, const eos_t *eos, dm_sg *out) {
+  const dk_node *set = dk_get(layer, "strength_set"), *map = dk_get(layer, "johnson_cook");
+  if (dk_get(layer, "strength")) {
+    dk_error(e, doc, dk_get(layer, "strength"),
+             "discrete_model.layers: with yield: johnson_cook give the constants as "
+             "'johnson_cook: {...}'");
+    dk_mark_used(layer, "strength");
+  }
+  bool have = false;
+  out->T0 = 300.0;
+  if (set) {
+    const char *nm = dk_scalar(set);
+    if (!dm_jc_set(nm, out))
+      dk_error(e, doc, set,
+               "discrete_model.layers: unknown johnson_cook strength_set '%s' (known: Cu_OFHC_JC)",
+               nm ? nm : "(not a name)");
+    have = true;
+  }
+  if (map && !dk_expect_map(e, doc, map, "discrete_model.layers.johnson_cook")) {
+    dk_mark_used(layer, "johnson_cook");
+    return;
+  }
+  if (!have && !map) {
+    dk_error(e, doc, layer,
+             "discrete_model.layers: yield: johnson_cook needs 'strength_set: Cu_OFHC_JC' or "
+             "'johnson_cook: {A, B, n, C, m, T_melt, T_room, shear_modulus, cv}'");
+    return;
+  }
+  const bool req = !have;
+  rd_pos(e, doc, map, "A", MS_DIM_PRESSURE, req, &out->jA);
+  rd(e, doc, map, "B", MS_DIM_PRESSURE, req, 0.0, &out->jB);
+  rd(e, doc, map, "n", MS_DIM_NONE, req, 0.0, &out->jn);
+  rd(e, doc, map, "C", MS_DIM_NONE, req, 0.0, &out->jC);
+  rd_pos(e, doc, map, "m", MS_DIM_NONE, req, &out->jm);
+  rd_pos(e, doc, map, "T_melt", MS_DIM_TEMPERATURE, req, &out->Tm0);
+  rd_pos(e, doc, map, "T_room", MS_DIM_TEMPERATURE, false, &out->T0);
+  rd_pos(e, doc, map, "shear_modulus", MS_DIM_PRESSURE, req, &out->G0);
+  rd_pos(e, doc, map, "cv", MS_DIM_SPEC_ENERGY, req, &out->cv); /* kJ/(g·K) */
+  if (out->T0 > 0 && out->Tm0 > 0 && !(out->T0 < out->Tm0))
+    dk_error(e, doc, map ? map : layer,
+             "discrete_model.layers: johnson_cook: T_room = %g K is not below T_melt = %g K",
+             out->T0, out->Tm0);
+  cold_curve_check(e, doc, layer, eos, out, "johnson_cook");
+}
+
 void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
                 dm_sg *out) {
   const dk_node *set = dk_get(layer, "strength_set"), *map = dk_get(layer, "strength");
   memset(out, 0, sizeof *out);
+  if (yield == DM_YIELD_JOHNSON_COOK) {
+    jc_read(e, doc, layer, eos, out);
+    return;
+  }
+  if (dk_get(layer, "johnson_cook")) {
+    dk_error(e, doc, dk_get(layer, "johnson_cook"),
+             "discrete_model.layers: 'johnson_cook' needs yield: johnson_cook");
+    dk_mark_used(layer, "johnson_cook");
+  }
   if (yield != DM_YIELD_STEINBERG_GUINAN) {
     if (set)
       dk_error(e, doc, set,
@@ -146,12 +243,5 @@ void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, cons
              "discrete_model.layers: steinberg_guinan: T0 = %g K is not below the melt "
              "temperature %g K: no strength at the reference state",
              out->T0, out->Tm0);
-  if (eos && out->cv > 0) {
-    const double T = dm_sg_temperature(out, eos, eos_rho0(eos), eos_e0(eos));
-    if (!isfinite(T))
-      dk_error(e, doc, layer,
-               "discrete_model.layers: yield: steinberg_guinan takes the temperature from the "
-               "EOS's cold curve, and this EOS (%s) has none",
-               eos_kind_name(eos_get_kind(eos)));
-  }
+  cold_curve_check(e, doc, layer, eos, out, "steinberg_guinan");
 }

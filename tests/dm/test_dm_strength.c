@@ -191,6 +191,7 @@ typedef struct wave {
   double G;              /* G of the plastic state (prediction) */
   double energy_err, hg; /* energy balance / work, bond-penalty energy / work */
   double flat;           /* (max − min)/mean of −σ_xx over the precursor window */
+  double epsp, T;        /* mean ε_p and T(ρ, e) over the plastic window */
 } wave;
 
 /* A 1D piston into Cu; the precursor and the plastic-state averages as in test_dm_hugoniot's
@@ -243,12 +244,15 @@ static wave piston(const eos_t *eos, const dm_fin_material *mat, const dm_sg *sg
     const double *q = &L[8 * ix];
     w.sxx += q[6], w.p += q[4] + q[5], w.Y += 1.5 * (q[6] - q[4] - q[5]);
     double G = mat->G, Y = mat->Y0;
-    if (sg)
+    if (sg && mat->yield == DM_YIELD_JOHNSON_COOK) /* the plateau is steady: rate below ε̇0 */
+      Y = dm_jc_yield(sg, r.eps_p[ix], 0.0, dm_sg_temperature(sg, eos, q[3], q[7]));
+    else if (sg)
       dm_sg_moduli(sg, q[3] / rho0, q[4], dm_sg_temperature(sg, eos, q[3], q[7]), r.eps_p[ix], &G,
                    &Y);
+    w.epsp += r.eps_p[ix], w.T += sg ? dm_sg_temperature(sg, eos, q[3], q[7]) : 0.0;
     w.Yp += Y, w.G += G, n2 += 1;
   }
-  w.sxx /= n2, w.p /= n2, w.Y /= n2, w.Yp /= n2, w.G /= n2;
+  w.sxx /= n2, w.p /= n2, w.Y /= n2, w.Yp /= n2, w.G /= n2, w.epsp /= n2, w.T /= n2;
   free(r.profile);
   ms_ctx_close(&ctx);
   return w;
@@ -412,11 +416,115 @@ static void test_piston_pb_melt(void **state) {
   eos_destroy(&eos);
 }
 
+/* Johnson–Cook closed form [JohnsonCook1983] for Cu_OFHC_JC (A 0.090, B 0.292 GPa, n 0.31, C 0.025,
+ * m 1.09, T_melt 1356 K, T_room 300 K); the values computed by hand (6 digits):
+ *  ε_p 0,   ε̇ ≤ 1/s,   T 300: Y = A = 0.0900000
+ *  ε_p 0.1, ε̇ 1/s,     T 300: 0.1^0.31 = 0.489779, Y = 0.09 + 0.292·0.489779 = 0.233015
+ *  ε_p 0.1, ε̇ 1e3/s,   T 300: ln 1e3 = 6.907755, × (1 + 0.025·6.907755 = 1.172694) = 0.273256
+ *  ε_p 0.1, ε̇ 1/s,     T 828: T* = 528/1056 = 0.5, 0.5^1.09 = 0.469761, × 0.530239 = 0.123554
+ *  ε_p 0.5, ε̇ 1e5/s,   T 600: 0.5^0.31 = 0.806642 → 0.325539; ln 1e5 = 11.512925 → 1.287823;
+ *                              T* = 0.284091, T*^1.09 = 0.253670 → 0.746330; Y = 0.312889
+ * Rates are in the code's time unit (10 µs): 1/s = 1e-5. Tolerance 3e-6 relative: the hand values
+ * are rounded to 6 digits. */
+static void test_jc_closed_form(void **state) {
+  (void)state;
+  dm_sg jc;
+  assert_true(dm_jc_set("Cu_OFHC_JC", &jc));
+  const double s1 = 1e-5; /* 1/s */
+  close_rel(dm_jc_yield(&jc, 0.0, 0.0, 300.0), 0.0900000, 3e-6);
+  close_rel(dm_jc_yield(&jc, 0.0, 0.5 * s1, 300.0), 0.0900000, 3e-6); /* ε̇* clamped to 1 */
+  close_rel(dm_jc_yield(&jc, 0.1, s1, 300.0), 0.233015, 3e-6);
+  close_rel(dm_jc_yield(&jc, 0.1, 1e3 * s1, 300.0), 0.273256, 3e-6);
+  close_rel(dm_jc_yield(&jc, 0.1, s1, 828.0), 0.123554, 3e-6);
+  close_rel(dm_jc_yield(&jc, 0.5, 1e5 * s1, 600.0), 0.312889, 3e-6);
+  close_rel(dm_jc_yield(&jc, 0.1, s1, 200.0), 0.233015, 3e-6); /* T* clamped to 0 */
+  assert_true(dm_jc_yield(&jc, 0.1, s1, 1356.0) == 0.0);       /* T* = 1: molten */
+  assert_true(dm_jc_yield(&jc, 0.1, s1, 2000.0) == 0.0);       /* clamped to 1 */
+  assert_true(dm_jc_yield(&jc, 0.1, s1, NAN) == 0.0);
+  assert_false(dm_jc_set("Cu_OFHC", &jc));
+}
+
+/* JC deck keys: the set, the map (overriding), and located errors. */
+static void test_jc_deck(void **state) {
+  (void)state;
+  int ok;
+  dk_errors e = read_deck(DECK_HEAD "    - {material: cu, response: eos, yield: johnson_cook, "
+                                    "strength_set: Cu_OFHC_JC, johnson_cook: {C: 0.03}}\n"
+                                    "  t_end: 1.0\n",
+                          &ok);
+  assert_true(ok);
+  dk_errors_free(&e);
+  e = read_deck(DECK_HEAD "    - {material: cu, response: eos, yield: johnson_cook, johnson_cook: "
+                          "{A: 0.09, B: 0.292, n: 0.31, C: 0.025, m: 1.09, T_melt: 1356, "
+                          "T_room: 294, shear_modulus: 47.7, cv: 3.83e-4}}\n"
+                          "  t_end: 1.0\n",
+                &ok);
+  assert_true(ok);
+  dk_errors_free(&e);
+  e = read_deck(DECK_HEAD
+                "    - {material: cu, x_max: 1, response: eos, yield: johnson_cook, strength_set: "
+                "Cu_OFHC}\n"
+                "    - {material: cu, x_max: 2, response: eos, yield: johnson_cook}\n"
+                "    - {material: cu, x_max: 3, response: eos, yield: johnson_cook, johnson_cook: "
+                "{A: -0.09, B: 0.292, n: 0.31, C: 0.025, m: 1.09, T_melt: 1356, shear_modulus: "
+                "47.7, cv: 3.83e-4}}\n"
+                "    - {material: cu, x_max: 4, response: eos, yield: johnson_cook, strength_set: "
+                "Cu_OFHC_JC, johnson_cook: {T_room: 1400}}\n"
+                "    - {material: cu, x_max: 5, response: eos, yield: steinberg_guinan, "
+                "strength_set: Cu_OFHC, johnson_cook: {A: 0.1}}\n"
+                "    - {material: cu, response: eos, yield: johnson_cook, strength_set: "
+                "Cu_OFHC_JC, yield_stress: 0.1}\n"
+                "  t_end: 1.0\n",
+                &ok);
+  assert_false(ok);
+  dk_errors_print(&e, stderr);
+  assert_true(has_error(&e, "deck.yaml:11:") && has_error(&e, "unknown johnson_cook strength_set"));
+  assert_true(has_error(&e, "deck.yaml:12:") && has_error(&e, "needs 'strength_set: Cu_OFHC_JC'"));
+  assert_true(has_error(&e, "deck.yaml:13:")); /* negative A */
+  assert_true(has_error(&e, "deck.yaml:14:") && has_error(&e, "not below T_melt"));
+  assert_true(has_error(&e, "deck.yaml:15:") && has_error(&e, "needs yield: johnson_cook"));
+  assert_true(has_error(&e, "deck.yaml:16:") && has_error(&e, "needs yield: elastic_plastic"));
+  dk_errors_free(&e);
+}
+
+/* Uniaxial-strain piston into OFHC Cu with Johnson–Cook at 0.25 and 0.4 km/s. Behind the plastic
+ * front the state is steady (D′ → 0, so ε̇* = 1 and the rate factor is 1): the radial return
+ * holds σ_u = 3/2(−σ_xx − p − q) at Y_JC(ε_p, 1, T) of each layer's measured ε_p and T(ρ, e).
+ * Tolerance 2 %, as for steinberg_guinan: residual ringing in the window (strain rates that
+ * would raise Y through C ln ε̇*) and the window average. Work hardening must show (Y > A). */
+static void test_piston_cu_jc(void **state) {
+  (void)state;
+  eos_t *eos = cu_eos();
+  dm_sg jc;
+  assert_true(dm_jc_set("Cu_OFHC_JC", &jc));
+  const dm_fin_material mat = {
+      .eos = eos, .yield = DM_YIELD_JOHNSON_COOK, .G = jc.G0, .Y0 = jc.jA, .sg = &jc};
+  const double rho0 = eos_rho0(eos), K = rho0 * pow(eos_c0(eos), 2);
+  const double hel = jc.jA * (K + 4 * jc.G0 / 3) / (2 * jc.G0);
+  const double upv[2] = {0.25, 0.4};
+  for (int j = 0; j < 2; ++j) {
+    const wave w = piston(eos, &mat, &jc, upv[j], hel, 1, 1500);
+    if (print_on())
+      printf("Cu JC up %.2f: HEL %.5f (quasi-static closed form %.5f); behind: -sxx %.4f, "
+             "p+q %.4f, eps_p %.4f, T %.1f K, Y %.5f (JC %.5f, %+.3f %%), energy %.1e\n",
+             upv[j], w.amp, hel, w.sxx, w.p, w.epsp, w.T, w.Y, w.Yp, 100 * (w.Y / w.Yp - 1),
+             w.energy_err);
+    assert_true(fabs(w.Y / w.Yp - 1) < 0.02);
+    assert_true(w.Yp > jc.jA && w.epsp > 0);
+    /* the precursor yields at the elastic front's strain rate (~1e4–1e5 /s), so the HEL lies
+     * above the quasi-static closed form with A by the rate factor 1 + C ln ε̇* (> 1.1 there) */
+    assert_true(w.amp > 1.1 * hel);
+    assert_true(w.energy_err < 1e-6);
+  }
+  eos_destroy(&eos);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_closed_forms),   cmocka_unit_test(test_deck),
       cmocka_unit_test(test_piston_cu),      cmocka_unit_test(test_piston_al_2d),
-      cmocka_unit_test(test_piston_pb_melt),
+      cmocka_unit_test(test_piston_pb_melt), cmocka_unit_test(test_jc_closed_form),
+      cmocka_unit_test(test_jc_deck),        cmocka_unit_test(test_piston_cu_jc),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
