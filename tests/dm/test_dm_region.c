@@ -375,6 +375,23 @@ static void test_deck_errors(void **state) {
   expect_error(SECTION("  yield: elastic_plastic\n  shear_modulus: 26\n"), "region.yaml",
                "yield_stress");
   expect_error(SECTION("  yield: steinberg_guinan\n"), "region.yaml", "strength_set");
+  expect_error(SECTION("  yield: johnson_cook\n"), "region.yaml", "Cu_OFHC_JC");
+  expect_error(
+      SECTION("  yield: johnson_cook\n  strength_set: Cu_OFHC_JC\n  johnson_cook: {m: -1}\n"),
+      "region.yaml", "johnson_cook.m");
+  { /* yield: johnson_cook with the built-in set reads cleanly, G0 from the set */
+    dk_errors e;
+    dk_errors_init(&e);
+    dk_doc *doc;
+    ptl_region_params *pp =
+        read(SECTION("  yield: johnson_cook\n  strength_set: Cu_OFHC_JC\n"), &e, &doc);
+    if (e.n) dk_errors_print(&e, stderr);
+    assert_non_null(pp);
+    assert_int_equal(e.n, 0);
+    ptl_region_params_destroy(&pp);
+    dk_free(doc);
+    dk_errors_free(&e);
+  }
   expect_error(SECTION("  yield_stress: 0.3\n"), "region.yaml:5:17",
                "needs yield: elastic_plastic");
   expect_error("particles:\n  r0: 1.0e-3\n  width: 0.004\n", "region.yaml:3:10",
