@@ -242,6 +242,25 @@ ms_status dm_fin_step(dm_fin *f) {
   return r;
 }
 
+void dm_fs_history_init(dm_fs_history *h, size_t cap) {
+  *h = (dm_fs_history){.rows = ms_calloc(2 * cap, sizeof(double)), .cap = cap, .stride = 1};
+}
+
+void dm_fs_history_record(dm_fs_history *h, long step, double t, const dm_state *s, long nx,
+                          long nyz) {
+  if (step % h->stride != 0) return;
+  if (h->n == h->cap) {
+    for (size_t r = 0; r < h->n / 2; ++r)
+      memmove(&h->rows[2 * r], &h->rows[4 * r], 2 * sizeof(double));
+    h->n /= 2, h->stride *= 2;
+    if (step % h->stride != 0) return;
+  }
+  double ux = 0;
+  for (long j = 0; j < nyz; ++j) ux += s->u[3 * (size_t)(j * nx + nx - 1)];
+  h->rows[2 * h->n] = t, h->rows[2 * h->n + 1] = ux / (double)nyz;
+  ++h->n;
+}
+
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass) {
   const dm_state *st = f->m->s;
   double K = 0, U = 0, H = 0;

@@ -55,23 +55,11 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
   dm_fin_energies(f, &K, &U, &H);
   const double E0 = K + U + H;
   res->K0 = K;
-  double *hist = ms_calloc(2 * sp->nhist, sizeof(double));
-  size_t nh = 0;
-  long stride = 1; /* record every stride-th step; doubled (and the rows thinned) when full */
+  dm_fs_history fs;
+  dm_fs_history_init(&fs, sp->nhist);
   double t = 0.0, dEmax = 0.0;
   for (long step = 0;; ++step) {
-    if (step % stride == 0) {
-      if (nh == sp->nhist) {
-        for (size_t r = 0; r < nh / 2; ++r) memmove(&hist[2 * r], &hist[4 * r], 2 * sizeof(double));
-        nh /= 2, stride *= 2;
-      }
-      if (step % stride == 0) {
-        double ux = 0;
-        for (long j = 0; j < ny * nz; ++j) ux += s.u[3 * (size_t)(j * nx + nx - 1)];
-        hist[2 * nh] = t, hist[2 * nh + 1] = ux / (double)(ny * nz);
-        ++nh;
-      }
-    }
+    dm_fs_history_record(&fs, step, t, &s, nx, ny * nz);
     if (t >= sp->t_end * (1 - 1e-12) || st != MS_OK) break;
     if (t + f->dt_next > sp->t_end) f->dt_next = sp->t_end - t;
     t += f->dt_next;
@@ -80,7 +68,7 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
     dEmax = fmax(dEmax, fabs(K + U + H - E0));
   }
   res->steps = f->step;
-  res->hist = hist, res->nhist = nh;
+  res->hist = fs.rows, res->nhist = fs.n;
   res->energy_err = res->K0 > 0 ? dEmax / res->K0 : dEmax;
   res->hg_ratio = res->K0 > 0 ? H / res->K0 : H;
   double *lay = ms_calloc((size_t)nx * 8, sizeof(double));

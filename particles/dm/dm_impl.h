@@ -60,4 +60,16 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
   for (int a = 0; a < 3; ++a) xi[a] = X[3 * k + a] + sh[a] - X[3 * i + a];
 }
 
+/* A free-surface history of fixed size: (t, mean u_x of the last x layer of an nx × nyz slab)
+ * recorded every `stride`-th step; when full, every other row is dropped and the stride
+ * doubled, so any run length fits (dm_finite.c). */
+typedef struct dm_fs_history {
+  double *rows; /* [cap][2] (owned: free) */
+  size_t n, cap;
+  long stride;
+} dm_fs_history;
+void dm_fs_history_init(dm_fs_history *h, size_t cap);
+void dm_fs_history_record(dm_fs_history *h, long step, double t, const dm_state *s, long nx,
+                          long nyz);
+
 #endif

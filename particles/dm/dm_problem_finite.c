@@ -79,12 +79,9 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   double *eh = ms_calloc(nemax * 7, sizeof(double));
   size_t ne = 0;
   char *done = ms_calloc(p->nprofile_times + 1, 1);
-  /* free-surface history: mean u_x of the last x layer of real particles, every step, thinned by
-   * 2 (every other row dropped, the stride doubled) whenever the fixed buffer is full */
-  const size_t nfsmax = 8192;
-  double *fs = flyer ? ms_calloc(2 * nfsmax, sizeof(double)) : NULL;
-  size_t nfs = 0;
-  long fs_stride = 1;
+  /* free-surface history of the flyer problem (dm_fs_history: thinned when full) */
+  dm_fs_history fs = {0};
+  if (flyer) dm_fs_history_init(&fs, 8192);
   double K, U, H;
   dm_fin_energies(f, &K, &U, &H);
   const double E0 = K + U + H;
@@ -105,19 +102,7 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
         dmp_write_fin_profile(ctx, p, f, nreal, t, (int)q, bins);
         done[q] = 1;
       }
-    if (fs && step % fs_stride == 0) {
-      if (nfs == nfsmax) {
-        for (size_t r = 0; r < nfs / 2; ++r) memmove(&fs[2 * r], &fs[4 * r], 2 * sizeof(double));
-        nfs /= 2, fs_stride *= 2;
-      }
-      if (step % fs_stride == 0) {
-        const long nyz = p->ncell[1] * p->ncell[2];
-        double ux = 0;
-        for (long j = 0; j < nyz; ++j) ux += s.u[3 * (size_t)(j * nx + nx - 1)];
-        fs[2 * nfs] = t, fs[2 * nfs + 1] = ux / (double)nyz;
-        ++nfs;
-      }
-    }
+    if (flyer) dm_fs_history_record(&fs, step, t, &s, nx, p->ncell[1] * p->ncell[2]);
     if (last) break;
     if (t + f->dt_next > t_end) f->dt_next = t_end - t;
     const double dt = f->dt_next, w0 = ms_wall_time();
@@ -157,13 +142,13 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
         "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0", 6, nm, un,
         eh, ne);
   }
-  if (fs) {
+  if (flyer) {
     const char *nm[] = {"t", "u_free_surface"}, *un[] = {"10 us", "km/s"};
     dmp_write_series(ctx, "dm_fin_free_surface.csv",
                      "free-surface velocity: mean x velocity of the last x layer of particles", 2,
-                     nm, un, fs, nfs);
+                     nm, un, fs.rows, fs.n);
   }
-  free(fs), free(bins), free(eh), free(done), free(mat), free(imat);
+  free(fs.rows), free(bins), free(eh), free(done), free(mat), free(imat);
   dm_fin_destroy(&f);
   dm_model_destroy(&m);
   dm_state_free(&s);

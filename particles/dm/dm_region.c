@@ -453,6 +453,18 @@ static ms_status region_init(ptl_region *r) {
   return MS_OK;
 }
 
+/* The particle view's velocities, which the coupling may have changed since the step (drag
+ * kicks), back into the model's free particles (u is the model's array, not the region's). */
+static void take_view_velocities(const dm_region *r) {
+  const ptl_state *ps = r->ps;
+  double *u = r->s.u;
+  for (size_t i = 0; i < r->s.n; i++)
+    if (r->s.bc[i] != DM_PRESCRIBED) {
+      u[3 * i] = ps->vx[i], u[3 * i + 1] = ps->vy[i];
+      if (ps->dim == 3) u[3 * i + 2] = ps->vz[i];
+    }
+}
+
 static ms_status region_step(ptl_region *rr) {
   dm_region *r = dmr(rr);
   dm_state *s = &r->s;
@@ -467,15 +479,10 @@ static ms_status region_step(ptl_region *rr) {
     par_bcast_doubles(r->ps->vy, s->n, 0);
     if (three) par_bcast_doubles(r->ps->vz, s->n, 0);
   }
-  for (size_t i = 0; i < s->n; i++) {
-    double *u = &s->u[3 * i];
-    if (s->bc[i] == DM_PRESCRIBED) {
-      for (int a = 0; a < 3; a++) u[a] = a < s->dim ? up * r->pis.dir[a] : 0.0;
-    } else {
-      u[0] = ps->vx[i], u[1] = ps->vy[i];
-      if (three) u[2] = ps->vz[i];
-    }
-  }
+  take_view_velocities(r);
+  for (size_t i = 0; i < s->n; i++)
+    if (s->bc[i] == DM_PRESCRIBED)
+      for (int a = 0; a < 3; a++) s->u[3 * i + a] = a < s->dim ? up * r->pis.dir[a] : 0.0;
   r->f->dt_next = dt;
   ms_status st = dm_fin_step(r->f);
   r->t += dt;
@@ -586,10 +593,7 @@ static ms_status region_checkpoint_write(const ptl_region *rr, ms_h5 *h, const m
   (void)ctx;
   const dm_region *r = cdmr(rr);
   const ptl_state *ps = r->ps;
-  double *u = r->s.u;
-  for (size_t i = 0; i < r->s.n; i++)
-    if (r->s.bc[i] != DM_PRESCRIBED)
-      u[3 * i] = ps->vx[i], u[3 * i + 1] = ps->vy[i], u[3 * i + 2] = ps->dim == 3 ? ps->vz[i] : 0;
+  take_view_velocities(r); /* what the next step would take, so the checkpoint holds it */
   ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm", r->rank == 0);
   int64_t *flags = ms_calloc(r->s.n + 1, sizeof *flags);
   for (size_t i = 0; i < r->s.n; i++) flags[i] = ps->flags[i];

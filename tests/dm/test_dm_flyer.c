@@ -251,31 +251,28 @@ static fcase pb_case(void) {
   return (fcase){"Pb", eos_create_mg_cold(11.34, 1.972, 3.0, 2.0, false), 1.0};
 }
 
+/* one case on a dim-D lattice with ny periodic rows (and columns in 3D), its EOS released */
+static void run_case(fcase c, int dim, long ny) {
+  flyer_case(&c, dim, ny);
+  eos_destroy(&c.eos);
+}
 static void test_al(void **state) {
   (void)state;
-  fcase c = al_case();
-  flyer_case(&c, 1, 1);
-  eos_destroy(&c.eos);
+  run_case(al_case(), 1, 1);
 }
 static void test_pb(void **state) {
   (void)state;
-  fcase c = pb_case();
-  flyer_case(&c, 1, 1);
-  eos_destroy(&c.eos);
+  run_case(pb_case(), 1, 1);
 }
 /* The same planar problem on a 2D (5 periodic rows) and a 3D (5 × 5) lattice: the periodic
  * width must exceed 3 horizons */
 static void test_al_2d(void **state) {
   (void)state;
-  fcase c = al_case();
-  flyer_case(&c, 2, 5);
-  eos_destroy(&c.eos);
+  run_case(al_case(), 2, 5);
 }
 static void test_pb_3d(void **state) {
   (void)state;
-  fcase c = pb_case();
-  flyer_case(&c, 3, 5);
-  eos_destroy(&c.eos);
+  run_case(pb_case(), 3, 5);
 }
 /* The fan at h and h/2: each within 3 spacings / W, and the error first order in h (it falls by
  * at least 1.5 when h halves: the smearing is proportional to the spacing). */
