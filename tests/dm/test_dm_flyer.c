@@ -131,6 +131,24 @@ typedef struct fcase {
   double v; /* impact speed (km/s) */
 } fcase;
 
+/* The flyer spec of these tests: fc's material for flyer and target, the flyer at fc->v onto
+ * the target at rest, horizon 1.5, default_par; nlat periodic rows (and columns in 3D). */
+static dm_flyer_spec flyer_spec(const fcase *fc, int dim, long nf, long nt, long nlat, double h,
+                                double t_end, size_t nhist) {
+  return (dm_flyer_spec){.dim = dim,
+                         .nflyer = nf,
+                         .ntarget = nt,
+                         .ny = nlat,
+                         .nz = nlat,
+                         .h = h,
+                         .horizon = 1.5,
+                         .mat = {{.eos = fc->eos}, {.eos = fc->eos}},
+                         .u = {fc->v, 0.0},
+                         .par = default_par(h),
+                         .t_end = t_end,
+                         .nhist = nhist};
+}
+
 /* Symmetric impact: flyer Lf = 2 Lt so that the flyer's rear release reaches the free surface
  * only after ≈ 4 t_a (t_a = Lt/D the breakout): the plateau window [1.2 t_a, 2.5 t_a] lies
  * between the arrival's rise and that release, for both materials. */
@@ -146,18 +164,7 @@ static void flyer_case(const fcase *fc, int dim, long nlat) {
   release_solve(fc->eos, hp.rho, hp.e, u1, &rl);
   const double ta_ex = Lt / hp.us, t_end = 2.6 * ta_ex;
 
-  dm_flyer_spec sp = {.dim = dim,
-                      .nflyer = nf,
-                      .ntarget = nt,
-                      .ny = nlat,
-                      .nz = nlat,
-                      .h = h,
-                      .horizon = 1.5,
-                      .mat = {{.eos = fc->eos}, {.eos = fc->eos}},
-                      .u = {fc->v, 0.0},
-                      .par = default_par(h),
-                      .t_end = t_end,
-                      .nhist = 20000};
+  dm_flyer_spec sp = flyer_spec(fc, dim, nf, nt, nlat, h, t_end, 20000);
   dm_flyer_result r;
   assert_int_equal(dm_flyer_run(&sp, &ctx, &r), MS_OK);
   const size_t ng = 2000;
@@ -205,18 +212,7 @@ static double fan_case(const fcase *fc, double h) {
   release rl;
   release_solve(fc->eos, hp.rho, hp.e, u1, &rl);
   const double tb = Lt / hp.us, t = 1.5 * tb;
-  dm_flyer_spec sp = {.dim = 1,
-                      .nflyer = nf,
-                      .ntarget = nt,
-                      .ny = 1,
-                      .nz = 1,
-                      .h = h,
-                      .horizon = 1.5,
-                      .mat = {{.eos = fc->eos}, {.eos = fc->eos}},
-                      .u = {fc->v, 0.0},
-                      .par = default_par(h),
-                      .t_end = t,
-                      .nhist = 100};
+  dm_flyer_spec sp = flyer_spec(fc, 1, nf, nt, 1, h, t, 100);
   dm_flyer_result r;
   assert_int_equal(dm_flyer_run(&sp, &ctx, &r), MS_OK);
   const double Xfs = Lf + Lt, W = rl.cl[0] * (t - tb);
