@@ -79,5 +79,9 @@ double cont_cell_volume(const cont_grid *g, double xl, double xr);
 void cont_layer_sizes(const cont_layer_spec *L, double *dx);
 /* Record the current state into every tag's history. */
 void cont_record_tags(cont_grid *g);
+/* A boundary history from deck map m: exactly one of value, table, file, pulse
+ * (docs/input-continuum.md); `what` names it in messages (deck.c; the 1D and 2D decks). */
+bool cont_fn_read(dk_errors *e, dk_doc *doc, const dk_node *m, const char *what, ms_dim vdim,
+                  cont_fn *fn);
 
 #endif

@@ -85,6 +85,42 @@ static bool read_history_table(dk_errors *e, dk_doc *doc, const dk_node *bcmap, 
   return ok;
 }
 
+/* A history in map m: exactly one of value, table, file, pulse (docs/input-continuum.md);
+ * `what` names it in messages. Shared by the 1D and 2D decks. */
+bool cont_fn_read(dk_errors *e, dk_doc *doc, const dk_node *m, const char *what, ms_dim vdim,
+                  cont_fn *fn) {
+  memset(fn, 0, sizeof *fn);
+  const dk_node *val = dk_get(m, "value"), *tab = dk_get(m, "table"), *file = dk_get(m, "file"),
+                *pulse = dk_get(m, "pulse");
+  int given = !!val + !!tab + !!file + !!pulse;
+  if (given != 1) {
+    dk_error(e, doc, m, "%s: give exactly one of value, table, file, pulse", what);
+    return false;
+  }
+  if (val) {
+    fn->kind = CONT_FN_CONST;
+    return dk_node_double(e, doc, val, "value", vdim, &fn->value);
+  }
+  if (tab || file) return read_history_table(e, doc, m, vdim, fn);
+  if (!dk_expect_map(e, doc, pulse, "pulse")) return false;
+  size_t n0 = e->n;
+  int shape = 0;
+  dk_read_enum(e, doc, pulse, "shape", false, 0, pulse_names, &shape);
+  dk_read_double(e, doc, pulse, "amplitude", vdim, true, 0, -INFINITY, INFINITY, &fn->value);
+  dk_read_double(e, doc, pulse, "start", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &fn->t0);
+  if (shape == 0) {
+    fn->kind = CONT_FN_TRAPEZOID;
+    dk_read_double(e, doc, pulse, "rise", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &fn->rise);
+    dk_read_double(e, doc, pulse, "hold", MS_DIM_TIME, true, 0.0, 0.0, INFINITY, &fn->hold);
+    dk_read_double(e, doc, pulse, "fall", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &fn->fall);
+  } else {
+    fn->kind = CONT_FN_EXP_DECAY;
+    dk_read_double(e, doc, pulse, "rise", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &fn->rise);
+    dk_read_positive(e, doc, pulse, "decay", MS_DIM_TIME, true, 1.0, &fn->tau);
+  }
+  return e->n == n0;
+}
+
 /* A boundary: {type: wall|free|piston|pressure, value | table | file | pulse}. */
 static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *sec, const char *key, cont_bc *bc) {
   const dk_node *m = dk_get(sec, key);
@@ -99,36 +135,10 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *sec, const char *k
   if (!dk_read_enum(e, doc, m, "type", true, 0, bc_names, &kind)) return;
   bc->kind = (cont_bc_kind)kind;
   if (bc->kind == CONT_BC_WALL || bc->kind == CONT_BC_FREE) return;
-  ms_dim vdim = bc->kind == CONT_BC_PISTON ? MS_DIM_VELOCITY : MS_DIM_PRESSURE;
-  const dk_node *val = dk_get(m, "value"), *tab = dk_get(m, "table"), *file = dk_get(m, "file"),
-                *pulse = dk_get(m, "pulse");
-  int given = !!val + !!tab + !!file + !!pulse;
-  if (given != 1) {
-    dk_error(e, doc, m, "%s boundary: give exactly one of value, table, file, pulse", key);
-    return;
-  }
-  if (val) {
-    bc->fn.kind = CONT_FN_CONST;
-    dk_node_double(e, doc, val, "value", vdim, &bc->fn.value);
-  } else if (tab || file) {
-    read_history_table(e, doc, m, vdim, &bc->fn);
-  } else {
-    if (!dk_expect_map(e, doc, pulse, "pulse")) return;
-    int shape = 0;
-    dk_read_enum(e, doc, pulse, "shape", false, 0, pulse_names, &shape);
-    dk_read_double(e, doc, pulse, "amplitude", vdim, true, 0, -INFINITY, INFINITY, &bc->fn.value);
-    dk_read_double(e, doc, pulse, "start", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &bc->fn.t0);
-    if (shape == 0) {
-      bc->fn.kind = CONT_FN_TRAPEZOID;
-      dk_read_double(e, doc, pulse, "rise", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &bc->fn.rise);
-      dk_read_double(e, doc, pulse, "hold", MS_DIM_TIME, true, 0.0, 0.0, INFINITY, &bc->fn.hold);
-      dk_read_double(e, doc, pulse, "fall", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &bc->fn.fall);
-    } else {
-      bc->fn.kind = CONT_FN_EXP_DECAY;
-      dk_read_double(e, doc, pulse, "rise", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &bc->fn.rise);
-      dk_read_positive(e, doc, pulse, "decay", MS_DIM_TIME, true, 1.0, &bc->fn.tau);
-    }
-  }
+  char what[64];
+  snprintf(what, sizeof what, "%s boundary", key);
+  cont_fn_read(e, doc, m, what, bc->kind == CONT_BC_PISTON ? MS_DIM_VELOCITY : MS_DIM_PRESSURE,
+               &bc->fn);
 }
 
 static void read_layer(dk_errors *e, dk_doc *doc, const dk_node *L, size_t k,

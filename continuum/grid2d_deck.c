@@ -2,6 +2,7 @@
 /* grid2d_deck.c — the `grid2d` deck problem: read the section, build the 2D grid, run it with
  * HDF5 + XDMF snapshots (docs/continuum2d.md §8). */
 #include "cont2d.h"
+#include "cont_impl.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -37,6 +38,22 @@ static bool read_range(dk_errors *e, dk_doc *doc, const dk_node *map, const char
   return ok;
 }
 
+/* `key: number` (a constant) or `key: {value | table | file | pulse}` (a history, as in the 1D
+ * deck: docs/input-continuum.md). */
+static void read_history(dk_errors *e, dk_doc *doc, const dk_node *bc, const char *side,
+                         const char *key, ms_dim dim, cont_fn *fn) {
+  memset(fn, 0, sizeof *fn);
+  const dk_node *h = dk_get(bc, key);
+  if (h && dk_node_kind(h) == DK_MAP) {
+    char what[64];
+    snprintf(what, sizeof what, "%s.%s", side, key);
+    cont_fn_read(e, doc, h, what, dim, fn);
+    return;
+  }
+  fn->kind = CONT_FN_CONST;
+  dk_read_double(e, doc, bc, key, dim, true, 0, -INFINITY, INFINITY, &fn->value);
+}
+
 static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *key, c2d_bc *bc) {
   memset(bc, 0, sizeof *bc);
   const dk_node *n = bcs ? dk_get(bcs, key) : NULL;
@@ -50,14 +67,11 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *k
   if (bc->kind == C2D_BC_WALL) read_range(e, doc, n, "normal", MS_DIM_NONE, false, 0, 0, nv);
   bc->normal[0] = nv[0];
   bc->normal[1] = nv[1];
-  if (bc->kind == C2D_BC_PRESSURE) {
-    bc->fn.kind = CONT_FN_CONST;
-    dk_read_double(e, doc, n, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY,
-                   &bc->fn.value);
-  }
+  if (bc->kind == C2D_BC_PRESSURE)
+    read_history(e, doc, n, key, "pressure", MS_DIM_PRESSURE, &bc->fn);
   if (bc->kind == C2D_BC_PISTON) {
-    double sp = 0, dir[2] = {1, 0};
-    dk_read_double(e, doc, n, "velocity", MS_DIM_VELOCITY, true, 0, -INFINITY, INFINITY, &sp);
+    double dir[2] = {1, 0};
+    read_history(e, doc, n, key, "velocity", MS_DIM_VELOCITY, &bc->fn);
     dk_read_bool(e, doc, n, "radial", false, false, &bc->radial);
     read_range(e, doc, n, "direction", MS_DIM_NONE, false, 1, 0, dir);
     double l = hypot(dir[0], dir[1]);
@@ -67,8 +81,6 @@ static void read_bc(dk_errors *e, dk_doc *doc, const dk_node *bcs, const char *k
     }
     bc->dir[0] = dir[0] / l;
     bc->dir[1] = dir[1] / l;
-    bc->fn.kind = CONT_FN_CONST;
-    bc->fn.value = sp;
   }
 }
 
@@ -89,26 +101,37 @@ static void mesh_nodes(int type, long ni, long nj, const double xr[2], const dou
   }
 }
 
-/* Regions: rectangles (zone centres) with their own state and material; the rest keeps the
- * section's (rho0, e0, material mname). */
+/* Regions: zones whose centre lies in the box `x`, `y` (and the ring `radius` about the
+ * origin) get their own state and material; the rest keeps the section's (rho0, e0, material
+ * mname). Later regions win; zreg[z] = the region of zone z (or -1). `energy_total` (a total
+ * energy E spread with uniform e over the region's mass, e.g. a Sedov deposit) is kept in
+ * etot[r] (NAN otherwise) and applied once the grid knows its zone masses. */
 static void read_regions(dk_errors *e, dk_doc *doc, const dk_node *regs, const eos_materials *mats,
                          const char *mname, double rho0, double e0, long ni, size_t nz,
                          const double *x, const double *y, double *rho, double *en,
-                         const eos_t **eos, int *mid) {
+                         const eos_t **eos, int *mid, int *zreg, double *etot) {
   for (size_t r = 0; r < dk_seq_len(regs); ++r) {
     const dk_node *rg = dk_seq_at(regs, r);
+    etot[r] = NAN;
     if (!dk_expect_map(e, doc, rg, "region")) continue;
-    double bx[2], by[2], rr0 = rho0, er = NAN, pr = NAN;
+    double bx[2], by[2], br[2], rr0 = rho0, er = NAN, pr = NAN;
     read_range(e, doc, rg, "x", MS_DIM_LENGTH, false, -INFINITY, INFINITY, bx);
     read_range(e, doc, rg, "y", MS_DIM_LENGTH, false, -INFINITY, INFINITY, by);
+    read_range(e, doc, rg, "radius", MS_DIM_LENGTH, false, 0, INFINITY, br);
     dk_read_positive(e, doc, rg, "density", MS_DIM_DENSITY, false, rho0, &rr0);
     const char *rm = mname;
     dk_read_string(e, doc, rg, "material", false, mname, &rm);
     const eos_material *m2 = eos_materials_find(mats, rm, e, doc, rg);
+    const int nstate =
+        !!dk_get(rg, "pressure") + !!dk_get(rg, "energy") + !!dk_get(rg, "energy_total");
+    if (nstate > 1)
+      dk_error(e, doc, rg, "region %zu: give at most one of pressure, energy, energy_total", r);
     if (dk_get(rg, "pressure"))
       dk_read_double(e, doc, rg, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &pr);
     if (dk_get(rg, "energy"))
       dk_read_double(e, doc, rg, "energy", MS_DIM_SPEC_ENERGY, true, 0, -INFINITY, INFINITY, &er);
+    if (dk_get(rg, "energy_total"))
+      dk_read_positive(e, doc, rg, "energy_total", MS_DIM_ENERGY, true, 1, &etot[r]);
     if (!m2) continue;
     if (!isnan(pr) && !cont_energy_from_pressure(m2->eos, rr0, pr, &er)) {
       dk_error(e, doc, rg, "region %zu: no energy gives pressure %g at density %g", r, pr, rr0);
@@ -118,15 +141,40 @@ static void read_regions(dk_errors *e, dk_doc *doc, const dk_node *regs, const e
     for (size_t z = 0; z < nz; ++z) {
       size_t i = z % (size_t)ni, j = z / (size_t)ni, a = i + (size_t)(ni + 1) * j, w = ni + 1;
       double xc = 0.25 * (x[a] + x[a + 1] + x[a + w] + x[a + w + 1]);
-      double yc = 0.25 * (y[a] + y[a + 1] + y[a + w] + y[a + w + 1]);
-      if (xc >= bx[0] && xc <= bx[1] && yc >= by[0] && yc <= by[1]) {
+      double yc = 0.25 * (y[a] + y[a + 1] + y[a + w] + y[a + w + 1]), rc = hypot(xc, yc);
+      if (xc >= bx[0] && xc <= bx[1] && yc >= by[0] && yc <= by[1] && rc >= br[0] && rc <= br[1]) {
         rho[z] = rr0;
         en[z] = er;
         eos[z] = m2->eos;
         mid[z] = (int)(m2 - mats->m);
+        zreg[z] = (int)r;
       }
     }
   }
+}
+
+/* energy_total of the regions: e = E / (the region's mass as the grid counts it: per radian in
+ * r–z), so the grid's internal energy Σ m e holds E exactly; false (located error) for a region
+ * with no zone. */
+static bool apply_energy_totals(dk_errors *e, dk_doc *doc, const dk_node *regs, const c2d_grid *g,
+                                const int *zreg, const double *etot, double *en) {
+  c2d_view v = c2d_grid_view(g);
+  bool ok = true;
+  for (size_t r = 0; r < dk_seq_len(regs); ++r) {
+    if (isnan(etot[r])) continue;
+    double mass = 0;
+    for (size_t z = 0; z < v.nzones; ++z)
+      if (zreg[z] == (int)r) mass += v.mass[z];
+    if (!(mass > 0)) {
+      dk_error(e, doc, dk_seq_at(regs, r), "region %zu: energy_total: no zone centre lies in it",
+               r);
+      ok = false;
+      continue;
+    }
+    for (size_t z = 0; z < v.nzones; ++z)
+      if (zreg[z] == (int)r) en[z] = etot[r] / mass;
+  }
+  return ok;
 }
 
 /* Tag lines `tags: [{name, i | j}]` on the built grid. */
@@ -255,8 +303,14 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   }
   /* Regions: rectangles (zone centres) with their own state and material. */
   const dk_node *regs = dk_get(sec, "regions");
-  if (ok && regs && dk_expect_seq(e, doc, regs, "regions"))
-    read_regions(e, doc, regs, mats, mname, rho0, e0, ni, nz, x, y, rho, en, eos, mid);
+  int *zreg = malloc(nz * sizeof *zreg);
+  for (size_t z = 0; z < nz; ++z) zreg[z] = -1;
+  double *etot = calloc(regs ? dk_seq_len(regs) + 1 : 1, sizeof *etot);
+  bool has_etot = false;
+  if (ok && regs && dk_expect_seq(e, doc, regs, "regions")) {
+    read_regions(e, doc, regs, mats, mname, rho0, e0, ni, nz, x, y, rho, en, eos, mid, zreg, etot);
+    for (size_t r = 0; r < dk_seq_len(regs); ++r) has_etot |= !isnan(etot[r]);
+  }
   c2d_problem *p = NULL;
   if (ok && e->n == nerr0) {
     s.ni = (size_t)ni;
@@ -272,9 +326,14 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
     char msg[512];
     c2d_grid *g = NULL;
     c2d_grid_create(&s, &g, msg, sizeof msg);
-    if (!g) {
-      dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh entry */
-    } else {
+    if (!g) dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh */
+    if (g && has_etot) { /* the zone masses are the grid's: build it again with the deposit */
+      const bool dep = apply_energy_totals(e, doc, regs, g, zreg, etot, en);
+      c2d_grid_destroy(&g);
+      if (dep && c2d_grid_create(&s, &g, msg, sizeof msg) != MS_OK)
+        dk_error(e, doc, regs, "regions: energy_total: %s", msg);
+    }
+    if (g) {
       read_tags(e, doc, tags, ni, nj, g);
       c2d_grid_set_threads(g, (int)nthreads);
       p = calloc(1, sizeof *p);
@@ -293,6 +352,8 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   free(en);
   free(eos);
   free(mid);
+  free(zreg);
+  free(etot);
   return p;
 }
 
@@ -383,6 +444,32 @@ static ms_status write_xmf(const ms_ctx *ctx, const c2d_grid *g, long nk, const 
   return ms_afile_commit(&af);
 }
 
+/* grid2d_energy.csv: the energy budget at t = 0 and at every snapshot time. */
+static ms_status write_energy_csv(const ms_ctx *ctx, const double *rows, long n) {
+  char *path = ms_out_path(ctx, "grid2d_energy.csv");
+  ms_afile af;
+  ms_status s = ms_afile_open(&af, path);
+  free(path);
+  if (s) return s;
+  const char *const names[] = {"t", "step", "internal", "kinetic", "boundary_work", "balance"};
+  const char *const units[] = {ms_unit_label(MS_DIM_TIME),   "1",
+                               ms_unit_label(MS_DIM_ENERGY), ms_unit_label(MS_DIM_ENERGY),
+                               ms_unit_label(MS_DIM_ENERGY), "1"};
+  ms_csv_header(af.f,
+                "2D grid energy budget (per radian in r-z, per unit depth in x-y); balance = "
+                "(internal + kinetic - boundary_work - E0) / E0",
+                6, names, units);
+  for (long k = 0; k < n; ++k) ms_csv_row(af.f, 6, &rows[6 * k]);
+  return ms_afile_commit(&af);
+}
+
+static void energy_row(const c2d_grid *g, double e0, double *row) {
+  c2d_balance b = c2d_grid_balance(g);
+  row[0] = c2d_grid_time(g), row[1] = (double)c2d_grid_steps(g);
+  row[2] = b.internal, row[3] = b.kinetic, row[4] = b.work;
+  row[5] = (b.internal + b.kinetic - b.work - e0) / fmax(fabs(e0), b.internal + b.kinetic);
+}
+
 ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
   if (ctx->rank != 0) return par_agree_status(MS_OK); /* the grid runs on rank 0 */
   c2d_grid *g = p->grid;
@@ -393,6 +480,9 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
   bool out = ctx->outdir && ctx->outdir[0];
   long nk = 0, nmax = p->nsnap + 2;
   double *times = calloc((size_t)nmax, sizeof(double));
+  double *erows = calloc(6 * (size_t)nmax, sizeof(double));
+  long ne = 0;
+  energy_row(g, e0, &erows[6 * ne++]);
   ms_status s = MS_OK;
   if (out) {
     s = write_snapshot(ctx, g, nk);
@@ -411,13 +501,13 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
       if (!sw) sw = write_xmf(ctx, g, nk, times);
       if (sw && !st) st = sw;
     }
-    c2d_balance b = c2d_grid_balance(g);
-    double tot = b.internal + b.kinetic - b.work;
+    double *row = &erows[6 * (ne < nmax ? ne++ : ne - 1)];
+    energy_row(g, e0, row);
     ms_log(ctx, MS_LOG_INFO,
-           "grid2d: t = %.6g, step %ld: internal %.9g, kinetic %.9g, boundary work %.9g, "
+           "grid2d: t = %.6g %s, step %ld: internal %.9g, kinetic %.9g, boundary work %.9g %s, "
            "energy error %.3e (relative)",
-           c2d_grid_time(g), c2d_grid_steps(g), b.internal, b.kinetic, b.work,
-           fabs(tot - e0) / fmax(fabs(e0), b.internal + b.kinetic));
+           row[0], ms_unit_label(MS_DIM_TIME), c2d_grid_steps(g), row[2], row[3], row[4],
+           ms_unit_label(MS_DIM_ENERGY), fabs(row[5]));
     if (st != MS_OK) {
       ms_log(ctx, MS_LOG_ERROR, "grid2d: %s (last snapshot written at t = %.9g)", c2d_grid_error(g),
              c2d_grid_time(g));
@@ -433,7 +523,7 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     ms_h5 *f = ms_h5_create(path);
     free(path);
     ms_status sw = f ? MS_OK : MS_ERR_IO;
-    if (!sw) sw = ms_h5_write_doubles(f, "t", h.n, 1, h.t, "10us");
+    if (!sw) sw = ms_h5_write_doubles(f, "t", h.n, 1, h.t, ms_unit_label(MS_DIM_TIME));
     if (!sw) sw = ms_h5_write_doubles(f, "x", h.n, h.nnodes, h.x, "cm");
     if (!sw) sw = ms_h5_write_doubles(f, "y", h.n, h.nnodes, h.y, "cm");
     if (!sw) sw = ms_h5_write_doubles(f, "u", h.n, h.nnodes, h.u, "km/s");
@@ -441,6 +531,11 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     if (f) sw = sw ? (ms_h5_abort(f), sw) : ms_h5_close(f);
     if (sw && !s) s = sw;
   }
+  if (out) {
+    const ms_status sw = write_energy_csv(ctx, erows, ne);
+    if (sw && !s) s = sw;
+  }
   free(times);
+  free(erows);
   return par_agree_status(s);
 }
