@@ -196,6 +196,30 @@ static void read_tags(dk_errors *e, dk_doc *doc, const dk_node *tags, long ni, l
   }
 }
 
+/* Viscosity, hourglass, r–z form, time, output and thread keys of the section. */
+static void read_controls(dk_errors *e, dk_doc *doc, const dk_node *sec, c2d_setup *s,
+                          double *t_end, long *nsnap, long *nthreads) {
+  const dk_node *visc = dk_get(sec, "viscosity");
+  if (visc && dk_expect_map(e, doc, visc, "viscosity")) {
+    dk_read_double(e, doc, visc, "q1", MS_DIM_NONE, false, s->q1, 0, INFINITY, &s->q1);
+    dk_read_double(e, doc, visc, "q2", MS_DIM_NONE, false, s->q2, 0, INFINITY, &s->q2);
+    dk_read_double(e, doc, visc, "gamma", MS_DIM_NONE, false, s->q_gamma, 1, INFINITY, &s->q_gamma);
+    dk_read_bool(e, doc, visc, "limiter", false, true, &s->use_limiter);
+  }
+  dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, 0, 0, INFINITY, &s->hg_coef);
+  dk_read_bool(e, doc, sec, "rz_area_weighted", false, false, &s->rz_area_weighted);
+  const dk_node *tm = dk_get(sec, "time");
+  if (!tm) dk_error(e, doc, sec, "grid2d: `time: {end: ...}` is required");
+  if (tm && dk_expect_map(e, doc, tm, "time")) {
+    dk_read_positive(e, doc, tm, "end", MS_DIM_TIME, true, 0, t_end);
+    dk_read_double(e, doc, tm, "cfl", MS_DIM_NONE, false, s->cfl, 1e-6, 0.999, &s->cfl);
+  }
+  const dk_node *out = dk_get(sec, "output");
+  if (out && dk_expect_map(e, doc, out, "output"))
+    dk_read_int(e, doc, out, "snapshots", false, 10, 0, 100000, nsnap);
+  dk_read_int(e, doc, sec, "threads", false, 1, 1, 1024, nthreads);
+}
+
 c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                               dk_errors *e) {
   size_t nerr0 = e->n;
@@ -246,30 +270,11 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   if (bcs) dk_expect_map(e, doc, bcs, "boundaries");
   const char *const sides[4] = {"ilo", "ihi", "jlo", "jhi"};
   for (int k = 0; k < 4; ++k) read_bc(e, doc, bcs, sides[k], &s.bc[k]);
-  const dk_node *visc = dk_get(sec, "viscosity");
-  if (visc && dk_expect_map(e, doc, visc, "viscosity")) {
-    dk_read_double(e, doc, visc, "q1", MS_DIM_NONE, false, s.q1, 0, INFINITY, &s.q1);
-    dk_read_double(e, doc, visc, "q2", MS_DIM_NONE, false, s.q2, 0, INFINITY, &s.q2);
-    dk_read_double(e, doc, visc, "gamma", MS_DIM_NONE, false, s.q_gamma, 1, INFINITY, &s.q_gamma);
-    dk_read_bool(e, doc, visc, "limiter", false, true, &s.use_limiter);
-  }
-  dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, 0, 0, INFINITY, &s.hg_coef);
-  dk_read_bool(e, doc, sec, "rz_area_weighted", false, false, &s.rz_area_weighted);
   double t_end = 0;
-  long nsnap = 10;
-  const dk_node *tm = dk_get(sec, "time");
-  if (!tm) dk_error(e, doc, sec, "grid2d: `time: {end: ...}` is required");
-  if (tm && dk_expect_map(e, doc, tm, "time")) {
-    dk_read_positive(e, doc, tm, "end", MS_DIM_TIME, true, 0, &t_end);
-    dk_read_double(e, doc, tm, "cfl", MS_DIM_NONE, false, s.cfl, 1e-6, 0.999, &s.cfl);
-  }
-  const dk_node *out = dk_get(sec, "output");
-  if (out && dk_expect_map(e, doc, out, "output"))
-    dk_read_int(e, doc, out, "snapshots", false, 10, 0, 100000, &nsnap);
+  long nsnap = 10, nthreads = 1;
+  read_controls(e, doc, sec, &s, &t_end, &nsnap, &nthreads);
   const dk_node *tags = dk_get(sec, "tags");
   if (tags) dk_expect_seq(e, doc, tags, "tags");
-  long nthreads = 1;
-  dk_read_int(e, doc, sec, "threads", false, 1, 1, 1024, &nthreads);
   if (e->n > nerr0 || !mat) {
     /* not read because of the errors above: not "unknown keys" either */
     dk_mark_used(sec, "regions");
