@@ -264,6 +264,7 @@ typedef struct dm_fin {
   double *frc, *vbar;                        /* [n][3] */
   double work; /* work done by driven (DM_PRESCRIBED/DM_FIXED) particles (kJ) */
   double dt_next;
+  size_t dt_particle; /* the particle whose stable step is dt_next (smallest index of ties) */
   long step;
   size_t bad;           /* on MS_ERR_UNSTABLE: the particle */
   const char *bad_what; /* and the quantity */

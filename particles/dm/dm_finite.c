@@ -151,15 +151,25 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
 static ms_status forces(dm_fin *f, double dt) {
   const long n = (long)f->n;
   double dtmin = INFINITY;
-  long bad = n;
-#pragma omp parallel for schedule(static) reduction(min : dtmin, bad) if (n > 4096)
-  for (long i = 0; i < n; ++i) {
-    const char *what = NULL;
-    double val = 0;
-    double d = stress_one(f, (size_t)i, dt, &what, &val);
-    if (d < 0) {
-      if (i < bad) bad = i;
-    } else if (d < dtmin) dtmin = d;
+  long bad = n, imin = 0;
+#pragma omp parallel if (n > 4096)
+  { /* the smallest step and its particle (the smallest index of ties: thread-count independent) */
+    double tdt = INFINITY;
+    long tbad = n, ti = n;
+#pragma omp for schedule(static) nowait
+    for (long i = 0; i < n; ++i) {
+      const char *what = NULL;
+      double val = 0;
+      double d = stress_one(f, (size_t)i, dt, &what, &val);
+      if (d < 0) {
+        if (i < tbad) tbad = i;
+      } else if (d < tdt) tdt = d, ti = i;
+    }
+#pragma omp critical(dm_fin_forces_min)
+    {
+      if (tbad < bad) bad = tbad;
+      if (tdt < dtmin || (tdt == dtmin && ti < imin)) dtmin = tdt, imin = ti;
+    }
   }
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
@@ -175,7 +185,7 @@ static ms_status forces(dm_fin *f, double dt) {
         f->bad = (size_t)i, f->bad_what = "force", f->bad_value = f->frc[3 * i + a];
         return MS_ERR_UNSTABLE;
       }
-  f->dt_next = dtmin;
+  f->dt_next = dtmin, f->dt_particle = (size_t)imin;
   return MS_OK;
 }
 

@@ -1,7 +1,15 @@
 /* SPDX-License-Identifier: MIT */
 /* dm_problem_finite.c — the run of the discrete-model problem with response: eos: the
- * finite-deformation model (dm_finite.c), on one rank. */
-#include "dm_problem_impl.h"
+ * finite-deformation model (dm_finite.c) with its profiles, snapshots, energy and free-surface
+ * histories, checkpoints (dm_fin_restart.c) and the report of a failed step with the last good
+ * state (dm_fin_output.c).
+ *
+ * MPI ranks: the model is replicated (dm_fin_run.h): every rank builds and steps every particle
+ * with the same arithmetic, so every rank holds the serial run's state bit for bit, and rank 0
+ * writes the files. It costs the serial run's time and memory on every rank (no speed-up; the
+ * run can sit inside an MPI job, e.g. beside ranks' other work, and restart on any rank count;
+ * docs/mpi.md). */
+#include "dm_fin_run.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -25,132 +33,209 @@ static int set_velocities(const dm_problem *p, dm_state *s, size_t nreal) {
   return flyer;
 }
 
-ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
-  dm_run_summary *sum = &p->sum;
-  if (ctx->size > 1) {
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: response: eos runs on one rank (not distributed)");
-    return MS_ERR_INPUT;
-  }
-  if (ctx->restart) {
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: response: eos has no restart yet");
-    return MS_ERR_INPUT;
-  }
-  dm_state s;
-  dmp_build_particles(p, &s);
-  const size_t nreal = (size_t)(p->ncell[0] * p->ncell[1] * p->ncell[2]);
-  dmp_set_initial(p, &s, nreal);
-  const int flyer = set_velocities(p, &s, nreal);
+/* The particles, the model and the run's records (sized once, before the time loop). */
+static ms_status setup(dmf_run *r) {
+  static char no_outdir[1] = "";
+  ms_ctx *ctx = r->ctx;
+  dm_problem *p = r->p;
+  r->octx = *ctx;
+  if (ctx->rank != 0) r->octx.outdir = no_outdir;
+  dm_state *s = &r->s;
+  dmp_build_particles(p, s);
+  r->nreal = (size_t)(p->ncell[0] * p->ncell[1] * p->ncell[2]);
+  dmp_set_initial(p, s, r->nreal);
+  r->flyer = set_velocities(p, s, r->nreal);
   dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max, .hourglass = 0.0};
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC) opt.box[a] = p->hi[a] - p->lo[a];
-  dm_model *m = NULL;
-  ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
-  if (st != MS_OK) {
-    dm_state_free(&s);
-    return st;
-  }
-  dm_fin_material *mat = ms_calloc(p->nlayers, sizeof *mat);
+  ms_status st = dm_model_create(&(dm_model_params){.state = s, .opt = opt, .ctx = ctx}, &r->m);
+  if (st != MS_OK) return st;
+  r->mat = ms_calloc(p->nlayers, sizeof *r->mat);
   for (size_t l = 0; l < p->nlayers; ++l)
-    mat[l] = (dm_fin_material){.eos = p->layers[l].eos,
-                               .yield = p->layers[l].yield,
-                               .G = p->layers[l].G,
-                               .Y0 = p->layers[l].Y0,
-                               .sg = &p->layers[l].sg};
-  uint8_t *imat = ms_calloc(s.n, 1);
-  for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(dmp_layer_at(p, s.X[3 * i]) - p->layers);
+    r->mat[l] = (dm_fin_material){.eos = p->layers[l].eos,
+                                  .yield = p->layers[l].yield,
+                                  .G = p->layers[l].G,
+                                  .Y0 = p->layers[l].Y0,
+                                  .sg = &p->layers[l].sg};
+  r->imat = ms_calloc(s->n, 1);
+  for (size_t i = 0; i < s->n; ++i)
+    r->imat[i] = (uint8_t)(dmp_layer_at(p, s->X[3 * i]) - p->layers);
   dm_fin_params par = {
       .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
-  dm_fin *f = NULL;
-  st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
+  st = dm_fin_create(&(dm_fin_setup){.m = r->m, .mat = r->mat, .imat = r->imat, .par = par}, &r->f);
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model (response eos): the initial state is not valid");
-    free(mat), free(imat), dm_model_destroy(&m), dm_state_free(&s);
     return st;
   }
-  sum->particles = s.n, sum->real_particles = nreal, sum->bonds = m->nbonds, sum->ranks = 1;
-  ms_log(ctx, MS_LOG_INFO,
-         "discrete model (response eos): %zu particles (%zu real), %zu bonds, dim %d, viscosity "
-         "C_q %.3g C_l %.3g, bond penalty c_s %.3g, courant %.3g, first dt %.6g%s",
-         s.n, nreal, m->nbonds, p->dim, p->cq, p->cl, p->hourglass, p->courant, f->dt_next,
-         p->has_piston ? ", piston" : "");
-  const long nx = p->ncell[0];
-  double *bins = ms_calloc((size_t)nx * 11, sizeof(double));
-  const size_t nemax = 4096;
-  double *eh = ms_calloc(nemax * 7, sizeof(double));
-  size_t ne = 0;
-  char *done = ms_calloc(p->nprofile_times + 1, 1);
+  r->bins = ms_calloc((size_t)p->ncell[0] * 11, sizeof(double));
+  r->sigma_u = ms_calloc(s->n ? s->n : 1, sizeof(double));
+  r->nemax = 4096;
+  r->eh = ms_calloc(r->nemax * 6, sizeof(double));
+  r->prof_done = ms_calloc(p->nprofile_times + 1, 1);
+  r->snap_done = ms_calloc(p->nsnapshot_times + 1, 1);
   /* free-surface history of the flyer problem (dm_fs_history: thinned when full) */
-  dm_fs_history fs = {0};
-  if (flyer) dm_fs_history_init(&fs, 8192);
+  if (r->flyer) dm_fs_history_init(&r->fs, 8192);
+  dmf_backup_alloc(r);
   double K, U, H;
-  dm_fin_energies(f, &K, &U, &H);
-  const double E0 = K + U + H;
-  double t = 0.0, dEmax = 0.0, wall = 0.0;
-  const double t_end = p->steps > 0 ? INFINITY : p->t_end;
-  long every = p->energy_every;
-  for (long step = 0;; ++step) {
-    dm_fin_energies(f, &K, &U, &H);
-    const double bal = K + U + H - f->work - E0;
-    dEmax = fmax(dEmax, fabs(bal));
-    const int last = (p->steps > 0 && step >= p->steps) || t >= t_end * (1 - 1e-12);
-    if ((step % every == 0 || last) && ne < nemax) {
-      double row[7] = {t, K, U, H, f->work, bal, 0};
-      memcpy(&eh[7 * ne++], row, sizeof row);
+  dm_fin_energies(r->f, &K, &U, &H);
+  r->E0 = K + U + H;
+  return MS_OK;
+}
+
+/* The profiles and snapshots due at time t (all that remain at the last step). */
+static void write_fields(dmf_run *r, double t, int last) {
+  const dm_problem *p = r->p;
+  for (size_t q = 0; q < p->nprofile_times; ++q)
+    if (!r->prof_done[q] && (t >= p->profile_times[q] * (1 - 1e-12) || last)) {
+      dmp_write_fin_profile(&r->octx, p, r->f, r->nreal, t, (int)q, r->bins);
+      r->prof_done[q] = 1;
     }
-    for (size_t q = 0; q < p->nprofile_times; ++q)
-      if (!done[q] && (t >= p->profile_times[q] * (1 - 1e-12) || last)) {
-        dmp_write_fin_profile(ctx, p, f, nreal, t, (int)q, bins);
-        done[q] = 1;
+  for (size_t q = 0; q < p->nsnapshot_times; ++q)
+    if (!r->snap_done[q] && (t >= p->snapshot_times[q] * (1 - 1e-12) || last)) {
+      char name[64];
+      snprintf(name, sizeof name, "dm_fin_snapshot_%03d.h5", (int)q);
+      const dmf_fields fl = dmf_live_fields(r);
+      dmf_write_snapshot(r, &fl, t, r->f->step, name);
+      r->snap_done[q] = 1;
+    }
+}
+
+/* The first particle whose velocity, energy or bond-penalty energy is not finite (a total
+ * energy that is not finite has one). */
+static size_t first_nonfinite(const dmf_run *r, const char **what, double *val) {
+  const dm_fin *f = r->f;
+  for (size_t i = 0; i < r->s.n; ++i) {
+    const double *u = &r->s.u[3 * i];
+    const double v[5] = {u[0], u[1], u[2], f->e[i], f->ehg[i]};
+    static const char *const names[5] = {"velocity u_x", "velocity u_y", "velocity u_z",
+                                         "specific internal energy e", "bond-penalty energy"};
+    for (int k = 0; k < 5; ++k)
+      if (!isfinite(v[k])) {
+        *what = names[k], *val = v[k];
+        return i;
       }
-    if (flyer) dm_fs_history_record(&fs, step, t, &s, nx, p->ncell[1] * p->ncell[2]);
+  }
+  *what = "piston work", *val = f->work;
+  return 0;
+}
+
+/* The time loop from the run's state to the end; MS_ERR_UNSTABLE with the report and the last
+ * good state's snapshot when a step fails. */
+static ms_status run_steps(dmf_run *r) {
+  const dm_problem *p = r->p;
+  dm_fin *f = r->f;
+  const double t_end = p->steps > 0 ? INFINITY : p->t_end;
+  const long every = p->energy_every, nyz = p->ncell[1] * p->ncell[2];
+  ms_status st = MS_OK;
+  for (long step = r->step0;; ++step) {
+    double K, U, H;
+    dm_fin_energies(f, &K, &U, &H);
+    if (!isfinite(K + U + H - f->work)) {
+      const char *what;
+      double val;
+      const size_t i = first_nonfinite(r, &what, &val);
+      dmf_report_unstable(r, i, what, val, r->t);
+      r->t = r->bk.t;
+      return MS_ERR_UNSTABLE;
+    }
+    r->K = K, r->U = U, r->H = H, r->steps = f->step;
+    const int last = (p->steps > 0 && step >= p->steps) || r->t >= t_end * (1 - 1e-12);
+    /* the checkpoint of the state at the top of this step, before anything of it is recorded */
+    if (p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 && !last) {
+      st = dmf_checkpoint_write(r);
+      if (st != MS_OK) return st;
+    }
+    const double bal = K + U + H - f->work - r->E0;
+    r->dEmax = fmax(r->dEmax, fabs(bal));
+    if ((step % every == 0 || last) && r->ne < r->nemax) {
+      const double row[6] = {r->t, K, U, H, f->work, bal};
+      memcpy(&r->eh[6 * r->ne++], row, sizeof row);
+    }
+    write_fields(r, r->t, last);
+    if (r->flyer) dm_fs_history_record(&r->fs, step, r->t, &r->s, p->ncell[0], nyz);
     if (last) break;
-    if (t + f->dt_next > t_end) f->dt_next = t_end - t;
+    dmf_backup_take(r, r->t);
+    if (r->t + f->dt_next > t_end) f->dt_next = t_end - r->t;
     const double dt = f->dt_next, w0 = ms_wall_time();
     st = dm_fin_step(f);
-    wall += ms_wall_time() - w0;
-    t += dt;
+    r->wall += ms_wall_time() - w0;
+    r->t += dt;
     if (st != MS_OK) {
-      const double *X = &s.X[3 * f->bad];
-      ms_log(ctx, MS_LOG_ERROR,
-             "discrete model (response eos): step %ld, t = %.9g: particle %zu (X = %g %g %g): %s "
-             "= %g; the run stops (no output of this state)",
-             f->step + 1, t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
-      break;
+      dmf_report_unstable(r, f->bad, f->bad_what, f->bad_value, r->t);
+      r->t = r->bk.t;
+      return st;
     }
   }
-  sum->steps = f->step, sum->t_end = t, sum->wall_s = wall;
-  sum->particle_steps_per_s = wall > 0 ? (double)nreal * f->step / wall : 0;
-  sum->energy_err_max = f->work != 0 ? dEmax / fabs(f->work) : dEmax / fmax(fabs(E0), 1e-300);
+  return MS_OK;
+}
+
+/* The summary, the log line and the histories (of the good states only). */
+static void report(dmf_run *r) {
+  dm_run_summary *sum = &r->p->sum;
+  const dm_fin *f = r->f;
+  const double K = r->K, U = r->U, H = r->H; /* of the last good state */
+  const long steps = r->steps;
+  sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall;
+  sum->particle_steps_per_s =
+      r->wall > 0 ? (double)r->nreal * (double)(steps - r->step0) / r->wall : 0;
+  sum->energy_err_max =
+      f->work != 0 ? r->dEmax / fabs(f->work) : r->dEmax / fmax(fabs(r->E0), 1e-300);
   /* no driven particles (a flyer): both relative to the initial energy E0 (kinetic) instead */
-  sum->hourglass_last = f->work != 0 ? H / fabs(f->work) : H / fmax(fabs(E0), 1e-300);
+  sum->hourglass_last = f->work != 0 ? H / fabs(f->work) : H / fmax(fabs(r->E0), 1e-300);
   sum->kinetic_end = K, sum->potential_end = U;
-  ms_log(ctx, MS_LOG_INFO,
+  sum->restart_step = r->step0;
+  ms_log(r->ctx, MS_LOG_INFO,
          "discrete model (response eos): %ld steps to t = %.6g in %.3f s (%.4g particle-steps/s); "
          "energy balance max |K + U + E_hg - W - E0| = %.3g of %s %.6g kJ; "
          "bond-penalty energy / that = %.3g",
-         f->step, t, wall, sum->particle_steps_per_s, sum->energy_err_max,
-         f->work != 0 ? "the piston work" : "the initial energy E0", f->work != 0 ? f->work : E0,
+         steps, r->t, r->wall, sum->particle_steps_per_s, sum->energy_err_max,
+         f->work != 0 ? "the piston work" : "the initial energy E0", f->work != 0 ? f->work : r->E0,
          sum->hourglass_last);
-  {
-    const char *nm[] = {"t",           "kinetic", "internal", "bond_penalty",
-                        "piston_work", "balance", "unused"};
-    const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ", "1"};
-    /* rows of 7 written as 6 columns: compact them first */
-    for (size_t r = 0; r < ne; ++r) memmove(&eh[6 * r], &eh[7 * r], 6 * sizeof(double));
-    dmp_write_series(
-        ctx, "dm_fin_energy.csv",
-        "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0", 6, nm, un,
-        eh, ne);
-  }
-  if (flyer) {
-    const char *nm[] = {"t", "u_free_surface"}, *un[] = {"10 us", "km/s"};
-    dmp_write_series(ctx, "dm_fin_free_surface.csv",
+  const char *nm[] = {"t", "kinetic", "internal", "bond_penalty", "piston_work", "balance"};
+  const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ"};
+  dmp_write_series(&r->octx, "dm_fin_energy.csv",
+                   "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0",
+                   6, nm, un, r->eh, r->ne);
+  if (r->flyer) {
+    const char *fnm[] = {"t", "u_free_surface"}, *fun[] = {"10 us", "km/s"};
+    dmp_write_series(&r->octx, "dm_fin_free_surface.csv",
                      "free-surface velocity: mean x velocity of the last x layer of particles", 2,
-                     nm, un, fs.rows, fs.n);
+                     fnm, fun, r->fs.rows, r->fs.n);
   }
-  free(fs.rows), free(bins), free(eh), free(done), free(mat), free(imat);
-  dm_fin_destroy(&f);
-  dm_model_destroy(&m);
-  dm_state_free(&s);
+}
+
+static void run_free(dmf_run *r) {
+  dmf_backup_free(r);
+  free(r->fs.rows), free(r->bins), free(r->sigma_u), free(r->eh);
+  free(r->prof_done), free(r->snap_done), free(r->mat), free(r->imat);
+  dm_fin_destroy(&r->f);
+  dm_model_destroy(&r->m);
+  dm_state_free(&r->s);
+}
+
+ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
+  dmf_run r = {.ctx = ctx, .p = p};
+  ms_status st = setup(&r);
+  if (st == MS_OK && ctx->restart) st = dmf_restart(&r);
+  if (st == MS_OK) {
+    dm_run_summary *sum = &p->sum;
+    const size_t lim = r.f->dt_particle;
+    sum->particles = r.s.n, sum->real_particles = r.nreal, sum->bonds = r.m->nbonds;
+    sum->ranks = ctx->size;
+    ms_log(ctx, MS_LOG_INFO,
+           "discrete model (response eos): %zu particles (%zu real), %zu bonds, dim %d, "
+           "viscosity C_q %.3g C_l %.3g, bond penalty c_s %.3g, courant %.3g, first dt %.6g "
+           "(limited by particle %zu at X = %g)%s",
+           r.s.n, r.nreal, r.m->nbonds, p->dim, p->cq, p->cl, p->hourglass, p->courant,
+           r.f->dt_next, lim, r.s.X[3 * lim], p->has_piston ? ", piston" : "");
+    if (ctx->size > 1)
+      ms_log(ctx, MS_LOG_INFO,
+             "discrete model (response eos) on %d ranks: replicated (every rank steps all %zu "
+             "particles; rank 0 writes)",
+             ctx->size, r.s.n);
+    st = run_steps(&r);
+    report(&r);
+  }
+  run_free(&r);
   return st;
 }

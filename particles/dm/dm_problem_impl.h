@@ -59,6 +59,7 @@ struct dm_problem {
   double *snapshot_times;
   size_t nsnapshot_times;
   long checkpoint_every; /* steps between checkpoints (0: none) */
+  uint64_t deck_hash;    /* of the resolved deck but t_end, steps (response eos checkpoints) */
   int finite;            /* every layer has response: eos (dm_finite.c) */
   double cq, cl;         /* viscosity coefficients */
   int has_piston;

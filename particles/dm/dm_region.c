@@ -495,15 +495,14 @@ static ms_status region_step(ptl_region *rr) {
     return MS_ERR_UNSTABLE;
   }
   if (r->f->dt_next < dt) {
-    size_t imin = 0; /* where the limit is smallest: the most compressed particle */
-    for (size_t i = 1; i < s->n; i++)
-      if (r->f->rho[i] > r->f->rho[imin]) imin = i;
+    const size_t i = r->f->dt_particle; /* where the limit is smallest (dm_fin's forces) */
     snprintf(r->err, sizeof r->err,
              "discrete model: step %ld, t = %.9g: the stable step %.6g fell below the fixed "
-             "step %.6g (densest particle %zu at X = %g: rho = %g, p = %g GPa); lower "
-             "particles.dt_margin (the fixed step is dt_margin x the limit at rest, %.6g)",
-             r->f->step, r->t, r->f->dt_next, dt, imin, s->X[3 * imin], r->f->rho[imin],
-             r->f->p[imin], r->dt0_limit);
+             "step %.6g (limiting particle %zu at X = %g %g %g: rho = %g, p = %g GPa, q = %g "
+             "GPa); lower particles.dt_margin (the fixed step is dt_margin x the limit at rest, "
+             "%.6g)",
+             r->f->step, r->t, r->f->dt_next, dt, i, s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2],
+             r->f->rho[i], r->f->p[i], r->f->q[i], r->dt0_limit);
     return MS_ERR_UNSTABLE;
   }
   return MS_OK;

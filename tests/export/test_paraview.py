@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """ParaView (Debian's python3-paraview, run by pvpython offscreen) opens a run's temporal XDMF
-collections: the coupled problem's particles.xmf and a continuum run's profiles.xmf.
+collections: the coupled problem's particles.xmf, a continuum run's profiles.xmf and the
+finite-deformation discrete model's particles.xmf.
 
     pvpython --force-offscreen-rendering tests/export/test_paraview.py MSCALE SOURCE_DIR WORKDIR
 
@@ -61,4 +62,10 @@ cont = run("inputs/continuum-sod.yaml", os.path.join(work, "sod"))
 profiles = sorted(glob.glob(os.path.join(cont, "profile_[0-9]*.h5")))
 n2 = check_series(os.path.join(cont, "profiles.xmf"), profiles, "nodes/xyz",
                   ("rho", "cells/rho"), False)
-print(f"paraview: particles.xmf {n1} steps, profiles.xmf {n2} steps, as in the HDF5 files")
+# the discrete model at finite deformation (response: eos): its snapshots' own series
+dm = run("tests/dm/data/dm_fin_piston_2d.yaml", os.path.join(work, "dm_fin"))
+dm_snaps = sorted(glob.glob(os.path.join(dm, "dm_fin_snapshot_[0-9]*.h5")))
+n3 = check_series(os.path.join(dm, "particles.xmf"), dm_snaps, "particles/x",
+                  ("von_mises", "particles/von_mises"), True)
+print(f"paraview: particles.xmf {n1} steps, profiles.xmf {n2} steps, discrete model (eos) "
+      f"particles.xmf {n3} steps, as in the HDF5 files")
