@@ -24,7 +24,7 @@ static size_t done_rows(const dmf_run *r) {
 ms_status dmf_checkpoint_write(dmf_run *r) {
   const ms_ctx *ctx = r->ctx;
   const bool owner = ctx->rank == 0;
-  ms_h5 *h = ms_ckpt_create(&r->octx, DMF_CHECKPOINT_NAME, DMF_CHECKPOINT_FORMAT, r->p->deck_hash);
+  ms_h5 *h = ms_ckpt_create(ctx, DMF_CHECKPOINT_NAME, DMF_CHECKPOINT_FORMAT, r->p->deck_hash);
   if (!h) return par_agree_status(MS_ERR_IO);
   ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm_fin", owner);
   const size_t nd = done_rows(r);
