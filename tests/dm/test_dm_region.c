@@ -8,7 +8,9 @@
  *     the EOS (eos_hugoniot) says, and the free surface jumps to about 2 u_p;
  *   - dimension 3 builds the cubic slab and conserves the same balance;
  *   - velocities changed between steps (the coupling's drag kicks) are taken up by the model;
- *   - a step that would outrun the model's own stability limit stops with MS_ERR_UNSTABLE;
+ *   - a step that would outrun the model's own stability limit stops with MS_ERR_UNSTABLE,
+ *     naming the particle that sets the limit (dm_fin's dt_particle: checked on a chain of two
+ *     materials, where the stiffer but lighter one limits the step, not the densest);
  *   - deck errors are located: response other than eos, elastic_plastic without its keys, a
  *     width below 3 horizons, steinberg_guinan without its parameters;
  *   - strength (elastic_plastic, steinberg_guinan): the elastic precursor runs at c_L. */
@@ -22,6 +24,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "dm.h"
 #include "ptl_region.h"
 
 /* h = 10 µm, 5 columns (the least width for horizon 1.5: 3 horizons = 4.5 h) */
@@ -232,6 +235,7 @@ static void test_step_beyond_the_limit_stops(void **state) {
   for (int k = 0; k < 2000 && st == MS_OK; k++) st = ptl_region_step(r);
   assert_int_equal(st, MS_ERR_UNSTABLE);
   assert_non_null(strstr(ptl_region_error(r), "fell below the fixed step"));
+  assert_non_null(strstr(ptl_region_error(r), "limiting particle"));
   /* the state it found, as the coupled run writes it (particles_unstable.h5) */
   char tmp[] = "/tmp/mscale_test_dmr_XXXXXX", path[96], cmd[128];
   assert_non_null(mkdtemp(tmp));
@@ -368,6 +372,50 @@ static void expect_error(const char *text, const char *where, const char *what) 
   dk_errors_free(&e);
 }
 
+/* dm_fin's dt_particle: at rest (tr D = 0, q = 0, no strength) each particle's limit is
+ * courant·h/(c + 2 C_l c) (docs/particles-dm.md "Time step"), so on a chain of Fe | Be | Fe
+ * (the linear-elastic materials of inputs/dm-contact-fe-be.yaml: c(Be) = 4.37 km/s >
+ * c(Fe) = 2.91 km/s, ρ(Be) = 1.85 < ρ(Fe) = 7.85) the first Be particle limits the step (the
+ * smallest index of the equal Be limits), while the densest particle is an Fe one. */
+static void test_fin_limiting_particle(void **state) {
+  (void)state;
+  const size_t n = 20, be0 = 10, be1 = 15;
+  const double h = 0.01;
+  eos_t *eos[2] = {eos_create_linear_elastic(7.85, 66.666666666666667),
+                   eos_create_linear_elastic(1.85, 35.376666666666667)};
+  dm_state s;
+  dm_state_alloc(&s, n, 1);
+  uint8_t imat[20];
+  for (size_t i = 0; i < n; i++) {
+    imat[i] = i >= be0 && i < be1;
+    s.X[3 * i] = (i + 0.5) * h;
+    s.vol[i] = h, s.mass[i] = eos_rho0(eos[imat[i]]) * h;
+    s.K[i] = eos_rho0(eos[imat[i]]) * pow(eos_c0(eos[imat[i]]), 2);
+    s.bc[i] = DM_FREE;
+  }
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  dm_model *m = NULL;
+  dm_options opt = {.horizon = 1.5 * h, .cond_max = 1e8};
+  assert_int_equal(dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = &ctx}, &m),
+                   MS_OK);
+  const dm_fin_material mat[2] = {{.eos = eos[0]}, {.eos = eos[1]}};
+  const dm_fin_params par = {.cq = 2.0, .cl = 0.5, .courant = 0.4, .hourglass = 1.0, .ell = h};
+  dm_fin *f = NULL;
+  assert_int_equal(dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f),
+                   MS_OK);
+  const double c_be = sqrt(35.376666666666667 / 1.85);
+  assert_int_equal(f->dt_particle, be0);
+  /* the same few operations in another order: round-off */
+  assert_true(fabs(f->dt_next - 0.4 * h / (c_be * (1 + 2 * 0.5))) < 1e-14 * f->dt_next);
+  dm_fin_destroy(&f);
+  dm_model_destroy(&m);
+  dm_state_free(&s);
+  ms_ctx_close(&ctx);
+  eos_destroy(&eos[0]);
+  eos_destroy(&eos[1]);
+}
+
 static void test_deck_errors(void **state) {
   (void)state;
   expect_error("particles:\n  r0: 1.0e-3\n  width: 0.005\n  response: linear_elastic\n",
@@ -406,6 +454,7 @@ int main(void) {
       cmocka_unit_test(test_three_d),
       cmocka_unit_test(test_strength_precursor),
       cmocka_unit_test(test_step_beyond_the_limit_stops),
+      cmocka_unit_test(test_fin_limiting_particle),
       cmocka_unit_test(test_deck_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
