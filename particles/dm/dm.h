@@ -285,6 +285,9 @@ void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
 /* One kick–drift–kick step of length f->dt_next; MS_ERR_UNSTABLE (f->bad, f->bad_what) when a
  * J ≤ 0 or a non-finite e, p or force appears: the state is then the one of the bad step. */
 ms_status dm_fin_step(dm_fin *f);
+/* The stresses, forces and dt_next of the current state again, without advancing the deviator
+ * (after a caller has changed e or s, e.g. an initial strain); MS_ERR_UNSTABLE as a step. */
+ms_status dm_fin_refresh(dm_fin *f);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
 /* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under

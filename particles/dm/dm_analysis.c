@@ -74,13 +74,18 @@ void dmp_rod_analysis(dm_problem *p, const double *hist, size_t nrec, double xpr
 }
 
 void dmp_contact_analysis(dm_problem *p, const dm_model *m, size_t nreal, double t) {
+  dmp_contact_analysis_sigma(p, m->s->X, m->sigma, nreal, t);
+}
+
+void dmp_contact_analysis_sigma(dm_problem *p, const double *X, const double *sigma, size_t nreal,
+                                double t) {
   const dm_layer *l0 = &p->layers[0], *l1 = &p->layers[1];
   double smax = 0, s1 = 0, s2 = 0, sinf = 0;
   for (size_t i = 0; i < nreal; ++i) {
-    double x = m->s->X[3 * i];
+    double x = X[3 * i];
     double ex = dm_exact_contact_stress(x, t, p->length, p->amplitude, l0->rho,
                                         l0->K + 4 * l0->G / 3, l1->rho, l1->K + 4 * l1->G / 3);
-    double d = m->sigma[9 * i] - ex;
+    double d = sigma[9 * i] - ex;
     smax = fmax(smax, fabs(ex));
     s1 += fabs(d);
     s2 += d * d;

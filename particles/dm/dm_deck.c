@@ -295,9 +295,6 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
                  "discrete_model.boundaries.%s: response: eos takes free, fixed or periodic "
                  "faces (wall and symmetry ghosts are not implemented for it)",
                  face_keys[f]);
-    if (p->profile != PROF_NONE && p->profile != PROF_RANDOM_VELOCITY)
-      dk_error(e, doc, ini ? ini : sec,
-               "discrete_model.initial: response: eos takes profile none or random_velocity");
     if (p->has_source) dk_error(e, doc, src, "discrete_model.source: not with response: eos");
     for (size_t i = 0; i < p->nlayers; ++i)
       if (p->layers[i].has_u0 && p->profile == PROF_RANDOM_VELOCITY)

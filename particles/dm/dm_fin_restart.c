@@ -39,9 +39,13 @@ ms_status dmf_checkpoint_write(dmf_run *r) {
   if (st == MS_OK && r->flyer)
     st = ms_h5_write_doubles_dist(h, "/run/free_surface", owner ? r->fs.n : 0, 2, r->fs.rows,
                                   "10 us, km/s");
-  const char *names[] = {"t", "E0", "dEmax", "fs_stride", "particles"};
-  const double vals[] = {r->t, r->E0, r->dEmax, (double)r->fs.stride, (double)r->s.n};
-  for (int k = 0; k < 5 && st == MS_OK; ++k)
+  if (st == MS_OK && r->p->nprobes)
+    st = ms_h5_write_doubles_dist(h, "/run/probes", owner ? r->nrec : 0, r->pcols, r->hist,
+                                  "10 us, cm");
+  const char *names[] = {"t", "E0", "dEmax", "fs_stride", "particles", "probe_stride"};
+  const double vals[] = {
+      r->t, r->E0, r->dEmax, (double)r->fs.stride, (double)r->s.n, (double)r->pstride};
+  for (int k = 0; k < 6 && st == MS_OK; ++k)
     st = ms_h5_attr_double(h, "/run/done", names[k], vals[k]);
   return ms_ckpt_commit(ctx, h, st, DMF_CHECKPOINT_NAME, r->f->step);
 }
@@ -80,12 +84,15 @@ static ms_status read_run(dmf_run *r, ms_h5r *h, dk_errors *e) {
   if (st == MS_OK) st = read_rows(h, "/run/energy", 6, r->nemax, r->eh, &r->ne, e);
   if (st == MS_OK && r->flyer)
     st = read_rows(h, "/run/free_surface", 2, r->fs.cap, r->fs.rows, &r->fs.n, e);
-  double stride = 1;
+  if (st == MS_OK && r->p->nprobes)
+    st = read_rows(h, "/run/probes", r->pcols, r->nrec_max, r->hist, &r->nrec, e);
+  double stride = 1, pstride = 1;
   if (st == MS_OK) st = ms_h5_read_attr_double(h, "/run/done", "t", &r->t, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, "/run/done", "E0", &r->E0, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, "/run/done", "dEmax", &r->dEmax, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, "/run/done", "fs_stride", &stride, e);
-  r->fs.stride = (long)stride;
+  if (st == MS_OK) st = ms_h5_read_attr_double(h, "/run/done", "probe_stride", &pstride, e);
+  r->fs.stride = (long)stride, r->pstride = (long)pstride;
   return st;
 }
 

@@ -41,6 +41,10 @@ typedef struct dmf_run {
   size_t ne, nemax;
   char *prof_done, *snap_done; /* [nprofile_times], [nsnapshot_times] */
   dm_fs_history fs;
+  probe_rec *pr; /* [nprobes] the probe particles */
+  double *hist;  /* [nrec_max][pcols]: t, w_x at each probe, every probe_every·pstride steps */
+  size_t pcols, nrec, nrec_max;
+  long pstride;           /* doubled (every other row dropped) whenever the table is full */
   double *bins, *sigma_u; /* scratch: profile bins, σ_u of the live state */
   double E0, t, dEmax, wall;
   double K, U, H;                       /* energies of the last good state (kJ) */

@@ -189,6 +189,8 @@ static ms_status forces(dm_fin *f, double dt) {
   return MS_OK;
 }
 
+ms_status dm_fin_refresh(dm_fin *f) { return forces(f, 0.0); }
+
 /* Half kick of length h = dt/2 with the current forces, and the matching energy updates. */
 static ms_status half_kick(dm_fin *f, double h) {
   dm_model *m = f->m;

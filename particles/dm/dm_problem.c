@@ -289,6 +289,18 @@ typedef struct dm_run {
   dm_checkpoint_data ck;
 } dm_run;
 
+void dmp_find_probes(const dm_problem *p, const dm_state *s, size_t nreal, probe_rec *pr) {
+  for (size_t q = 0; q < p->nprobes; ++q) {
+    double best = INFINITY;
+    for (size_t i = 0; i < nreal; ++i) {
+      const double *X = &s->X[3 * i];
+      double dd = fabs(X[0] - p->probes[q]);
+      for (int a = 1; a < p->dim; ++a) dd += fabs(X[a] - (p->lo[a] + 0.5 * p->h));
+      if (dd < best) best = dd, pr[q].particle = i, pr[q].x = X[0];
+    }
+  }
+}
+
 static double sound_speed_max(const dm_state *s, size_t nreal) {
   double cmax = 0;
   for (size_t i = 0; i < nreal; ++i)
@@ -387,17 +399,8 @@ static void run_records(dm_run *r) {
   const dm_problem *p = r->p;
   r->octx = *r->ctx;
   if (r->ctx->rank != 0) r->octx.outdir = no_outdir;
-  /* probes: nearest real particle to each x */
   r->pr = ms_calloc(p->nprobes ? p->nprobes : 1, sizeof *r->pr);
-  for (size_t q = 0; q < p->nprobes; ++q) {
-    double best = INFINITY;
-    for (size_t i = 0; i < r->nreal; ++i) {
-      const double *X = &r->s.X[3 * i];
-      double dd = fabs(X[0] - p->probes[q]);
-      for (int a = 1; a < p->dim; ++a) dd += fabs(X[a] - (p->lo[a] + 0.5 * p->h));
-      if (dd < best) best = dd, r->pr[q].particle = i, r->pr[q].x = X[0];
-    }
-  }
+  dmp_find_probes(p, &r->s, r->nreal, r->pr);
   r->probe_val = ms_calloc(p->nprobes ? p->nprobes : 1, sizeof(double));
   r->nrec_max = (size_t)(r->nsteps / p->probe_every) + 2;
   r->pcols = 1 + p->nprobes;

@@ -33,6 +33,36 @@ static int set_velocities(const dm_problem *p, dm_state *s, size_t nreal) {
   return flyer;
 }
 
+/* An initial displacement (the paper's rod and contact profiles) as an elastic state reached
+ * from rest: the deviator s = 2G dev ε and the strain energy (½K (tr ε)² + G ε′:ε′)V added to
+ * m e, with ε = sym(F − I) the small strain of the fitted F and K = ρ0c0², G of the material
+ * (G = 0 without strength). The hypoelastic deviator starts at 0 otherwise, and E0 would miss
+ * the strain energy. Second order in ε off the finite-strain state (docs/particles-dm.md). */
+static ms_status initial_strain(dmf_run *r) {
+  dm_fin *f = r->f;
+  const dm_state *s = &r->s;
+  for (size_t i = 0; i < s->n; ++i) {
+    const dm_fin_material *mt = &r->mat[r->imat[i]];
+    const double *F = &f->F[9 * i];
+    double eps[9];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) eps[3 * a + b] = 0.5 * (F[3 * a + b] + F[3 * b + a]);
+    eps[0] -= 1.0, eps[4] -= 1.0, eps[8] -= 1.0;
+    const double tr = eps[0] + eps[4] + eps[8];
+    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
+    const double G = mt->yield != DM_YIELD_NONE ? mt->G : 0.0;
+    double dd = 0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        const double d = eps[3 * a + b] - (a == b ? tr / 3.0 : 0.0);
+        f->s[9 * i + 3 * a + b] = 2.0 * G * d;
+        dd += d * d;
+      }
+    f->e[i] += (0.5 * rho0 * c0 * c0 * tr * tr + G * dd) * s->vol[i] / s->mass[i];
+  }
+  return dm_fin_refresh(f);
+}
+
 /* The particles, the model and the run's records (sized once, before the time loop). */
 static ms_status setup(dmf_run *r) {
   static char no_outdir[1] = "";
@@ -75,7 +105,19 @@ static ms_status setup(dmf_run *r) {
   r->snap_done = ms_calloc(p->nsnapshot_times + 1, 1);
   /* free-surface history of the flyer problem (dm_fs_history: thinned when full) */
   if (r->flyer) dm_fs_history_init(&r->fs, 8192);
+  r->pr = ms_calloc(p->nprobes + 1, sizeof *r->pr);
+  dmp_find_probes(p, s, r->nreal, r->pr);
+  r->pcols = 1 + p->nprobes, r->nrec_max = 8192, r->pstride = 1;
+  r->hist = ms_calloc(r->nrec_max * r->pcols, sizeof(double));
   dmf_backup_alloc(r);
+  if (p->profile == PROF_ROD_TRIANGLE || p->profile == PROF_ROD_SINE ||
+      p->profile == PROF_CONTACT) {
+    st = initial_strain(r);
+    if (st != MS_OK) {
+      ms_log(ctx, MS_LOG_ERROR, "discrete model (response eos): the initial strain is not valid");
+      return st;
+    }
+  }
   double K, U, H;
   dm_fin_energies(r->f, &K, &U, &H);
   r->E0 = K + U + H;
@@ -98,6 +140,24 @@ static void write_fields(dmf_run *r, double t, int last) {
       dmf_write_snapshot(r, &fl, t, r->f->step, name);
       r->snap_done[q] = 1;
     }
+}
+
+/* The probes' w_x every probe_every steps; when the table is full every other row is dropped
+ * and the interval doubled, so any run length fits (the rows stay evenly spaced in steps). */
+static void record_probes(dmf_run *r, long step) {
+  const dm_problem *p = r->p;
+  if (!p->nprobes || step % p->probe_every != 0) return;
+  const long k = step / p->probe_every;
+  if (k % r->pstride != 0) return;
+  if (r->nrec == r->nrec_max) {
+    for (size_t j = 0; j < r->nrec / 2; ++j)
+      memmove(&r->hist[j * r->pcols], &r->hist[2 * j * r->pcols], r->pcols * sizeof(double));
+    r->nrec /= 2, r->pstride *= 2;
+    if (k % r->pstride != 0) return;
+  }
+  double *row = &r->hist[r->nrec++ * r->pcols];
+  row[0] = r->t;
+  for (size_t q = 0; q < p->nprobes; ++q) row[1 + q] = r->s.w[3 * r->pr[q].particle];
 }
 
 /* The first particle whose velocity, energy or bond-penalty energy is not finite (a total
@@ -153,6 +213,7 @@ static ms_status run_steps(dmf_run *r) {
     }
     write_fields(r, r->t, last);
     if (r->flyer) dm_fs_history_record(&r->fs, step, r->t, &r->s, p->ncell[0], nyz);
+    record_probes(r, step);
     if (last) break;
     dmf_backup_take(r, r->t);
     if (r->t + f->dt_next > t_end) f->dt_next = t_end - r->t;
@@ -167,6 +228,30 @@ static ms_status run_steps(dmf_run *r) {
     }
   }
   return MS_OK;
+}
+
+/* After a run that completed: the comparisons with the exact solutions of the paper's
+ * problems (dm_analysis.c), as the linear model's run makes them. */
+static void analyses(dmf_run *r) {
+  dm_problem *p = r->p;
+  const dm_run_summary *sum = &p->sum;
+  if ((p->profile == PROF_ROD_TRIANGLE || p->profile == PROF_ROD_SINE) && p->nprobes) {
+    double *h1 = ms_calloc(2 * r->nrec + 1, sizeof(double));
+    for (size_t k = 0; k < r->nrec; ++k)
+      h1[2 * k] = r->hist[k * r->pcols], h1[2 * k + 1] = r->hist[k * r->pcols + 1];
+    dmp_rod_analysis(p, h1, r->nrec, r->pr[0].x);
+    free(h1);
+    ms_log(r->ctx, MS_LOG_INFO,
+           "rod: probe x = %.6g, last 10 L/c: amplitude error %+.3f %% (least-squares fit), "
+           "lag %+.5f L/c, peak error %+.3f %%, rms error %.3f %% of the amplitude",
+           r->pr[0].x, 100 * sum->amp_err, sum->phase_err, 100 * sum->peak_err, 100 * sum->rms_err);
+  }
+  if (p->profile == PROF_CONTACT && p->nlayers >= 2) {
+    dmp_contact_analysis_sigma(p, r->s.X, r->f->sig, r->nreal, sum->t_end);
+    ms_log(r->ctx, MS_LOG_INFO,
+           "contact: sigma_xx at t = %.6g vs exact: L1 %.4f, L2 %.4f, max %.4f (of max|sigma|)",
+           sum->t_end, sum->err_l1, sum->err_l2, sum->err_max);
+  }
 }
 
 /* The summary, the log line and the histories (of the good states only). */
@@ -196,6 +281,7 @@ static void report(dmf_run *r) {
   dmp_write_series(&r->octx, "dm_fin_energy.csv",
                    "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0",
                    6, nm, un, r->eh, r->ne);
+  if (r->p->nprobes) dmp_write_probes(&r->octx, r->p, r->pr, r->hist, r->nrec);
   if (r->flyer) {
     const char *fnm[] = {"t", "u_free_surface"}, *fun[] = {"10 us", "km/s"};
     dmp_write_series(&r->octx, "dm_fin_free_surface.csv",
@@ -206,7 +292,7 @@ static void report(dmf_run *r) {
 
 static void run_free(dmf_run *r) {
   dmf_backup_free(r);
-  free(r->fs.rows), free(r->bins), free(r->sigma_u), free(r->eh);
+  free(r->fs.rows), free(r->bins), free(r->sigma_u), free(r->eh), free(r->pr), free(r->hist);
   free(r->prof_done), free(r->snap_done), free(r->mat), free(r->imat);
   dm_fin_destroy(&r->f);
   dm_model_destroy(&r->m);
@@ -235,6 +321,7 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
              ctx->size, r.s.n);
     st = run_steps(&r);
     report(&r);
+    if (st == MS_OK) analyses(&r);
   }
   run_free(&r);
   return st;

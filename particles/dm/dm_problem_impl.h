@@ -110,6 +110,11 @@ void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_
 /* ---- analyses against the exact solutions (dm_analysis.c): fill p->sum ---- */
 void dmp_rod_analysis(dm_problem *p, const double *hist, size_t nrec, double xprobe);
 void dmp_contact_analysis(dm_problem *p, const dm_model *m, size_t nreal, double t);
+/* The same on any stress: σ_xx = sigma[9 i] at reference positions X[3 i] (response eos). */
+void dmp_contact_analysis_sigma(dm_problem *p, const double *X, const double *sigma, size_t nreal,
+                                double t);
+/* The nearest real particle to each probe x (and the y, z of the first lattice row). */
+void dmp_find_probes(const dm_problem *p, const dm_state *s, size_t nreal, probe_rec *pr);
 void dmp_sphere_analysis(dm_problem *p, const dm_state *s, size_t nreal, double t);
 
 /* ---- checkpoint / restart (dm_checkpoint.c, docs/mpi.md) ---- */

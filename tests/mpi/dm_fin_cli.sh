@@ -10,7 +10,7 @@
 # reports once and leaves the serial run's last good state.
 # usage: dm_fin_cli.sh MSCALE MPIEXEC DECK
 source "$(dirname "$0")/cli_common.sh"
-files="dm_fin_energy.csv dm_fin_profile_000.csv dm_fin_profile_001.csv"
+files="dm_fin_energy.csv dm_fin_profile_000.csv dm_fin_profile_001.csv dm_probes.csv"
 same() { # DIR_A DIR_B WHAT [FIRST_SNAPSHOT]
   for f in $files; do cmp -s "$1/$f" "$2/$f" || { echo "FAIL: $f differs ($3)"; exit 1; }; done
   for k in ${4:-0} 1; do
@@ -24,7 +24,7 @@ for np in 2 3; do
   grep -q "on $np ranks" "$work/np$np/run.log" || { echo "np $np: no rank count in run.log"; exit 1; }
   same "$work/serial" "$work/np$np" "serial vs $np ranks"
 done
-files="dm_fin_energy.csv dm_fin_profile_001.csv" # written after the last checkpoint
+files="dm_fin_energy.csv dm_fin_profile_001.csv dm_probes.csv" # written after the last checkpoint
 mpirun 3 "$mscale" run "$deck" -o "$work/r3" --restart "$work/serial/dm_checkpoint.h5" --quiet
 grep -q "restarted from" "$work/r3/run.log" || { echo "FAIL: no restart in the log"; exit 1; }
 same "$work/serial" "$work/r3" "serial vs restart on 3 ranks" 1
