@@ -81,7 +81,8 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
     return -1.0;
   }
   const double ell = f->par.ell * pow(J, 1.0 / f->dim);
-  const double q = trD < 0 ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
+  const double q =
+      trD < 0 && !open ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
   double G = mt->G, Y = mt->Y0; /* elastic_plastic: constants */
