@@ -17,6 +17,7 @@
 #include "dm_impl.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 void dm_frac_alloc(dm_fin *f) {
@@ -82,4 +83,26 @@ size_t dm_fin_failed_count(const dm_fin *f) {
   if (f->failed)
     for (size_t i = 0; i < f->n; ++i) c += f->failed[i] != 0;
   return c;
+}
+
+/* The `fracture: {model, spall_strength, failure_strain}` map of a deck section (a discrete_model
+ * layer, the coupled problem's particles), docs/input-dm.md. */
+void dm_frac_read(dk_errors *e, dk_doc *doc, const dk_node *section, const char *where,
+                  dm_fracture *out) {
+  static const char *const models[] = {"none", "mean_stress", "principal_stress", NULL};
+  *out = (dm_fracture){0};
+  const dk_node *F = dk_get(section, "fracture");
+  if (!F) return;
+  char what[96];
+  snprintf(what, sizeof what, "%s.fracture", where);
+  if (!dk_expect_map(e, doc, F, what)) return;
+  dk_read_enum(e, doc, F, "model", false, DM_FRACTURE_MEAN_STRESS, models, &out->model);
+  if (out->model == DM_FRACTURE_NONE) return;
+  if (!dk_get(F, "spall_strength")) {
+    dk_error(e, doc, F, "%s: a failure model needs 'spall_strength' (the tension σ_s, > 0)", what);
+    return;
+  }
+  dk_read_positive(e, doc, F, "spall_strength", MS_DIM_PRESSURE, true, 0, &out->spall_strength);
+  dk_read_double(e, doc, F, "failure_strain", MS_DIM_NONE, false, 0.0, 0.0, 100.0,
+                 &out->failure_strain);
 }

@@ -75,6 +75,11 @@ static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
 }
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
+/* The deck's `fracture: {model: mean_stress|principal_stress|none, spall_strength, failure_strain}`
+ * of `section` (absent: no fracture); located errors (no or non-positive spall_strength) in e;
+ * `where` names the section in messages. */
+void dm_frac_read(dk_errors *e, dk_doc *doc, const dk_node *section, const char *where,
+                  dm_fracture *out);
 /* Largest eigenvalue of a symmetric 3×3 matrix (row-major), closed form. */
 double dm_frac_max_principal(const double *a);
 

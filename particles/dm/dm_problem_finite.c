@@ -55,7 +55,8 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
                                .yield = p->layers[l].yield,
                                .G = p->layers[l].G,
                                .Y0 = p->layers[l].Y0,
-                               .sg = &p->layers[l].sg};
+                               .sg = &p->layers[l].sg,
+                               .frac = p->layers[l].frac};
   uint8_t *imat = ms_calloc(s.n, 1);
   for (size_t i = 0; i < s.n; ++i) imat[i] = (uint8_t)(dmp_layer_at(p, s.X[3 * i]) - p->layers);
   dm_fin_params par = {
@@ -90,7 +91,8 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
   long every = p->energy_every;
   for (long step = 0;; ++step) {
     dm_fin_energies(f, &K, &U, &H);
-    const double bal = K + U + H - f->work - E0;
+    const double bal =
+        K + U + H + dm_fin_broken_energy(f) - f->work - E0; /* broken: 0 without fracture */
     dEmax = fmax(dEmax, fabs(bal));
     const int last = (p->steps > 0 && step >= p->steps) || t >= t_end * (1 - 1e-12);
     if ((step % every == 0 || last) && ne < nemax) {
@@ -118,6 +120,11 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
       break;
     }
   }
+  if (f->failed)
+    ms_log(ctx, MS_LOG_INFO,
+           "discrete model (response eos): fracture: %zu particles failed, broken energy %.6g kJ "
+           "(in the balance: K + U + E_hg + broken - W - E0)",
+           dm_fin_failed_count(f), dm_fin_broken_energy(f));
   sum->steps = f->step, sum->t_end = t, sum->wall_s = wall;
   sum->particle_steps_per_s = wall > 0 ? (double)nreal * f->step / wall : 0;
   sum->energy_err_max = f->work != 0 ? dEmax / fabs(f->work) : dEmax / fmax(fabs(E0), 1e-300);
