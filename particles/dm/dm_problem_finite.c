@@ -144,10 +144,12 @@ ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p) {
     const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ", "1"};
     /* rows of 7 written as 6 columns: compact them first */
     for (size_t r = 0; r < ne; ++r) memmove(&eh[6 * r], &eh[7 * r], 6 * sizeof(double));
-    dmp_write_series(
-        ctx, "dm_fin_energy.csv",
-        "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0", 6, nm, un,
-        eh, ne);
+    dmp_write_series(ctx, "dm_fin_energy.csv",
+                     f->failed ? "energy history: balance = kinetic + internal + bond_penalty + "
+                                 "broken - piston_work - E0 (broken: fracture, in run.log)"
+                               : "energy history: balance = kinetic + internal + bond_penalty - "
+                                 "piston_work - E0",
+                     6, nm, un, eh, ne);
   }
   if (flyer) {
     const char *nm[] = {"t", "u_free_surface"}, *un[] = {"10 us", "km/s"};
