@@ -2,7 +2,7 @@
 /* dm_fracture.c — fracture of the finite-deformation discrete model (docs/particles-dm.md,
  * "Fracture"): an instantaneous tensile cut-off at the spall strength σ_s (the pmin / "spall"
  * model of hydrocodes: a cell whose tension reaches the threshold loses its deviator and
- * carries pressure in compression only [Kanel2010] §2, [Grady1988]), per particle, for good.
+ * carries pressure in compression only [Kanel2010], [Grady1988]), per particle, for good.
  *
  * A failed particle keeps its mass, momentum and family: σ = −max(p + q, 0) I, so it still
  * resists compression (a closed crack), and p = 0 while its family is stretched (J > 1: the
@@ -34,7 +34,7 @@ void dm_frac_free(dm_fin *f) {
 }
 
 /* Largest eigenvalue of the symmetric a: the trigonometric form of the cubic's roots
- * (Smith, Commun. ACM 4 (1961) 168): λ = q + 2p cos(φ), q = tr a/3, p² = tr((a − qI)²)/6,
+ * ([Smith1961]): λ = q + 2p cos(φ), q = tr a/3, p² = tr((a − qI)²)/6,
  * cos 3φ = det((a − qI)/p)/2. */
 double dm_frac_max_principal(const double *a) {
   const double p1 = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
