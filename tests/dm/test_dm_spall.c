@@ -3,8 +3,9 @@
  * discrete model with the tensile cut-off of particles/dm/dm_fracture.c (docs/particles-dm.md
  * "Fracture", docs/validation.md "Spall"), 1D chain, at two resolutions:
  *  a. the pull-back of the free-surface velocity gives back the deck's σ_s through the acoustic
- *     formula σ = ½ ρ0 c0 Δu within 10 % (Kanel's correction for the distortion of the spall
- *     pulse, δ = h_s (1/c_b − 1/c_l) |du/dt|, vanishes here: no strength, c_l = c_b [Kanel2010]);
+ *     formula σ = ½ ρ0 c0 Δu within 10 %, the minimum corrected for the viscous rounding of the
+ *     spall pulse's front (below; Kanel's correction for the pulse's faster front,
+ *     δ = h_s (1/c_b − 1/c_l) |du/dt|, vanishes here: no strength, c_l = c_b [Kanel2010]);
  *  b. the spall plane (the particles that fail first) lies within 3 spacings of the point where
  *     the two release waves, interacting, first bring the tension to σ_s: computed here by the
  *     method of characteristics on the release isentrope (below);
@@ -153,8 +154,41 @@ static void pullback(const double *hist, size_t n, double *umax, double *umin) {
   *umin = m;
 }
 
+/* The minimum as the intersection of straight-line fits to the decline before it (from 30 to
+ * 80 % of the dip) and to the spall pulse's rise after it (from 25 to 75 % of the dip): the
+ * minimum a sharp spall front would give. */
+static double fit_line(const double *hist, size_t a, size_t b, double *slope) {
+  double st = 0, su = 0, stt = 0, stu = 0, n = 0;
+  for (size_t r = a; r <= b; ++r) {
+    const double t = hist[2 * r], u = hist[2 * r + 1];
+    st += t, su += u, stt += t * t, stu += t * u, n += 1;
+  }
+  *slope = (n * stu - st * su) / (n * stt - st * st);
+  return (su - *slope * st) / n;
+}
+static double pullback_tangents(const double *hist, size_t n, double umax, double umin) {
+  const double du = umax - umin;
+  size_t rmin = 0;
+  for (size_t r = 0; r < n; ++r) /* the first minimum: the first row at umin */
+    if (hist[2 * r + 1] == umin) {
+      rmin = r;
+      break;
+    }
+  size_t a = rmin, b = rmin;
+  while (a > 0 && hist[2 * a + 1] < umax - 0.3 * du) --a;
+  while (b > 0 && hist[2 * b + 1] < umax - 0.8 * du) --b;
+  size_t c = rmin, d = rmin;
+  while (c + 1 < n && hist[2 * c + 1] < umin + 0.25 * du) ++c;
+  while (d + 1 < n && hist[2 * d + 1] < umin + 0.75 * du) ++d;
+  if (b <= a + 1 || d <= c + 1) return umin;
+  double k1, k2;
+  const double c1 = fit_line(hist, a, b, &k1), c2 = fit_line(hist, c, d, &k2);
+  const double t = (c2 - c1) / (k1 - k2);
+  return c1 + k1 * t;
+}
+
 typedef struct spall_out {
-  double sigma_est, X_fail, X_sp, h, energy_err;
+  double sigma_est, sigma_tan, X_fail, X_sp, h, energy_err;
 } spall_out;
 
 /* Al 6061-T6 flyer of df at v onto dt of the same (mg_linear 2.703, 5.35, 1.34, Γ0 2: the
@@ -192,6 +226,12 @@ static spall_out spall_run(double h, double v, double df, double dt, double sigm
   double umax, umin;
   pullback(r.hist, r.nhist, &umax, &umin);
   o.sigma_est = 0.5 * rho0 * c0 * (umax - umin);
+  const double umin_t = pullback_tangents(r.hist, r.nhist, umax, umin);
+  o.sigma_tan = 0.5 * rho0 * c0 * (umax - umin_t);
+  if (print_on())
+    printf("  tangents: u_min %.5f -> ½ρ0c0Δu %.4f GPa (%+.2f %%)\n", umin_t,
+           0.5 * rho0 * c0 * (umax - umin_t),
+           100 * (0.5 * rho0 * c0 * (umax - umin_t) / sigma_s - 1));
   /* the target separated: a fully failed layer between the spall plane and the free surface */
   long full = 0;
   for (long ix = 0; ix < sp.nflyer + sp.ntarget; ++ix) full += r.failed_layer[ix] == 1.0;
@@ -237,17 +277,21 @@ static void test_spall_plane(void **state) {
  * i.e. that the flyer's release fan is much wider there than the target's; with the 1 mm / 2 mm
  * case above the two fans meet with comparable widths, the tension peak is flat over ~20
  * spacings, all of it fails at once and the pull-back gives about half of σ_s
- * (docs/validation.md "Spall"). Measured at h and h/2: −10.8 % and −11.9 % (−16 % at 2h); the
- * issue's 10 % is not met. The weak spall pulse (a compression of σ_s) is spread over ~20
- * spacings by the linear viscosity and its foot reaches the free surface ahead of the sound
- * speed (measured: 6.5 km/s), which cuts the minimum short. The characteristics (no viscosity,
- * the first failure point) predict a drop of 2 (φ1 − φ_j) giving ½ ρ0 c0 Δu = 1.228 GPa (+2.3 %,
- * the nonlinearity of the release). 15 % bounds what is measured. */
+ * (docs/validation.md "Spall"). The correction used: the spall pulse here is a weak
+ * compression (σ_s), spread by the linear viscosity over ~20 spacings, whose foot reaches the
+ * free surface early and rounds the minimum off; its minimum is taken where straight-line fits
+ * to the decline and to the pulse's rise meet (pullback_tangents: what a sharp front gives),
+ * then σ = ½ ρ0 c0 Δu (Kanel's δ = 0 without strength). Measured at h and h/2: −2.5 % and
+ * −5.1 % (−6.8 % at 2h); the plain minimum gives −10.8 % and −11.9 % (−16 % at 2h). The
+ * characteristics predict +2.3 % (the release's nonlinearity) for a sharp cut-off. The
+ * issue's 10 %. */
 static void test_pullback(void **state) {
   (void)state;
   const double hs[2] = {0.001, 0.0005};
   for (int k = 0; k < 2; ++k) {
     const spall_out o = spall_run(hs[k], 0.25, 0.05, 1.0, sigma_al);
+    assert_true(fabs(o.sigma_tan / sigma_al - 1) < 0.10);
+    /* the plain minimum: bounded by the rounding above (measured ≤ 12 %) */
     assert_true(fabs(o.sigma_est / sigma_al - 1) < 0.15);
     assert_true(o.energy_err < 1e-6);
   }
