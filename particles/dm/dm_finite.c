@@ -86,8 +86,9 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
   double G = mt->G, Y = mt->Y0; /* elastic_plastic: constants */
-  if (mt->yield >=
-      DM_YIELD_STEINBERG_GUINAN) { /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T) */
+  /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T); not for a failed
+   * particle (no deviator; an open one's density may be beyond the cold curve) */
+  if (mt->yield >= DM_YIELD_STEINBERG_GUINAN && !dm_frac_failed(f, i)) {
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
     if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
