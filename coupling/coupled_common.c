@@ -118,6 +118,9 @@ void cpl_phase_close(cpl_particle_phase *ph) {
  * distributed search over owned particles + ghosts (docs/mpi.md "Fragments on MPI ranks"), after
  * which *view covers the owned particles only (each rank kicks and writes its own). */
 ms_status cpl_find_fragments(const ms_ctx *ctx, cpl_particle_phase *ph, cpl_particles *view) {
+  /* the model's own connectivity if it has one (the discrete model's unbroken bonds; NULL for
+   * cluster dynamics: the distance criterion) */
+  ptl_region_links(ph->region, &ph->fo.link_start, &ph->fo.link_nbr);
   if (ctx->size < 2) {
     *view = cpl_particle_view(ph->region, ph->skip);
     return cpl_fragments_find(&ph->fr, view, &ph->fo);

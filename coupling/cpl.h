@@ -67,6 +67,11 @@ typedef struct cpl_fragment_opts {
   double spacing; /* a: lattice spacing / cluster size, cm (> 0) */
   double rho0;    /* reference density for equivalent diameters, g/cm³ (≤ 0: diameters NaN) */
   cpl_box box;    /* zero = open in every direction */
+  /* optional: the particle model's own connectivity (ptl_region_links): particles i and
+   * link_nbr[link_start[i] .. link_start[i + 1]) are bonded whatever their distance, and no
+   * distance search is made (NULL: the criterion above). Indices into the view. */
+  const size_t *link_start;
+  const int32_t *link_nbr;
 } cpl_fragment_opts;
 
 /* Fragments of one particle configuration. Fragment k is numbered in the order of its smallest

@@ -357,11 +357,31 @@ static void search_cells(cpl_fragments *f, const cpl_particles *p, const cpl_fra
   f->n_bonds = nb;
 }
 
+/* Union of the model's links (o->link_start/link_nbr) between particles that are not skipped. */
+static void link_search(cpl_fragments *f, const cpl_particles *p, const cpl_fragment_opts *o) {
+  long nb = 0;
+  for (size_t i = 0; i < p->n; i++) {
+    if (p->skip && p->skip[i]) continue;
+    for (size_t b = o->link_start[i]; b < o->link_start[i + 1]; b++) {
+      const int32_t k = o->link_nbr[b];
+      if (k < 0 || (size_t)k >= p->n || (size_t)k == i || (p->skip && p->skip[k])) continue;
+      nb++;
+      cpl_uf_union(&f->uf, i, (size_t)k);
+    }
+  }
+  f->n_bonds = nb; /* a pair listed both ways counts twice */
+}
+
 ms_status cpl_fragments_bond_search(cpl_fragments *f, const cpl_particles *p,
                                     const cpl_fragment_opts *o, size_t n_mass) {
   ms_status s = check_input(p, o, n_mass);
   if (s != MS_OK) return s;
   reserve_particles(f, p->n);
+  if (o->link_start && o->link_nbr) { /* the model's connectivity instead of distances */
+    cpl_uf_init(&f->uf, p->n);
+    link_search(f, p, o);
+    return MS_OK;
+  }
   cell_grid g;
   size_t ncell = build_cells(f, p, o, &g);
   cpl_uf_init(&f->uf, p->n);

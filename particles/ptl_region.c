@@ -60,6 +60,11 @@ void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner) {
 ms_status ptl_region_write_snapshot(ptl_region *r, const char *path) {
   return r->model->write_snapshot(r, path);
 }
+bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr) {
+  if (r->model->links) return r->model->links(r, start, nbr);
+  *start = NULL, *nbr = NULL;
+  return false;
+}
 ms_status ptl_region_refresh(ptl_region *r) { return r->model->refresh(r); }
 ms_status ptl_region_checkpoint_write(const ptl_region *r, ms_h5 *h, const ms_ctx *ctx) {
   return r->model->checkpoint_write(r, h, ctx);

@@ -96,6 +96,13 @@ void ptl_region_energy_get(ptl_region *r, ptl_region_energy *out);
 void ptl_region_refresh_ghosts(ptl_region *r);
 void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner);
 
+/* The model's own connectivity for the fragments, if it has one: a CSR list over the view's
+ * particles [0, n), the particles linked to i being nbr[start[i] .. start[i + 1]) (view
+ * indices), valid until the next step; fragments are then its connected components. false
+ * (*start = *nbr = NULL) if the model has none: the coupling's distance criterion
+ * |r_i − r_k| ≤ b·a (cluster dynamics). The discrete model links the unbroken bonds. */
+bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr);
+
 /* The model's own HDF5 snapshot of its state (a run that went unstable). */
 ms_status ptl_region_write_snapshot(ptl_region *r, const char *path);
 /* Checkpoint: bring the state to what a restore reproduces (before writing), write it into the

@@ -239,11 +239,27 @@ typedef enum dm_yield {
   DM_YIELD_JOHNSON_COOK = 3      /* G0, Y(ε_p, ε̇, T) (dm_strength.c) */
 } dm_yield;
 typedef struct dm_sg dm_sg; /* Steinberg–Guinan parameters (dm_impl.h) */
+/* Fracture (dm_fracture.c, docs/particles-dm.md "Fracture"): a particle fails for good when its
+ * tensile stress reaches the spall strength σ_s (criterion: the mean stress tr σ/3 or the
+ * largest principal stress), or, with failure_strain > 0, when J − 1 reaches it. A failed
+ * particle carries no deviator and no tension (σ = −max(p + q, 0) I, p = 0 while J > 1), its
+ * bond penalty is switched off; a bond is broken when both its particles have failed. */
+typedef enum dm_fracture_model {
+  DM_FRACTURE_NONE = 0,
+  DM_FRACTURE_MEAN_STRESS = 1,     /* tr σ/3 ≥ σ_s */
+  DM_FRACTURE_PRINCIPAL_STRESS = 2 /* max eigenvalue of σ ≥ σ_s */
+} dm_fracture_model;
+typedef struct dm_fracture {
+  int model;             /* dm_fracture_model (0: no fracture) */
+  double spall_strength; /* σ_s (GPa), > 0 */
+  double failure_strain; /* ε_f (volumetric, J − 1); 0: not used */
+} dm_fracture;
 typedef struct dm_fin_material {
   const eos_t *eos; /* not owned */
   int yield;        /* dm_yield */
   double G, Y0;     /* shear modulus, yield stress (GPa); G0, Y0 for steinberg_guinan */
   const dm_sg *sg;  /* steinberg_guinan, johnson_cook: its parameters (not owned), else NULL */
+  dm_fracture frac; /* zero: no fracture */
 } dm_fin_material;
 typedef struct dm_fin_params {
   double cq, cl;    /* quadratic and linear viscosity coefficients */
@@ -263,6 +279,10 @@ typedef struct dm_fin {
   double *F, *s, *QP, *sig;                  /* [n][9]: F, deviator s, V P A⁻¹, Cauchy σ */
   double *frc, *vbar;                        /* [n][3] */
   double work; /* work done by driven (DM_PRESCRIBED/DM_FIXED) particles (kJ) */
+  /* fracture (dm_fracture.c; NULL when no material has a fracture model): failed[i] = 1 once
+   * particle i failed; broken[i] the bond-penalty energy it held then (kJ), taken out of E_hg */
+  uint8_t *failed;
+  double *broken;
   double dt_next;
   size_t dt_particle; /* the particle whose stable step is dt_next (smallest index of ties) */
   long step;
@@ -290,6 +310,14 @@ ms_status dm_fin_step(dm_fin *f);
 ms_status dm_fin_refresh(dm_fin *f);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
+/* Fracture (dm_fracture.c): the energy booked as broken (Σ broken[i], kJ), the number of failed
+ * particles, and whether bond (i, k) is broken (both failed). K + U + E_hg + broken − W is
+ * conserved. All 0/false without fracture. */
+double dm_fin_broken_energy(const dm_fin *f);
+size_t dm_fin_failed_count(const dm_fin *f);
+static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
+  return f->failed && f->failed[i] && f->failed[k];
+}
 /* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under
  * `group` of a checkpoint file (serial or collective; on ranks every rank calls it, `owner`
  * on the one rank whose rows are written), and back into a model built for the same particles
@@ -354,6 +382,12 @@ typedef struct dm_flyer_result {
   double *hist; /* [nhist][2]: t, mean u_x of the target's last x layer (owned: free) */
   size_t nhist;
   double *profile; /* [nx][8] layer means at t_end: X, x, u_x, ρ, p, q, −σ_xx, e (free) */
+  /* fracture (a material with frac.model; energy_err then includes the broken term) */
+  double broken;         /* broken energy at t_end (kJ) */
+  size_t nfailed;        /* failed particles at t_end */
+  double t_fail, X_fail; /* time of the first failure and the mean X of the particles failing
+                            then (NaN: none) */
+  double *failed_layer;  /* [nx] fraction of each x layer failed at t_end (free; NULL without) */
 } dm_flyer_result;
 ms_status dm_flyer_run(const dm_flyer_spec *spec, const ms_ctx *ctx, dm_flyer_result *res);
 

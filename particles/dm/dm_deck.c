@@ -84,6 +84,10 @@ static void read_layers(dm_problem *p, dk_doc *doc, const dk_node *sec, const eo
       }
     }
     dm_sg_read(e, doc, it, ly->yield, ly->eos, &ly->sg); /* strength_set / strength keys */
+    dm_frac_read(e, doc, it, "discrete_model.layers[]", &ly->frac); /* fracture: {...} */
+    if (ly->frac.model != DM_FRACTURE_NONE && ly->response != RESP_EOS)
+      dk_error(e, doc, dk_get(it, "fracture"),
+               "discrete_model.layers: 'fracture' needs response: eos");
     if (ly->yield != DM_YIELD_NONE) {
       if (ly->response != RESP_EOS)
         dk_error(e, doc, it, "discrete_model.layers: 'yield' needs response: eos");

@@ -32,6 +32,7 @@ static size_t fin_arrays(const dm_fin *f, fin_array a[16]) {
   a[k++] = (fin_array){"sigma", "GPa", 9, f->sig};
   a[k++] = (fin_array){"force", "g cm/(10 us)^2", 3, f->frc};
   a[k++] = (fin_array){"vbar", "km/s", 3, f->vbar};
+  if (f->broken) a[k++] = (fin_array){"broken", "kJ", 1, f->broken}; /* fracture only */
   return k;
 }
 
@@ -54,6 +55,13 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
     path(name, sizeof name, group, "w"), st = ms_h5_write_doubles_dist(h, name, n, 3, s->w, "cm");
   if (st == MS_OK)
     path(name, sizeof name, group, "u"), st = ms_h5_write_doubles_dist(h, name, n, 3, s->u, "km/s");
+  if (st == MS_OK && f->failed) { /* fracture: the failed flags (as 0/1) */
+    double *fl = ms_calloc(f->n + 1, sizeof *fl);
+    for (size_t i = 0; i < f->n; ++i) fl[i] = f->failed[i];
+    path(name, sizeof name, group, "failed");
+    st = ms_h5_write_doubles_dist(h, name, n, 1, fl, "1");
+    free(fl);
+  }
   /* the scalars as attributes of the group's e dataset: the step count exactly (< 2^53) */
   path(name, sizeof name, group, "e");
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "work", f->work);
@@ -91,6 +99,16 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
   }
   if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, s->n, 3, s->w, e);
   if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, s->n, 3, s->u, e);
+  if (st == MS_OK && f->failed) { /* a failed particle's bond penalty is off (dm_fracture.c) */
+    double *fl = ms_calloc(f->n + 1, sizeof *fl);
+    path(name, sizeof name, group, "failed");
+    st = read_into(h, name, f->n, 1, fl, e);
+    for (size_t i = 0; st == MS_OK && i < f->n; ++i) {
+      f->failed[i] = fl[i] != 0.0;
+      if (f->failed[i]) f->m->kappa[i] = 0.0;
+    }
+    free(fl);
+  }
   double step = 0;
   path(name, sizeof name, group, "e");
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "work", &f->work, e);

@@ -73,18 +73,22 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   const double trD = L[0] + L[4] + L[8];
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = st->mass[i] / st->vol[i], rho = rho0 / J;
-  const double p = eos_pressure(mt->eos, rho, f->e[i]), c = eos_sound_speed(mt->eos, rho, f->e[i]);
+  const bool open = dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
+  const double p = open ? 0.0 : eos_pressure(mt->eos, rho, f->e[i]);
+  const double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho, f->e[i]);
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
   }
   const double ell = f->par.ell * pow(J, 1.0 / f->dim);
-  const double q = trD < 0 ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
+  const double q =
+      trD < 0 && !open ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
   double G = mt->G, Y = mt->Y0; /* elastic_plastic: constants */
-  if (mt->yield >=
-      DM_YIELD_STEINBERG_GUINAN) { /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T) */
+  /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T); not for a failed
+   * particle (no deviator; an open one's density may be beyond the cold curve) */
+  if (mt->yield >= DM_YIELD_STEINBERG_GUINAN && !dm_frac_failed(f, i)) {
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
     if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
@@ -98,7 +102,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
       G = mt->sg->G0, Y = dm_jc_yield(mt->sg, f->eps_p[i], rate, T);
     } else dm_sg_moduli(mt->sg, rho / eos_rho0(mt->eos), p, T, f->eps_p[i], &G, &Y);
   }
-  if (strength && dt > 0) {
+  if (strength && dt > 0 && !dm_frac_failed(f, i)) {
     /* Jaumann: ṡ = 2G D′ + W s − s W (D = sym L, W = skew L) */
     double D[9], W[9], ds[9];
     for (int a = 0; a < 3; ++a)
@@ -129,7 +133,8 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   double *sg = &f->sig[9 * i];
   for (int a = 0; a < 9; ++a) sg[a] = s[a];
   sg[0] -= p + q, sg[4] -= p + q, sg[8] -= p + q;
-  double P[9]; /* P = J σ F⁻ᵀ */
+  dm_frac_stress(f, i, mt, J, sg, s); /* failure test; a failed particle's cut-off */
+  double P[9];                        /* P = J σ F⁻ᵀ */
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b)
       P[3 * a + b] = J * (sg[3 * a] * Fi[3 * b] + sg[3 * a + 1] * Fi[3 * b + 1] +
@@ -292,6 +297,7 @@ void dm_fin_destroy(dm_fin **fp) {
   dm_fin *f = *fp;
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
   free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar);
+  dm_frac_free(f);
   free(f);
   *fp = NULL;
 }
@@ -308,7 +314,9 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
     return MS_ERR_INPUT;
   for (size_t i = 0; i < st->n; ++i)
-    if (mat[imat[i]].yield >= DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) return MS_ERR_INPUT;
+    if ((mat[imat[i]].yield >= DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) ||
+        (mat[imat[i]].frac.model != DM_FRACTURE_NONE && !(mat[imat[i]].frac.spall_strength > 0)))
+      return MS_ERR_INPUT;
   dm_fin *f = ms_calloc(1, sizeof *f);
   size_t n = st->n, n1 = n ? n : 1;
   f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;
@@ -319,6 +327,7 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->F = ms_calloc(9 * n1, sizeof(double)), f->s = ms_calloc(9 * n1, sizeof(double));
   f->QP = ms_calloc(9 * n1, sizeof(double)), f->sig = ms_calloc(9 * n1, sizeof(double));
   f->frc = ms_calloc(3 * n1, sizeof(double)), f->vbar = ms_calloc(3 * n1, sizeof(double));
+  dm_frac_alloc(f);
   /* bond penalty κ_i = c_s M_i V_i / tr A_i, M = ρ0 c0² + 4G/3 (reference P-wave modulus) */
   m->opt.hourglass = par->hourglass;
   for (size_t i = 0; i < n; ++i) {

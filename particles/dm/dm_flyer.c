@@ -58,6 +58,7 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
   dm_fs_history fs;
   dm_fs_history_init(&fs, sp->nhist);
   double t = 0.0, dEmax = 0.0;
+  res->t_fail = res->X_fail = NAN;
   for (long step = 0;; ++step) {
     dm_fs_history_record(&fs, step, t, &s, nx, ny * nz);
     if (t >= sp->t_end * (1 - 1e-12) || st != MS_OK) break;
@@ -65,7 +66,19 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
     t += f->dt_next;
     st = dm_fin_step(f);
     dm_fin_energies(f, &K, &U, &H);
-    dEmax = fmax(dEmax, fabs(K + U + H - E0));
+    dEmax = fmax(dEmax, fabs(K + U + H + dm_fin_broken_energy(f) - E0));
+    if (f->failed && isnan(res->t_fail) && dm_fin_failed_count(f) > 0) {
+      double sx = 0, c = 0;
+      for (size_t i = 0; i < n; ++i)
+        if (f->failed[i]) sx += s.X[3 * i], c += 1;
+      res->t_fail = t, res->X_fail = sx / c;
+    }
+  }
+  res->broken = dm_fin_broken_energy(f), res->nfailed = dm_fin_failed_count(f);
+  if (f->failed) {
+    res->failed_layer = ms_calloc((size_t)nx, sizeof(double));
+    for (size_t i = 0; i < n; ++i)
+      res->failed_layer[i % (size_t)nx] += f->failed[i] / (double)(ny * nz);
   }
   res->steps = f->step;
   res->hist = fs.rows, res->nhist = fs.n;

@@ -60,6 +60,29 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
   for (int a = 0; a < 3; ++a) xi[a] = X[3 * k + a] + sh[a] - X[3 * i + a];
 }
 
+/* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
+ * dm_frac_alloc: failed[] and broken[] when a material of f has a fracture model (else NULL);
+ * dm_frac_free releases them. dm_frac_open: particle i has failed and its family is stretched
+ * (J > 1): the crack is open, no EOS pressure (p = 0). dm_frac_stress, called by the stress
+ * pass after σ = s − (p + q) I: the failure test of an intact particle (books its bond-penalty
+ * energy as broken and switches its penalty off), and for a failed one s = 0,
+ * σ = −max(p + q, 0) I. Touches particle i's entries only (safe in the parallel pass). */
+void dm_frac_alloc(dm_fin *f);
+void dm_frac_free(dm_fin *f);
+static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
+static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
+  return dm_frac_failed(f, i) && J > 1.0;
+}
+void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
+                    double *s);
+/* The deck's `fracture: {model: mean_stress|principal_stress|none, spall_strength, failure_strain}`
+ * of `section` (absent: no fracture); located errors (no or non-positive spall_strength) in e;
+ * `where` names the section in messages. */
+void dm_frac_read(dk_errors *e, dk_doc *doc, const dk_node *section, const char *where,
+                  dm_fracture *out);
+/* Largest eigenvalue of a symmetric 3×3 matrix (row-major), closed form. */
+double dm_frac_max_principal(const double *a);
+
 /* A free-surface history of fixed size: (t, mean u_x of the last x layer of an nx × nyz slab)
  * recorded every `stride`-th step; when full, every other row is dropped and the stride
  * doubled, so any run length fits (dm_finite.c). */

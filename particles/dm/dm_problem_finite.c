@@ -86,7 +86,8 @@ static ms_status setup(dmf_run *r) {
                                   .yield = p->layers[l].yield,
                                   .G = p->layers[l].G,
                                   .Y0 = p->layers[l].Y0,
-                                  .sg = &p->layers[l].sg};
+                                  .sg = &p->layers[l].sg,
+                                  .frac = p->layers[l].frac};
   r->imat = ms_calloc(s->n, 1);
   for (size_t i = 0; i < s->n; ++i)
     r->imat[i] = (uint8_t)(dmp_layer_at(p, s->X[3 * i]) - p->layers);
@@ -205,7 +206,8 @@ static ms_status run_steps(dmf_run *r) {
       st = dmf_checkpoint_write(r);
       if (st != MS_OK) return st;
     }
-    const double bal = K + U + H - f->work - r->E0;
+    const double bal =
+        K + U + H + dm_fin_broken_energy(f) - f->work - r->E0; /* broken: 0 without fracture */
     r->dEmax = fmax(r->dEmax, fabs(bal));
     if ((step % every == 0 || last) && r->ne < r->nemax) {
       const double row[6] = {r->t, K, U, H, f->work, bal};
@@ -260,6 +262,11 @@ static void report(dmf_run *r) {
   const dm_fin *f = r->f;
   const double K = r->K, U = r->U, H = r->H; /* of the last good state */
   const long steps = r->steps;
+  if (f->failed)
+    ms_log(r->ctx, MS_LOG_INFO,
+           "discrete model (response eos): fracture: %zu particles failed, broken energy %.6g kJ "
+           "(in the balance: K + U + E_hg + broken - W - E0)",
+           dm_fin_failed_count(f), dm_fin_broken_energy(f));
   sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall;
   sum->particle_steps_per_s =
       r->wall > 0 ? (double)r->nreal * (double)(steps - r->step0) / r->wall : 0;
@@ -279,7 +286,10 @@ static void report(dmf_run *r) {
   const char *nm[] = {"t", "kinetic", "internal", "bond_penalty", "piston_work", "balance"};
   const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ"};
   dmp_write_series(&r->octx, "dm_fin_energy.csv",
-                   "energy history: balance = kinetic + internal + bond_penalty - piston_work - E0",
+                   f->failed ? "energy history: balance = kinetic + internal + bond_penalty + "
+                               "broken - piston_work - E0 (broken: fracture, in run.log)"
+                             : "energy history: balance = kinetic + internal + bond_penalty - "
+                               "piston_work - E0",
                    6, nm, un, r->eh, r->ne);
   if (r->p->nprobes) dmp_write_probes(&r->octx, r->p, r->pr, r->hist, r->nrec);
   if (r->flyer) {

@@ -28,6 +28,7 @@ typedef struct dm_layer {
   int response, yield; /* enum response, dm_yield */
   double Y0;           /* yield stress (GPa), elastic_plastic */
   dm_sg sg;            /* steinberg_guinan (dm_strength.c) */
+  dm_fracture frac;    /* fracture: {...} (dm_fracture.c), response eos */
   const eos_t *eos;    /* the material's EOS (response eos) */
   int has_u0;          /* 'velocity' given (response eos: a flyer or target body) */
   double u0;           /* its initial x velocity (km/s) */

@@ -34,7 +34,8 @@ typedef struct dm_region_params {
   long piston_layers;
   int yield;
   double G, Y0;
-  dm_sg sg; /* steinberg_guinan: strength_set and/or strength {...} (dm_strength.c) */
+  dm_sg sg;         /* steinberg_guinan: strength_set and/or strength {...} (dm_strength.c) */
+  dm_fracture frac; /* fracture: {...} (dm_fracture.c) */
   double cq, cl, courant, hourglass, dt_margin, cond_max;
   int surface;
   double surf_depth, surf_wavelength;
@@ -57,6 +58,8 @@ typedef struct dm_region {
   dm_fin_material mat;
   uint8_t *imat;
   ptl_state *ps;
+  size_t *link_start; /* [n + 1], link_nbr [bonds]: the unbroken bonds (region_links) */
+  int32_t *link_nbr;
   ptl_region_geometry geo;
   double t, dt, dt0_limit;
   piston pis;
@@ -130,6 +133,7 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
   dm_sg_read(e, doc, P, p->yield, NULL, &p->sg);
   if (p->yield == DM_YIELD_STEINBERG_GUINAN) p->G = p->sg.G0, p->Y0 = p->sg.Y0;
   if (p->yield == DM_YIELD_JOHNSON_COOK) p->G = p->sg.G0, p->Y0 = p->sg.jA;
+  dm_frac_read(e, doc, P, "particles", &p->frac);
   p->cq = 2.0, p->cl = 0.5;
   const dk_node *V = dk_get(P, "viscosity");
   if (V && dk_expect_map(e, doc, V, "particles.viscosity")) {
@@ -267,7 +271,7 @@ static void region_free(dm_region *r) {
   dm_model_destroy(&r->m);
   dm_state_free(&r->s);
   ptl_state_destroy(&r->ps);
-  free(r->imat);
+  free(r->imat), free(r->link_start), free(r->link_nbr);
   free(r->pis.t), free(r->pis.u), free(r->pis.cum);
   free(r);
 }
@@ -346,7 +350,8 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
     region_free(r);
     return st;
   }
-  r->mat = (dm_fin_material){.eos = eos, .yield = p->yield, .G = p->G, .Y0 = p->Y0};
+  r->mat =
+      (dm_fin_material){.eos = eos, .yield = p->yield, .G = p->G, .Y0 = p->Y0, .frac = p->frac};
   if (p->yield >= DM_YIELD_STEINBERG_GUINAN) {
     r->mat.sg = &p->sg; /* the parameters outlive the region (the deck's) */
     if (!isfinite(dm_sg_temperature(&p->sg, eos, rho0, e0))) {
@@ -374,6 +379,8 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
    * ℓ/h ≈ 0.96 in 2D, |tr D| ≈ u_p/(5 h)) by ≈ 1.35, so dt_margin 0.5 leaves room up to
    * a 2 km/s piston (measured: u_p = 2 km/s runs, 3 km/s needs 0.35; docs/particles-dm.md);
    * beyond, the step check below stops the run with the advice. */
+  r->link_start = ms_calloc(r->s.n + 1, sizeof *r->link_start);
+  r->link_nbr = ms_calloc(r->m->nbonds + 1, sizeof *r->link_nbr);
   r->dt0_limit = r->f->dt_next;
   r->dt = p->dt_margin * r->dt0_limit;
   r->pis.dir[0] = 1.0;
@@ -530,9 +537,10 @@ static double region_free_surface_velocity(const ptl_region *rr) {
   return cnt ? sum / (double)cnt : 0.0;
 }
 
-/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy, piston work W;
- * total = K + U − W, conserved to round-off by dm_fin (docs/particles-dm.md "Energy
- * identity") except for what the coupling's kicks add. */
+/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy, broken (the
+ * penalty energy of failed particles, dm_fracture.c), piston work W; total = K + U + broken − W,
+ * conserved to round-off by dm_fin (docs/particles-dm.md "Energy identity") except for what the
+ * coupling's kicks add. */
 static void region_energy(ptl_region *rr, ptl_region_energy *out) {
   const dm_region *r = dmr(rr);
   double K, U, H;
@@ -541,10 +549,29 @@ static void region_energy(ptl_region *rr, ptl_region_energy *out) {
   out->kinetic = K;
   out->potential = U + H;
   out->piston_work = r->f->work;
-  out->total = K + U + H - r->f->work;
+  out->broken = dm_fin_broken_energy(r->f);
+  out->total = K + U + H + out->broken - r->f->work;
   for (size_t i = 0; i < r->s.n; i++)
     if (r->s.bc[i] == DM_FREE)
       for (int a = 0; a < 3; a++) out->momentum[a] += r->s.mass[i] * r->s.u[3 * i + a];
+}
+
+/* The fragments' connectivity: every bond of the families but the broken ones (both particles
+ * failed, dm_fracture.c), so a slab is one fragment until it breaks, however far its spike
+ * tips stretch. Particle i of the model is particle i of the view (on ranks > 0 the view is
+ * empty and nothing is read). */
+static bool region_links(ptl_region *rr, const size_t **start, const int32_t **nbr) {
+  dm_region *r = dmr(rr);
+  const dm_model *m = r->m;
+  size_t q = 0;
+  for (size_t i = 0; i < r->s.n; i++) {
+    r->link_start[i] = q;
+    for (size_t b = m->start[i]; b < m->start[i + 1]; b++)
+      if (!dm_fin_bond_broken(r->f, i, m->nbr[b])) r->link_nbr[q++] = (int32_t)m->nbr[b];
+  }
+  r->link_start[r->s.n] = q;
+  *start = r->link_start, *nbr = r->link_nbr;
+  return true;
 }
 
 static void region_refresh_ghosts(ptl_region *r) { (void)r; } /* serial: no ghosts */
@@ -651,6 +678,7 @@ static const ptl_region_model dm_region_model = {
     .energy = region_energy,
     .refresh_ghosts = region_refresh_ghosts,
     .ghost_owners = region_ghost_owners,
+    .links = region_links,
     .write_snapshot = region_write_snapshot,
     .refresh = region_refresh,
     .checkpoint_write = region_checkpoint_write,

@@ -240,6 +240,45 @@ static void test_flyer_errors(void **state) {
   unload(&L);
 }
 
+/* The fracture keys of a layer (docs/input-dm.md): a failure model needs spall_strength > 0,
+ * and response: eos; each error located. */
+static void test_fracture_errors(void **state) {
+  (void)state;
+  static const char *deck =
+      "problem: discrete_model\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2.703, c0: 5.35, s: 1.34, gamma0: 2.0}\n"
+      "discrete_model:\n"
+      "  spacing: 0.1\n"
+      "  domain: {lo: [0], hi: [4.0]}\n"
+      "  layers:\n"
+      "    - {material: al, x_max: 1, response: eos, fracture: {model: mean_stress}}\n"
+      "    - {material: al, x_max: 2, response: eos, fracture: {spall_strength: -1.2}}\n"
+      "    - {material: al, x_max: 3, response: eos, fracture: {spall_strength: 0}}\n"
+      "    - {material: al, fracture: {spall_strength: 1.2}}\n"
+      "  t_end: 1.0\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
+  dk_errors_print(&e, stderr);
+  assert_null(p);
+  assert_true(has_error(&e, "deck.yaml:9:")); /* no spall_strength */
+  assert_true(has_error(&e, "needs 'spall_strength'"));
+  assert_true(has_error(&e, "deck.yaml:10:")); /* σ_s < 0 */
+  assert_true(has_error(&e, "deck.yaml:11:")); /* σ_s = 0 */
+  assert_true(has_error(&e, "deck.yaml:12:")); /* the linear model */
+  assert_true(has_error(&e, "'fracture' needs response: eos"));
+  eos_materials_destroy(&mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
 /* A piston far beyond what the time step resolves (courant 20) inverts a family: the run stops
  * with MS_ERR_UNSTABLE naming the particle, not with NaN. */
 static void test_finite_degenerate_stops(void **state) {
@@ -355,10 +394,15 @@ static void test_snapshot_layout(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_errors_collected),    cmocka_unit_test(test_finite_errors),
-      cmocka_unit_test(test_flyer_errors),        cmocka_unit_test(test_finite_degenerate_stops),
-      cmocka_unit_test(test_unstable_dt_refused), cmocka_unit_test(test_singular_geometry_refused),
-      cmocka_unit_test(test_small_runs),          cmocka_unit_test(test_snapshot_layout),
+      cmocka_unit_test(test_errors_collected),
+      cmocka_unit_test(test_finite_errors),
+      cmocka_unit_test(test_flyer_errors),
+      cmocka_unit_test(test_fracture_errors),
+      cmocka_unit_test(test_finite_degenerate_stops),
+      cmocka_unit_test(test_unstable_dt_refused),
+      cmocka_unit_test(test_singular_geometry_refused),
+      cmocka_unit_test(test_small_runs),
+      cmocka_unit_test(test_snapshot_layout),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
