@@ -11,8 +11,8 @@ For body 0 (a cylinder whose axis is the wall normal) of impact_particles_final.
 * footprint D = D0 max(r/r0) over its outer particles (initial radius r0 within h/2 of the
   largest): the rod's surface is taken to stretch radially with the outer particles beside it
   (the same definitions as particles/dm/dm_impact.c, which writes them to impact_summary.csv);
-* profile: in slices of one spacing along the axis, the radius of the rod's surface
-  r_max (1 + h/(2 r_max0)) — the outermost particle of the slice plus its stretched half cell.
+* profile: in slices of one spacing along the axis, the surface radius R0 max(r/r0) of the
+  outer particles in the slice (the footprint's definition, slice by slice).
 
 Prints L, D, L/L0, D/D0 for every OUTDIR (and the differences to the experiment when given) and
 plots the profiles with the experimental final length and footprint. Units: cm in the files,
@@ -56,11 +56,12 @@ def measure(outdir, name="impact_particles_final.csv"):
     footprint = 2.0 * R0 * np.max(r[outer] / r0[outer])
     edges = np.arange(z.min() - 0.5 * h, z.max() + h, h)
     zc, rc = [], []
+    stretch = R0 * r / np.maximum(r0, 1e-300)
     for a, b in zip(edges[:-1], edges[1:]):
-        m = (z >= a) & (z < b)
+        m = (z >= a) & (z < b) & outer
         if m.any():
             zc.append(0.5 * (a + b))
-            rc.append(r[m].max() * (1.0 + 0.5 * h / r0.max()))
+            rc.append(stretch[m].max())
     return dict(h=h, L0=L0, D0=2 * R0, length=length, footprint=footprint,
                 z=np.array(zc) - (z.min() - 0.5 * h), r=np.array(rc), particles=int(sel.sum()))
 
@@ -71,6 +72,9 @@ def main(argv=None):
     ap.add_argument("-o", "--output", help="plot file (PNG); none: print only")
     ap.add_argument("--exp-length", type=float, help="experimental final length (mm)")
     ap.add_argument("--exp-footprint", type=float, help="experimental footprint diameter (mm)")
+    ap.add_argument("--exp-lateral", type=float, nargs="*", default=[],
+                    help="experimental radii (mm) at heights f L_f, as pairs f r (e.g. 0.5 4.40)")
+    ap.add_argument("--title", default="Taylor test, OFHC Cu", help="plot title")
     args = ap.parse_args(argv)
     results = []
     for d in args.dirs:
@@ -104,11 +108,15 @@ def main(argv=None):
     if args.exp_footprint:
         ax.plot([-args.exp_footprint / 2, args.exp_footprint / 2], [0, 0], "r-", lw=4,
                 label=f"experiment: footprint {args.exp_footprint:g} mm")
+    if args.exp_lateral and args.exp_length:
+        f, r = np.array(args.exp_lateral[0::2]), np.array(args.exp_lateral[1::2])
+        ax.plot(np.concatenate([r, -r]), np.concatenate([f, f]) * args.exp_length, "rs", ms=4,
+                label="experiment: radius at fractions of L_f")
     ax.set_xlabel("r (mm)")
     ax.set_ylabel("height above the wall (mm)")
     ax.set_aspect("equal")
     ax.legend(fontsize=7, loc="upper right")
-    ax.set_title("Taylor test, OFHC Cu, 190 m/s")
+    ax.set_title(args.title)
     fig.tight_layout()
     fig.savefig(args.output, dpi=130)
     print(f"wrote {args.output}")

@@ -408,6 +408,10 @@ typedef struct dm_impact_summary {
   double hg_ratio;     /* E_hg / E0 at the end */
   double released;     /* bond-penalty energy given up at reference updates (kJ) */
   double p_transverse; /* max_t |Σ m u| along the wall plane / |Σ m u(0)| */
+  double stretch_max;  /* largest bond stretch (dm_fin_max_stretch) over the history samples */
+  double J_min, J_max; /* range of J = det F over the history samples */
+  double p_normal;     /* Σ m u · n at the end / |Σ m u(0)|, n the wall normal into the bodies
+                          (> 0: rebound) */
   double length0, length;       /* body 0, a cylinder along the wall normal: axial extent (cm) */
   double footprint0, footprint; /* and the largest diameter of its outer particles (cm); NaN
                                    when body 0 is not such a cylinder */

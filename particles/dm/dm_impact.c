@@ -152,11 +152,15 @@ static void record(run_state *r) {
   taylor_measures(r->p, s, r->X0, &L, &D);
   dm_impact_summary *sum = &r->p->sum;
   const double bal = K + U + H - f->ext_work - r->E0;
+  sum->stretch_max = fmax(sum->stretch_max, dm_fin_max_stretch(f, NULL));
+  for (size_t i = 0; i < f->n; ++i)
+    sum->J_min = fmin(sum->J_min, f->J[i]), sum->J_max = fmax(sum->J_max, f->J[i]);
   sum->energy_err = fmax(sum->energy_err, fabs(bal) / r->E0);
   sum->wall_err = fmax(sum->wall_err, fabs(f->ext_work + r->wl->stored) / r->E0);
   if (r->p->has_wall && r->P0 > 0) {
     const int a = r->p->wall_axis;
     sum->p_transverse = fmax(sum->p_transverse, hypot(P[(a + 1) % 3], P[(a + 2) % 3]) / r->P0);
+    sum->p_normal = r->p->wall_side * P[a] / r->P0;
   }
   if (r->nh == r->nhmax) { /* thin: keep every other row */
     for (size_t j = 0; j < r->nh / 2; ++j)
@@ -202,17 +206,21 @@ static void write_outputs(const ms_ctx *ctx, const run_state *r) {
                         (double)s->ref_updates,
                         s->released,
                         s->p_transverse,
+                        s->p_normal,
+                        s->J_min,
+                        s->J_max,
+                        s->stretch_max,
                         s->length0,
                         s->length,
                         s->footprint0,
                         s->footprint};
-  const char *sn[] = {"particles", "bonds",       "steps",      "t_end",
-                      "wall_time", "E0",          "energy_err", "wall_err",
-                      "hg_ratio",  "ref_updates", "released",   "p_transverse",
-                      "length0",   "length",      "footprint0", "footprint"};
-  const char *su[] = {"1", "1", "1",  "10 us", "s",  "kJ", "1",  "1",
-                      "1", "1", "kJ", "1",     "cm", "cm", "cm", "cm"};
-  dmp_write_series(ctx, "impact_summary.csv", "impact summary (docs/input-impact.md)", 16, sn, su,
+  const char *sn[] = {"particles",   "bonds",        "steps",    "t_end",      "wall_time",
+                      "E0",          "energy_err",   "wall_err", "hg_ratio",   "ref_updates",
+                      "released",    "p_transverse", "p_normal", "J_min",      "J_max",
+                      "stretch_max", "length0",      "length",   "footprint0", "footprint"};
+  const char *su[] = {"1",  "1", "1", "10 us", "s", "kJ", "1",  "1",  "1",  "1",
+                      "kJ", "1", "1", "1",     "1", "1",  "cm", "cm", "cm", "cm"};
+  dmp_write_series(ctx, "impact_summary.csv", "impact summary (docs/input-impact.md)", 20, sn, su,
                    row, 1);
 }
 
@@ -306,6 +314,7 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     return MS_ERR_INPUT;
   }
   memset(&p->sum, 0, sizeof p->sum);
+  p->sum.J_min = INFINITY, p->sum.J_max = -INFINITY;
   const long energy_every = p->energy_every;
   dm_state s;
   uint8_t *imat = NULL;
@@ -357,11 +366,14 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     ms_log(ctx, MS_LOG_INFO,
            "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "
            "E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = %.3g; transverse "
-           "momentum / |P0| <= %.3g; %ld reference updates; body 0: length %.5g cm (L/L0 %.4f), "
+           "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
+           "%.4g; %ld reference updates; body 0: length "
+           "%.5g cm (L/L0 %.4f), "
            "footprint %.5g cm (D/D0 %.4f)",
            f->step, r.t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
-           p->sum.p_transverse, p->sum.ref_updates, p->sum.length, p->sum.length / p->sum.length0,
-           p->sum.footprint, p->sum.footprint / p->sum.footprint0);
+           p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
+           p->sum.ref_updates, p->sum.length, p->sum.length / p->sum.length0, p->sum.footprint,
+           p->sum.footprint / p->sum.footprint0);
     if (st == MS_OK) write_particles(ctx, "impact_particles_final.csv", f, X0, imat, r.t);
     write_outputs(ctx, &r);
   } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
