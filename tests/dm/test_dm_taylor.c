@@ -58,12 +58,16 @@ static void test_taylor_cu_coarse(void **state) {
   assert_true(s->p_transverse < 1e-12);
   /* the rod has stopped on the wall: what is left of its momentum is the elastic rebound */
   assert_true(fabs(s->p_normal) < 0.1);
-  /* LOOSE BOUNDS (the criterion of the full-size run, docs/validation.md, is 5 % and 10 %):
-   * at h = R0/6 the final length is within CI_LENGTH_TOL of the measured one; the footprint
-   * is resolution-bound — the measured largest radius is a lip thinner than 1 mm at the
-   * impact face, about one particle layer here — see CI_FOOTPRINT_TOL below. */
+  /* LOOSE BOUNDS (the criterion of the full-size run, docs/validation.md, is 5 % and 10 %).
+   * Length: the 5 % of the criterion holds already at h = R0/6 (measured +1.4 %).
+   * Footprint: resolution-bound. The measured largest radius (8.40 mm) is a lip at the impact
+   * face: the measured outline falls to 5.60 mm within 1.75 mm of the face, less than three
+   * particle layers of h = 0.635 mm here, so the coarse lattice cannot carry it (measured
+   * −23 %; the profile above the lip, 3–10 mm from the face, is within 0.2 mm of the
+   * measured radii). 30 % admits that and still fails a penalty that stiffens the flow
+   * (hourglass: 1 gives −35 %). */
 #define CI_LENGTH_TOL    0.05
-#define CI_FOOTPRINT_TOL 0.40
+#define CI_FOOTPRINT_TOL 0.30
   assert_true(fabs(L / exp_length - 1) < CI_LENGTH_TOL);
   assert_true(fabs(D / exp_footprint - 1) < CI_FOOTPRINT_TOL);
   dm_impact_problem_destroy(&p);
