@@ -88,6 +88,12 @@ def main(argv=None):
         if args.exp_footprint:
             line += f", D {100 * (10 * m['footprint'] / args.exp_footprint - 1):+.2f} %"
         print(line)
+        if args.exp_lateral:  # the profile's radius at the same fractions of its own length
+            f, r = np.array(args.exp_lateral[0::2]), np.array(args.exp_lateral[1::2])
+            rr = 10 * np.interp(f * m["length"], m["z"], m["r"])
+            print("  radius at f L_f: " + ", ".join(
+                f"f {a:.3g}: {b:.3f} mm (experiment {c:.3f}, {b - c:+.3f})"
+                for a, b, c in zip(f, rr, r)))
     if not args.output:
         return 0
     import matplotlib
