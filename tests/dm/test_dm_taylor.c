@@ -64,8 +64,8 @@ static void test_taylor_cu_coarse(void **state) {
    * Footprint: resolution-bound. The measured largest radius (8.40 mm) is a lip at the impact
    * face: the measured outline falls to 5.60 mm within 1.75 mm of the face, less than three
    * particle layers of h = 0.635 mm here, so the coarse lattice cannot carry it. Measured
-   * −29.0 % at R0/6 and −19.7 % at R0/12 (the footprint grows with resolution, the profile
-   * 3–10 mm from the face is within 0.3 mm of the measured radii). 35 % admits the coarse
+   * −29.0 % at R0/6 and −19.7 % at R0/12 (the footprint grows with resolution, the profile at 0.2–0.67 of L_f
+   * is within 0.5 mm of the measured radii at R0/6 and 0.22 mm at R0/12). 35 % admits the coarse
    * lattice's deficit with a margin for compiler and platform round-off in a run of 2800
    * steps, and still fails a rod that spreads 10 % less. */
 #define CI_LENGTH_TOL    0.05
