@@ -407,7 +407,7 @@ typedef struct dm_impact_summary {
   double wall_err;     /* max_t |W_wall + E_wall| / E0: the penalty's time-discretisation error */
   double hg_ratio;     /* E_hg / E0 at the end */
   double released;     /* bond-penalty energy given up at reference updates (kJ) */
-  double p_transverse; /* max_t |Σ m u| along the wall plane / |Σ m u(0)| */
+  double p_transverse; /* max_t of the change of Σ m u along the wall plane / |Σ m u(0)| */
   double stretch_max;  /* largest bond stretch (dm_fin_max_stretch) over the history samples */
   double J_min, J_max; /* range of J = det F over the history samples */
   double p_normal;     /* Σ m u · n at the end / |Σ m u(0)|, n the wall normal into the bodies

@@ -137,8 +137,8 @@ typedef struct run_state {
   dm_fin *f;
   wall *wl;
   const double *X0;
-  double E0, P0, t;
-  double *hist; /* [nhmax][13] */
+  double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
+  double *hist;             /* [nhmax][13] */
   size_t nh, nhmax;
 } run_state;
 
@@ -159,7 +159,9 @@ static void record(run_state *r) {
   sum->wall_err = fmax(sum->wall_err, fabs(f->ext_work + r->wl->stored) / r->E0);
   if (r->p->has_wall && r->P0 > 0) {
     const int a = r->p->wall_axis;
-    sum->p_transverse = fmax(sum->p_transverse, hypot(P[(a + 1) % 3], P[(a + 2) % 3]) / r->P0);
+    sum->p_transverse = fmax(
+        sum->p_transverse,
+        hypot(P[(a + 1) % 3] - r->Pv0[(a + 1) % 3], P[(a + 2) % 3] - r->Pv0[(a + 2) % 3]) / r->P0);
     sum->p_normal = r->p->wall_side * P[a] / r->P0;
   }
   if (r->nh == r->nhmax) { /* thin: keep every other row */
@@ -350,6 +352,7 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     for (size_t i = 0; i < s.n; ++i)
       for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
     r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+    for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
     r.hist = ms_calloc(13 * r.nhmax, sizeof(double));
     p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
     taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
