@@ -267,6 +267,10 @@ typedef struct dm_fin_params {
   double hourglass; /* bond-penalty coefficient c_s: κ_i = c_s M_i V_i / tr A_i (0 = off) */
   double ell;       /* particle spacing ℓ (cm) */
 } dm_fin_params;
+struct dm_fin;
+/* An external force on the particles (dm_impact.c's rigid wall): fills fext [n][3] at the
+ * current configuration (w, u of f->m->s) and returns its stable time step (INFINITY: none). */
+typedef double (*dm_fin_ext_fn)(void *user, const struct dm_fin *f, double *fext);
 typedef struct dm_fin {
   dm_model *m; /* not owned; families, A⁻¹; m->Q holds the gather's Q */
   size_t n;
@@ -289,6 +293,13 @@ typedef struct dm_fin {
   size_t bad;           /* on MS_ERR_UNSTABLE: the particle */
   const char *bad_what; /* and the quantity */
   double bad_value;
+  /* optional external force (dm_fin_set_external): added to frc at every force evaluation;
+   * its work on the free particles, with the half kick's time-centred velocity, is ext_work,
+   * so K + U + E_hg − work − ext_work is conserved to round-off */
+  dm_fin_ext_fn ext;
+  void *ext_user;
+  double *fext; /* [n][3] the external force of the last evaluation (NULL without one) */
+  double ext_work;
 } dm_fin;
 /* What a finite-deformation model is built from (dm_fin_create). */
 typedef struct dm_fin_setup {
@@ -305,9 +316,30 @@ void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
 /* One kick–drift–kick step of length f->dt_next; MS_ERR_UNSTABLE (f->bad, f->bad_what) when a
  * J ≤ 0 or a non-finite e, p or force appears: the state is then the one of the bad step. */
 ms_status dm_fin_step(dm_fin *f);
-/* The stresses, forces and dt_next of the current state again, without advancing the deviator
- * (after a caller has changed e or s, e.g. an initial strain); MS_ERR_UNSTABLE as a step. */
+/* Installs an external force (NULL: none) and recomputes the forces and dt_next at the current
+ * state (no deviator step). */
+ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user);
+/* Recomputes stresses, forces and dt_next at the current state without advancing the deviator
+ * (after a change of the model's families: dm_refamily.c). */
 ms_status dm_fin_refresh(dm_fin *f);
+/* The bond-penalty stiffness κ_i = c_s M_i V_i / tr A_i of every particle from f->m's families
+ * (M = ρ0 c0² + 4G/3 of the particle's material). */
+void dm_fin_bond_penalty(dm_fin *f);
+/* Reference-configuration update (dm_refamily.c, docs/particles-dm.md "Reference update"):
+ * the largest bond stretch max(|x_k − x_i|/|ξ_ik|, |ξ_ik|/|x_k − x_i|) over all bonds (≥ 1; the
+ * particle in *where), the trigger of an update; and the update itself, X ← x, w ← 0, V ← J V,
+ * families and A⁻¹ rebuilt on the current configuration (deviator, ε_p, e, u kept). f->m is
+ * replaced by the new model (the old one is destroyed: the caller destroys f->m at the end).
+ * A degenerate new family (cond A > cond_max) refuses the update: the old state is restored,
+ * rep->bad names the particle and MS_ERR_UNSTABLE is returned. */
+typedef struct dm_refamily_report {
+  double released;   /* the bond penalty's stored energy Σ κ|z|²/2 given up (kJ) */
+  double jmin, jmax; /* range of J = V_new/V_old */
+  size_t bonds;      /* bonds of the new families */
+  size_t bad;        /* on refusal: the first particle with a degenerate family */
+} dm_refamily_report;
+double dm_fin_max_stretch(const dm_fin *f, size_t *where);
+ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
 /* Fracture (dm_fracture.c): the energy booked as broken (Σ broken[i], kJ), the number of failed
@@ -390,5 +422,35 @@ typedef struct dm_flyer_result {
   double *failed_layer;  /* [nx] fraction of each x layer failed at t_end (free; NULL without) */
 } dm_flyer_result;
 ms_status dm_flyer_run(const dm_flyer_spec *spec, const ms_ctx *ctx, dm_flyer_result *res);
+
+/* Deck problem type `impact` (dm_impact*.c, docs/input-impact.md): bodies (cylinder, sphere,
+ * box) of the finite-deformation model with their own materials and initial velocities onto a
+ * rigid frictionless wall (a penalty on the particles crossing its contact plane), free
+ * surfaces, optional reference-configuration updates; energy and momentum balance, the length
+ * and footprint of a cylinder standing on the wall (the Taylor anvil test). One rank. */
+typedef struct dm_impact dm_impact;
+dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                                  dk_errors *e);
+ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p);
+void dm_impact_problem_destroy(dm_impact **p); /* null-safe; sets *p = NULL */
+typedef struct dm_impact_summary {
+  size_t particles, bonds;
+  long steps, ref_updates;
+  double t_end, wall_s;
+  double E0;           /* initial energy K + U + E_hg (kJ) */
+  double energy_err;   /* max_t |K + U + E_hg − W_wall − E0| / E0 (round-off) */
+  double wall_err;     /* max_t |W_wall + E_wall| / E0: the penalty's time-discretisation error */
+  double hg_ratio;     /* E_hg / E0 at the end */
+  double released;     /* bond-penalty energy given up at reference updates (kJ) */
+  double p_transverse; /* max_t of the change of Σ m u along the wall plane / |Σ m u(0)| */
+  double stretch_max;  /* largest bond stretch (dm_fin_max_stretch) over the history samples */
+  double J_min, J_max; /* range of J = det F over the history samples */
+  double p_normal;     /* Σ m u · n at the end / |Σ m u(0)|, n the wall normal into the bodies
+                          (> 0: rebound) */
+  double length0, length;       /* body 0, a cylinder along the wall normal: axial extent (cm) */
+  double footprint0, footprint; /* and the largest diameter of its outer particles (cm); NaN
+                                   when body 0 is not such a cylinder */
+} dm_impact_summary;
+const dm_impact_summary *dm_impact_get_summary(const dm_impact *p);
 
 #endif /* MSCALE_DM_H */

@@ -184,6 +184,11 @@ static ms_status forces(dm_fin *f, double dt) {
     return MS_ERR_UNSTABLE;
   }
   dm_gather_pass(f->m, f->m->s->w, f->frc, f->n);
+  if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
+    const double dext = f->ext(f->ext_user, f, f->fext);
+    for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
+    if (dext < dtmin) dtmin = dext;
+  }
   for (long i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a)
       if (!isfinite(f->frc[3 * i + a])) {
@@ -201,7 +206,7 @@ static ms_status half_kick(dm_fin *f, double h) {
   dm_model *m = f->m;
   dm_state *st = m->s;
   const long n = (long)f->n;
-  double dW = 0.0;
+  double dW = 0.0, dWe = 0.0;
   for (long i = 0; i < n; ++i) {
     double *u = &st->u[3 * i], *vb = &f->vbar[3 * i];
     if (is_driven(st->bc[i])) {
@@ -214,9 +219,10 @@ static ms_status half_kick(dm_fin *f, double h) {
       const double u1 = u[a] + im * f->frc[3 * i + a];
       vb[a] = 0.5 * (u[a] + u1);
       u[a] = u1;
+      if (f->ext) dWe += h * f->fext[3 * i + a] * vb[a]; /* its share of Σ m Δ|u|²/2 */
     }
   }
-  f->work += dW;
+  f->work += dW, f->ext_work += dWe;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
   for (long i = 0; i < n; ++i) {
@@ -292,12 +298,39 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
   if (hourglass) *hourglass = H;
 }
 
+void dm_fin_bond_penalty(dm_fin *f) {
+  /* bond penalty κ_i = c_s M_i V_i / tr A_i, M = ρ0 c0² + 4G/3 (reference P-wave modulus) */
+  dm_model *m = f->m;
+  const dm_state *st = m->s;
+  const double cs = f->par.hourglass;
+  m->opt.hourglass = cs;
+  for (size_t i = 0; i < f->n; ++i) {
+    const dm_fin_material *mt = &f->mat[f->imat[i]];
+    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
+    const double M = rho0 * c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / 3.0 : 0.0);
+    double trA = 0;
+    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+      double xi[3];
+      dm_bond_vector(m, i, b, xi);
+      trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    }
+    m->kappa[i] = cs > 0 && trA > 0 ? cs * M * st->vol[i] / trA : 0.0;
+  }
+}
+
+ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user) {
+  f->ext = fn, f->ext_user = user;
+  if (fn && !f->fext) f->fext = ms_calloc(3 * (f->n ? f->n : 1), sizeof(double));
+  return forces(f, 0.0);
+}
+
 void dm_fin_destroy(dm_fin **fp) {
   if (!fp || !*fp) return;
   dm_fin *f = *fp;
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
   free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar);
   dm_frac_free(f);
+  free(f->fext);
   free(f);
   *fp = NULL;
 }
@@ -328,21 +361,8 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->QP = ms_calloc(9 * n1, sizeof(double)), f->sig = ms_calloc(9 * n1, sizeof(double));
   f->frc = ms_calloc(3 * n1, sizeof(double)), f->vbar = ms_calloc(3 * n1, sizeof(double));
   dm_frac_alloc(f);
-  /* bond penalty κ_i = c_s M_i V_i / tr A_i, M = ρ0 c0² + 4G/3 (reference P-wave modulus) */
-  m->opt.hourglass = par->hourglass;
-  for (size_t i = 0; i < n; ++i) {
-    const dm_fin_material *mt = &mat[imat[i]];
-    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
-    const double M = rho0 * c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / 3.0 : 0.0);
-    double trA = 0;
-    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-      double xi[3];
-      dm_bond_vector(m, i, b, xi);
-      trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
-    }
-    m->kappa[i] = par->hourglass > 0 && trA > 0 ? par->hourglass * M * st->vol[i] / trA : 0.0;
-    f->e[i] = eos_e0(mt->eos);
-  }
+  dm_fin_bond_penalty(f);
+  for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);
   const ms_status status = forces(f, 0.0);
   if (status != MS_OK) {
     dm_fin_destroy(&f);

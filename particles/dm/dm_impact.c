@@ -1,0 +1,390 @@
+/* SPDX-License-Identifier: MIT */
+/* dm_impact.c — the run of the deck problem type `impact` (docs/input-impact.md,
+ * docs/particles-dm.md "Impact onto a rigid wall"): bodies of the finite-deformation model
+ * (dm_finite.c) onto a rigid frictionless wall, free surfaces everywhere else.
+ *
+ * Wall (a penalty on the particles crossing its contact plane): a particle's centre may come no
+ * closer than half a spacing to the wall plane (the body's surface is half a spacing beyond its
+ * last particles); beyond that contact plane it feels the normal force
+ *   f = k_i d,  d = h/2 − side (x_a − x_wall) > 0,  k_i = c_w M_i h,
+ * M = ρ0 c_L² the particle material's P-wave modulus, so that a layer pressed on the wall
+ * compresses like a layer of the body (c_w = 1: penetration = the strain of the contact stress
+ * times h). Frictionless: no tangential force. Energy: the wall's work on the free particles,
+ * with the half kicks' time-centred velocities, is dm_fin's ext_work, so K + U + E_hg − W_wall
+ * is constant to round-off; the stored penalty energy E_wall = Σ k d²/2 equals −W_wall up to
+ * the time discretisation (reported). Time step: ω_w Δt ≤ 2·courant (ω_w = √(k/m)), and a
+ * particle approaching the wall moves at most 0.1 h per step. */
+#include "dm_impact_impl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct wall {
+  int axis, side;
+  double contact; /* plane of the particle centres: x_wall + side·h/2 */
+  double h;
+  double *k;       /* [n] penalty stiffness */
+  double dt_k;     /* courant·2/max ω_w */
+  double courant;  /* for the approach limit */
+  double stored;   /* Σ k d²/2 at the last evaluation (kJ) */
+  long in_contact; /* particles beyond the contact plane */
+} wall;
+
+static double wall_force(void *user, const dm_fin *f, double *fext) {
+  wall *w = user;
+  const dm_state *s = f->m->s;
+  const int a = w->axis;
+  double E = 0, vmax = 0;
+  long nc = 0;
+  memset(fext, 0, 3 * f->n * sizeof(double));
+  for (size_t i = 0; i < f->n; ++i) {
+    const double x = s->X[3 * i + a] + s->w[3 * i + a];
+    const double d = w->side * (w->contact - x); /* > 0: beyond the contact plane */
+    if (d > 0) {
+      fext[3 * i + a] = w->side * w->k[i] * d;
+      E += 0.5 * w->k[i] * d * d;
+      ++nc;
+    }
+    vmax = fmax(vmax, -w->side * s->u[3 * i + a]); /* approach speed */
+  }
+  w->stored = E, w->in_contact = nc;
+  const double dt_v = vmax > 0 ? 0.1 * w->h / vmax : INFINITY;
+  return fmin(w->dt_k, dt_v);
+}
+
+/* The particles of every body, lattice sites in body order; X0 keeps the first reference. */
+static void build_state(dm_impact *p, dm_state *s, uint8_t **imat) {
+  size_t n = 0;
+  for (size_t b = 0; b < p->nbodies; ++b) {
+    p->bodies[b].first = n;
+    p->bodies[b].count = dmi_body_sites(&p->bodies[b], p->h, NULL);
+    n += p->bodies[b].count;
+  }
+  dm_state_alloc(s, n, 3);
+  *imat = ms_calloc(n, 1);
+  const double vol = p->h * p->h * p->h;
+  for (size_t b = 0; b < p->nbodies; ++b) {
+    dmi_body *bd = &p->bodies[b];
+    dmi_body_sites(bd, p->h, &s->X[3 * bd->first]);
+    const double rho0 = eos_rho0(bd->mat.eos), c0 = eos_c0(bd->mat.eos);
+    for (size_t i = bd->first; i < bd->first + bd->count; ++i) {
+      for (int a = 0; a < 3; ++a) s->u[3 * i + a] = bd->velocity[a];
+      s->mass[i] = rho0 * vol, s->vol[i] = vol;
+      s->K[i] = rho0 * c0 * c0, s->G[i] = bd->mat.G;
+      s->bc[i] = DM_FREE;
+      (*imat)[i] = (uint8_t)b;
+    }
+  }
+}
+
+/* Body 0 as a Taylor rod: a cylinder whose axis is the wall normal. Length = the axial extent
+ * of its particles + h (half a spacing at each end); footprint = D0 max r/r0 over its outer
+ * particles (r0 within h/2 of the largest initial radius): the rod's surface taken to stretch
+ * radially with the outer particles beside it, so that the footprint is D0 at t = 0 whatever the
+ * lattice. NaN for other bodies. */
+static void taylor_measures(const dm_impact *p, const dm_state *s, const double *X0, double *length,
+                            double *footprint) {
+  const dmi_body *b = &p->bodies[0];
+  *length = *footprint = NAN;
+  if (b->shape != DMI_CYLINDER || !p->has_wall || b->axis != p->wall_axis) return;
+  const int a = b->axis, q1 = (a + 1) % 3, q2 = (a + 2) % 3;
+  double zmin = INFINITY, zmax = -INFINITY, r0max = 0, D = 0;
+  for (size_t i = b->first; i < b->first + b->count; ++i) {
+    const double z = s->X[3 * i + a] + s->w[3 * i + a];
+    zmin = fmin(zmin, z), zmax = fmax(zmax, z);
+    r0max = fmax(r0max, hypot(X0[3 * i + q1] - b->center[q1], X0[3 * i + q2] - b->center[q2]));
+  }
+  for (size_t i = b->first; i < b->first + b->count; ++i) {
+    const double r0 = hypot(X0[3 * i + q1] - b->center[q1], X0[3 * i + q2] - b->center[q2]);
+    if (r0 < r0max - 0.5 * p->h) continue;
+    const double x1 = s->X[3 * i + q1] + s->w[3 * i + q1] - b->center[q1];
+    const double x2 = s->X[3 * i + q2] + s->w[3 * i + q2] - b->center[q2];
+    D = fmax(D, 2.0 * b->radius * hypot(x1, x2) / r0);
+  }
+  *length = zmax - zmin + p->h, *footprint = D;
+}
+
+/* OUTDIR/NAME: every particle (body, first reference X0, current x, u, ρ, p, e, ε_p, J). */
+static void write_particles(const ms_ctx *ctx, const char *name, const dm_fin *f, const double *X0,
+                            const uint8_t *imat, double t) {
+  const dm_state *s = f->m->s;
+  const size_t nc = 15;
+  double *rows = ms_calloc(nc * (f->n ? f->n : 1), sizeof(double));
+  for (size_t i = 0; i < f->n; ++i) {
+    double *r = &rows[nc * i];
+    r[0] = imat[i];
+    for (int a = 0; a < 3; ++a) {
+      r[1 + a] = X0[3 * i + a];
+      r[4 + a] = s->X[3 * i + a] + s->w[3 * i + a];
+      r[7 + a] = s->u[3 * i + a];
+    }
+    r[10] = f->rho[i], r[11] = f->p[i], r[12] = f->e[i], r[13] = f->eps_p[i], r[14] = f->J[i];
+  }
+  const char *nm[] = {"body", "X0",  "Y0",  "Z0", "x", "y",     "z", "u_x",
+                      "u_y",  "u_z", "rho", "p",  "e", "eps_p", "J"};
+  const char *un[] = {"1",    "cm",   "cm",    "cm",  "cm",   "cm", "cm", "km/s",
+                      "km/s", "km/s", "g/cm3", "GPa", "kJ/g", "1",  "1"};
+  char title[160];
+  snprintf(title, sizeof title,
+           "impact particles at t = %.9g (10 us): first reference X0, current x", t);
+  dmp_write_series(ctx, name, title, nc, nm, un, rows, f->n);
+  free(rows);
+}
+
+typedef struct run_state {
+  dm_impact *p;
+  dm_fin *f;
+  wall *wl;
+  const double *X0;
+  double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
+  double *hist;             /* [nhmax][13] */
+  size_t nh, nhmax;
+} run_state;
+
+static void record(run_state *r) {
+  const dm_fin *f = r->f;
+  const dm_state *s = f->m->s;
+  double K, U, H, P[3] = {0, 0, 0}, L, D;
+  dm_fin_energies(f, &K, &U, &H);
+  for (size_t i = 0; i < f->n; ++i)
+    for (int a = 0; a < 3; ++a) P[a] += s->mass[i] * s->u[3 * i + a];
+  taylor_measures(r->p, s, r->X0, &L, &D);
+  dm_impact_summary *sum = &r->p->sum;
+  const double bal = K + U + H - f->ext_work - r->E0;
+  sum->stretch_max = fmax(sum->stretch_max, dm_fin_max_stretch(f, NULL));
+  for (size_t i = 0; i < f->n; ++i)
+    sum->J_min = fmin(sum->J_min, f->J[i]), sum->J_max = fmax(sum->J_max, f->J[i]);
+  sum->energy_err = fmax(sum->energy_err, fabs(bal) / r->E0);
+  sum->wall_err = fmax(sum->wall_err, fabs(f->ext_work + r->wl->stored) / r->E0);
+  if (r->p->has_wall && r->P0 > 0) {
+    const int a = r->p->wall_axis;
+    sum->p_transverse = fmax(
+        sum->p_transverse,
+        hypot(P[(a + 1) % 3] - r->Pv0[(a + 1) % 3], P[(a + 2) % 3] - r->Pv0[(a + 2) % 3]) / r->P0);
+    sum->p_normal = r->p->wall_side * P[a] / r->P0;
+  }
+  if (r->nh == r->nhmax) { /* thin: keep every other row */
+    for (size_t j = 0; j < r->nh / 2; ++j)
+      memmove(&r->hist[13 * j], &r->hist[13 * 2 * j], 13 * sizeof(double));
+    r->nh /= 2, r->p->energy_every *= 2;
+  }
+  const double row[13] = {r->t,
+                          K,
+                          U,
+                          H,
+                          f->ext_work,
+                          r->wl->stored,
+                          bal,
+                          P[0],
+                          P[1],
+                          P[2],
+                          L,
+                          D,
+                          (double)r->wl->in_contact};
+  memcpy(&r->hist[13 * r->nh++], row, sizeof row);
+}
+
+static void write_outputs(const ms_ctx *ctx, const run_state *r) {
+  const char *nm[] = {"t",           "kinetic",   "internal", "bond_penalty", "wall_work",
+                      "wall_energy", "balance",   "p_x",      "p_y",          "p_z",
+                      "length",      "footprint", "contacts"};
+  const char *un[] = {"10 us",  "kJ",     "kJ",     "kJ", "kJ", "kJ", "kJ",
+                      "g*km/s", "g*km/s", "g*km/s", "cm", "cm", "1"};
+  dmp_write_series(ctx, "impact_history.csv",
+                   "impact history: balance = kinetic + internal + bond_penalty - wall_work - E0; "
+                   "length, footprint of body 0 (a cylinder on the wall)",
+                   13, nm, un, r->hist, r->nh);
+  const dm_impact_summary *s = &r->p->sum;
+  const double row[] = {(double)s->particles,
+                        (double)s->bonds,
+                        (double)s->steps,
+                        s->t_end,
+                        s->wall_s,
+                        s->E0,
+                        s->energy_err,
+                        s->wall_err,
+                        s->hg_ratio,
+                        (double)s->ref_updates,
+                        s->released,
+                        s->p_transverse,
+                        s->p_normal,
+                        s->J_min,
+                        s->J_max,
+                        s->stretch_max,
+                        s->length0,
+                        s->length,
+                        s->footprint0,
+                        s->footprint};
+  const char *sn[] = {"particles",   "bonds",        "steps",    "t_end",      "wall_time",
+                      "E0",          "energy_err",   "wall_err", "hg_ratio",   "ref_updates",
+                      "released",    "p_transverse", "p_normal", "J_min",      "J_max",
+                      "stretch_max", "length0",      "length",   "footprint0", "footprint"};
+  const char *su[] = {"1",  "1", "1", "10 us", "s", "kJ", "1",  "1",  "1",  "1",
+                      "kJ", "1", "1", "1",     "1", "1",  "cm", "cm", "cm", "cm"};
+  dmp_write_series(ctx, "impact_summary.csv", "impact summary (docs/input-impact.md)", 20, sn, su,
+                   row, 1);
+}
+
+/* A particle outside the domain stops the run (the box bounds the problem). */
+static long outside_box(const dm_impact *p, const dm_state *s) {
+  for (size_t i = 0; i < s->n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double x = s->X[3 * i + a] + s->w[3 * i + a];
+      if (!(x >= p->lo[a] && x <= p->hi[a])) return (long)i;
+    }
+  return -1;
+}
+
+/* The reference update when a bond stretch passes 1 + threshold (dm_refamily.c). */
+static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
+  dm_impact *p = r->p;
+  if (!(p->ref_threshold > 0)) return MS_OK;
+  size_t at = 0;
+  const double lam = dm_fin_max_stretch(r->f, &at);
+  if (lam <= 1.0 + p->ref_threshold) return MS_OK;
+  dm_refamily_report rep;
+  const ms_status st = dm_fin_reference_update(r->f, ctx, &rep);
+  const dm_state *s = r->f->m->s;
+  if (st != MS_OK) {
+    const size_t b = rep.bad < s->n ? rep.bad : at;
+    ms_log(ctx, MS_LOG_ERROR,
+           "impact: step %ld, t = %.9g: the reference update (bond stretch %.4g at particle %zu) "
+           "is refused: particle %zu at x = (%g, %g, %g) would have a degenerate family; the run "
+           "stops (no output of this state)",
+           r->f->step, r->t, lam, at, b, s->X[3 * b] + s->w[3 * b],
+           s->X[3 * b + 1] + s->w[3 * b + 1], s->X[3 * b + 2] + s->w[3 * b + 2]);
+    return st;
+  }
+  p->sum.ref_updates++, p->sum.released += rep.released;
+  ms_log(ctx, MS_LOG_INFO,
+         "impact: step %ld, t = %.6g: reference update %ld (bond stretch %.4g at particle %zu): "
+         "%zu bonds, J in [%.4g, %.4g], bond-penalty energy released %.4g kJ",
+         r->f->step, r->t, p->sum.ref_updates, lam, at, rep.bonds, rep.jmin, rep.jmax,
+         rep.released);
+  return MS_OK;
+}
+
+static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat) {
+  dm_impact *p = r->p;
+  dm_fin *f = r->f;
+  ms_status st = MS_OK;
+  size_t next_out = 0;
+  double wall_time = 0;
+  for (long step = 0;; ++step) {
+    const int last = r->t >= p->t_end * (1 - 1e-12);
+    if (step % p->energy_every == 0 || last) record(r);
+    while (next_out < p->nparticle_times &&
+           (r->t >= p->particle_times[next_out] * (1 - 1e-12) || last)) {
+      char name[64];
+      snprintf(name, sizeof name, "impact_particles_%03zu.csv", next_out);
+      write_particles(ctx, name, f, r->X0, imat, r->t);
+      ++next_out;
+    }
+    if (last) break;
+    if (r->t + f->dt_next > p->t_end) f->dt_next = p->t_end - r->t;
+    const double dt = f->dt_next, w0 = ms_wall_time();
+    st = dm_fin_step(f);
+    if (st == MS_OK) st = maybe_update(r, ctx);
+    wall_time += ms_wall_time() - w0;
+    r->t += dt;
+    if (st != MS_OK) {
+      if (f->bad_what) {
+        const double *X = &f->m->s->X[3 * f->bad];
+        ms_log(ctx, MS_LOG_ERROR,
+               "impact: step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = %g; the run stops "
+               "(no output of this state)",
+               f->step, r->t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
+      }
+      break;
+    }
+    const long out = outside_box(p, f->m->s);
+    if (out >= 0) {
+      ms_log(ctx, MS_LOG_ERROR, "impact: step %ld, t = %.9g: particle %ld left the domain", f->step,
+             r->t, out);
+      st = MS_ERR_UNSTABLE;
+      break;
+    }
+  }
+  p->sum.wall_s = wall_time;
+  return st;
+}
+
+ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
+  if (ctx->size > 1 || ctx->restart) {
+    ms_log(ctx, MS_LOG_ERROR, "impact: runs on one rank, without restart");
+    return MS_ERR_INPUT;
+  }
+  memset(&p->sum, 0, sizeof p->sum);
+  p->sum.J_min = INFINITY, p->sum.J_max = -INFINITY;
+  const long energy_every = p->energy_every;
+  dm_state s;
+  uint8_t *imat = NULL;
+  build_state(p, &s, &imat);
+  double *X0 = ms_calloc(3 * s.n, sizeof(double));
+  memcpy(X0, s.X, 3 * s.n * sizeof(double));
+  dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max};
+  dm_model *m = NULL;
+  ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
+  dm_fin_material *mat = ms_calloc(p->nbodies, sizeof *mat);
+  for (size_t b = 0; b < p->nbodies; ++b) mat[b] = p->bodies[b].mat, mat[b].sg = &p->bodies[b].sg;
+  dm_fin *f = NULL;
+  dm_fin_params par = {
+      .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
+  if (st == MS_OK)
+    st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
+  wall wl = {.axis = p->wall_axis, .side = p->wall_side, .h = p->h, .courant = p->courant};
+  wl.contact = p->wall_pos + p->wall_side * 0.5 * p->h;
+  wl.k = ms_calloc(s.n, sizeof(double));
+  wl.dt_k = INFINITY;
+  for (size_t i = 0; p->has_wall && i < s.n; ++i) {
+    double cL, c;
+    dmi_body_speeds(&p->bodies[imat[i]], &cL, &c);
+    wl.k[i] = p->wall_stiffness * s.mass[i] / s.vol[i] * cL * cL * p->h;
+    wl.dt_k = fmin(wl.dt_k, 2.0 * p->courant / sqrt(wl.k[i] / s.mass[i]));
+  }
+  if (st == MS_OK && p->has_wall) st = dm_fin_set_external(f, wall_force, &wl);
+  run_state r = {.p = p, .f = f, .wl = &wl, .X0 = X0, .nhmax = 4096};
+  if (st == MS_OK) {
+    double K, U, H, P[3] = {0, 0, 0};
+    dm_fin_energies(f, &K, &U, &H);
+    r.E0 = K + U + H;
+    for (size_t i = 0; i < s.n; ++i)
+      for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
+    r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+    for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
+    r.hist = ms_calloc(13 * r.nhmax, sizeof(double));
+    p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
+    taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
+    ms_log(ctx, MS_LOG_INFO,
+           "impact: %zu particles in %zu bodies, %zu bonds, h %g cm, first dt %.6g, E0 %.6g kJ, "
+           "wall %s; body 0: length %.5g cm, footprint %.5g cm",
+           s.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0, p->has_wall ? "on" : "off",
+           p->sum.length0, p->sum.footprint0);
+    st = time_loop(&r, ctx, imat);
+    double K1, U1, H1;
+    dm_fin_energies(f, &K1, &U1, &H1);
+    p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
+    taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
+    ms_log(ctx, MS_LOG_INFO,
+           "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "
+           "E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = %.3g; transverse "
+           "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
+           "%.4g; %ld reference updates; body 0: length "
+           "%.5g cm (L/L0 %.4f), "
+           "footprint %.5g cm (D/D0 %.4f)",
+           f->step, r.t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
+           p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
+           p->sum.ref_updates, p->sum.length, p->sum.length / p->sum.length0, p->sum.footprint,
+           p->sum.footprint / p->sum.footprint0);
+    if (st == MS_OK) write_particles(ctx, "impact_particles_final.csv", f, X0, imat, r.t);
+    write_outputs(ctx, &r);
+  } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
+  p->energy_every = energy_every;
+  if (f) m = f->m; /* a reference update replaces the model */
+  free(r.hist), free(wl.k), free(mat), free(imat), free(X0);
+  dm_fin_destroy(&f);
+  dm_model_destroy(&m);
+  dm_state_free(&s);
+  return st;
+}

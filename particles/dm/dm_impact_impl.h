@@ -1,0 +1,48 @@
+/* SPDX-License-Identifier: MIT */
+/* dm_impact_impl.h — internals of the deck problem type `impact` (docs/input-impact.md):
+ * dm_impact_deck.c reads and checks the deck, dm_impact.c builds the bodies, runs the
+ * finite-deformation model against the rigid wall and writes the outputs. */
+#ifndef MSCALE_DM_IMPACT_IMPL_H
+#define MSCALE_DM_IMPACT_IMPL_H
+
+#include "dm_problem_impl.h"
+
+enum dmi_shape { DMI_CYLINDER = 0, DMI_SPHERE, DMI_BOX };
+
+typedef struct dmi_body {
+  int shape, axis;  /* enum dmi_shape; the cylinder's axis (0, 1, 2) */
+  double center[3]; /* cylinder: the middle of its axis */
+  double radius, length, size[3];
+  double velocity[3];   /* initial velocity (km/s) */
+  const char *material; /* name (owned by the deck) */
+  dm_fin_material mat;  /* eos, yield, G, Y0; sg points to `sg` below */
+  dm_sg sg;
+  size_t first, count; /* its particles (set by dmi_build) */
+} dmi_body;
+
+struct dm_impact {
+  double h, horizon; /* spacing (cm), δ/h */
+  double lo[3], hi[3];
+  size_t nbodies;
+  dmi_body *bodies;
+  int has_wall, wall_axis, wall_side; /* side +1: bodies on the + side of the plane */
+  double wall_pos, wall_stiffness;    /* plane x_axis = pos; penalty coefficient c_w */
+  double t_end, courant, cq, cl, hourglass, cond_max;
+  double ref_threshold; /* reference update when a bond stretch exceeds 1 + this (0: off) */
+  long energy_every;
+  double *particle_times;
+  size_t nparticle_times;
+  dm_impact_summary sum;
+};
+
+/* Is x inside body b (strictly)? */
+bool dmi_inside(const dmi_body *b, const double x[3]);
+/* The lattice sites of body b: the number of them, and their positions into X ([n][3]) when X
+ * is not NULL. Cylinder: cross-section (i + ½)h about the axis with r < R, n_L = round(L/h)
+ * layers centred on `center`; sphere: (i + ½)h about the centre, r < R; box: round(size/h)
+ * sites per axis centred on `center`. */
+size_t dmi_body_sites(const dmi_body *b, double h, double *X);
+/* The P-wave modulus ρ0 c_L² (GPa) and c_L, c at (ρ0, e0) of a body's material. */
+void dmi_body_speeds(const dmi_body *b, double *cL, double *c);
+
+#endif

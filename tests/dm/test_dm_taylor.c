@@ -1,0 +1,84 @@
+/* SPDX-License-Identifier: MIT */
+/* The Taylor anvil test at CI resolution (docs/validation.md, "Taylor anvil test"): the shipped
+ * deck inputs/dm-taylor-cu-wg-coarse.yaml — the OFHC copper rod of [WilkinsGuinan1973]
+ * (L0 = 23.47 mm, D0 = 7.62 mm, 210 m/s onto a rigid anvil), Johnson–Cook copper, the
+ * finite-deformation discrete model in full 3D at h = R0/6 — run through the `impact` problem,
+ * its final length and footprint compared with the measured ones ([Zelepugin2023], test 1:
+ * L_f = 14.80 mm, largest radius 8.40 mm), and its energy and momentum balance checked.
+ * DM_TAYLOR_PRINT=1 prints the numbers. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "dm.h"
+#include "test_util.h"
+
+/* measured ([Zelepugin2023] test 1, from [WilkinsGuinan1973]), mm */
+static const double exp_length = 14.7964, exp_footprint = 2 * 8.3965;
+
+static void test_taylor_cu_coarse(void **state) {
+  (void)state;
+  const char *src = getenv("MSCALE_SOURCE_DIR");
+  assert_non_null(src);
+  char path[4096];
+  snprintf(path, sizeof path, "%s/inputs/dm-taylor-cu-wg-coarse.yaml", src);
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load(path, &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  dm_impact *p = dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e);
+  dk_report_unused(&e, doc);
+  dk_errors_print(&e, stderr);
+  assert_non_null(p);
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.verbosity = getenv("DM_TAYLOR_PRINT") ? MS_LOG_INFO : MS_LOG_ERROR;
+  assert_int_equal(dm_impact_problem_run(&ctx, p), MS_OK);
+  ms_ctx_close(&ctx);
+  const dm_impact_summary *s = dm_impact_get_summary(p);
+  const double L = 10 * s->length, D = 10 * s->footprint;
+  printf("Taylor Cu (Wilkins-Guinan, 210 m/s), h = R0/6: %zu particles, %ld steps; L %.3f mm "
+         "(experiment %.2f, %+.2f %%), D %.3f mm (experiment %.2f, %+.2f %%); balance %.3g, "
+         "wall %.3g, E_hg/E0 %.3g, transverse momentum %.3g, final normal momentum %.3g\n",
+         s->particles, s->steps, L, exp_length, 100 * (L / exp_length - 1), D, exp_footprint,
+         100 * (D / exp_footprint - 1), s->energy_err, s->wall_err, s->hg_ratio, s->p_transverse,
+         s->p_normal);
+  /* K + U + E_hg − W_wall = E0 holds per half kick (dm_finite.c): round-off over ~3000 steps */
+  assert_true(s->energy_err < 1e-11);
+  /* frictionless wall and pairwise internal forces: no momentum along the wall */
+  assert_true(s->p_transverse < 1e-12);
+  /* the rod has stopped on the wall: what is left of its momentum is the elastic rebound */
+  assert_true(fabs(s->p_normal) < 0.1);
+  /* LOOSE BOUNDS (the criterion of the full-size run, docs/validation.md, is 5 % and 10 %).
+   * Length: the 5 % of the criterion holds already at h = R0/6 (measured +0.2 %; +1.3 % at
+   * R0/12, +1.4 % to −1.4 % over the bond-penalty study).
+   * Footprint: resolution-bound. The measured largest radius (8.40 mm) is a lip at the impact
+   * face: the measured outline falls to 5.60 mm within 1.75 mm of the face, less than three
+   * particle layers of h = 0.635 mm here, so the coarse lattice cannot carry it. Measured
+   * −29.0 % at R0/6 and −19.7 % at R0/12 (the footprint grows with resolution, the profile at 0.2–0.67 of L_f
+   * is within 0.5 mm of the measured radii at R0/6 and 0.22 mm at R0/12). 35 % admits the coarse
+   * lattice's deficit with a margin for compiler and platform round-off in a run of 2800
+   * steps, and still fails a rod that spreads 10 % less. */
+#define CI_LENGTH_TOL    0.05
+#define CI_FOOTPRINT_TOL 0.35
+  assert_true(fabs(L / exp_length - 1) < CI_LENGTH_TOL);
+  assert_true(fabs(D / exp_footprint - 1) < CI_FOOTPRINT_TOL);
+  dm_impact_problem_destroy(&p);
+  eos_materials_destroy(&mats);
+  dk_free(doc);
+  dk_errors_free(&e);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_taylor_cu_coarse)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
