@@ -11,7 +11,8 @@
  * it is chosen at create as dt_margin × the model's own limit at the initial state (the
  * Courant limit of dm_fin, docs/particles-dm.md "Time step"), and every step checks that the
  * model's limit at the new state has not dropped below it (MS_ERR_UNSTABLE otherwise).
- * Not yet: MPI ranks, checkpoints and restart (refused with a message), random surfaces. */
+ * Fracture (dm_fracture.c) breaks bonds; the fragments are the components of the unbroken ones
+ * (region_links). Not yet: random surfaces. */
 #include "dm_impl.h"
 #include "ptl_region_impl.h"
 
