@@ -104,8 +104,10 @@ static void antiderivative(dm_columns *c, double time, double sign) {
   c->k = k;
   const double dt = t[k + 1] - t[k], tau = time - t[k];
   for (size_t j = 0; j < nc; j++) {
-    const double u0 = u[k * nc + j], u1 = u[(k + 1) * nc + j];
-    c->mean[j] += sign * (cum[k * nc + j] + u0 * tau + 0.5 * (u1 - u0) / dt * tau * tau);
+    /* the single piston's arithmetic (dm_region.c, piston_antiderivative), operation for
+     * operation: equal histories give bitwise equal runs */
+    const double u0 = u[k * nc + j], slope = dt > 0 ? (u[(k + 1) * nc + j] - u0) / dt : 0.0;
+    c->mean[j] += sign * (cum[k * nc + j] + u0 * tau + 0.5 * slope * tau * tau);
   }
 }
 
