@@ -122,6 +122,30 @@ static void test_sphere_rz(void **state) {
   close_loaded(&l);
 }
 
+/* Regions on a blocks mesh with no section material: a region names its material and density
+ * (its zones take them); one that does not is an error. */
+static void test_regions_on_blocks(void **state) {
+  (void)state;
+  const char *blk =
+      "      - {i: [0, 4], j: [0, 2], x: [0, 1], y: [0, 0.5], material: al, density: 2.703}\n"
+      "  regions:\n"
+      "    - {x: [0, 0.5], material: gas, density: 0.01, energy: 0.025}\n";
+  loaded l;
+  load(&l, "xy", "wall", blk);
+  assert_non_null(l.p);
+  c2d_view v = c2d_grid_view(c2d_problem_grid(l.p));
+  for (size_t z = 0; z < v.nzones; ++z) assert_int_equal(v.material[z], z % 4 < 2 ? 0 : 1);
+  close_loaded(&l);
+  load(&l, "xy", "wall",
+       "      - {i: [0, 4], j: [0, 2], x: [0, 1], y: [0, 0.5], material: al, density: 2.703}\n"
+       "  regions:\n"
+       "    - {x: [0, 0.5], energy: 0.025}\n");
+  assert_null(l.p);
+  assert_true(
+      has_error(&l.e, "deck.yaml:15:7: grid2d.regions[0]: missing required key 'material'"));
+  close_loaded(&l);
+}
+
 typedef struct bad_case {
   const char *geo, *blocks, *msg;
 } bad_case;
@@ -252,6 +276,7 @@ static void test_flyer_blocks(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_tiling), cmocka_unit_test(test_sphere_rz),
-      cmocka_unit_test(test_block_errors), cmocka_unit_test(test_flyer_blocks)};
+      cmocka_unit_test(test_block_errors), cmocka_unit_test(test_regions_on_blocks),
+      cmocka_unit_test(test_flyer_blocks)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
