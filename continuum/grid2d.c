@@ -41,6 +41,28 @@
 #include <omp.h>
 #endif
 
+/* The share of the calling thread of [0, count) items of a row-major (width) index space, as
+ * schedule(static) would give it (contiguous, in thread order), and the (i, j) of its first item;
+ * the loops then step i, j without dividing every index. */
+static inline void thread_share(size_t count, size_t width, size_t lo_hi[2], size_t *i, size_t *j) {
+#ifdef _OPENMP
+  const size_t nt = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
+#else
+  const size_t nt = 1, t = 0;
+#endif
+  const size_t q = count / nt, r = count % nt;
+  lo_hi[0] = t * q + (t < r ? t : r);
+  lo_hi[1] = lo_hi[0] + q + (t < r ? 1 : 0);
+  *i = lo_hi[0] % width;
+  *j = lo_hi[0] / width;
+}
+/* for (i, j) over the calling thread's share (thread_share) of count items, width per row;
+ * the body sees i and j (and q_, the linear index). */
+#define FOR_SHARE(count, width)                                                                    \
+  for (size_t q_ = 0, lh_[2], i = 0, j = 0; q_ == 0; q_ = 1)                                       \
+    for (thread_share((count), (width), lh_, &i, &j), q_ = lh_[0]; q_ < lh_[1];                    \
+         ++q_, i = i + 1 == (width) ? 0 : i + 1, j += i == 0)
+
 /* ∂V/∂x_k of a 4-vertex polygon: planar area ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1}); in r–z the
  * per-radian volume V = (1/6) Σ (r_k + r_{k+1})(r_k z_{k+1} − r_{k+1} z_k) differentiated. */
 static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y[4], double gx[4],
@@ -137,25 +159,23 @@ static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
   for (int k = 0; k < 4; ++k) rb[k] = ma[k] > 0 ? mr[k] / ma[k] : 0.0;
 }
 
-/* Zone pass: planar corner forces (pressure pz, sub-zonal pressure, edge viscosity) at positions
- * (px, py) and velocities (pu, pv); densities rz, sound speeds cz. */
-void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
-                     const double *pv, const double *pz, const double *rz, const double *cz) {
-  const long ni = (long)g->ni;
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
-#endif
-  for (size_t z = 0; z < g->nz; ++z) {
-    double X[4], Y[4], U[4], V[4];
-    gather(g, z, px, py, X, Y);
-    gather(g, z, pu, pv, U, V);
+/* The corner forces of zone z = (i, j) (c2d_zone_forces). The zone loops run over rows and
+ * columns so that no zone divides its index (the divisions were a visible share of the pass). */
+static inline __attribute__((always_inline)) void
+zone_force(c2d_grid *g, size_t i0, size_t j0, const double *px, const double *py, const double *pu,
+           const double *pv, const double *pz, const double *rz, const double *cz) {
+  const size_t z = i0 + g->ni * j0;
+  size_t nd[4];
+  zone_nodes_ij(g, i0, j0, nd);
+  double X[4], Y[4], U[4], V[4];
+  gather_nd(nd, px, py, X, Y);
+  gather_nd(nd, pu, pv, U, V);
+  {
     double *f = g->fc + 8 * z;
     const double P = pz[z];
     double gvx[4], gvy[4];
     const c2d_geometry fg = g->area_weighted ? C2D_XY : g->geo; /* geometry of the gradients */
     poly_grad(fg, X, Y, gvx, gvy);
-    size_t nd[4];
-    zone_nodes(g, z, nd);
     if (g->geo == C2D_RZ)
       for (int k = 0; k < 4; ++k) {
         double CX[4], CY[4];
@@ -203,7 +223,7 @@ void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const doub
       }
     }
     /* Edge viscosity, compression only. */
-    long i = (long)z % ni, j = (long)z / ni;
+    const long i = (long)i0, j = (long)j0;
     const long li[4] = {i, i + 1, i + 1, i}, lj[4] = {j, j, j + 1, j + 1};
     double dumax = 0.0, vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int k = 0; k < 4; ++k) {
@@ -243,14 +263,24 @@ void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const doub
   }
 }
 
+/* Zone pass: planar corner forces (pressure pz, sub-zonal pressure, edge viscosity) at positions
+ * (px, py) and velocities (pu, pv); densities rz, sound speeds cz. */
+void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
+                     const double *pv, const double *pz, const double *rz, const double *cz) {
+#ifdef _OPENMP
+#pragma omp parallel num_threads(g->nthreads)
+#endif
+  FOR_SHARE(g->nz, g->ni) zone_force(g, i, j, px, py, pu, pv, pz, rz, cz);
+}
+
 /* Node pass: gather the corner forces touching each node (fixed order), radius factor. */
 static void node_gather(c2d_grid *g) {
   const size_t ni = g->ni, nj = g->nj, w = ni + 1;
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t n = 0; n < g->nn; ++n) {
-    size_t i = n % w, j = n / w;
+  FOR_SHARE(g->nn, (g->ni + 1)) {
+    const size_t n = i + w * j;
     double sx = 0.0, sy = 0.0, sa = 0.0;
     /* zone (i, j) corner 0, (i−1, j) corner 1, (i−1, j−1) corner 2, (i, j−1) corner 3 */
     if (i < ni && j < nj) {
@@ -332,8 +362,8 @@ static void boundary_pressure(c2d_grid *g, const double *px, const double *py, d
 
 /* Boundary conditions of node n at time t on the velocity (u, v). Returns true if the node is
  * constrained (its reaction does work). */
-bool c2d_apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
-  size_t w = g->ni + 1, i = n % w, j = n / w;
+static bool apply_bc_ij(const c2d_grid *g, size_t i, size_t j, size_t n, double t, double *u,
+                        double *v) {
   bool on[4] = {i == 0, i == g->ni, j == 0, j == g->nj};
   bool con = false;
   for (int s = 0; s < 4; ++s) {
@@ -365,6 +395,16 @@ bool c2d_apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
   return con;
 }
 
+bool c2d_apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
+  const size_t w = g->ni + 1;
+  return apply_bc_ij(g, n % w, n / w, n, t, u, v);
+}
+
+/* Only the nodes of the mesh's sides can be constrained (an interior node: nothing to do). */
+static inline bool on_side(const c2d_grid *g, size_t i, size_t j) {
+  return i == 0 || j == 0 || i == g->ni || j == g->nj;
+}
+
 static ms_status fail_zone(c2d_grid *g, size_t z, const char *what, double value) {
   size_t nd[4];
   zone_nodes(g, z, nd);
@@ -380,11 +420,14 @@ ms_status c2d_zone_state(c2d_grid *g, const double *px, const double *py, const 
   size_t bad_zone = (size_t)-1;
   double bad_val = 0.0;
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t z = 0; z < g->nz; ++z) {
+  FOR_SHARE(g->nz, g->ni) {
+    const size_t z = i + g->ni * j;
+    size_t nd[4];
+    zone_nodes_ij(g, i, j, nd);
     double X[4], Y[4];
-    gather(g, z, px, py, X, Y);
+    gather_nd(nd, px, py, X, Y);
     double a = quad_area(X, Y);
     double vz = g->geo == C2D_RZ ? quad_rvol(X, Y) : a;
     vol[z] = vz;
@@ -415,11 +458,14 @@ ms_status c2d_zone_state(c2d_grid *g, const double *px, const double *py, const 
 double c2d_stable_dt(const c2d_grid *g) {
   double dt = INFINITY;
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static) reduction(min : dt)
+#pragma omp parallel num_threads(g->nthreads) reduction(min : dt)
 #endif
-  for (size_t z = 0; z < g->nz; ++z) {
+  FOR_SHARE(g->nz, g->ni) {
+    const size_t z = i + g->ni * j;
+    size_t nd[4];
+    zone_nodes_ij(g, i, j, nd);
     double X[4], Y[4];
-    gather(g, z, g->x, g->y, X, Y);
+    gather_nd(nd, g->x, g->y, X, Y);
     double l2 = INFINITY;
     for (int k = 0; k < 4; ++k) {
       int kn = (k + 1) & 3;
@@ -432,7 +478,7 @@ double c2d_stable_dt(const c2d_grid *g) {
     double L = sqrt(l2);
     if (h < L) L = h;
     double U[4], V[4], dumax = 0.0;
-    gather(g, z, g->u, g->v, U, V);
+    gather_nd(nd, g->u, g->v, U, V);
     for (int k = 0; k < 4; ++k) {
       int kn = (k + 1) & 3;
       double du = U[kn] - U[k], dv = V[kn] - V[k];
@@ -461,9 +507,11 @@ static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *a
 }
 
 /* Work rate −Σ_c r̃ f_c·w of zone z with node velocities (wu, wv). */
-static inline double zone_work(const c2d_grid *g, size_t z, const double *wu, const double *wv) {
+static inline double zone_work(const c2d_grid *g, size_t i, size_t j, const double *wu,
+                               const double *wv) {
+  const size_t z = i + g->ni * j;
   size_t nd[4];
-  zone_nodes(g, z, nd);
+  zone_nodes_ij(g, i, j, nd);
   const double *f = g->fc + 8 * z;
   double s = 0.0;
   for (int k = 0; k < 4; ++k) {
@@ -482,29 +530,32 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
     return MS_ERR_UNSTABLE;
   }
   const double t1 = g->t + dt;
-  const size_t nn = g->nn, nz = g->nz;
+  const size_t nn = g->nn, nz = g->nz, ni = g->ni;
   /* Predictor. */
   c2d_zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
   node_gather(g);
   boundary_pressure(g, g->x, g->y, g->t);
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t n = 0; n < nn; ++n) {
+  FOR_SHARE(g->nn, (g->ni + 1)) {
+    const size_t n = i + (ni + 1) * j;
     double ax, ay;
     node_accel(g, n, &ax, &ay);
     double us = g->u[n] + dt * ax, vs = g->v[n] + dt * ay;
-    c2d_apply_bc(g, n, t1, &us, &vs);
+    if (on_side(g, i, j)) apply_bc_ij(g, i, j, n, t1, &us, &vs);
     g->uh[n] = 0.5 * (g->u[n] + us);
     g->vh[n] = 0.5 * (g->v[n] + vs);
     g->xh[n] = g->x[n] + 0.5 * dt * g->uh[n];
     g->yh[n] = g->y[n] + 0.5 * dt * g->vh[n];
   }
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t z = 0; z < nz; ++z)
-    g->eh[z] = g->e[z] - 0.5 * dt * zone_work(g, z, g->uh, g->vh) / g->m[z];
+  FOR_SHARE(g->nz, g->ni) {
+    const size_t z = i + ni * j;
+    g->eh[z] = g->e[z] - 0.5 * dt * zone_work(g, i, j, g->uh, g->vh) / g->m[z];
+  }
   ms_status st = c2d_zone_state(g, g->xh, g->yh, g->eh, g->vol_old, g->rhoh, g->ph, g->ch);
   if (st != MS_OK) return st;
   /* Corrector. */
@@ -513,13 +564,14 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   boundary_pressure(g, g->xh, g->yh, g->t + 0.5 * dt);
   double work = 0.0;
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t n = 0; n < nn; ++n) {
+  FOR_SHARE(g->nn, (g->ni + 1)) {
+    const size_t n = i + (ni + 1) * j;
     double ax, ay;
     node_accel(g, n, &ax, &ay);
     double u1 = g->u[n] + dt * ax, v1 = g->v[n] + dt * ay;
-    bool con = c2d_apply_bc(g, n, t1, &u1, &v1);
+    const bool con = on_side(g, i, j) && apply_bc_ij(g, i, j, n, t1, &u1, &v1);
     double ub = 0.5 * (g->u[n] + u1), vb = 0.5 * (g->v[n] + v1);
     /* Reaction work at constrained nodes: ΔKE minus the work of the grid's own forces. */
     g->xh[n] = con ? g->M[n] * ((u1 - g->u[n]) * ub + (v1 - g->v[n]) * vb) -
@@ -535,11 +587,12 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   for (size_t n = 0; n < nn; ++n) work += g->xh[n]; /* serial: thread-count independent */
   g->work += work;
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(g->nthreads) schedule(static)
+#pragma omp parallel num_threads(g->nthreads)
 #endif
-  for (size_t z = 0; z < nz; ++z) {
+  FOR_SHARE(g->nz, g->ni) {
+    const size_t z = i + ni * j;
     g->vol_old[z] = g->vol[z];
-    g->e[z] -= dt * zone_work(g, z, g->uh, g->vh) / g->m[z];
+    g->e[z] -= dt * zone_work(g, i, j, g->uh, g->vh) / g->m[z];
   }
   g->t = t1;
   st = c2d_zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c);

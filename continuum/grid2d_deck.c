@@ -1,8 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* grid2d_deck.c — the `grid2d` deck problem: read the section, build the 2D grid, run it with
  * HDF5 + XDMF snapshots (docs/continuum2d.md §8). */
-#include "cont2d.h"
-#include "cont_impl.h"
+#include "grid2d_deck_impl.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -102,26 +101,26 @@ static void mesh_nodes(int type, long ni, long nj, const double xr[2], const dou
 }
 
 /* Regions: zones whose centre lies in the box `x`, `y` (and the ring `radius` about the
- * origin) get their own state and material; the rest keeps the section's (rho0, e0, material
- * mname). Later regions win; zreg[z] = the region of zone z (or -1). `energy_total` (a total
+ * origin) get their own state and material, by default the section's (d; with blocks and no
+ * section material or density, the region must give them). Later regions win; zreg[z] = the region of zone z (or -1). `energy_total` (a total
  * energy E spread with uniform e over the region's mass, e.g. a Sedov deposit) is kept in
  * etot[r] (NAN otherwise) and applied once the grid knows its zone masses. */
 static void read_regions(dk_errors *e, dk_doc *doc, const dk_node *regs, const eos_materials *mats,
-                         const char *mname, double rho0, double e0, long ni, size_t nz,
-                         const double *x, const double *y, double *rho, double *en,
-                         const eos_t **eos, int *mid, int *zreg, double *etot) {
+                         const c2d_deck_defaults *d, long ni, size_t nz, const double *x,
+                         const double *y, double *rho, double *en, const eos_t **eos, int *mid,
+                         int *zreg, double *etot) {
   for (size_t r = 0; r < dk_seq_len(regs); ++r) {
     const dk_node *rg = dk_seq_at(regs, r);
     etot[r] = NAN;
     if (!dk_expect_map(e, doc, rg, "region")) continue;
-    double bx[2], by[2], br[2], rr0 = rho0, er = NAN, pr = NAN;
+    double bx[2], by[2], br[2], rr0 = d->rho, er = NAN, pr = NAN;
     read_range(e, doc, rg, "x", MS_DIM_LENGTH, false, -INFINITY, INFINITY, bx);
     read_range(e, doc, rg, "y", MS_DIM_LENGTH, false, -INFINITY, INFINITY, by);
     read_range(e, doc, rg, "radius", MS_DIM_LENGTH, false, 0, INFINITY, br);
-    dk_read_positive(e, doc, rg, "density", MS_DIM_DENSITY, false, rho0, &rr0);
-    const char *rm = mname;
-    dk_read_string(e, doc, rg, "material", false, mname, &rm);
-    const eos_material *m2 = eos_materials_find(mats, rm, e, doc, rg);
+    dk_read_positive(e, doc, rg, "density", MS_DIM_DENSITY, isnan(d->rho), d->rho, &rr0);
+    const char *rm = d->mat ? d->mat->name : NULL;
+    dk_read_string(e, doc, rg, "material", !d->mat, rm, &rm);
+    const eos_material *m2 = rm ? eos_materials_find(mats, rm, e, doc, rg) : NULL;
     const int nstate =
         !!dk_get(rg, "pressure") + !!dk_get(rg, "energy") + !!dk_get(rg, "energy_total");
     if (nstate > 1)
@@ -132,12 +131,12 @@ static void read_regions(dk_errors *e, dk_doc *doc, const dk_node *regs, const e
       dk_read_double(e, doc, rg, "energy", MS_DIM_SPEC_ENERGY, true, 0, -INFINITY, INFINITY, &er);
     if (dk_get(rg, "energy_total"))
       dk_read_positive(e, doc, rg, "energy_total", MS_DIM_ENERGY, true, 1, &etot[r]);
-    if (!m2) continue;
+    if (!m2 || isnan(rr0)) continue;
     if (!isnan(pr) && !cont_energy_from_pressure(m2->eos, rr0, pr, &er)) {
       dk_error(e, doc, rg, "region %zu: no energy gives pressure %g at density %g", r, pr, rr0);
       continue;
     }
-    if (isnan(er)) er = e0;
+    if (isnan(er)) er = d->e;
     for (size_t z = 0; z < nz; ++z) {
       size_t i = z % (size_t)ni, j = z / (size_t)ni, a = i + (size_t)(ni + 1) * j, w = ni + 1;
       double xc = 0.25 * (x[a] + x[a + 1] + x[a + w] + x[a + w + 1]);
@@ -220,6 +219,109 @@ static void read_controls(dk_errors *e, dk_doc *doc, const dk_node *sec, c2d_set
   dk_read_int(e, doc, sec, "threads", false, 1, 1, 1024, nthreads);
 }
 
+/* The section's state, the defaults of the mesh blocks: material, density, energy (or pressure),
+ * velocity and radial velocity. With blocks, material and density may come from every block. */
+static bool read_defaults(dk_errors *e, dk_doc *doc, const dk_node *sec, const eos_materials *mats,
+                          bool blocks, c2d_deck_defaults *d) {
+  memset(d, 0, sizeof *d);
+  d->rho = NAN;
+  const char *mname = NULL;
+  if (!blocks || dk_get(sec, "material"))
+    dk_read_string(e, doc, sec, "material", true, NULL, &mname);
+  d->mat = mname ? eos_materials_find(mats, mname, e, doc, dk_get(sec, "material")) : NULL;
+  if (!blocks || dk_get(sec, "density"))
+    dk_read_positive(e, doc, sec, "density", MS_DIM_DENSITY, true, 1, &d->rho);
+  double p0 = NAN;
+  d->e = d->mat ? eos_e0(d->mat->eos) : 0;
+  if (dk_get(sec, "pressure"))
+    dk_read_double(e, doc, sec, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &p0);
+  else
+    dk_read_double(e, doc, sec, "energy", MS_DIM_SPEC_ENERGY, false, d->e, -INFINITY, INFINITY,
+                   &d->e);
+  read_range(e, doc, sec, "velocity", MS_DIM_VELOCITY, false, 0, 0, d->vel);
+  dk_read_double(e, doc, sec, "radial_velocity", MS_DIM_VELOCITY, false, 0, -INFINITY, INFINITY,
+                 &d->vrad);
+  if (!isnan(p0) && d->mat && !isnan(d->rho) &&
+      !cont_energy_from_pressure(d->mat->eos, d->rho, p0, &d->e)) {
+    dk_error(e, doc, dk_get(sec, "pressure"), "pressure %g: no energy gives it at density %g", p0,
+             d->rho);
+    return false;
+  }
+  if (!isnan(p0) && (!d->mat || isnan(d->rho))) {
+    dk_error(e, doc, dk_get(sec, "pressure"),
+             "pressure: needs the section's material and density (give it in the blocks)");
+    return false;
+  }
+  return d->mat || blocks;
+}
+
+/* The one mesh `mesh: {type: rect | polar | saltzman, ni, nj, ...}` filled with the section's
+ * state. */
+static bool read_single_mesh(dk_errors *e, dk_doc *doc, const dk_node *mesh,
+                             const eos_materials *mats, const c2d_deck_defaults *d,
+                             c2d_deck_mesh *m) {
+  static const char *const types[] = {"rect", "polar", "saltzman", NULL};
+  int type = 0;
+  long ni = 0, nj = 0;
+  bool ok = dk_read_enum(e, doc, mesh, "type", false, 0, types, &type);
+  ok = dk_read_int(e, doc, mesh, "ni", true, 0, 1, 100000000, &ni) && ok;
+  ok = dk_read_int(e, doc, mesh, "nj", true, 0, 1, 100000000, &nj) && ok;
+  double xr[2] = {0, 0}, yr[2] = {0, 0}, rr[2] = {0, 0}, th[2] = {0, 0}, skew = 0;
+  if (type == 0) {
+    ok = read_range(e, doc, mesh, "x", MS_DIM_LENGTH, true, 0, 1, xr) && ok;
+    ok = read_range(e, doc, mesh, "y", MS_DIM_LENGTH, true, 0, 1, yr) && ok;
+    ok = dk_read_double(e, doc, mesh, "skew", MS_DIM_NONE, false, 0, -INFINITY, INFINITY, &skew) &&
+         ok;
+  } else if (type == 1) {
+    ok = read_range(e, doc, mesh, "r", MS_DIM_LENGTH, true, 0, 1, rr) && ok;
+    ok = read_range(e, doc, mesh, "theta", MS_DIM_NONE, true, 0, 90, th) && ok; /* degrees */
+  }
+  if (!ok || !d->mat) return false;
+  c2d_deck_mesh_alloc(m, ni, nj);
+  mesh_nodes(type, ni, nj, xr, yr, rr, th, skew, m->x, m->y);
+  const size_t nn = (size_t)(ni + 1) * (size_t)(nj + 1), nz = (size_t)ni * (size_t)nj;
+  for (size_t n = 0; n < nn; ++n) {
+    double r = hypot(m->x[n], m->y[n]);
+    m->u[n] = d->vel[0] + (r > 0 ? d->vrad * m->x[n] / r : 0);
+    m->v[n] = d->vel[1] + (r > 0 ? d->vrad * m->y[n] / r : 0);
+  }
+  for (size_t z = 0; z < nz; ++z) {
+    m->rho[z] = d->rho;
+    m->en[z] = d->e;
+    m->eos[z] = d->mat->eos;
+    m->mid[z] = (int)(d->mat - mats->m);
+  }
+  return true;
+}
+
+/* Builds the grid of the mesh m (located errors at `at`: the mesh entry), the regions' energy
+ * deposits applied; NULL on error. */
+static c2d_grid *build_grid(dk_errors *e, dk_doc *doc, const dk_node *at, const dk_node *regs,
+                            c2d_setup *s, c2d_deck_mesh *m, const int *zreg, const double *etot,
+                            bool has_etot) {
+  s->ni = (size_t)m->ni;
+  s->nj = (size_t)m->nj;
+  s->x = m->x;
+  s->y = m->y;
+  s->u = m->u;
+  s->v = m->v;
+  s->rho = m->rho;
+  s->e = m->en;
+  s->eos = m->eos;
+  s->material = m->mid;
+  char msg[512];
+  c2d_grid *g = NULL;
+  c2d_grid_create(s, &g, msg, sizeof msg);
+  if (!g) dk_error(e, doc, at, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh */
+  if (g && has_etot) { /* the zone masses are the grid's: build it again with the deposit */
+    const bool dep = apply_energy_totals(e, doc, regs, g, zreg, etot, m->en);
+    c2d_grid_destroy(&g);
+    if (dep && c2d_grid_create(s, &g, msg, sizeof msg) != MS_OK)
+      dk_error(e, doc, regs, "regions: energy_total: %s", msg);
+  }
+  return g;
+}
+
 c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
                               dk_errors *e) {
   size_t nerr0 = e->n;
@@ -230,42 +332,21 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   int geo = 0;
   dk_read_enum(e, doc, sec, "geometry", false, 0, geos, &geo);
   s.geometry = (c2d_geometry)geo;
-  /* Mesh. */
   const dk_node *mesh = dk_get(sec, "mesh");
   if (!mesh) {
     dk_error(e, doc, sec, "grid2d: `mesh` is required");
     return NULL;
   }
   if (!dk_expect_map(e, doc, mesh, "mesh")) return NULL;
-  static const char *const types[] = {"rect", "polar", "saltzman", NULL};
-  int type = 0;
-  long ni = 0, nj = 0;
-  dk_read_enum(e, doc, mesh, "type", false, 0, types, &type);
-  dk_read_int(e, doc, mesh, "ni", true, 0, 1, 100000000, &ni);
-  dk_read_int(e, doc, mesh, "nj", true, 0, 1, 100000000, &nj);
-  double xr[2] = {0, 0}, yr[2] = {0, 0}, rr[2] = {0, 0}, th[2] = {0, 0}, skew = 0;
-  if (type == 0) {
-    read_range(e, doc, mesh, "x", MS_DIM_LENGTH, true, 0, 1, xr);
-    read_range(e, doc, mesh, "y", MS_DIM_LENGTH, true, 0, 1, yr);
-    dk_read_double(e, doc, mesh, "skew", MS_DIM_NONE, false, 0, -INFINITY, INFINITY, &skew);
-  } else if (type == 1) {
-    read_range(e, doc, mesh, "r", MS_DIM_LENGTH, true, 0, 1, rr);
-    read_range(e, doc, mesh, "theta", MS_DIM_NONE, true, 0, 90, th); /* degrees */
-  }
-  const char *mname = NULL;
-  dk_read_string(e, doc, sec, "material", true, NULL, &mname);
-  const eos_material *mat =
-      mname ? eos_materials_find(mats, mname, e, doc, dk_get(sec, "material")) : NULL;
-  double rho0 = 1, e0 = 0, p0 = NAN, vel[2] = {0, 0}, vrad = 0;
-  dk_read_positive(e, doc, sec, "density", MS_DIM_DENSITY, true, 1, &rho0);
-  if (dk_get(sec, "pressure"))
-    dk_read_double(e, doc, sec, "pressure", MS_DIM_PRESSURE, true, 0, -INFINITY, INFINITY, &p0);
-  else
-    dk_read_double(e, doc, sec, "energy", MS_DIM_SPEC_ENERGY, false, mat ? eos_e0(mat->eos) : 0,
-                   -INFINITY, INFINITY, &e0);
-  read_range(e, doc, sec, "velocity", MS_DIM_VELOCITY, false, 0, 0, vel);
-  dk_read_double(e, doc, sec, "radial_velocity", MS_DIM_VELOCITY, false, 0, -INFINITY, INFINITY,
-                 &vrad);
+  const dk_node *blocks = dk_get(mesh, "blocks");
+  if (blocks)
+    for (size_t k = 0; k < dk_map_len(mesh); ++k)
+      if (strcmp(dk_map_key(mesh, k), "blocks") != 0)
+        dk_error(e, doc, dk_map_value(mesh, k),
+                 "mesh: %s: not with `blocks` (each block has its own ranges and type)",
+                 dk_map_key(mesh, k));
+  c2d_deck_defaults d;
+  bool ok = read_defaults(e, doc, sec, mats, blocks != NULL, &d);
   const dk_node *bcs = dk_get(sec, "boundaries");
   if (bcs) dk_expect_map(e, doc, bcs, "boundaries");
   const char *const sides[4] = {"ilo", "ihi", "jlo", "jhi"};
@@ -275,90 +356,42 @@ c2d_problem *c2d_problem_read(dk_doc *doc, const dk_node *sec, const eos_materia
   read_controls(e, doc, sec, &s, &t_end, &nsnap, &nthreads);
   const dk_node *tags = dk_get(sec, "tags");
   if (tags) dk_expect_seq(e, doc, tags, "tags");
-  if (e->n > nerr0 || !mat) {
-    /* not read because of the errors above: not "unknown keys" either */
-    dk_mark_used(sec, "regions");
-    dk_mark_used(sec, "tags");
-    return NULL;
-  }
-
-  /* Build the arrays. */
-  size_t nn = (size_t)(ni + 1) * (size_t)(nj + 1), nz = (size_t)ni * (size_t)nj;
-  double *x = calloc(nn, sizeof *x), *y = calloc(nn, sizeof *y), *u = calloc(nn, sizeof *u),
-         *v = calloc(nn, sizeof *v), *rho = calloc(nz, sizeof *rho), *en = calloc(nz, sizeof *en);
-  const eos_t **eos = calloc(nz, sizeof *eos);
-  int *mid = calloc(nz, sizeof *mid);
-  mesh_nodes(type, ni, nj, xr, yr, rr, th, skew, x, y);
-  for (size_t n = 0; n < nn; ++n) {
-    double r = hypot(x[n], y[n]);
-    u[n] = vel[0] + (r > 0 ? vrad * x[n] / r : 0);
-    v[n] = vel[1] + (r > 0 ? vrad * y[n] / r : 0);
-  }
-  bool ok = true;
-  if (!isnan(p0) && !cont_energy_from_pressure(mat->eos, rho0, p0, &e0)) {
-    dk_error(e, doc, dk_get(sec, "pressure"), "pressure %g: no energy gives it at density %g", p0,
-             rho0);
-    ok = false;
-  }
-  for (size_t z = 0; z < nz; ++z) {
-    rho[z] = rho0;
-    en[z] = e0;
-    eos[z] = mat->eos;
-    mid[z] = (int)(mat - mats->m);
-  }
-  /* Regions: rectangles (zone centres) with their own state and material. */
+  c2d_deck_mesh m = {0};
+  ok = (blocks ? c2d_blocks_build(e, doc, blocks, mats, s.geometry, &d, &m)
+               : read_single_mesh(e, doc, mesh, mats, &d, &m)) &&
+       ok;
   const dk_node *regs = dk_get(sec, "regions");
-  int *zreg = malloc(nz * sizeof *zreg);
-  for (size_t z = 0; z < nz; ++z) zreg[z] = -1;
-  double *etot = calloc(regs ? dk_seq_len(regs) + 1 : 1, sizeof *etot);
-  bool has_etot = false;
-  if (ok && regs && dk_expect_seq(e, doc, regs, "regions")) {
-    read_regions(e, doc, regs, mats, mname, rho0, e0, ni, nz, x, y, rho, en, eos, mid, zreg, etot);
-    for (size_t r = 0; r < dk_seq_len(regs); ++r) has_etot |= !isnan(etot[r]);
-  }
   c2d_problem *p = NULL;
   if (ok && e->n == nerr0) {
-    s.ni = (size_t)ni;
-    s.nj = (size_t)nj;
-    s.x = x;
-    s.y = y;
-    s.u = u;
-    s.v = v;
-    s.rho = rho;
-    s.e = en;
-    s.eos = eos;
-    s.material = mid;
-    char msg[512];
-    c2d_grid *g = NULL;
-    c2d_grid_create(&s, &g, msg, sizeof msg);
-    if (!g) dk_error(e, doc, mesh, "%s", msg); /* tangled/inverted zone, r < 0: at the mesh */
-    if (g && has_etot) { /* the zone masses are the grid's: build it again with the deposit */
-      const bool dep = apply_energy_totals(e, doc, regs, g, zreg, etot, en);
-      c2d_grid_destroy(&g);
-      if (dep && c2d_grid_create(&s, &g, msg, sizeof msg) != MS_OK)
-        dk_error(e, doc, regs, "regions: energy_total: %s", msg);
+    /* Regions: rectangles (zone centres) with their own state and material. */
+    const size_t nz = (size_t)m.ni * (size_t)m.nj;
+    int *zreg = malloc(nz * sizeof *zreg);
+    for (size_t z = 0; z < nz; ++z) zreg[z] = -1;
+    double *etot = calloc(regs ? dk_seq_len(regs) + 1 : 1, sizeof *etot);
+    bool has_etot = false;
+    if (regs && dk_expect_seq(e, doc, regs, "regions")) {
+      read_regions(e, doc, regs, mats, &d, m.ni, nz, m.x, m.y, m.rho, m.en, m.eos, m.mid, zreg,
+                   etot);
+      for (size_t r = 0; r < dk_seq_len(regs); ++r) has_etot |= !isnan(etot[r]);
     }
+    c2d_grid *g =
+        e->n == nerr0 ? build_grid(e, doc, mesh, regs, &s, &m, zreg, etot, has_etot) : NULL;
     if (g) {
-      read_tags(e, doc, tags, ni, nj, g);
+      read_tags(e, doc, tags, m.ni, m.nj, g);
       c2d_grid_set_threads(g, (int)nthreads);
       p = calloc(1, sizeof *p);
       p->grid = g;
       p->t_end = t_end;
       p->nsnap = nsnap;
     }
+    free(zreg);
+    free(etot);
   }
-  dk_mark_used(sec, "tags"); /* not read when the grid could not be built */
+  /* not read because of the errors above: not "unknown keys" either */
+  dk_mark_used(sec, "regions");
+  dk_mark_used(sec, "tags");
   for (int k = 0; k < 4; ++k) cont_fn_free(&s.bc[k].fn);
-  free(x);
-  free(y);
-  free(u);
-  free(v);
-  free(rho);
-  free(en);
-  free(eos);
-  free(mid);
-  free(zreg);
-  free(etot);
+  c2d_deck_mesh_free(&m);
   return p;
 }
 

@@ -64,6 +64,23 @@ static inline void zone_nodes(const c2d_grid *g, size_t z, size_t nd[4]) {
   nd[3] = nd[0] + w;
 }
 
+/* The same for zone (i, j), without dividing its index. */
+static inline void zone_nodes_ij(const c2d_grid *g, size_t i, size_t j, size_t nd[4]) {
+  const size_t w = g->ni + 1;
+  nd[0] = i + w * j;
+  nd[1] = nd[0] + 1;
+  nd[2] = nd[1] + w;
+  nd[3] = nd[0] + w;
+}
+
+static inline void gather_nd(const size_t nd[4], const double *ax, const double *ay, double X[4],
+                             double Y[4]) {
+  for (int k = 0; k < 4; ++k) {
+    X[k] = ax[nd[k]];
+    Y[k] = ay[nd[k]];
+  }
+}
+
 static inline double quad_area(const double X[4], const double Y[4]) {
   return 0.5 * ((X[0] - X[2]) * (Y[1] - Y[3]) - (X[1] - X[3]) * (Y[0] - Y[2]));
 }

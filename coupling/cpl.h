@@ -322,6 +322,31 @@ double cpl_piston_velocity(const cpl_piston *p, double t);
 /* Displacement x(t) − x(t_0) (exact integral of cpl_piston_velocity). */
 double cpl_piston_displacement(const cpl_piston *p, double t);
 
+/* Driving a 2D particle region from a 2D grid's tagged node line (one-way, docs/coupling.md
+ * "Driving particles from a 2D node line"): every node of the line is a piston column. Node n
+ * of the line, at initial position p_n, sits at the region's transverse coordinate
+ * y = y0 + s_n, s_n = p_n · across (and also y0 − s_n with mirror: the grid's symmetry axis at
+ * s = 0, e.g. a half-flyer with a wall); its velocity history U_n(t) = (u, v)_n · dir (dir: the
+ * grid direction of the region's drive axis +x) becomes that column's piston on the region's
+ * x (with lateral, (u, v)_n · across its velocity along y, reversed on the mirrored side)
+ * clock τ = t − t0 (records before t0 but the last one are dropped; the region's piston is
+ * constant before its first sample). The grid moves nodes with the time-centred velocity, so the
+ * piecewise-linear U_n integrates to the node's recorded displacement (as cpl_piston); the
+ * region follows it exactly (ptl_region_set_piston_columns). The region needs a model with a
+ * piston by columns (the discrete model); MS_ERR_INPUT otherwise or for a line of < 2 records. */
+typedef struct cpl_line_drive {
+  double t0;        /* grid time of the region's clock 0 */
+  double dir[2];    /* unit vector in the grid plane along the region's drive axis */
+  double across[2]; /* unit vector in the grid plane along the region's y */
+  double y0;        /* the region's y of s = 0 */
+  bool mirror;      /* columns at y0 + s and y0 − s */
+  bool lateral;     /* also the velocity along `across` (else the columns move along x only) */
+} cpl_line_drive;
+struct ptl_region;
+struct c2d_line_history;
+ms_status cpl_drive_from_line(struct ptl_region *r, const struct c2d_line_history *h,
+                              const cpl_line_drive *d);
+
 /* Drive check: free-surface velocity of the particles against the grid's free-surface tag,
  * sampled at the same times. Breakout t_break: the grid's velocity first exceeds 5 % of its
  * maximum; plateaus: means over [t_break + window/2, t_break + window]; t_half_*: first time

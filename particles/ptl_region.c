@@ -43,6 +43,11 @@ void ptl_region_set_piston(ptl_region *r, size_t n, const double *t, const doubl
 void ptl_region_hold_piston(ptl_region *r, double u, double span) {
   r->model->hold_piston(r, u, span);
 }
+ms_status ptl_region_set_piston_columns(ptl_region *r, size_t ncol, const double *ycol, size_t n,
+                                        const double *t, const double *ux, const double *uy) {
+  if (!r->model->set_piston_columns) return MS_ERR_INPUT;
+  return r->model->set_piston_columns(r, ncol, ycol, n, t, ux, uy);
+}
 void ptl_region_set_dt(ptl_region *r, double dt) { r->model->set_dt(r, dt); }
 void ptl_region_distribute(ptl_region *r, const ms_ctx *ctx) { r->model->distribute(r, ctx); }
 ms_status ptl_region_init(ptl_region *r) { return r->model->init(r); }

@@ -77,6 +77,17 @@ void ptl_region_set_piston(ptl_region *r, size_t n, const double *t, const doubl
 /* Piston velocity u over the next `span` of the region's clock (a transmitting or two-way
  * piston, set before each step or sub-cycle). */
 void ptl_region_hold_piston(ptl_region *r, double u, double span);
+/* Piston by columns (a 2D drive along a grid's node line, one-way): column c at transverse
+ * position ycol[c] (along period[1]; strictly increasing) moves with velocity (ux_c, uy_c)(t)
+ * along the region's (x, y) — uy NULL: along x only —, each piecewise linear through
+ * (t[k], ux[k·ncol + c]) on the region's clock (row k = time k, the layout of a tagged grid
+ * line's history), constant beyond the ends. A driven particle at reference y takes the linear
+ * interpolation between the two columns around it (the nearest column's beyond the ends); over
+ * each step it moves with the step's mean, so it follows the interpolated displacement exactly.
+ * Replaces the piston until the next set_piston or hold_piston (arrays copied). MS_ERR_INPUT
+ * for bad arrays, or if the model has none (cluster dynamics keeps the single piston). */
+ms_status ptl_region_set_piston_columns(ptl_region *r, size_t ncol, const double *ycol, size_t n,
+                                        const double *t, const double *ux, const double *uy);
 void ptl_region_set_dt(ptl_region *r, double dt); /* sub-cycling a grid step */
 
 /* MPI: keep each rank's share (the model's default decomposition). Serial: nothing. */

@@ -29,6 +29,9 @@ struct ptl_region_model {
   void (*set_piston)(ptl_region *r, size_t n, const double *t, const double *u,
                      const double dir[3]);
   void (*hold_piston)(ptl_region *r, double u, double span);
+  /* NULL: the model has no piston by columns (ptl_region_set_piston_columns refuses) */
+  ms_status (*set_piston_columns)(ptl_region *r, size_t ncol, const double *ycol, size_t n,
+                                  const double *t, const double *ux, const double *uy);
   void (*set_dt)(ptl_region *r, double dt);
   void (*distribute)(ptl_region *r, const ms_ctx *ctx);
   ms_status (*init)(ptl_region *r);

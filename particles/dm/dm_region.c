@@ -13,6 +13,7 @@
  * model's limit at the new state has not dropped below it (MS_ERR_UNSTABLE otherwise).
  * Fracture (dm_fracture.c) breaks bonds; the fragments are the components of the unbroken ones
  * (region_links). Not yet: random surfaces. */
+#include "dm_columns.h"
 #include "dm_impl.h"
 #include "ptl_region_impl.h"
 
@@ -64,6 +65,7 @@ typedef struct dm_region {
   ptl_region_geometry geo;
   double t, dt, dt0_limit;
   piston pis;
+  dm_columns *cols; /* the piston by columns (set_piston_columns); NULL: pis */
   int rank, nranks; /* replicated on MPI ranks: rank 0 owns the particles (region_distribute) */
   char err[512];
 } dm_region;
@@ -274,6 +276,7 @@ static void region_free(dm_region *r) {
   ptl_state_destroy(&r->ps);
   free(r->imat), free(r->link_start), free(r->link_nbr);
   free(r->pis.t), free(r->pis.u), free(r->pis.cum);
+  dm_columns_destroy(&r->cols);
   free(r);
 }
 
@@ -425,6 +428,7 @@ static double region_time(const ptl_region *r) { return cdmr(r)->t; }
 static void region_set_piston(ptl_region *rr, size_t n, const double *t, const double *u,
                               const double dir[3]) {
   piston *q = &dmr(rr)->pis;
+  dm_columns_destroy(&dmr(rr)->cols);
   piston_reserve(q, n < 2 ? 2 : n);
   q->n = n;
   memcpy(q->t, t, n * sizeof *t);
@@ -436,10 +440,24 @@ static void region_set_piston(ptl_region *rr, size_t n, const double *t, const d
 static void region_hold_piston(ptl_region *rr, double u, double span) {
   dm_region *r = dmr(rr);
   piston *q = &r->pis; /* capacity ≥ 2 since create: nothing is allocated here */
+  dm_columns_destroy(&r->cols);
   q->n = 2;
   q->t[0] = r->t, q->t[1] = r->t + span;
   q->u[0] = q->u[1] = u;
   piston_integrate(q);
+}
+
+/* The piston by columns (ptl_region.h): the driven particles' weights by their reference y. */
+static ms_status region_set_piston_columns(ptl_region *rr, size_t ncol, const double *ycol,
+                                           size_t n, const double *t, const double *ux,
+                                           const double *uy) {
+  dm_region *r = dmr(rr);
+  dm_columns *c = NULL;
+  const ms_status st = dm_columns_create(ncol, ycol, n, t, ux, uy, &r->s, &c);
+  if (st != MS_OK) return st;
+  dm_columns_destroy(&r->cols);
+  r->cols = c;
+  return MS_OK;
 }
 
 static void region_set_dt(ptl_region *r, double dt) { dmr(r)->dt = dt; }
@@ -488,9 +506,11 @@ static ms_status region_step(ptl_region *rr) {
     if (three) par_bcast_doubles(r->ps->vz, s->n, 0);
   }
   take_view_velocities(r);
-  for (size_t i = 0; i < s->n; i++)
-    if (s->bc[i] == DM_PRESCRIBED)
-      for (int a = 0; a < 3; a++) s->u[3 * i + a] = a < s->dim ? up * r->pis.dir[a] : 0.0;
+  if (r->cols) dm_columns_drive(r->cols, r->t, r->t + dt, s);
+  else
+    for (size_t i = 0; i < s->n; i++)
+      if (s->bc[i] == DM_PRESCRIBED)
+        for (int a = 0; a < 3; a++) s->u[3 * i + a] = a < s->dim ? up * r->pis.dir[a] : 0.0;
   r->f->dt_next = dt;
   ms_status st = dm_fin_step(r->f);
   r->t += dt;
@@ -669,6 +689,7 @@ static const ptl_region_model dm_region_model = {
     .time = region_time,
     .set_piston = region_set_piston,
     .hold_piston = region_hold_piston,
+    .set_piston_columns = region_set_piston_columns,
     .set_dt = region_set_dt,
     .distribute = region_distribute,
     .init = region_init,
