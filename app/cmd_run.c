@@ -88,6 +88,24 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
   free(path);
 }
 
+/* OUTDIR made or reused: --force removes the previous run's files first, so that reruns never
+ * mix (docs/output.md); --continue keeps them in the manifest. Every rank calls it. */
+static ms_status open_outdir(ms_ctx *ctx, const char *outdir, bool force, bool cont,
+                             run_files *files) {
+  size_t removed = 0;
+  ms_status s = MS_OK;
+  if (ctx->rank == 0) {
+    if (cont) files->keep = app_manifest_previous(outdir);
+    else if (force) s = app_manifest_clear(outdir, &removed);
+    if (!s) files->before = app_listing_take(outdir);
+  }
+  s = par_agree_status(s);
+  if (!s) s = par_agree_status(ms_outdir_create(ctx, outdir, force || cont));
+  if (!s && removed)
+    ms_log(ctx, MS_LOG_INFO, "--force: removed the %zu files of the previous run", removed);
+  return s;
+}
+
 int cmd_run(int argc, char **argv) {
   /* the command line as given, for run_info.yaml (getopt_long permutes argv) */
   char **cmdline = ms_calloc((size_t)argc + 1, sizeof *cmdline);
@@ -194,16 +212,8 @@ int cmd_run(int argc, char **argv) {
       }
       ctx.restart = continue_from;
     }
-    /* --force: the previous run's files go first, so that reruns never mix (docs/output.md) */
-    size_t removed = 0;
-    if (!s && ctx.rank == 0 && cont) files.keep = app_manifest_previous(outdir);
-    else if (!s && ctx.rank == 0 && force) s = app_manifest_clear(outdir, &removed);
-    if (!s && ctx.rank == 0) files.before = app_listing_take(outdir);
-    s = par_agree_status(s);
-    if (!s) s = par_agree_status(ms_outdir_create(&ctx, outdir, force || cont));
+    if (!s) s = open_outdir(&ctx, outdir, force, cont, &files);
     free(outdir);
-    if (!s && removed)
-      ms_log(&ctx, MS_LOG_INFO, "--force: removed the %zu files of the previous run", removed);
     if (!s) {
       char *resolved = ms_out_path(&ctx, "deck.resolved.yaml");
       if (ctx.rank == 0) s = dk_write_resolved(d.doc, resolved);
