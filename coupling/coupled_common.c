@@ -182,7 +182,8 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
 /* A particle step failed: the guard's finding (step, time on the particles' clock, particle,
  * quantity) and the state it found, particles_unstable.h5 (docs/reliability.md §5). */
 void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start) {
-  ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g): %s", t_start,
+  ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g %s): %s",
+         ms_out_time(t_start), ms_out_time_label(),
          st == MS_ERR_UNSTABLE ? ptl_region_error(r) : ms_status_str(st));
   char *path = ms_out_path(ctx, "particles_unstable.h5");
   if (ptl_region_write_snapshot(r, path) == MS_OK)
@@ -244,8 +245,8 @@ ms_status cpl_transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *
   }
   ms_log(ctx, MS_LOG_INFO,
          "coupled: 3/3 transport of %zu ejecta fragments to the detector at "
-         "x = %g cm (%g cm beyond the free surface), until t = %g",
-         nfl, to.det_x, p->det_distance, p->transport_end);
+         "x = %g cm (%g cm beyond the free surface), until t = %g %s",
+         nfl, to.det_x, p->det_distance, ms_out_time(p->transport_end), ms_out_time_label());
   ms_progress prog;
   ms_progress_start(&prog, ctx, "transport", t0, p->transport_end);
   for (long w = 1; w <= p->transport_windows && st == MS_OK; w++) {

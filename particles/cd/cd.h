@@ -252,7 +252,8 @@ typedef struct cd_sim_params {
   ptl_state *particles; /* ownership passes to the sim */
   const cd_box *box;
   const cd_config *cfg;
-  int nmat; /* 1 .. CD_MAX_MATERIALS */
+  int nmat;                   /* 1 .. CD_MAX_MATERIALS */
+  const char *material_names; /* the materials' names for snapshots, "al,pb" (NULL: none) */
 } cd_sim_params;
 /* MS_ERR_INPUT (and *out NULL, the particles still the caller's) for a missing particle state,
  * box or configuration or a material count out of range. */

@@ -135,10 +135,10 @@ ms_status cd_sim_guard(cd_sim *s) {
                  name[a], q[a][i], s->box.lo[a], s->box.hi[a]);
     if (what[0]) {
       snprintf(s->err, sizeof s->err,
-               "unstable at step %ld, t = %.9g: particle %zu (%s"
-               "at %g, %g, %g): %s",
-               s->step, s->t, i, p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i],
-               p->z[i], what);
+               "unstable at step %ld, t = %.9g %s: particle %zu (%s"
+               "at %g, %g, %g cm): %s",
+               s->step, ms_out_time(s->t), ms_out_time_label(), i,
+               p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i], p->z[i], what);
       return MS_ERR_UNSTABLE;
     }
   }
@@ -175,6 +175,7 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
                                {"sigma_u", "particles/sigma_u", 1, false},
                                {"pressure", "particles/pressure", 1, false},
                                {"mass", "particles/mass", 1, false}};
+  snap.material_names = s->material_names;
   snap.ndata = 4;
   snap.data = data;
   snap.nxdmf = 4;

@@ -41,6 +41,7 @@ struct cd_sim {
   cd_box box;
   cd_config cfg;
   int nmat;
+  char *material_names; /* "al,pb" for snapshots (NULL: none); owned */
   cd_pair_table *pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* [a][b] == [b][a], owned */
   double rc_max;
   cd_neigh *nl;

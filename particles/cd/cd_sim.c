@@ -82,7 +82,8 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
     free(data);
     return MS_ERR_INPUT;
   }
-  double ft = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_TIME) : 1.0;
+  double ft =
+      ms_table_time_factor(path, 0, si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_TIME) : 1.0);
   double fu = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_VELOCITY) : 1.0;
   h->n = nrow;
   h->t = ms_calloc(nrow, sizeof *h->t);
@@ -118,6 +119,7 @@ ms_status cd_sim_create(const cd_sim_params *p, cd_sim **out) {
   s->box = *p->box;
   s->cfg = *p->cfg;
   s->nmat = p->nmat;
+  s->material_names = p->material_names ? ms_strdup(p->material_names) : NULL;
   *out = s;
   return MS_OK;
 }
@@ -145,6 +147,7 @@ void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]) {
 
 static void cd_sim_free(cd_sim *s) {
   if (!s) return;
+  free(s->material_names);
   for (int a = 0; a < CD_MAX_MATERIALS; a++)
     for (int b = a; b < CD_MAX_MATERIALS; b++)
       if (s->pair[a][b]) {

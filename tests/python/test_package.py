@@ -102,8 +102,11 @@ for k, (p, t) in enumerate(zip(r.profiles, times)):
     path = os.path.join(sod, f"profile_{k:04d}.csv")
     check(p.path == path, f"profile {k} is {p.path}")
     check(len(p) == ncell, f"{path}: {len(p)} rows for {ncell} cells")
-    # the title prints the time with %g (6 significant digits): relative 5e-6 at most
-    check(abs(p.time - t) <= 5e-6 * abs(t), f"{path}: time {p.time} != {t}")
+    # the title prints the time with %g (6 significant digits): relative 5e-6 at most; the
+    # deck's times are internal (10 us), the title's in the unit it names (us)
+    t_us, pt_us = mscale.to_us(t, "10us"), mscale.to_us(p.time, p.time_unit)
+    check(p.time_unit == "us", f"{path}: time unit {p.time_unit}")
+    check(abs(pt_us - t_us) <= 5e-6 * abs(t_us), f"{path}: time {p.time} {p.time_unit} != {t}")
     check(p["cell"].dtype == np.int64 and np.array_equal(p["cell"], np.arange(ncell)),
           f"{path}: the cell column is not the int64 index 0..n-1")
     check(p["rho"].dtype == np.float64, f"{path}: rho is {p['rho'].dtype}")
@@ -112,6 +115,9 @@ for k, (p, t) in enumerate(zip(r.profiles, times)):
         for n in ("x", "rho", "e", "p", "c"):
             close(p[n], h["cells"][n][()], f"{path}: {n}")
             check(p.units[n] == h5_units(h["cells"][n]), f"{path}: unit of {n} differs from HDF5")
+        # planar geometry: a cell's mass is per unit area; the step a count (docs/output.md)
+        check(h5_units(h["cells"]["mass"]) == "g/cm^2", f"{path}: cells/mass unit")
+        check(np.issubdtype(h.attrs["step"].dtype, np.integer), f"{path}: step not an integer")
         tu = h.attrs["time_units"]
         check(p.time_unit == (tu.decode() if isinstance(tu, bytes) else tu), f"{path}: time unit")
 same_as_csv(r.final_profile, os.path.join(sod, "profile_final.csv"))
@@ -127,6 +133,8 @@ for tag in tags:
             close(hist[n], g[n][()], f"{path}: {n}")
             check(hist.units[n] == h5_units(g[n]), f"{path}: unit of {n} differs from HDF5")
             check(np.array_equal(exact[tag][n], g[n][()]), f"history.h5 {tag}/{n} not exact")
+        check(np.issubdtype(g.attrs["node"].dtype, np.integer), f"history.h5 {tag}: node")
+        check(h5_units(g["t"]) == "us", f"history.h5 {tag}/t: unit {h5_units(g['t'])}")
 xt = r.xt
 nf = len(xt["t"])
 check(nf >= 2 and xt["x"].shape == (nf, ncell + 1), f"xt x {xt['x'].shape}, {nf} frames")
