@@ -216,9 +216,10 @@ ms_status cd_rebuild_lists(cd_sim *s, bool reorder) {
  * its ghost neighbours too, so its force is complete, and a ghost's list is empty (its force is
  * its owner's business; the diagnostics take an owned–ghost pair from the owned side). */
 static bool fit_path(const cd_sim *s) {
-#if defined(__AVX512F__)
-  return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
-         !(s->cfg.damping_gamma > 0.0) && !getenv("MSCALE_CD_NO_FIT");
+#if CD_X86_DISPATCH || defined(__AVX512F__)
+  return cd_simd_level_ == CD_SIMD_AVX512 && s->nmat == 1 && s->pair[0][0]->fit_ok &&
+         s->cfg.cutoff == CD_CUTOFF_PLAIN && !(s->cfg.damping_gamma > 0.0) &&
+         !getenv("MSCALE_CD_NO_FIT");
 #else
   return false;
 #endif
@@ -471,7 +472,7 @@ static void rkn_constrain_cd(void *user, double t, bool end) {
 
 /* RKN acceleration at the stage positions (x, y, z hold q_l): a = f/m of integrated
  * particles, 0 for driven and removed ones; records the force on the piston. */
-static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
+CD_KERNEL_CLONES static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
   (void)t;
   cd_sim *s = user;
   ptl_state *p = s->p;
@@ -496,7 +497,7 @@ static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
  * (rkn_reach; max|a| from the last forces, doubled for its change within the step), so the
  * lists are rebuilt before the step unless the rebuild test (neighbour.c) passes with that
  * reach added to the displacements so far. */
-static ms_status rkn_step_cd(cd_sim *s) {
+CD_KERNEL_CLONES static ms_status rkn_step_cd(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt;
   const long n = (long)p->nlocal;
@@ -560,7 +561,7 @@ static inline double kick_drift_zero(long i, double hdt, double dt, const double
 }
 
 /* One velocity-Verlet step (the header comment). */
-static ms_status vv_step(cd_sim *s) {
+CD_KERNEL_CLONES static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt, hdt = 0.5 * dt;
   long n = (long)p->nlocal; /* ghosts are refreshed from their owners; MPI: changes at a build */
