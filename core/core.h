@@ -79,6 +79,8 @@ typedef struct ms_ctx {
  * `mscale run --continue` reproduces the uninterrupted run bit for bit. */
 void ms_interrupts_install(void);
 bool ms_interrupt_requested(void); /* this process's flag (loops agree on it over the ranks) */
+/* Whether any rank has the flag (collective under MPI: every rank of ctx calls it). */
+bool ms_interrupt_agreed(const ms_ctx *ctx);
 
 /* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
 void ms_ctx_init_serial(ms_ctx *ctx);

@@ -402,6 +402,7 @@ static ms_status run_steps(cd_run *r) {
              ctx->restart, step0, ms_out_time(s->t), ms_out_time_label());
   }
   ms_progress prog;
+  bool stopping = false; /* interrupted: stop at the next checkpoint */
   ms_progress_start(&prog, ctx, "cluster_dynamics", s->t, nsteps * r->cfg.dt);
   for (long k = step0; k <= nsteps && st == MS_OK; k++) {
     if (k > step0) st = cd_sim_step(s);
@@ -417,6 +418,25 @@ static ms_status run_steps(cd_run *r) {
     if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
       st = cd_outputs_checkpoint(ctx, p, s, &r->out);
       if (st != MS_OK) break;
+      if (stopping) { /* SIGINT/SIGTERM: `mscale run --continue` goes on from here */
+        ms_log(ctx, MS_LOG_WARN, "cluster_dynamics: interrupted; checkpoint at step %ld written",
+               k);
+        st = MS_INTERRUPTED;
+        break;
+      }
+    }
+    if (!stopping && k < nsteps && ms_interrupt_agreed(ctx)) { /* collective, every step */
+      stopping = true;
+      if (ckpt_every == 0) {
+        ms_log(ctx, MS_LOG_WARN, "cluster_dynamics: interrupted at step %ld (no checkpoints)", k);
+        cd_outputs_write(ctx, p, s, &r->out);
+        st = MS_INTERRUPTED;
+        break;
+      }
+      ms_log(ctx, MS_LOG_WARN,
+             "cluster_dynamics: interrupt: stopping at the next checkpoint "
+             "(step %ld)",
+             (k / ckpt_every + 1) * ckpt_every);
     }
     if (k % p->out_every == 0 || k == nsteps) {
       cd_outputs_write(ctx, p, s, &r->out);

@@ -522,12 +522,31 @@ static ms_status run_steps(dm_run *r, ms_status st) {
   ms_progress prog;
   ms_progress_start(&prog, r->ctx, "discrete model", r->step0 * dt, p->sum.t_end);
   r->last_step = r->step0;
+  bool stopping = false; /* interrupted: stop at the next checkpoint */
   for (long step = r->step0; step <= r->nsteps && st == MS_OK; ++step) {
     double t = step * dt;
     if (p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 &&
         step < r->nsteps) {
       st = run_checkpoint(r, step);
       if (st != MS_OK) break;
+      if (stopping) { /* SIGINT/SIGTERM: `mscale run --continue` goes on from here */
+        ms_log(r->ctx, MS_LOG_WARN, "discrete model: interrupted; checkpoint at step %ld written",
+               step);
+        st = MS_INTERRUPTED;
+        break;
+      }
+    }
+    if (!stopping && step < r->nsteps && ms_interrupt_agreed(r->ctx)) { /* collective */
+      stopping = true;
+      if (p->checkpoint_every <= 0) {
+        ms_log(r->ctx, MS_LOG_WARN, "discrete model: interrupted at step %ld (no checkpoints)",
+               step);
+        st = MS_INTERRUPTED;
+        break;
+      }
+      ms_log(r->ctx, MS_LOG_WARN,
+             "discrete model: interrupt: stopping at the next checkpoint (step %ld)",
+             (step / p->checkpoint_every + 1) * p->checkpoint_every);
     }
     run_record(r, step, t);
     run_write_fields(r, step, t);
