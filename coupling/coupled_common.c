@@ -77,6 +77,7 @@ ms_status cpl_phase_open(const ms_ctx *ctx, const cpl_problem *p, double x_drive
       ptl_region_create(p->region, ctx, p->mats->m[p->sample_mat].eos, x_drive, depth, &ph->region);
   if (st != MS_OK) return st;
   ph->geo = ptl_region_get_geometry(ph->region);
+  ph->material = p->mats->m[p->sample_mat].name;
   const double dir[3] = {1, 0, 0};
   ptl_region_set_piston(ph->region, npiston, t_piston, u_piston, dir);
   /* MPI: every rank built the whole region and keeps its share; the grids are replicated
@@ -173,7 +174,7 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
   char name[64];
   snprintf(name, sizeof name, "particles_%04ld.h5", index);
   char *path = ms_out_path(ctx, name);
-  cpl_snapshot_info info = {t, ph->geo.spacing, ph->geo.rho0, ph->fo.box};
+  cpl_snapshot_info info = {t, ph->geo.spacing, ph->geo.rho0, ph->fo.box, ph->material};
   ms_status st = cpl_write_snapshot(path, view, &ph->fr, &info);
   free(path);
   return st;

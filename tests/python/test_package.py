@@ -194,11 +194,18 @@ both = mscale.write_extxyz(snaps, None)
 ref2 = subprocess.run([mscale_bin, "export"] + [s.path for s in snaps] + ["--format", "extxyz"],
                       env=RUN_ENV, check=True, capture_output=True, text=True).stdout
 check(both == ref2, "several frames differ from mscale export")
+# the run's snapshots name their one material (docs/output.md, "Units")
+names = [m["name"] for m in r.deck["materials"]]
+check(last.material_names is not None and len(last.material_names) == 1
+      and last.material_names[0] in names and np.all(last["material"] == 0),
+      f"material table of {last.path}: {last.material_names}")
 # species from a material table: a copy of the snapshot given a material per particle (0, 1,
 # and 2, which the table does not name) and the names "pb,air" (Pb, then X: not an element)
 named = os.path.join(work, "named.h5")
 with h5py.File(last.path, "r") as src_h, h5py.File(named, "w") as h:
     src_h.copy("particles", h)
+    if "material" in h["particles"]:  # the run's own table (one material): replaced here
+        del h["particles"]["material"]
     h["particles"].create_dataset("material", data=np.arange(len(last)) % 3)
     h["particles"].attrs["material_names"] = np.bytes_("pb,air")
 ref = subprocess.run([mscale_bin, "export", named, "--format", "extxyz"], env=RUN_ENV,
