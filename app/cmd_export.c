@@ -20,7 +20,8 @@ static void export_usage(FILE *f) {
              "datasets) as extended XYZ (ASE, OVITO) or a LAMMPS text dump (OVITO, LAMMPS\n"
              "tools), one frame per snapshot, to FILE (written under FILE.part, then renamed)\n"
              "or to stdout. Units are the snapshot's: positions cm, velocities km/s, mass g,\n"
-             "time 10 us; the extended-XYZ comment line names them. Species: the material's name\n"
+             "time us (10 us in files of mscale before 0.2); the extended-XYZ comment line names "
+             "them. Species: the material's name\n"
              "when it is an element symbol (attribute material_names of /particles), else X.\n\n"
              "Options:\n"
              "  --format F   extxyz or lammps-dump\n"
@@ -58,7 +59,8 @@ typedef struct snapshot {
   ms_h5_entry *field; /* from ms_h5_list, minus x */
   double **data;      /* [nfield][n * cols] */
   double *x;          /* [n][3] */
-  double time;        /* 10 us; NAN if the file has none */
+  double time;        /* in time_unit; NAN if the file has none */
+  char time_unit[16]; /* the file's time_units ("us"), else the internal "10us" */
   char **names;       /* material names (NULL: none) */
   size_t nnames;
 } snapshot;
@@ -133,7 +135,12 @@ static ms_status snapshot_read(const char *path, snapshot *s, dk_errors *e) {
   s->time = NAN;
   if (st == MS_OK && ms_h5_read_attr_double(h, "/", "time", &s->time, NULL) != MS_OK)
     ms_h5_read_attr_double(h, "/particles", "time", &s->time, NULL);
-  char *names = NULL;
+  char *names = NULL, *tu = NULL;
+  snprintf(s->time_unit, sizeof s->time_unit, "10us"); /* files before time_units */
+  if (st == MS_OK && ms_h5_read_attr_string(h, "/particles", "time_units", &tu, NULL) == MS_OK &&
+      strlen(tu) < sizeof s->time_unit && !strpbrk(tu, "\" \n"))
+    snprintf(s->time_unit, sizeof s->time_unit, "%s", tu);
+  free(tu);
   if (st == MS_OK &&
       ms_h5_read_attr_string(h, "/particles", "material_names", &names, NULL) == MS_OK) {
     split_names(s, names);
@@ -168,7 +175,7 @@ static void write_extxyz(FILE *f, const snapshot *s) {
   for (size_t k = 0; k < s->nfield; k++)
     fprintf(f, ":%s:%c:%zu", strcmp(s->field[k].name, "v") ? s->field[k].name : "velo",
             s->field[k].is_int ? 'I' : 'R', s->field[k].cols);
-  fprintf(f, " pbc=\"F F F\" units=\"pos:cm velo:km/s mass:g time:10us\"");
+  fprintf(f, " pbc=\"F F F\" units=\"pos:cm velo:km/s mass:g time:%s\"", s->time_unit);
   if (isfinite(s->time)) fprintf(f, " Time=%.17g", s->time);
   fputc('\n', f);
   for (size_t i = 0; i < s->n; i++) {

@@ -13,7 +13,9 @@ static void run_usage(FILE *f) {
           "Usage: mscale run DECK [-o OUTDIR] [--force] [--quiet] [--verbose] [--restart FILE]\n"
           "                       [--continue] [--set PATH=VALUE]...\n\n"
           "  -o, --output=OUTDIR  output directory (default: out/<deck name>)\n"
-          "  --force              allow writing into an OUTDIR that already holds results\n"
+          "  --force              write into an OUTDIR that already holds results, after\n"
+          "                       removing the files of its previous run (run_info.yaml's\n"
+          "                       manifest) and its plots/\n"
           "  --quiet              no progress line\n"
           "  --verbose            debug messages in the log\n"
           "  --restart=FILE       continue from a checkpoint the same deck wrote (discrete_model,\n"
@@ -53,9 +55,15 @@ static void put_quoted(FILE *f, const char *prefix, const char *s) {
   }
 }
 
+/* The directory before the run and, for --continue, the previous run's files: what the
+ * manifest is made of (app/manifest.c). */
+typedef struct run_files {
+  app_listing *before, *keep;
+} run_files;
+
 static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char *deck,
                            const char *const *sets, size_t nsets, const char *started, ms_status s,
-                           double wall) {
+                           double wall, const run_files *files) {
   char *path = ms_out_path(ctx, "run_info.yaml");
   ms_afile af;
   if (ms_afile_open(&af, path) == MS_OK) {
@@ -74,9 +82,28 @@ static void write_run_info(const ms_ctx *ctx, int argc, char **argv, const char 
                                                : "failed";
     fprintf(af.f, "status: %s\nstatus_message: \"%s\"\nwall_time_s: %.3f\n", status,
             (int)s < 0 ? "" : ms_status_str(s), wall);
+    if ((int)s >= 0) app_manifest_write(af.f, ctx->outdir, files->before, files->keep);
     ms_afile_commit(&af);
   }
   free(path);
+}
+
+/* OUTDIR made or reused: --force removes the previous run's files first, so that reruns never
+ * mix (docs/output.md); --continue keeps them in the manifest. Every rank calls it. */
+static ms_status open_outdir(ms_ctx *ctx, const char *outdir, bool force, bool cont,
+                             run_files *files) {
+  size_t removed = 0;
+  ms_status s = MS_OK;
+  if (ctx->rank == 0) {
+    if (cont) files->keep = app_manifest_previous(outdir);
+    else if (force) s = app_manifest_clear(outdir, &removed);
+    if (!s) files->before = app_listing_take(outdir);
+  }
+  s = par_agree_status(s);
+  if (!s) s = par_agree_status(ms_outdir_create(ctx, outdir, force || cont));
+  if (!s && removed)
+    ms_log(ctx, MS_LOG_INFO, "--force: removed the %zu files of the previous run", removed);
+  return s;
 }
 
 int cmd_run(int argc, char **argv) {
@@ -156,6 +183,7 @@ int cmd_run(int argc, char **argv) {
   dk_errors e;
   dk_errors_init(&e);
   app_deck d;
+  run_files files = {NULL, NULL};
   ms_status s = app_deck_read_set(deck, sets, nsets, &d, &e);
   if (s) {
     if (ctx.rank == 0) {
@@ -184,7 +212,7 @@ int cmd_run(int argc, char **argv) {
       }
       ctx.restart = continue_from;
     }
-    if (!s) s = par_agree_status(ms_outdir_create(&ctx, outdir, force || cont));
+    if (!s) s = open_outdir(&ctx, outdir, force, cont, &files);
     free(outdir);
     if (!s) {
       char *resolved = ms_out_path(&ctx, "deck.resolved.yaml");
@@ -196,7 +224,8 @@ int cmd_run(int argc, char **argv) {
       ms_log(&ctx, MS_LOG_INFO, "mscale %s: running %s on %d rank%s into %s", app_version(), deck,
              ctx.size, ctx.size == 1 ? "" : "s", ctx.outdir);
       if (ctx.rank == 0) /* status: running, until the run ends */
-        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, (ms_status)-1, 0.0);
+        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, (ms_status)-1, 0.0,
+                       &files);
       ms_interrupts_install();
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
@@ -210,11 +239,13 @@ int cmd_run(int argc, char **argv) {
                ctx.outdir);
       else ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
       if (ctx.rank == 0)
-        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, s, wall);
+        write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, s, wall, &files);
     }
   }
   app_deck_free(&d);
   dk_errors_free(&e);
+  app_listing_free(&files.before);
+  app_listing_free(&files.keep);
   free(continue_from);
   free(cmdline);
   free(sets);

@@ -45,6 +45,19 @@ void app_print_version(FILE *f);
  * flags}, libraries {mpi, hdf5, sundials, metis, libyaml}, ranks, threads, host. */
 void app_write_provenance(FILE *f, const ms_ctx *ctx);
 
+/* Run-directory manifests (app/manifest.c): the regular files of a directory with their inode,
+ * size and modification time; the previous run's files (run_info.yaml's `manifest:`, else those
+ * modified since its `started`); --force's removal of them and of plots/ (*removed: how many);
+ * and run_info.yaml's `manifest:` list: the files new or changed since `before`, those of
+ * `keep` (--continue: the previous run's) and run_info.yaml. */
+typedef struct app_listing app_listing;
+app_listing *app_listing_take(const char *dir);
+void app_listing_free(app_listing **pl);
+app_listing *app_manifest_previous(const char *dir);
+ms_status app_manifest_clear(const char *dir, size_t *removed);
+void app_manifest_write(FILE *f, const char *dir, const app_listing *before,
+                        const app_listing *keep);
+
 /* Command-line parsing with getopt_long (app/cmd_run.c): the message for getopt's ':' (an option
  * without its value) or '?' (unknown; with a "did you mean") and exit code 2; and the check for
  * a value that is the next option ("-o --force"), which prints the message and returns 1. */

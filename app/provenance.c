@@ -4,6 +4,7 @@
  * threads and host. For `mscale --version` and run_info.yaml (issue 23 items 1 and 7). */
 #include "commands.h"
 
+#include "cd.h"
 #include "mscale_build_config.h"
 #include "mscale_git.h"
 
@@ -43,6 +44,7 @@ void app_print_version(FILE *f) {
   fprintf(f, "libraries: MPI %s; HDF5 %s; SUNDIALS %s; METIS %d.%d.%d; libyaml %s\n", mpi, h5,
           SUNDIALS_VERSION, METIS_VER_MAJOR, METIS_VER_MINOR, METIS_VER_SUBMINOR,
           dk_yaml_version());
+  fprintf(f, "cluster-dynamics kernels: %s (chosen for this CPU at run time)\n", cd_kernel_name());
 }
 
 void app_write_provenance(FILE *f, const ms_ctx *ctx) {
@@ -59,6 +61,7 @@ void app_write_provenance(FILE *f, const ms_ctx *ctx) {
   put_field(f, "  ", "type", MSCALE_BUILD_TYPE);
   put_field(f, "  ", "compiler", MSCALE_BUILD_COMPILER);
   put_field(f, "  ", "flags", MSCALE_BUILD_FLAGS);
+  put_field(f, "  ", "cd_kernel", cd_kernel_name()); /* the SIMD kernels this CPU runs */
   fprintf(f, "libraries:\n");
   put_field(f, "  ", "mpi", mpi);
   put_field(f, "  ", "hdf5", h5);

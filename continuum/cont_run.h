@@ -21,6 +21,11 @@ struct cont_problem {
 
 /* Output writers (output.c). */
 ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *stem);
+/* The units of a cell's mass and of the grid's energies in its geometry: per unit area in
+ * planar ("g/cm^2", "kJ/cm^2"), per radian and unit length in cylindrical, per steradian in
+ * spherical geometry (cont.h). */
+const char *cont_mass_unit(cont_geometry geometry);
+const char *cont_energy_unit(cont_geometry geometry);
 ms_status cont_write_histories(const ms_ctx *ctx, const cont_grid *g, long stride);
 
 #endif

@@ -70,6 +70,7 @@ static bool read_history_table(dk_errors *e, dk_doc *doc, const dk_node *bcmap, 
   fn->t = ms_calloc(nrow ? nrow : 1, sizeof(double));
   fn->v = ms_calloc(nrow ? nrow : 1, sizeof(double));
   fn->n = nrow;
+  tconv = ms_table_time_factor(full, 0, tconv); /* the file's own "# units:" line first */
   for (size_t k = 0; k < nrow && ok; ++k) {
     fn->t[k] = data[k * ncol] * tconv;
     fn->v[k] = data[k * ncol + 1] * vconv;

@@ -409,8 +409,10 @@ static ms_status fail_zone(c2d_grid *g, size_t z, const char *what, double value
   size_t nd[4];
   zone_nodes(g, z, nd);
   snprintf(g->err, sizeof g->err,
-           "step %ld, t = %.9g: %s in zone %zu (i = %zu, j = %zu, near x = %.6g, y = %.6g) = %.6g",
-           g->step + 1, g->t, what, z, z % g->ni, z / g->ni, g->x[nd[0]], g->y[nd[0]], value);
+           "step %ld, t = %.9g %s: %s in zone %zu (i = %zu, j = %zu, near x = %.6g, y = %.6g cm) "
+           "= %.6g",
+           g->step + 1, ms_out_time(g->t), ms_out_time_label(), what, z, z % g->ni, z / g->ni,
+           g->x[nd[0]], g->y[nd[0]], value);
   return MS_ERR_UNSTABLE;
 }
 
@@ -525,8 +527,9 @@ ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
   double dt = g->dt_next;
   if (dt > dt_limit) dt = dt_limit;
   if (!(dt >= g->dt_min) && dt_limit >= g->dt_min) {
-    snprintf(g->err, sizeof g->err, "step %ld, t = %.9g: time step %.3g below dt_min %.3g",
-             g->step + 1, g->t, dt, g->dt_min);
+    snprintf(g->err, sizeof g->err, "step %ld, t = %.9g %s: time step %.3g below dt_min %.3g %s",
+             g->step + 1, ms_out_time(g->t), ms_out_time_label(), ms_out_time(dt),
+             ms_out_time(g->dt_min), ms_out_time_label());
     return MS_ERR_UNSTABLE;
   }
   const double t1 = g->t + dt;

@@ -431,7 +431,7 @@ static ms_status write_snapshot(const ms_ctx *ctx, const c2d_grid *g, long k) {
   if (!s) s = ms_h5_write_doubles(h, "density", v.nj, v.ni, v.rho, "g/cm3");
   if (!s) s = ms_h5_write_doubles(h, "pressure", v.nj, v.ni, v.p, "GPa");
   if (!s) s = ms_h5_write_doubles(h, "energy", v.nj, v.ni, v.e, "kJ/g");
-  if (!s) s = ms_h5_attr_double(h, "/", "time", c2d_grid_time(g));
+  if (!s) s = ms_h5_attr_double(h, "/", "time", ms_out_time(c2d_grid_time(g)));
   if (s) {
     ms_h5_abort(h);
     return s;
@@ -514,7 +514,8 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
   c2d_view v = c2d_grid_view(g);
   c2d_balance b0 = c2d_grid_balance(g);
   double e0 = b0.internal + b0.kinetic;
-  ms_log(ctx, MS_LOG_INFO, "grid2d: %zu x %zu zones, t_end = %g", v.ni, v.nj, p->t_end);
+  ms_log(ctx, MS_LOG_INFO, "grid2d: %zu x %zu zones, t_end = %g %s", v.ni, v.nj,
+         ms_out_time(p->t_end), ms_out_time_label());
   bool out = ctx->outdir && ctx->outdir[0];
   long nk = 0, nmax = p->nsnap + 2;
   double *times = calloc((size_t)nmax, sizeof(double));
@@ -535,7 +536,7 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     ms_progress_update(&pr, c2d_grid_time(g), c2d_grid_steps(g));
     if (out && (p->nsnap > 0 || st != MS_OK) && nk < nmax) {
       ms_status sw = write_snapshot(ctx, g, nk);
-      times[nk++] = c2d_grid_time(g);
+      times[nk++] = ms_out_time(c2d_grid_time(g)); /* the sidecars' times, us */
       if (!sw) sw = write_xmf(ctx, g, nk, times);
       if (sw && !st) st = sw;
     }
@@ -544,11 +545,11 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     ms_log(ctx, MS_LOG_INFO,
            "grid2d: t = %.6g %s, step %ld: internal %.9g, kinetic %.9g, boundary work %.9g %s, "
            "energy error %.3e (relative)",
-           row[0], ms_unit_label(MS_DIM_TIME), c2d_grid_steps(g), row[2], row[3], row[4],
+           ms_out_time(row[0]), ms_out_time_label(), c2d_grid_steps(g), row[2], row[3], row[4],
            ms_unit_label(MS_DIM_ENERGY), fabs(row[5]));
     if (st != MS_OK) {
-      ms_log(ctx, MS_LOG_ERROR, "grid2d: %s (last snapshot written at t = %.9g)", c2d_grid_error(g),
-             c2d_grid_time(g));
+      ms_log(ctx, MS_LOG_ERROR, "grid2d: %s (last snapshot written at t = %.9g %s)",
+             c2d_grid_error(g), ms_out_time(c2d_grid_time(g)), ms_out_time_label());
       s = st;
     }
   }
@@ -561,7 +562,7 @@ ms_status c2d_problem_run(ms_ctx *ctx, c2d_problem *p) {
     ms_h5 *f = ms_h5_create(path);
     free(path);
     ms_status sw = f ? MS_OK : MS_ERR_IO;
-    if (!sw) sw = ms_h5_write_doubles(f, "t", h.n, 1, h.t, ms_unit_label(MS_DIM_TIME));
+    if (!sw) sw = ms_h5_write_times(f, "t", h.n, h.t);
     if (!sw) sw = ms_h5_write_doubles(f, "x", h.n, h.nnodes, h.x, "cm");
     if (!sw) sw = ms_h5_write_doubles(f, "y", h.n, h.nnodes, h.y, "cm");
     if (!sw) sw = ms_h5_write_doubles(f, "u", h.n, h.nnodes, h.u, "km/s");

@@ -15,6 +15,16 @@ static char *stem_name(const char *stem, const char *ext) {
   return s;
 }
 
+const char *cont_mass_unit(cont_geometry geometry) {
+  return geometry == CONT_PLANAR ? "g/cm^2" : geometry == CONT_CYLINDRICAL ? "g/(cm*rad)" : "g/sr";
+}
+
+const char *cont_energy_unit(cont_geometry geometry) {
+  return geometry == CONT_PLANAR        ? "kJ/cm^2"
+         : geometry == CONT_CYLINDRICAL ? "kJ/(cm*rad)"
+                                        : "kJ/sr";
+}
+
 ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *stem) {
   size_t N = g->ncells, Nn = g->nnodes;
   char *h5_name = stem_name(stem, ".h5"), *xmf_name = stem_name(stem, ".xmf"),
@@ -54,13 +64,13 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
               {"cells/p", N, 1, g->p, P},
               {"cells/q", N, 1, g->q, P},
               {"cells/c", N, 1, g->c, V},
-              {"cells/mass", N, 1, g->mass, ms_unit_label(MS_DIM_MASS)},
-              {"cells/material", N, 1, mat, "1"}};
+              {"cells/mass", N, 1, g->mass, cont_mass_unit(g->geometry)},
+              {"cells/material", N, 1, mat, "1"}}; /* float: the XDMF sidecar reads it as one */
     for (size_t k = 0; k < sizeof ds / sizeof ds[0] && s == MS_OK; ++k)
       s = ms_h5_write_doubles(h, ds[k].name, ds[k].n0, ds[k].n1, ds[k].d, ds[k].u);
-    if (s == MS_OK) s = ms_h5_attr_double(h, "/", "time", g->t);
-    if (s == MS_OK) s = ms_h5_attr_double(h, "/", "step", (double)g->step);
-    if (s == MS_OK) s = ms_h5_attr_string(h, "/", "time_units", ms_unit_label(MS_DIM_TIME));
+    if (s == MS_OK) s = ms_h5_attr_double(h, "/", "time", ms_out_time(g->t));
+    if (s == MS_OK) s = ms_h5_attr_int(h, "/", "step", g->step);
+    if (s == MS_OK) s = ms_h5_attr_string(h, "/", "time_units", ms_out_time_label());
     if (s == MS_OK) {
       static const char *const geo[] = {"planar", "cylindrical", "spherical"};
       s = ms_h5_attr_string(h, "/", "geometry", geo[g->geometry]);
@@ -76,7 +86,7 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
                                  {"q", "cells/q", 1, true},
                                  {"c", "cells/c", 1, true},
                                  {"material", "cells/material", 1, true}};
-    s = ms_xdmf_write_points(xmf_path, h5_name, "nodes/xyz", Nn, 3, g->t,
+    s = ms_xdmf_write_points(xmf_path, h5_name, "nodes/xyz", Nn, 3, ms_out_time(g->t),
                              sizeof attr / sizeof attr[0], attr);
     /* the run's profiles as one time series for ParaView (profile_final sorts last) */
     const char *slash = strrchr(xmf_path, '/');
@@ -100,8 +110,8 @@ ms_status cont_write_profile(const ms_ctx *ctx, const cont_grid *g, const char *
                              ms_unit_label(MS_DIM_VELOCITY),
                              "1"};
       char title[128];
-      snprintf(title, sizeof title, "continuum profile at t = %.9g %s (cell centres)", g->t,
-               ms_unit_label(MS_DIM_TIME));
+      snprintf(title, sizeof title, "continuum profile at t = %.9g %s (cell centres)",
+               ms_out_time(g->t), ms_out_time_label());
       ms_csv_header(af.f, title, 9, names, units);
       for (size_t i = 0; i < N; ++i) {
         double row[9] = {(double)i, xc[i],   g->rho[i], uc[i], g->e[i],
@@ -157,13 +167,16 @@ ms_status cont_write_histories(const ms_ctx *ctx, const cont_grid *g, long strid
       if (last_extra) buf[nrow - 1] = cols[c][hs.n - 1];
       char ds[256];
       snprintf(ds, sizeof ds, "%s/%s", hs.name, names[c]);
-      s = ms_h5_write_doubles(h, ds, nrow, 1, buf, units[c]);
+      double to_out; /* the time column in the output unit (docs/output.md, "Units") */
+      const char *unit = ms_out_unit(units[c], &to_out);
+      for (size_t r = 0; r < nrow; ++r) buf[r] *= to_out;
+      s = ms_h5_write_doubles(h, ds, nrow, 1, buf, unit);
     }
     free(buf);
     if (s == MS_OK) {
       char grp[256];
       snprintf(grp, sizeof grp, "/%s", hs.name);
-      s = ms_h5_attr_double(h, grp, "node", (double)hs.node);
+      s = ms_h5_attr_int(h, grp, "node", (int64_t)hs.node);
     }
     /* CSV */
     char fname[300];

@@ -56,7 +56,7 @@ static ms_status xt_write(const ms_ctx *ctx, const xt_data *xt, int quantity) {
   free(path);
   if (!h) return MS_ERR_IO;
   size_t nf = xt->nframes, nc = xt->ncol;
-  ms_status s = ms_h5_write_doubles(h, "t", nf, 1, xt->t, ms_unit_label(MS_DIM_TIME));
+  ms_status s = ms_h5_write_times(h, "t", nf, xt->t);
   if (!s) s = ms_h5_write_doubles(h, "x", nf, nc + 1, xt->x, ms_unit_label(MS_DIM_LENGTH));
   if (!s) s = ms_h5_write_doubles(h, "rho", nf, nc, xt->rho, ms_unit_label(MS_DIM_DENSITY));
   if (!s) s = ms_h5_write_doubles(h, "p", nf, nc, xt->p, ms_unit_label(MS_DIM_PRESSURE));
@@ -82,14 +82,17 @@ static void log_balance(const ms_ctx *ctx, const cont_grid *g, double e0, double
   if (!(scale > 0.0)) scale = 1.0;
   double drift = (total - b.work - e0) / scale;
   ms_log(ctx, MS_LOG_INFO,
-         "continuum t = %.6g step %ld: energy internal %.9g + kinetic %.9g = %.9g, boundary work "
-         "%.6g, relative drift %.2e",
-         g->t, g->step, b.internal, b.kinetic, total, b.work, drift);
+         "continuum t = %.6g %s step %ld: energy [%s] internal %.9g + kinetic %.9g = %.9g, "
+         "boundary work %.6g, relative drift %.2e",
+         ms_out_time(g->t), ms_out_time_label(), g->step, cont_energy_unit(g->geometry), b.internal,
+         b.kinetic, total, b.work, drift);
   if (g->geometry == CONT_PLANAR) {
     double mscale = fabs(mom0) > 0 ? fabs(mom0) : 1.0;
     ms_log(ctx, MS_LOG_INFO,
-           "continuum t = %.6g: momentum %.9g, boundary impulse %.6g, drift %.2e (scale %.3g)",
-           g->t, b.momentum, b.impulse, (b.momentum - b.impulse - mom0) / mscale, mscale);
+           "continuum t = %.6g %s: momentum [g*km/s/cm^2] %.9g, boundary impulse %.6g, drift "
+           "%.2e (scale %.3g)",
+           ms_out_time(g->t), ms_out_time_label(), b.momentum, b.impulse,
+           (b.momentum - b.impulse - mom0) / mscale, mscale);
   }
 }
 
@@ -136,12 +139,12 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   const file_writer fw = {ctx, h != NULL && ctx->size > 1};
   cont_balance b0 = cont_grid_balance(g);
   double e0 = b0.internal + b0.kinetic, mom0 = b0.momentum;
-  ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g", g->ncells,
-         g->nregions,
+  ms_log(ctx, MS_LOG_INFO, "continuum: %zu cells in %zu layers, %s geometry, t_end = %g %s",
+         g->ncells, g->nregions,
          g->geometry == CONT_PLANAR        ? "planar"
          : g->geometry == CONT_CYLINDRICAL ? "cylindrical"
                                            : "spherical",
-         p->t_end);
+         ms_out_time(p->t_end), ms_out_time_label());
 
   xt_data xt;
   xt_init(&xt, g, p->xt_frames > 0 ? (size_t)p->xt_frames : 0);
@@ -162,7 +165,8 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
   ms_progress_start(&prog, ctx, "continuum", 0.0, p->t_end);
   while (g->t < p->t_end) {
     if (!h && ctx->size == 1 && ms_interrupt_requested()) { /* no checkpoints: stop at once */
-      ms_log(ctx, MS_LOG_WARN, "continuum: interrupted at t = %g (step %ld)", g->t, g->step);
+      ms_log(ctx, MS_LOG_WARN, "continuum: interrupted at t = %g %s (step %ld)", ms_out_time(g->t),
+             ms_out_time_label(), g->step);
       s = MS_INTERRUPTED;
       break;
     }
@@ -203,8 +207,8 @@ static ms_status run_on_this_rank(ms_ctx *ctx, cont_problem *p, const cont_step_
     }
     ms_progress_update(&prog, g->t, g->step);
     if (p->max_steps > 0 && g->step >= p->max_steps) {
-      ms_log(ctx, MS_LOG_WARN, "continuum: stopped after max_steps = %ld at t = %g", p->max_steps,
-             g->t);
+      ms_log(ctx, MS_LOG_WARN, "continuum: stopped after max_steps = %ld at t = %g %s",
+             p->max_steps, ms_out_time(g->t), ms_out_time_label());
       break;
     }
   }

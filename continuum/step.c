@@ -141,9 +141,9 @@ double cont_calc_time_constraint(const cont_grid *g, size_t lo, size_t hi) {
 
 static ms_status fail(cont_grid *g, size_t cell, const char *what, double value) {
   snprintf(g->err, sizeof g->err,
-           "unstable at step %ld, t = %.9g: %s in cell %zu (layer %d, x = %.6g) = %.6g",
-           g->step + 1, g->t, what, cell, g->layer[cell], 0.5 * (g->x[cell] + g->x[cell + 1]),
-           value);
+           "unstable at step %ld, t = %.9g %s: %s in cell %zu (layer %d, x = %.6g cm) = %.6g",
+           g->step + 1, ms_out_time(g->t), ms_out_time_label(), what, cell, g->layer[cell],
+           0.5 * (g->x[cell] + g->x[cell + 1]), value);
   return MS_ERR_UNSTABLE;
 }
 
@@ -430,8 +430,9 @@ static inline __attribute__((always_inline)) ms_status step_impl(cont_grid *g, d
   double dt = g->dt_next < dt_limit ? g->dt_next : dt_limit;
   if (!(dt >= g->dt_min) && !(dt_limit < g->dt_min && dt == dt_limit)) {
     snprintf(g->err, sizeof g->err,
-             "unstable at step %ld, t = %.9g: time step %.3g below dt_min = %.3g", g->step + 1,
-             g->t, dt, g->dt_min);
+             "unstable at step %ld, t = %.9g %s: time step %.3g below dt_min = %.3g %s",
+             g->step + 1, ms_out_time(g->t), ms_out_time_label(), ms_out_time(dt),
+             ms_out_time(g->dt_min), ms_out_time_label());
     return MS_ERR_UNSTABLE;
   }
   const size_t N = g->ncells, Nn = g->nnodes;

@@ -25,6 +25,7 @@ ms_status ms_afile_open(ms_afile *af, const char *path) {
 ms_status ms_afile_commit(ms_afile *af) {
   ms_status s = MS_OK;
   if (!af->f) return MS_ERR_IO;
+  ms_csv_forget(af->f);
   bool bad = ferror(af->f) != 0;
   if (fclose(af->f) != 0 || bad) {
     fprintf(stderr, "mscale: error writing '%s'\n", af->tmp_path);
@@ -43,6 +44,7 @@ ms_status ms_afile_commit(ms_afile *af) {
 
 void ms_afile_abort(ms_afile *af) {
   if (af->f) {
+    ms_csv_forget(af->f);
     fclose(af->f);
     remove(af->tmp_path);
   }

@@ -106,6 +106,7 @@ ms_status ms_ckpt_restore_afile(const ms_ctx *ctx, ms_h5r *h, const char *name, 
   size_t len = 0;
   ms_status st = ms_h5_read_bytes(h, name, &text, &len, e);
   if (st == MS_OK && ctx->rank == 0 && af->f && fwrite(text, 1, len, af->f) != len) st = MS_ERR_IO;
+  if (st == MS_OK && ctx->rank == 0 && af->f) ms_csv_resume(af->f, text, len);
   free(text);
   return st;
 }

@@ -79,6 +79,8 @@ typedef struct ms_ctx {
  * `mscale run --continue` reproduces the uninterrupted run bit for bit. */
 void ms_interrupts_install(void);
 bool ms_interrupt_requested(void); /* this process's flag (loops agree on it over the ranks) */
+/* Whether any rank has the flag (collective under MPI: every rank of ctx calls it). */
+bool ms_interrupt_agreed(const ms_ctx *ctx);
 
 /* A context for serial tools and tests: rank 0 of 1, no output directory, log to stderr. */
 void ms_ctx_init_serial(ms_ctx *ctx);
@@ -133,6 +135,15 @@ typedef enum ms_unit_system { MS_UNITS_INTERNAL = 0, MS_UNITS_SI } ms_unit_syste
 double ms_unit_to_internal(ms_unit_system sys, ms_dim dim);
 /* Label of the internal unit of a dimension, e.g. "GPa", "km/s", "g/cm^3". */
 const char *ms_unit_label(ms_dim dim);
+/* Output units (docs/output.md, "Units"): outputs give times in µs ("us"), not in the internal
+ * 10 µs. ms_out_unit: the output spelling of an internal unit ("10us" -> "us", "GPa*10us" ->
+ * "GPa*us"; any other unit unchanged) and the factor internal -> output (*factor, may be NULL).
+ * ms_out_unit_factor: that factor from the output spelling (1 for units that are unchanged).
+ * ms_out_time: an internal time in the output unit ms_out_time_label() ("us"). */
+const char *ms_out_unit(const char *internal, double *factor);
+double ms_out_unit_factor(const char *output);
+double ms_out_time(double t);
+const char *ms_out_time_label(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Deck reading (libyaml)                                                                      *
@@ -294,6 +305,16 @@ void ms_afile_abort(ms_afile *af);       /* fclose + remove the temporary */
 void ms_csv_header(FILE *f, const char *title, size_t ncol, const char *const *names,
                    const char *const *units);
 void ms_csv_row(FILE *f, size_t ncol, const double *values);
+/* The header converts internal time units to output ones (ms_out_unit) and ms_csv_row writes the
+ * later rows of that FILE in them. ms_csv_resume: the same for a file whose text so far (with its
+ * header) was copied back from a checkpoint; ms_csv_forget: the file is closed (ms_afile does
+ * both). Rows written by hand into such a file must convert with ms_out_time themselves. */
+void ms_csv_resume(FILE *f, const char *text, size_t len);
+/* The factor that takes column `col` of a table file to internal time, from the file's
+ * "# units:" line ("t [us]": 0.1; [10us], [s], [ms], [ns]), else `fallback` (the deck's unit
+ * system): an output CSV of one run (in µs) read as the history of another. */
+double ms_table_time_factor(const char *path, size_t col, double fallback);
+void ms_csv_forget(FILE *f);
 
 /* Read a numeric table (CSV or whitespace separated; '#' comments; an optional header line of
  * names). Errors name FILE:LINE. On success *data is row-major [nrow][ncol], malloc'd. */
@@ -310,7 +331,10 @@ ms_h5 *ms_h5_create(const char *path);
 ms_status ms_h5_write_doubles(ms_h5 *h, const char *name, size_t n0, size_t n1, const double *data,
                               const char *units);
 ms_status ms_h5_write_ints(ms_h5 *h, const char *name, size_t n, const int64_t *data);
+/* n internal times as a dataset in the output time unit (ms_out_time; units "us") */
+ms_status ms_h5_write_times(ms_h5 *h, const char *name, size_t n, const double *t);
 ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v);
+ms_status ms_h5_attr_int(ms_h5 *h, const char *obj, const char *attr, int64_t v); /* counts */
 ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const char *v);
 /* Parallel HDF5 (MPI-IO): every rank calls create, every write and close (collectively);
  * attributes must be written with the same values on every rank. Without MPI running it is

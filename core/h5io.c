@@ -96,6 +96,14 @@ static ms_status write_dataset(ms_h5 *h, const char *name, int rank, const hsize
   return MS_OK;
 }
 
+ms_status ms_h5_write_times(ms_h5 *h, const char *name, size_t n, const double *t) {
+  double *out = ms_calloc(n ? n : 1, sizeof *out);
+  for (size_t i = 0; i < n; i++) out[i] = ms_out_time(t[i]);
+  ms_status s = ms_h5_write_doubles(h, name, n, 1, out, ms_out_time_label());
+  free(out);
+  return s;
+}
+
 ms_status ms_h5_write_doubles(ms_h5 *h, const char *name, size_t n0, size_t n1, const double *data,
                               const char *units) {
   hsize_t dims[2] = {n0, n1};
@@ -183,6 +191,18 @@ ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double 
   hid_t space = H5Screate(H5S_SCALAR);
   hid_t a = H5Acreate2(o, attr, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
   herr_t rc = a >= 0 ? H5Awrite(a, H5T_NATIVE_DOUBLE, &v) : -1;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Oclose(o);
+  return rc < 0 ? MS_ERR_IO : MS_OK;
+}
+
+ms_status ms_h5_attr_int(ms_h5 *h, const char *obj, const char *attr, int64_t v) {
+  hid_t o = open_object(h->file, obj);
+  if (o < 0) return MS_ERR_IO;
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(o, attr, H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = a >= 0 ? H5Awrite(a, H5T_NATIVE_INT64, &v) : -1;
   if (a >= 0) H5Aclose(a);
   H5Sclose(space);
   H5Oclose(o);

@@ -40,12 +40,12 @@ void ms_progress_update(ms_progress *p, double t, long step) {
   format_seconds(e1, sizeof e1, elapsed);
   format_seconds(e2, sizeof e2, eta);
   if (p->tty) {
-    fprintf(stderr, "\r%s: %5.1f%%  step %ld  t = %.4g (10us)  elapsed %s  ETA %s   ", p->what,
-            100 * frac, step, t, e1, e2);
+    fprintf(stderr, "\r%s: %5.1f%%  step %ld  t = %.4g %s  elapsed %s  ETA %s   ", p->what,
+            100 * frac, step, ms_out_time(t), ms_out_time_label(), e1, e2);
     fflush(stderr);
   } else {
-    ms_log(p->ctx, MS_LOG_INFO, "%s: %.1f%% step %ld t = %.6g (10us) elapsed %s ETA %s", p->what,
-           100 * frac, step, t, e1, e2);
+    ms_log(p->ctx, MS_LOG_INFO, "%s: %.1f%% step %ld t = %.6g %s elapsed %s ETA %s", p->what,
+           100 * frac, step, ms_out_time(t), ms_out_time_label(), e1, e2);
   }
 }
 
@@ -54,6 +54,7 @@ void ms_progress_finish(ms_progress *p, double t, long step) {
   if (p->tty) fprintf(stderr, "\r%*s\r", 100, "");
   char e1[32];
   format_seconds(e1, sizeof e1, ms_wall_time() - p->wall_start);
-  ms_log(p->ctx, MS_LOG_INFO, "%s: done, %ld steps to t = %.6g (10us) in %s", p->what, step, t, e1);
+  ms_log(p->ctx, MS_LOG_INFO, "%s: done, %ld steps to t = %.6g %s in %s", p->what, step,
+         ms_out_time(t), ms_out_time_label(), e1);
   p->active = false;
 }

@@ -98,3 +98,8 @@ void ms_interrupts_install(void) {
 }
 
 bool ms_interrupt_requested(void) { return interrupt_flag != 0; }
+
+bool ms_interrupt_agreed(const ms_ctx *ctx) {
+  int stop = interrupt_flag != 0;
+  return ctx->size > 1 ? par_max_int(stop) != 0 : stop;
+}

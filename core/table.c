@@ -154,3 +154,32 @@ ms_status ms_read_table(const char *path, size_t min_cols, double **data, size_t
   *ncol = (size_t)cols;
   return MS_OK;
 }
+
+double ms_table_time_factor(const char *path, size_t col, double fallback) {
+  FILE *f = fopen(path, "r");
+  if (!f) return fallback;
+  char line[4096];
+  double factor = fallback;
+  while (fgets(line, sizeof line, f) && line[0] == '#') {
+    if (strncmp(line, "# units:", 8) != 0) continue;
+    const char *p = line + 8;
+    for (size_t k = 0; k < col && p; k++) p = strchr(p, ','), p = p ? p + 1 : NULL;
+    const char *lb = p ? strchr(p, '[') : NULL, *rb = lb ? strchr(lb, ']') : NULL;
+    if (!rb) break;
+    const char *comma = strchr(p, ',');
+    if (comma && comma < lb) break; /* this column has no [unit] */
+    char unit[32] = "";
+    size_t n = (size_t)(rb - lb - 1);
+    if (n < sizeof unit) memcpy(unit, lb + 1, n), unit[n] = 0;
+    /* internal time is 10 µs: µs, 10 µs, s, ms and ns as written in units headers */
+    static const struct {
+      const char *name;
+      double to_internal;
+    } times[] = {{"us", 0.1}, {"10us", 1.0}, {"10 us", 1.0}, {"s", 1e5}, {"ms", 1e2}, {"ns", 1e-4}};
+    for (size_t i = 0; i < sizeof times / sizeof times[0]; i++)
+      if (!strcmp(unit, times[i].name)) factor = times[i].to_internal;
+    break;
+  }
+  fclose(f);
+  return factor;
+}

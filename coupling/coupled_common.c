@@ -77,6 +77,7 @@ ms_status cpl_phase_open(const ms_ctx *ctx, const cpl_problem *p, double x_drive
       ptl_region_create(p->region, ctx, p->mats->m[p->sample_mat].eos, x_drive, depth, &ph->region);
   if (st != MS_OK) return st;
   ph->geo = ptl_region_get_geometry(ph->region);
+  ph->material = p->mats->m[p->sample_mat].name;
   const double dir[3] = {1, 0, 0};
   ptl_region_set_piston(ph->region, npiston, t_piston, u_piston, dir);
   /* MPI: every rank built the whole region and keeps its share; the grids are replicated
@@ -176,7 +177,7 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
   char name[64];
   snprintf(name, sizeof name, "particles_%04ld.h5", index);
   char *path = ms_out_path(ctx, name);
-  cpl_snapshot_info info = {t, ph->geo.spacing, ph->geo.rho0, ph->fo.box};
+  cpl_snapshot_info info = {t, ph->geo.spacing, ph->geo.rho0, ph->fo.box, ph->material};
   ms_status st = cpl_write_snapshot(path, view, &ph->fr, &info);
   free(path);
   return st;
@@ -185,7 +186,8 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
 /* A particle step failed: the guard's finding (step, time on the particles' clock, particle,
  * quantity) and the state it found, particles_unstable.h5 (docs/reliability.md §5). */
 void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start) {
-  ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g): %s", t_start,
+  ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g %s): %s",
+         ms_out_time(t_start), ms_out_time_label(),
          st == MS_ERR_UNSTABLE ? ptl_region_error(r) : ms_status_str(st));
   char *path = ms_out_path(ctx, "particles_unstable.h5");
   if (ptl_region_write_snapshot(r, path) == MS_OK)
@@ -247,8 +249,8 @@ ms_status cpl_transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *
   }
   ms_log(ctx, MS_LOG_INFO,
          "coupled: 3/3 transport of %zu ejecta fragments to the detector at "
-         "x = %g cm (%g cm beyond the free surface), until t = %g",
-         nfl, to.det_x, p->det_distance, p->transport_end);
+         "x = %g cm (%g cm beyond the free surface), until t = %g %s",
+         nfl, to.det_x, p->det_distance, ms_out_time(p->transport_end), ms_out_time_label());
   ms_progress prog;
   ms_progress_start(&prog, ctx, "transport", t0, p->transport_end);
   for (long w = 1; w <= p->transport_windows && st == MS_OK; w++) {

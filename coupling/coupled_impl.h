@@ -96,6 +96,7 @@ typedef struct cpl_particle_phase {
   uint8_t *skip;
   int32_t *ghost_owner; /* MPI: owner rank of each ghost (fragment search) */
   double *fx, *fy, *fz;
+  const char *material; /* the sample's material name, for the snapshots (not owned) */
 } cpl_particle_phase;
 /* Build the region between x_drive and x_drive + depth with its piston history (t, u on the
  * region's clock, along +x), distribute it, and (unless restarting) initialise it; the

@@ -240,18 +240,19 @@ static ms_status search(one_way *w, long step, bool out_now) {
   if (st != MS_OK) return st;
   char name[64], title[160];
   snprintf(name, sizeof name, "spectrum_%04ld.csv", w->next_out);
-  snprintf(title, sizeof title, "fragment spectrum N(g) at t = %g (10us), b = %g", t_abs, p->bond);
+  snprintf(title, sizeof title, "fragment spectrum N(g) at t = %g %s, b = %g", ms_out_time(t_abs),
+           ms_out_time_label(), p->bond);
   st = cpl_write_table(ctx, name, &w->ph.fr, 0, &w->ph.sel, title);
   if (ctx->size > 1) st = par_agree_status(st); /* rank 0's file error stops every rank */
   if (st != MS_OK) return st;
   ptl_region_energy en;
   ptl_region_energy_get(r, &en);
   ms_log(ctx, MS_LOG_INFO,
-         "coupled: t = %.5g: %zu fragments, ejected mass %.4g g, free surface %.4g km/s "
+         "coupled: t = %.5g %s: %zu fragments, ejected mass %.4g g, free surface %.4g km/s "
          "(grid %.4g); energy [kJ]: kinetic %.4g potential %.4g damped %.4g broken %.4g "
          "piston work %.4g, balance %.3g of the work",
-         t_abs, w->ph.fr.n, row_ej[1], up, ug, en.kinetic, en.potential - w->e0.potential,
-         en.dissipated, en.broken, en.piston_work,
+         ms_out_time(t_abs), ms_out_time_label(), w->ph.fr.n, row_ej[1], up, ug, en.kinetic,
+         en.potential - w->e0.potential, en.dissipated, en.broken, en.piston_work,
          en.piston_work != 0 ? (en.total - w->e0.total) / en.piston_work : 0.0);
   w->next_out++;
   return MS_OK;
@@ -311,11 +312,12 @@ static void drive_check(one_way *w) {
   const double window = p->check_window > 0 ? p->check_window : depth / w->ph.geo.c0;
   if (cpl_free_surface_check(w->fs_n, w->fs_t, w->fs_ug, w->fs_up, window, &chk))
     ms_log(w->ctx, MS_LOG_INFO,
-           "coupled: drive check (free surface, %zu samples over [%g, %g]): plateau particles "
-           "%.5g km/s vs grid %.5g km/s: %.2f %%; half-rise at t = %.5g (particles) vs %.5g "
+           "coupled: drive check (free surface, %zu samples over [%g, %g] %s): plateau particles "
+           "%.5g km/s vs grid %.5g km/s: %.2f %%; half-rise at t = %.5g %s (particles) vs %.5g "
            "(grid); smallest particle velocity in the next two windows %.4g km/s (%s piston)",
-           chk.samples, chk.t_break + 0.5 * window, chk.t_break + window, chk.plateau_particles,
-           chk.plateau_grid, 100 * chk.rel_diff, chk.t_half_particles, chk.t_half_grid,
+           chk.samples, ms_out_time(chk.t_break + 0.5 * window), ms_out_time(chk.t_break + window),
+           ms_out_time_label(), chk.plateau_particles, chk.plateau_grid, 100 * chk.rel_diff,
+           ms_out_time(chk.t_half_particles), ms_out_time_label(), ms_out_time(chk.t_half_grid),
            chk.min_after, cpl_drive_mode_names[p->drive_mode]);
   else
     ms_log(w->ctx, MS_LOG_WARN,
@@ -381,13 +383,14 @@ static ms_status summarise(one_way *w) {
   p->sum.u_ref = u_ref;
   const cpl_ejecta_classes *ec = &p->sum.classes;
   ms_log(ctx, MS_LOG_INFO,
-         "coupled: detached material at t = %.5g (bulk %.4g g): jets (faster than %.4g km/s = "
+         "coupled: detached material at t = %.5g %s (bulk %.4g g): jets (faster than %.4g km/s = "
          "(1 + %g) x the grid's free-surface jump-off velocity %.4g) %.4g g in %zu fragments, "
          "slower (spall layers, debris) %.4g g in %zu fragments; fastest %.4g km/s",
-         t_now, ec->m_bulk, (1 + p->jet_margin) * u_ref, p->jet_margin, u_ref, ec->m_jet, ec->n_jet,
-         ec->m_slow, ec->n_slow, ec->v_max);
+         ms_out_time(t_now), ms_out_time_label(), ec->m_bulk, (1 + p->jet_margin) * u_ref,
+         p->jet_margin, u_ref, ec->m_jet, ec->n_jet, ec->m_slow, ec->n_slow, ec->v_max);
   char title[160];
-  snprintf(title, sizeof title, "fragments at the end of the particle phase, t = %g (10us)", t_now);
+  snprintf(title, sizeof title, "fragments at the end of the particle phase, t = %g %s",
+           ms_out_time(t_now), ms_out_time_label());
   const char *names[] = {"spectrum.csv",  "fragments.csv",     "cumulative.csv",
                          "mass_hist.csv", "diameter_hist.csv", "ejecta_velocity.csv"};
   ms_status st = MS_OK;

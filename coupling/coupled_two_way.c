@@ -179,11 +179,12 @@ static ms_status two_way_output(two_way *w, double tb, double ubar) {
   view.n = ptl_region_state(w->ph.region)->nlocal; /* MPI: each rank its owned particles */
   ms_status st = cpl_write_particles(w->ctx, &w->ph, w->next_out, tb, &view);
   ms_log(w->ctx, MS_LOG_INFO,
-         "coupled: two-way t = %.5g: %ld grid steps, %ld particle steps; interface u = %.5g "
-         "km/s, p = %.5g GPa; impulse grid %.6g vs particles %.6g, work grid %.6g vs "
-         "particles %.6g (per cm^2); %zu fragments",
-         tb, w->gsteps, w->psteps, ubar, w->acc.p_avg, w->acc.Jg, w->acc.Jp, w->acc.Wg,
-         w->acc.Wp / w->ph.geo.area, w->ph.fr.n);
+         "coupled: two-way t = %.5g %s: %ld grid steps, %ld particle steps; interface u = "
+         "%.5g km/s, p = %.5g GPa; impulse [GPa*us] grid %.6g vs particles %.6g, work [kJ/cm^2] "
+         "grid %.6g vs particles %.6g; %zu fragments",
+         ms_out_time(tb), ms_out_time_label(), w->gsteps, w->psteps, ubar, w->acc.p_avg,
+         ms_out_time(w->acc.Jg), ms_out_time(w->acc.Jp), w->acc.Wg, w->acc.Wp / w->ph.geo.area,
+         w->ph.fr.n);
   w->next_out++;
   return st;
 }

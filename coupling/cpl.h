@@ -193,6 +193,7 @@ typedef struct cpl_snapshot_info {
   double spacing; /* lattice spacing a, cm */
   double rho0;    /* reference density (≤ 0: not written) */
   cpl_box box;
+  const char *material; /* the particles' material name (NULL: no material table) */
 } cpl_snapshot_info;
 ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl_fragments *f,
                              const cpl_snapshot_info *info);

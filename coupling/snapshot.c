@@ -19,8 +19,10 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
     id[i] = f && i < f->n_particles ? f->id[i] : -1;
     fid[i] = (double)id[i];
   }
-  ptl_snapshot_data data[3];
+  ptl_snapshot_data data[4];
   size_t ndata = 0;
+  int64_t *mat = info->material ? ms_calloc(n + 1, sizeof *mat) : NULL; /* one material: 0 */
+  if (mat) data[ndata++] = (ptl_snapshot_data){"particles/material", NULL, mat, 1, NULL};
   if (p->gid) data[ndata++] = (ptl_snapshot_data){"particles/gid", NULL, p->gid, 1, NULL};
   data[ndata++] = (ptl_snapshot_data){"particles/fragment", NULL, id, 1, NULL};
   data[ndata++] = (ptl_snapshot_data){"particles/fragment_id", fid, NULL, 1, "1"};
@@ -33,6 +35,7 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
   snap.data = data;
   snap.nxdmf = 3;
   snap.xdmf = xdmf;
+  snap.material_names = info->material; /* the index table of particles/material */
   ptl_snapshot_attr_add(&snap, "time", info->time);
   ptl_snapshot_attr_add(&snap, "r0", info->spacing);
   if (info->rho0 > 0) ptl_snapshot_attr_add(&snap, "rho0", info->rho0);
@@ -42,5 +45,6 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
   const ms_status st = ptl_write_snapshot(path, &snap);
   free(fid);
   free(id);
+  free(mat);
   return st;
 }

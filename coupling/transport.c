@@ -304,7 +304,7 @@ void cpl_write_arrivals(FILE *out, const cpl_transport *tr, const char *title) {
   for (size_t i = 0; i < tr->n; i++) {
     const cpl_flight *f = &tr->rec[i]->fl;
     if (f->state != CPL_ARRIVED) continue;
-    fprintf(out, "%zu,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", i, f->mass, f->diameter, f->t_arrival,
-            f->v_arrival[0], f->v_arrival[1], f->v_arrival[2]);
+    fprintf(out, "%zu,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", i, f->mass, f->diameter,
+            ms_out_time(f->t_arrival), f->v_arrival[0], f->v_arrival[1], f->v_arrival[2]);
   }
 }

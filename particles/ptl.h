@@ -82,7 +82,8 @@ enum {
 /* What a snapshot holds. Datasets, in this order: particles/x [n][3] from x[0..2] (x[2] NULL:
  * 0), particles/v [n][3] from v[0..2] (a NULL component: 0), particles/mass [n], then
  * data[0..ndata), then particles/vertex (0..N-1, the sidecar's connectivity); then the
- * attributes attr[0..nattr) of /particles, in order. `omit` leaves out v, mass, vertex (and the
+ * attributes attr[0..nattr) of /particles, in order ("time" in the output time unit with
+ * time_units beside it, "step" as an integer) and material_names. `omit` leaves out v, mass, vertex (and the
  * time series). The sidecar (PATH with .h5 replaced by .xmf, naming the file by its base name)
  * shows xdmf[0..nxdmf) at `time`; with it, the time series DIR/particles.xmf of every sidecar
  * of the file's prefix (its name up to the first digit). Collective when dist: every rank gives
@@ -99,7 +100,8 @@ typedef struct ptl_snapshot {
   const ms_xdmf_attr *xdmf;
   double time;
   bool dist;
-  unsigned omit; /* PTL_SNAPSHOT_NO_* */
+  unsigned omit;              /* PTL_SNAPSHOT_NO_* */
+  const char *material_names; /* the names of the material indices, "al,pb" (NULL: none) */
 } ptl_snapshot;
 
 /* A snapshot of n particles at positions x[0..2], velocities v[0..2] and masses at `time`

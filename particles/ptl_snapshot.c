@@ -71,8 +71,19 @@ static ms_status write_datasets(ms_h5 *h, const ptl_snapshot *sn, const double *
               : ms_h5_write_ints_dist(h, d->name, n, d->i);
   }
   if (st == MS_OK && !(sn->omit & PTL_SNAPSHOT_NO_VERTEX)) st = write_vertex_ids(h, n, sn->dist);
-  for (size_t k = 0; k < sn->nattr && st == MS_OK; k++)
-    st = ms_h5_attr_double(h, "particles", sn->attr[k].name, sn->attr[k].value);
+  if (st == MS_OK && sn->material_names) /* the names of the material indices, "al,pb" */
+    st = ms_h5_attr_string(h, "particles", "material_names", sn->material_names);
+  for (size_t k = 0; k < sn->nattr && st == MS_OK; k++) {
+    /* the time in the output unit (docs/output.md, "Units"), named by time_units */
+    bool is_time = !strcmp(sn->attr[k].name, "time");
+    if (!strcmp(sn->attr[k].name, "step")) /* a count: an integer attribute */
+      st = ms_h5_attr_int(h, "particles", "step", (int64_t)sn->attr[k].value);
+    else
+      st = ms_h5_attr_double(h, "particles", sn->attr[k].name,
+                             is_time ? ms_out_time(sn->attr[k].value) : sn->attr[k].value);
+    if (st == MS_OK && is_time)
+      st = ms_h5_attr_string(h, "particles", "time_units", ms_out_time_label());
+  }
   return st;
 }
 
@@ -86,8 +97,8 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
   const char *base = strrchr(path, '/');
   base = base ? base + 1 : path;
   const char *vertex = sn->omit & PTL_SNAPSHOT_NO_VERTEX ? NULL : "particles/vertex";
-  ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", vertex, nglobal, 3, sn->time,
-                                         sn->nxdmf, sn->xdmf);
+  ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", vertex, nglobal, 3,
+                                         ms_out_time(sn->time), sn->nxdmf, sn->xdmf);
   free(xmf);
   if (sn->omit & PTL_SNAPSHOT_NO_SERIES) return st;
   /* the run's time series: every sidecar of this prefix (the name up to its number) */

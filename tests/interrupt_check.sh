@@ -36,7 +36,7 @@ wait $pid; rc=$?
 grep -q "^status: interrupted" "$T/cut/run_info.yaml" ||
   { echo "FAIL: run_info.yaml does not say 'status: interrupted'"; cat "$T/cut/run_info.yaml"; fail=1; }
 ls "$T/cut"/*.part > /dev/null 2>&1 && { echo "FAIL: .part files left"; fail=1; }
-grep -o "interrupted; checkpoint at particle step [0-9]*" "$T/cut/run.log" | head -1
+grep -o "interrupted; checkpoint at [a-z ]*step [0-9]*" "$T/cut/run.log" | head -1
 
 "${launch[@]}" "$MSCALE" run "$T/deck.yaml" -o "$T/cut" --continue --quiet 2>> "$T/stderr" ||
   { cat "$T/stderr"; echo "FAIL: --continue"; exit 1; }

@@ -74,7 +74,7 @@ def plot_interface(outdir, plotdir):
     a2.plot(c["t"], -c["W_grid"], label="work given by the grid (-W_grid)")
     a2.plot(c["t"], c["W_particles"], "--", label="work received by the particles")
     a2.set_xlabel(lab("t", u))
-    a2.set_ylabel("per cm^2 (GPa*10us, kJ/cm^2)")
+    a2.set_ylabel(f"impulse [{u.get('J_grid', '?')}], work [{u.get('W_grid', '?')}]")
     a2.set_title("interface balance")
     a2.grid(True, alpha=0.3)
     a2.legend(fontsize=8)
@@ -145,15 +145,22 @@ def plot_snapshot(path, out):
     a1.set_aspect("equal")
     a1.set_xlabel("x − x_free surface [um]")
     a1.set_ylabel("y [um]" + (" (periodic: two periods)" if copies > 1 else ""))
-    a1.set_title(f"{time_label(t, snap.time_unit)}: the free surface (black: driven layer)")
+    a1.set_title(f"{time_label(t, snap.time_unit)}: the free surface")
     fig.colorbar(sc, ax=a1, label="vx [km/s]", fraction=0.046, pad=0.02)
+    if ((frag < 0) & near).any():  # the driven rows, named in a legend rather than the title
+        a1.scatter([], [], s=20, c="k", lw=0, label="driven layer (piston)")
+        a1.legend(loc="lower left", fontsize=8, framealpha=0.8)
     det = ids != bulk
+    m = 1e9 * m  # fragment masses in ng (docs/output.md: the plots' units)
     if det.any():
         size = 8 + 120 * (m[det] / m[det].max()) ** (1 / 3)
         pc = a2.scatter(1e4 * (cx[det] - fs), vx[det], s=size, c=m[det], cmap="plasma",
                         norm=LogNorm(vmin=m[det].min(), vmax=max(m[det].max(), 1.0001 * m[det].min())),
                         edgecolor="k", lw=0.3)
-        fig.colorbar(pc, ax=a2, label="fragment mass [g]", fraction=0.046, pad=0.02)
+        cb = fig.colorbar(pc, ax=a2, label="fragment mass [ng]", fraction=0.046, pad=0.02)
+        from matplotlib.ticker import FormatStrFormatter  # plain numbers, not 3x10^0
+        for axis_fmt in (cb.ax.yaxis.set_major_formatter, cb.ax.yaxis.set_minor_formatter):
+            axis_fmt(FormatStrFormatter("%.3g"))
         vb = vx[ids == bulk]
         if len(vb):
             a2.axhline(vb[0], color="0.5", ls="--", lw=1, label=f"bulk c.o.m. {vb[0]:.3g} km/s")
@@ -163,7 +170,7 @@ def plot_snapshot(path, out):
     a2.set_xlabel("fragment centre − x_free surface [um]")
     a2.set_ylabel("fragment velocity vx [km/s]")
     a2.set_title(f"ejecta: {int(det.sum())} detached fragments, "
-                 f"{m[det].sum() if det.any() else 0:.3g} g")
+                 f"{m[det].sum() if det.any() else 0:.3g} ng")
     a2.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(out, dpi=110)

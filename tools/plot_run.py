@@ -5,12 +5,17 @@
 Usage: /usr/bin/python3 tools/plot_run.py OUTDIR
 
 Recognises the outputs of each problem type by file name and calls the matching plotter in
-tools/ (plot_*.py). Uses Debian's numpy, h5py and matplotlib only.
+tools/ (plot_*.py). Uses Debian's numpy, h5py and matplotlib only. Only the files of the run
+are plotted: when run_info.yaml lists them (``manifest:``), the plotters see a view of the
+directory that holds those files alone, so that files of an earlier run or of another program
+in the same directory never enter a plot.
 """
 import glob
 import importlib.util
 import os
+import shutil
 import sys
+import tempfile
 
 import matplotlib
 
@@ -20,6 +25,21 @@ import matplotlib.pyplot as plt  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from plot_spectrum import lab, read_csv  # noqa: E402  (python/mscale's reader, as a tuple)
+import mscale  # noqa: E402  (plot_spectrum put python/ on the path)
+
+
+def run_view(outdir):
+    """A temporary directory of symbolic links to the files of run_info.yaml's manifest (None
+    when the run has no manifest: every file of outdir is then the run's)."""
+    names = mscale.Run(outdir).manifest
+    if names is None:
+        return None
+    view = tempfile.mkdtemp(prefix="plot_run_")
+    for n in sorted(names):
+        src = os.path.join(os.path.abspath(outdir), n)
+        if os.path.exists(src):
+            os.symlink(src, os.path.join(view, n))
+    return view
 
 
 def plot_hugoniots(outdir, plotdir):
@@ -62,12 +82,18 @@ def main():
         return 2
     plotdir = os.path.join(outdir, "plots")
     os.makedirs(plotdir, exist_ok=True)
-    made = plot_hugoniots(outdir, plotdir)
-    # Plotters of the other modules: each offers plot_run(outdir, plotdir) -> list of files.
-    for plugin in ("plot_xt.py", "plot_particles.py", "plot_spectrum.py", "plot_coupled.py"):
-        mod = load_plugin(plugin)
-        if mod is not None and hasattr(mod, "plot_run"):
-            made += mod.plot_run(outdir, plotdir) or []
+    view = run_view(outdir)
+    try:
+        data = view or outdir
+        made = plot_hugoniots(data, plotdir)
+        # Plotters of the other modules: each offers plot_run(outdir, plotdir) -> list of files.
+        for plugin in ("plot_xt.py", "plot_particles.py", "plot_spectrum.py", "plot_coupled.py"):
+            mod = load_plugin(plugin)
+            if mod is not None and hasattr(mod, "plot_run"):
+                made += mod.plot_run(data, plotdir) or []
+    finally:
+        if view:
+            shutil.rmtree(view)
     for m in made:
         print(f"plot_run: wrote {m}")
     if not made:

@@ -119,6 +119,20 @@ def first(outdir, pattern):
     return files[0] if files else None
 
 
+# Plots give lengths of particles and fragments in um (the snapshots' unit) and ejected masses
+# in ng, so no axis carries a 1e-8 offset and the figures of one run agree.
+_UM_PER = {"cm": 1e4, "m": 1e6, "mm": 1e3, "um": 1.0}
+_NG_PER = {"g": 1e9, "kg": 1e12, "mg": 1e6, "ng": 1.0}
+
+
+def to_um(values, unit):
+    return values * _UM_PER.get(unit, 1.0), "um" if unit in _UM_PER else unit
+
+
+def to_ng(values, unit):
+    return values * _NG_PER.get(unit, 1.0), "ng" if unit in _NG_PER else unit
+
+
 def plot_distributions(outdir, plotdir):
     mh, dh, cu = (first(outdir, p) for p in ("mass_hist*.csv", "diameter_hist*.csv", "cumulative*.csv"))
     if not (mh or dh or cu):
@@ -129,11 +143,13 @@ def plot_distributions(outdir, plotdir):
             ax.set_visible(False)
             continue
         c, u, _ = read_csv(path)
+        conv = to_um if what != "mass" else (lambda v, unit: (v, unit))
+        lo, unit = conv(c["lo"], u.get("lo", ""))
+        hi, _ = conv(c["hi"], u.get("hi", ""))
         if len(c["lo"]):
-            w = c["hi"] - c["lo"]
-            ax.bar(c["lo"], c["count"], width=w, align="edge", edgecolor="k", alpha=0.7)
+            ax.bar(lo, c["count"], width=hi - lo, align="edge", edgecolor="k", alpha=0.7)
             ax.set_xscale("log")
-        ax.set_xlabel(lab("lo", u).replace("lo", what))
+        ax.set_xlabel(f"{what} [{unit}]")
         ax.set_ylabel("fragments per bin")
         ax.set_title(f"{what} distribution")
     if cu:
@@ -160,19 +176,22 @@ def plot_ejecta(outdir, plotdir):
     fig, axs = plt.subplots(1, 2, figsize=(11, 4))
     if ev:
         c, u, _ = read_csv(ev)
+        m, mu = to_ng(c["M_ge"], u.get("M_ge", ""))
         if len(c["v"]):
-            axs[0].step(c["v"], c["M_ge"], where="post")
+            axs[0].step(c["v"], m, where="post")
         axs[0].set_xlabel(lab("v", u))
-        axs[0].set_ylabel(lab("M_ge", u).replace("M_ge", "ejected mass with velocity >= v"))
+        axs[0].set_ylabel(f"ejected mass with velocity >= v [{mu}]")
         axs[0].set_title("cumulative ejected mass vs velocity")
         axs[0].grid(True, alpha=0.3)
     else:
         axs[0].set_visible(False)
     if em:
         c, u, _ = read_csv(em)
-        axs[1].plot(c["t"], c["M_ej"], "o-", ms=3)
-        axs[1].set_xlabel(lab("t", u))
-        axs[1].set_ylabel(lab("M_ej", u))
+        m, mu = to_ng(c["M_ej"], u.get("M_ej", ""))
+        t_us = mscale.to_us(c["t"], u.get("t"))
+        axs[1].plot(t_us, m, "o-", ms=3)
+        axs[1].set_xlabel("t [us]")
+        axs[1].set_ylabel(f"ejected mass M_ej [{mu}]")
         axs[1].set_title("ejected mass vs time")
         axs[1].grid(True, alpha=0.3)
     else:
@@ -190,9 +209,10 @@ def plot_arrivals(outdir, plotdir):
         return []
     c, u, title = read_csv(ar)
     fig, axs = plt.subplots(1, 3, figsize=(15, 4))
-    t_us, d_um = mscale.to_us(c["t_arrival"], u["t_arrival"]), 1e4 * c["d"]  # d in cm
+    t_us, d_um = mscale.to_us(c["t_arrival"], u["t_arrival"]), to_um(c["d"], u.get("d", "cm"))[0]
+    m_ng, mu = to_ng(c["mass"], u.get("mass", "g"))
     if len(t_us):
-        axs[0].hist(t_us, bins=min(40, max(5, len(t_us))), weights=c["mass"], edgecolor="k",
+        axs[0].hist(t_us, bins=min(40, max(5, len(t_us))), weights=m_ng, edgecolor="k",
                     alpha=0.7)
         sc = axs[1].scatter(t_us, c["vx"], c=d_um, s=10, cmap="viridis")
         fig.colorbar(sc, ax=axs[1], label="equivalent diameter [um]")
@@ -203,8 +223,8 @@ def plot_arrivals(outdir, plotdir):
         if wide:
             axs[2].set_xscale("log")
     axs[0].set_xlabel("arrival time [us]")
-    axs[0].set_ylabel("mass per bin [g]")
-    axs[0].set_title(f"arrivals at the detector: {len(t_us)} fragments, {c['mass'].sum():.3g} g")
+    axs[0].set_ylabel(f"mass per bin [{mu}]")
+    axs[0].set_title(f"arrivals at the detector: {len(t_us)} fragments, {m_ng.sum():.3g} {mu}")
     axs[1].set_xlabel("arrival time [us]")
     axs[1].set_ylabel(lab("vx", u))
     axs[1].set_title("arrival velocity")

@@ -252,7 +252,8 @@ typedef struct cd_sim_params {
   ptl_state *particles; /* ownership passes to the sim */
   const cd_box *box;
   const cd_config *cfg;
-  int nmat; /* 1 .. CD_MAX_MATERIALS */
+  int nmat;                   /* 1 .. CD_MAX_MATERIALS */
+  const char *material_names; /* the materials' names for snapshots, "al,pb" (NULL: none) */
 } cd_sim_params;
 /* MS_ERR_INPUT (and *out NULL, the particles still the caller's) for a missing particle state,
  * box or configuration or a material count out of range. */
@@ -367,6 +368,9 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
 /* HDF5 particle snapshot (positions, velocities, material, gid, per-particle σ_u and
  * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
 ms_status cd_write_snapshot(cd_sim *s, const char *path);
+/* The SIMD kernels this CPU runs: "avx512", "avx2" or "scalar" (cd_kernel.c; for --version and
+ * run_info.yaml). */
+const char *cd_kernel_name(void);
 
 /* ---- checkpoint / restart (particles/cd_checkpoint.c, docs/mpi.md) ---- */
 /* Rebuild the lists with renumbering and recompute the forces: what a restart does, so the run

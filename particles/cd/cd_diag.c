@@ -90,7 +90,7 @@ const char *cd_sim_error(const cd_sim *s) { return s->err; }
 /* The guard's screening pass: true when no owned particle can fail it (all of x, v finite,
  * |v| Δt <= step_max, no wall axis to check). One parallel, vectorised pass; only when it
  * fails does cd_sim_guard scan particle by particle for the one to name. */
-static bool guard_screen(const cd_sim *s, double step_max) {
+CD_KERNEL_CLONES static bool guard_screen(const cd_sim *s, double step_max) {
   const ptl_state *p = s->p;
   for (int a = 0; a < 3; a++)
     if (s->box.bc[a] == CD_BC_WALL) return false;
@@ -135,10 +135,10 @@ ms_status cd_sim_guard(cd_sim *s) {
                  name[a], q[a][i], s->box.lo[a], s->box.hi[a]);
     if (what[0]) {
       snprintf(s->err, sizeof s->err,
-               "unstable at step %ld, t = %.9g: particle %zu (%s"
-               "at %g, %g, %g): %s",
-               s->step, s->t, i, p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i],
-               p->z[i], what);
+               "unstable at step %ld, t = %.9g %s: particle %zu (%s"
+               "at %g, %g, %g cm): %s",
+               s->step, ms_out_time(s->t), ms_out_time_label(), i,
+               p->flags[i] & PTL_DRIVEN ? "piston, " : "", p->x[i], p->y[i], p->z[i], what);
       return MS_ERR_UNSTABLE;
     }
   }
@@ -175,6 +175,7 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
                                {"sigma_u", "particles/sigma_u", 1, false},
                                {"pressure", "particles/pressure", 1, false},
                                {"mass", "particles/mass", 1, false}};
+  snap.material_names = s->material_names;
   snap.ndata = 4;
   snap.data = data;
   snap.nxdmf = 4;

@@ -45,13 +45,12 @@ static inline void pair_fast(double s, double dx, double dy, double dz, double s
 /* The rest of the particle at position pos (index i, at xi, yi, zi): its plain entries from k0
  * on and its image entries, one at a time, into its partners' forces and into the force it has
  * so far (fxi, ...), which is then added to f_i. */
-static inline void finish_particle(const cd_neigh *nl, const int32_t *restrict lst, int k0,
-                                   int32_t pos, int32_t i, double xi, double yi, double zi,
-                                   const double *restrict x, const double *restrict y,
-                                   const double *restrict z, double *restrict fx,
-                                   double *restrict fy, double *restrict fz, double slo, double ih,
-                                   double rc2, const double *restrict fc, double fxi, double fyi,
-                                   double fzi) {
+CD_KERNEL_INLINE static inline void
+finish_particle(const cd_neigh *nl, const int32_t *restrict lst, int k0, int32_t pos, int32_t i,
+                double xi, double yi, double zi, const double *restrict x, const double *restrict y,
+                const double *restrict z, double *restrict fx, double *restrict fy,
+                double *restrict fz, double slo, double ih, double rc2, const double *restrict fc,
+                double fxi, double fyi, double fzi) {
   const int np = nl->nplain[pos], ni = nl->nimg[pos];
   for (int k = k0; k < np; k++) {
     const int32_t j = lst[k];
@@ -78,7 +77,8 @@ static inline void finish_particle(const cd_neigh *nl, const int32_t *restrict l
  * ~12 % faster on one core; three or four lanes were no better). Each particle's remaining
  * entries follow one at a time. The order of the f_j updates is fixed by the layout alone, so
  * results stay independent of the thread count. */
-static void layer_forces_fast(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer) {
+CD_KERNEL_CLONES static void layer_forces_fast(const cd_neigh *nl, ptl_state *p,
+                                               const cd_pair_table *t, int layer) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
   const double slo = t->s_lo, ih = t->inv_h, rc2 = t->rc2;
@@ -136,7 +136,8 @@ static inline bool books_pair(const ptl_state *p, int32_t i, int32_t j) {
 }
 
 /* General path: several materials, bonded mode, energies and virials. */
-static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *pw, bool wf) {
+CD_KERNEL_CLONES static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *pw,
+                                               bool wf) {
   const cd_neigh *nl = s->nl;
   ptl_state *p = s->p;
   const double *x = p->x, *y = p->y, *z = p->z;

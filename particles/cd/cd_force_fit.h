@@ -16,7 +16,7 @@
  *                          are the lanes, the plain entries taken eight at a time (loads of
  *                          x_j; segment coefficients by register permutes), the image entries
  *                          (particles at a periodic boundary) entry by entry across the lanes.
- * cd_layer_forces_fit picks the one the build supports. The helpers below are shared by both
+ * cd_layer_forces_fit picks the one the CPU runs (cd_simd_level_). The helpers below are shared by both
  * (and by cd_force.c's other kernels). */
 #ifndef MSCALE_CD_FORCE_FIT_H
 #define MSCALE_CD_FORCE_FIT_H
@@ -73,18 +73,21 @@ static inline void cd_add_force(ptl_state *p, int32_t i, double fxi, double fyi,
  * hdt > 0, the closing kick). */
 void cd_layer_forces_fit_scalar(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer,
                                 double hdt);
-#if defined(__AVX512F__)
+#if CD_X86_DISPATCH || defined(__AVX512F__)
+#define CD_FIT_AVX512 1
 void cd_layer_forces_fit_avx512(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t, int layer,
                                 double hdt);
 #endif
 
 static inline void cd_layer_forces_fit(const cd_neigh *nl, ptl_state *p, const cd_pair_table *t,
                                        int layer, double hdt) {
-#if defined(__AVX512F__)
-  cd_layer_forces_fit_avx512(nl, p, t, layer, hdt);
-#else
-  cd_layer_forces_fit_scalar(nl, p, t, layer, hdt);
+#if defined(CD_FIT_AVX512)
+  if (cd_simd_level_ == CD_SIMD_AVX512) {
+    cd_layer_forces_fit_avx512(nl, p, t, layer, hdt);
+    return;
+  }
 #endif
+  cd_layer_forces_fit_scalar(nl, p, t, layer, hdt);
 }
 
 #endif /* MSCALE_CD_FORCE_FIT_H */

@@ -3,7 +3,10 @@
  * of the scalar reference cd_force_fit.c, in the same order. */
 #include "cd_force_fit.h"
 
-#if defined(__AVX512F__)
+#if CD_X86_DISPATCH || defined(__AVX512F__)
+#if !defined(__AVX512F__) /* a portable build: this file's code for AVX-512 CPUs only */
+#pragma GCC target("arch=x86-64-v4")
+#endif
 #include <immintrin.h>
 
 /* F/r at eight s (lanes of `in` inside R_c; others are 0): cd_pair_fit_eval lane by lane. */
@@ -175,4 +178,4 @@ void cd_layer_forces_fit_avx512(const cd_neigh *nl, ptl_state *p, const cd_pair_
       cd_add_force(p, nl->sorted[g0 + l], fxl[l], fyl[l], fzl[l], hdt);
   }
 }
-#endif /* __AVX512F__ */
+#endif /* CD_X86_DISPATCH || __AVX512F__ */

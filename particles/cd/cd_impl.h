@@ -36,11 +36,41 @@
 #define CD_PAR(n) ((long)(n) >= 8192)
 
 /* The simulation (cd.h: cd_sim, opaque to the library's users). */
+/* Runtime dispatch of the SIMD kernels (docs/benchmarks.md, "One binary for every x86-64").
+ * A portable build (x86-64-v2, MSCALE_NATIVE=OFF) holds the AVX2 and AVX-512 kernels too,
+ * compiled for their instruction sets by `#pragma GCC target`, and picks them by CPU detection
+ * (cd_kernel.c): cd_simd_level_ says which. The hot loops without intrinsics (the table-path
+ * force loops, the list build) are compiled three times by CD_KERNEL_CLONES, so that fma() is
+ * one instruction wherever the CPU has FMA (under x86-64-v2 it would be a libm call). A native
+ * build for an AVX-512 CPU needs no clones. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define CD_X86_DISPATCH 1
+#else
+#define CD_X86_DISPATCH 0
+#endif
+#if CD_X86_DISPATCH && !defined(__AVX512F__)
+#define CD_KERNEL_CLONES                                                                           \
+  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
+/* a helper of a cloned loop that the compiler might leave out of line (then compiled for the
+ * baseline, fma() a libm call): inlined into each clone */
+#define CD_KERNEL_INLINE __attribute__((always_inline))
+/* a cloned loop whose callees (the SIMD kernels of its instruction set among them) are all
+ * inlined where the clone's target allows */
+#define CD_KERNEL_FLATTEN __attribute__((flatten))
+#else
+#define CD_KERNEL_CLONES
+#define CD_KERNEL_INLINE
+#define CD_KERNEL_FLATTEN
+#endif
+enum { CD_SIMD_SCALAR = 0, CD_SIMD_AVX2 = 1, CD_SIMD_AVX512 = 2 };
+extern int cd_simd_level_; /* CD_SIMD_*, set when the library loads (cd_kernel.c) */
+
 struct cd_sim {
   ptl_state *p; /* owned */
   cd_box box;
   cd_config cfg;
   int nmat;
+  char *material_names; /* "al,pb" for snapshots (NULL: none); owned */
   cd_pair_table *pair[CD_MAX_MATERIALS][CD_MAX_MATERIALS]; /* [a][b] == [b][a], owned */
   double rc_max;
   cd_neigh *nl;

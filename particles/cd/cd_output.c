@@ -187,7 +187,8 @@ ms_status cd_outputs_close(ms_ctx *ctx, const cd_sim *s, cd_outputs *o, ms_statu
     if (sc != MS_OK) ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: cannot write the CSV files");
     if (st == MS_OK) st = sc;
   } else if (st != MS_OK && st != MS_ERR_UNSTABLE) {
-    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: stopped at t = %g (%s)", s->t, ms_status_str(st));
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: stopped at t = %g %s (%s)", ms_out_time(s->t),
+           ms_out_time_label(), ms_status_str(st));
     cd_outputs_free(o);
   }
   return st;

@@ -286,9 +286,16 @@ static ms_status sim_create(cd_run *r) {
                        .lattice = p->lattice,
                        .thickness = p->thickness,
                        .integrator = p->integrator};
-  ms_must(cd_sim_create(
-              &(cd_sim_params){.particles = r->ps, .box = &p->box, .cfg = &r->cfg, .nmat = p->nmat},
-              &r->s),
+  char names[CD_MAX_MATERIALS * 64] = ""; /* the snapshots' material table, "al,pb" */
+  for (int k = 0; k < p->nmat; k++)
+    snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? "," : "",
+             p->mat[k]->name);
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = r->ps,
+                                         .box = &p->box,
+                                         .cfg = &r->cfg,
+                                         .nmat = p->nmat,
+                                         .material_names = names},
+                        &r->s),
           "cd_sim_create");
   cd_sim *s = r->s;
   /* every rank built (or read) the whole set: cd_sim_init keeps what each rank's cells own */
@@ -343,9 +350,10 @@ static void log_setup(const cd_run *r) {
   ms_ctx *ctx = r->ctx;
   const cd_problem *p = r->p;
   ms_log(ctx, MS_LOG_INFO,
-         "cluster_dynamics: %zu particles, %d material(s), dt = %g, R_c = %g r0, "
-         "%s cutoff, damping Gamma = %g, integrator %s, %zu bytes/particle",
-         r->nglobal, p->nmat, r->cfg.dt, p->rc, cd_mode_names[p->mode], r->cfg.damping_gamma,
+         "cluster_dynamics: %zu particles, %d material(s), dt = %g %s, R_c = %g r0, "
+         "%s cutoff, damping Gamma = %g 1/%s, integrator %s, %zu bytes/particle",
+         r->nglobal, p->nmat, ms_out_time(r->cfg.dt), ms_out_time_label(), p->rc,
+         cd_mode_names[p->mode], r->cfg.damping_gamma / ms_out_time(1.0), ms_out_time_label(),
          cd_integrator_names[p->integrator],
          cd_sim_bytes(r->s) / (r->ps->nlocal ? r->ps->nlocal : 1));
   const cd_mpi_stats *ms = cd_sim_mpi_stats(r->s);
@@ -390,10 +398,11 @@ static ms_status run_steps(cd_run *r) {
     ms_h5_close_read(r->rh);
     r->rh = NULL;
     if (st == MS_OK)
-      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: restarted from %s at step %ld (t = %.9g)",
-             ctx->restart, step0, s->t);
+      ms_log(ctx, MS_LOG_INFO, "cluster_dynamics: restarted from %s at step %ld (t = %.9g %s)",
+             ctx->restart, step0, ms_out_time(s->t), ms_out_time_label());
   }
   ms_progress prog;
+  bool stopping = false; /* interrupted: stop at the next checkpoint */
   ms_progress_start(&prog, ctx, "cluster_dynamics", s->t, nsteps * r->cfg.dt);
   for (long k = step0; k <= nsteps && st == MS_OK; k++) {
     if (k > step0) st = cd_sim_step(s);
@@ -409,6 +418,25 @@ static ms_status run_steps(cd_run *r) {
     if (k > step0 && ckpt_every > 0 && k % ckpt_every == 0) {
       st = cd_outputs_checkpoint(ctx, p, s, &r->out);
       if (st != MS_OK) break;
+      if (stopping) { /* SIGINT/SIGTERM: `mscale run --continue` goes on from here */
+        ms_log(ctx, MS_LOG_WARN, "cluster_dynamics: interrupted; checkpoint at step %ld written",
+               k);
+        st = MS_INTERRUPTED;
+        break;
+      }
+    }
+    if (!stopping && k < nsteps && ms_interrupt_agreed(ctx)) { /* collective, every step */
+      stopping = true;
+      if (ckpt_every == 0) {
+        ms_log(ctx, MS_LOG_WARN, "cluster_dynamics: interrupted at step %ld (no checkpoints)", k);
+        cd_outputs_write(ctx, p, s, &r->out);
+        st = MS_INTERRUPTED;
+        break;
+      }
+      ms_log(ctx, MS_LOG_WARN,
+             "cluster_dynamics: interrupt: stopping at the next checkpoint "
+             "(step %ld)",
+             (k / ckpt_every + 1) * ckpt_every);
     }
     if (k % p->out_every == 0 || k == nsteps) {
       cd_outputs_write(ctx, p, s, &r->out);

@@ -82,7 +82,8 @@ ms_status cd_history_read(cd_history *h, const char *path, bool si, dk_errors *e
     free(data);
     return MS_ERR_INPUT;
   }
-  double ft = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_TIME) : 1.0;
+  double ft =
+      ms_table_time_factor(path, 0, si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_TIME) : 1.0);
   double fu = si ? ms_unit_to_internal(MS_UNITS_SI, MS_DIM_VELOCITY) : 1.0;
   h->n = nrow;
   h->t = ms_calloc(nrow, sizeof *h->t);
@@ -118,6 +119,7 @@ ms_status cd_sim_create(const cd_sim_params *p, cd_sim **out) {
   s->box = *p->box;
   s->cfg = *p->cfg;
   s->nmat = p->nmat;
+  s->material_names = p->material_names ? ms_strdup(p->material_names) : NULL;
   *out = s;
   return MS_OK;
 }
@@ -145,6 +147,7 @@ void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]) {
 
 static void cd_sim_free(cd_sim *s) {
   if (!s) return;
+  free(s->material_names);
   for (int a = 0; a < CD_MAX_MATERIALS; a++)
     for (int b = a; b < CD_MAX_MATERIALS; b++)
       if (s->pair[a][b]) {
@@ -213,9 +216,10 @@ ms_status cd_rebuild_lists(cd_sim *s, bool reorder) {
  * its ghost neighbours too, so its force is complete, and a ghost's list is empty (its force is
  * its owner's business; the diagnostics take an owned–ghost pair from the owned side). */
 static bool fit_path(const cd_sim *s) {
-#if defined(__AVX512F__)
-  return s->nmat == 1 && s->pair[0][0]->fit_ok && s->cfg.cutoff == CD_CUTOFF_PLAIN &&
-         !(s->cfg.damping_gamma > 0.0) && !getenv("MSCALE_CD_NO_FIT");
+#if CD_X86_DISPATCH || defined(__AVX512F__)
+  return cd_simd_level_ == CD_SIMD_AVX512 && s->nmat == 1 && s->pair[0][0]->fit_ok &&
+         s->cfg.cutoff == CD_CUTOFF_PLAIN && !(s->cfg.damping_gamma > 0.0) &&
+         !getenv("MSCALE_CD_NO_FIT");
 #else
   return false;
 #endif
@@ -468,7 +472,7 @@ static void rkn_constrain_cd(void *user, double t, bool end) {
 
 /* RKN acceleration at the stage positions (x, y, z hold q_l): a = f/m of integrated
  * particles, 0 for driven and removed ones; records the force on the piston. */
-static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
+CD_KERNEL_CLONES static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
   (void)t;
   cd_sim *s = user;
   ptl_state *p = s->p;
@@ -493,7 +497,7 @@ static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
  * (rkn_reach; max|a| from the last forces, doubled for its change within the step), so the
  * lists are rebuilt before the step unless the rebuild test (neighbour.c) passes with that
  * reach added to the displacements so far. */
-static ms_status rkn_step_cd(cd_sim *s) {
+CD_KERNEL_CLONES static ms_status rkn_step_cd(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt;
   const long n = (long)p->nlocal;
@@ -557,7 +561,7 @@ static inline double kick_drift_zero(long i, double hdt, double dt, const double
 }
 
 /* One velocity-Verlet step (the header comment). */
-static ms_status vv_step(cd_sim *s) {
+CD_KERNEL_CLONES static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt, hdt = 0.5 * dt;
   long n = (long)p->nlocal; /* ghosts are refreshed from their owners; MPI: changes at a build */

@@ -279,8 +279,10 @@ static int cell_stencil(const cd_neigh *nl, const bool per[3], const int ax[3], 
   return nst;
 }
 
-static size_t build_layer(cd_neigh *nl, const ptl_state *p, const cd_box *box, int layer,
-                          const int ax[3], const int32_t *partners, float rl2) {
+CD_KERNEL_CLONES CD_KERNEL_FLATTEN static size_t build_layer(cd_neigh *nl, const ptl_state *p,
+                                                             const cd_box *box, int layer,
+                                                             const int ax[3],
+                                                             const int32_t *partners, float rl2) {
   const int n1 = nl->ncell[ax[1]], n2 = nl->ncell[ax[2]];
   const bool per[3] = {box->bc[ax[0]] == CD_BC_PERIODIC, box->bc[ax[1]] == CD_BC_PERIODIC,
                        box->bc[ax[2]] == CD_BC_PERIODIC};

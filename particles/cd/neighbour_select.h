@@ -11,13 +11,14 @@
  *
  * cd_select_range_scalar below is the readable reference and the kernel of builds without
  * AVX2; neighbour_select_simd.h holds the AVX-512 and AVX2 kernels, which take the same
- * candidates in the same order; select_range picks the one the build supports. */
+ * candidates in the same order; select_range picks the one the CPU runs (cd_simd_level_). */
 #ifndef MSCALE_NEIGHBOUR_SELECT_H
 #define MSCALE_NEIGHBOUR_SELECT_H
 
 #include "cd_impl.h"
 
-#if (defined(__AVX512F__) && defined(__AVX512VL__)) || (defined(__AVX2__) && defined(__FMA__))
+#if CD_X86_DISPATCH || (defined(__AVX512F__) && defined(__AVX512VL__)) ||                          \
+    (defined(__AVX2__) && defined(__FMA__))
 #include "neighbour_select_simd.h"
 #endif
 
@@ -38,13 +39,15 @@ static inline int cd_select_range_scalar(const cd_neigh *nl, int32_t q0, int32_t
 
 static inline int select_range(const cd_neigh *nl, int32_t q0, int32_t q1, const float *sv,
                                float xi, float yi, float zi, float rl2, int32_t *restrict out) {
-#if defined(__AVX512F__) && defined(__AVX512VL__)
-  return cd_select_range_avx512(nl, q0, q1, sv, xi, yi, zi, rl2, out);
-#elif defined(CD_SELECT_AVX2)
-  return cd_select_range_avx2(nl, q0, q1, sv, xi, yi, zi, rl2, out);
-#else
-  return cd_select_range_scalar(nl, q0, q1, sv, xi, yi, zi, rl2, out);
+#if defined(CD_SELECT_AVX512)
+  if (cd_simd_level_ == CD_SIMD_AVX512)
+    return cd_select_range_avx512(nl, q0, q1, sv, xi, yi, zi, rl2, out);
 #endif
+#if defined(CD_SELECT_AVX2)
+  if (cd_simd_level_ >= CD_SIMD_AVX2)
+    return cd_select_range_avx2(nl, q0, q1, sv, xi, yi, zi, rl2, out);
+#endif
+  return cd_select_range_scalar(nl, q0, q1, sv, xi, yi, zi, rl2, out);
 }
 
 #endif /* MSCALE_NEIGHBOUR_SELECT_H */

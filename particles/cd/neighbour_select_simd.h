@@ -8,7 +8,16 @@
 
 #include <immintrin.h>
 
-#if defined(__AVX512F__) && defined(__AVX512VL__)
+/* A portable build compiles each kernel for its own instruction set (#pragma GCC target); the
+ * caller runs it only on a CPU that has it (cd_simd_level_, cd_impl.h). */
+#if CD_X86_DISPATCH || (defined(__AVX512F__) && defined(__AVX512VL__))
+#define CD_SELECT_AVX512 1
+#if CD_X86_DISPATCH
+#pragma GCC push_options
+#if !defined(__AVX512F__)
+#pragma GCC target("arch=x86-64-v4")
+#endif
+#endif
 static inline int cd_select_range_avx512(const cd_neigh *nl, int32_t q0, int32_t q1,
                                          const float *sv, float xi, float yi, float zi, float rl2,
                                          int32_t *restrict out) {
@@ -40,8 +49,12 @@ static inline int cd_select_range_avx512(const cd_neigh *nl, int32_t q0, int32_t
   }
   return nc;
 }
+#if CD_X86_DISPATCH
+#pragma GCC pop_options
+#endif
+#endif
 
-#elif defined(__AVX2__) && defined(__FMA__)
+#if CD_X86_DISPATCH || (defined(__AVX2__) && defined(__FMA__))
 #define CD_SELECT_AVX2 1
 /* compress_lut[m]: the positions of the set bits of the 8-bit mask m, in order (the lanes an
  * AVX2 compress keeps, by a permute); filled once by cd_neigh_create */
@@ -55,6 +68,12 @@ static void fill_compress_lut(void) {
   }
 }
 
+#if CD_X86_DISPATCH
+#pragma GCC push_options
+#if !defined(__AVX2__)
+#pragma GCC target("arch=x86-64-v3")
+#endif
+#endif
 static inline int cd_select_range_avx2(const cd_neigh *nl, int32_t q0, int32_t q1, const float *sv,
                                        float xi, float yi, float zi, float rl2,
                                        int32_t *restrict out) {
@@ -87,6 +106,9 @@ static inline int cd_select_range_avx2(const cd_neigh *nl, int32_t q0, int32_t q
   }
   return nc;
 }
+#if CD_X86_DISPATCH
+#pragma GCC pop_options
+#endif
 #endif
 
 #endif /* MSCALE_NEIGHBOUR_SELECT_SIMD_H */

@@ -28,9 +28,9 @@ void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size
                          "km/s", "km/s", "km/s", "GPa", "GPa", "GPa or cm"};
   char title[160];
   snprintf(title, sizeof title,
-           "discrete model profile at t = %.9g (10 us); exact = sigma_xx (contact) or w_x (rod) "
+           "discrete model profile at t = %.9g %s; exact = sigma_xx (contact) or w_x (rod) "
            "where known, else 0",
-           t);
+           ms_out_time(t), ms_out_time_label());
   ms_csv_header(af.f, title, 12, names, units);
   for (size_t i = 0; i < nreal; ++i) {
     const double *X = &s->X[3 * i];
@@ -129,7 +129,8 @@ void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_st
   const char *names[] = {"r", "w_r", "u_r", "w_exact", "u_exact"};
   const char *units[] = {"cm", "cm", "km/s", "cm", "km/s"};
   char title[128];
-  snprintf(title, sizeof title, "spherical wave, all free particles, t = %.9g (10 us)", t);
+  snprintf(title, sizeof title, "spherical wave, all free particles, t = %.9g %s", ms_out_time(t),
+           ms_out_time_label());
   ms_csv_header(af.f, title, 5, names, units);
   const double cl = dmp_wave_speed(p);
   size_t stride = nreal > 400000 ? nreal / 400000 + 1 : 1; /* keep the file < ~40 MB */
@@ -187,7 +188,8 @@ void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_
     }
   free(acc);
   if (what[0] || ctx->rank == 0)
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: unstable at step %ld, t = %.9g: %s", step + 1, t,
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: unstable at step %ld, t = %.9g %s: %s", step + 1,
+           ms_out_time(t), ms_out_time_label(),
            what[0] ? what
                    : "non-finite acceleration in a stage of the step (the state at its "
                      "start is finite)");
@@ -224,9 +226,9 @@ void dmp_write_fin_profile(const ms_ctx *ctx, const dm_problem *p, const dm_fin 
   snprintf(name, sizeof name, "dm_fin_profile_%03d.csv", index);
   char title[160];
   snprintf(title, sizeof title,
-           "discrete model (response eos) profile along x at t = %.9g (10 us), averaged over each "
+           "discrete model (response eos) profile along x at t = %.9g %s, averaged over each "
            "x layer of particles",
-           t);
+           ms_out_time(t), ms_out_time_label());
   const char *nm[] = {"X", "x",     "u_x",     "rho", "p", "q", "minus_sigma_xx",
                       "e", "eps_p", "sigma_u", "J"};
   const char *un[] = {"cm", "cm", "km/s", "g/cm3", "GPa", "GPa", "GPa", "kJ/g", "1", "GPa", "1"};

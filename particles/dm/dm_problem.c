@@ -379,9 +379,10 @@ static ms_status run_distribute(dm_run *r) {
   sum->omega_dt = wmax * dt;
   ms_log(ctx, MS_LOG_INFO,
          "discrete model: %zu particles (%zu real), %zu bonds (%.1f per particle), dim %d, "
-         "horizon %.3g h; %s, dt = %.6g (omega_max dt = %.4g, stability limit %.4g), %ld steps",
+         "horizon %.3g h; %s, dt = %.6g %s (omega_max dt = %.4g, stability limit %.4g), %ld steps",
          r->s.n, r->nreal, r->m->nbonds, (double)r->m->nbonds / r->s.n, p->dim, p->horizon,
-         rkn_scheme_names[p->integrator], dt, wmax * dt, limit, r->nsteps);
+         rkn_scheme_names[p->integrator], ms_out_time(dt), ms_out_time_label(), wmax * dt, limit,
+         r->nsteps);
   if (wmax * dt > 0.99 * limit) {
     ms_log(ctx, MS_LOG_ERROR,
            "discrete model: time step %.6g too large: omega_max dt = %.4g exceeds 0.99 x the "
@@ -438,8 +439,8 @@ static ms_status run_restart(dm_run *r) {
     r->nrec = ck->nrec, r->nerec = ck->nerec;
     r->p->sum.energy_err_max = ck->energy_err_max;
     r->p->sum.restart_step = r->step0;
-    ms_log(ctx, MS_LOG_INFO, "discrete model: restarted from %s at step %ld (t = %.9g)",
-           ctx->restart, r->step0, r->step0 * r->dt);
+    ms_log(ctx, MS_LOG_INFO, "discrete model: restarted from %s at step %ld (t = %.9g %s)",
+           ctx->restart, r->step0, ms_out_time(r->step0 * r->dt), ms_out_time_label());
   }
   return st;
 }
@@ -524,12 +525,31 @@ static ms_status run_steps(dm_run *r, ms_status st) {
   ms_progress prog;
   ms_progress_start(&prog, r->ctx, "discrete model", r->step0 * dt, p->sum.t_end);
   r->last_step = r->step0;
+  bool stopping = false; /* interrupted: stop at the next checkpoint */
   for (long step = r->step0; step <= r->nsteps && st == MS_OK; ++step) {
     double t = step * dt;
     if (p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 &&
         step < r->nsteps) {
       st = run_checkpoint(r, step);
       if (st != MS_OK) break;
+      if (stopping) { /* SIGINT/SIGTERM: `mscale run --continue` goes on from here */
+        ms_log(r->ctx, MS_LOG_WARN, "discrete model: interrupted; checkpoint at step %ld written",
+               step);
+        st = MS_INTERRUPTED;
+        break;
+      }
+    }
+    if (!stopping && step < r->nsteps && ms_interrupt_agreed(r->ctx)) { /* collective */
+      stopping = true;
+      if (p->checkpoint_every <= 0) {
+        ms_log(r->ctx, MS_LOG_WARN, "discrete model: interrupted at step %ld (no checkpoints)",
+               step);
+        st = MS_INTERRUPTED;
+        break;
+      }
+      ms_log(r->ctx, MS_LOG_WARN,
+             "discrete model: interrupt: stopping at the next checkpoint (step %ld)",
+             (step / p->checkpoint_every + 1) * p->checkpoint_every);
     }
     run_record(r, step, t);
     run_write_fields(r, step, t);

@@ -124,7 +124,8 @@ class Run:
         the x–t data of the grid (``xt.h5``), an :class:`Arrays` (t, x, rho, p).
 
     ``run.table(NAME)`` reads any other CSV of the run (``run.table("arrivals")``),
-    ``run.tables`` is a dict of every CSV by name, ``run.files`` the run's file names.
+    ``run.tables`` is a dict of every CSV by name, ``run.files`` the run's file names. When
+    run_info.yaml lists the run's files (``manifest:``), only those are read.
     Tables are numpy structured arrays with units; ``.to_pandas()`` makes DataFrames (when
     python3-pandas is installed). Units are the run's own, as its files name them.
     """
@@ -148,15 +149,32 @@ class Run:
         return os.path.join(self.path, name)
 
     def has(self, name):
-        return os.path.exists(self.file(name))
+        m = self.manifest
+        return os.path.exists(self.file(name)) and (m is None or name in m)
+
+    @property
+    def manifest(self):
+        """The set of file names run_info.yaml's ``manifest:`` lists (the files of the last run
+        in the directory), or None for a run without one (killed, or an older mscale)."""
+        def make():
+            if not os.path.exists(self.file("run_info.yaml")):
+                return None
+            m = (_read_yaml(self.file("run_info.yaml")) or {}).get("manifest")
+            return None if m is None else set(m) | {"run_info.yaml"}
+        return self._once("manifest", make)
 
     @property
     def files(self):
-        """The names of the files in the run directory, sorted."""
-        return sorted(os.listdir(self.path))
+        """The names of the run's files, sorted: those of the manifest when run_info.yaml has
+        one (files of an earlier run or of someone else in the directory are left out), else
+        every file in the directory."""
+        m = self.manifest
+        return sorted(f for f in os.listdir(self.path) if m is None or f in m)
 
     def _glob(self, pattern):
-        return sorted(glob.glob(os.path.join(glob.escape(self.path), pattern)))
+        m = self.manifest
+        return sorted(p for p in glob.glob(os.path.join(glob.escape(self.path), pattern))
+                      if m is None or os.path.basename(p) in m)
 
     # -- YAML ---------------------------------------------------------------------------
     @property

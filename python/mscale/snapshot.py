@@ -197,7 +197,9 @@ class Snapshot:
         head = [f"{self.n}\nProperties=species:S:1:pos:R:3"]
         for k, (a, is_int) in zip(fields, data):
             head.append(f":{'velo' if k == 'v' else k}:{'I' if is_int else 'R'}:{a.shape[1]}")
-        head.append(' pbc="F F F" units="pos:cm velo:km/s mass:g time:10us"')
+        tu = self.time_unit if len(self.time_unit) < 16 and not any(
+            c in self.time_unit for c in '" \n') else INTERNAL_TIME
+        head.append(f' pbc="F F F" units="pos:cm velo:km/s mass:g time:{tu}"')
         if math.isfinite(self.time):
             head.append(f" Time={self.time:.17g}")
         f.write("".join(head) + "\n")

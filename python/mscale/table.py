@@ -4,8 +4,8 @@ arrays with units, convertible to pandas DataFrames.
 
 An mscale CSV is::
 
-    # a title line (what the table is, often "... at t = 0.1 10us ...")
-    # units: t [10us], x [cm], u [km/s]
+    # a title line (what the table is, often "... at t = 1 us ...")
+    # units: t [us], x [cm], u [km/s]
     t,x,u
     0,0.5,0
     ...

@@ -3,8 +3,9 @@
 
 Every mscale output names its units: a CSV table in its ``# units: name [unit], ...`` line, an
 HDF5 dataset in its ``units`` attribute (profiles add ``time_units`` on the file). The internal
-system is g, cm, 10 µs (docs/design.md §2), so velocities are km/s, pressures GPa, densities
-g/cm^3 and times "10us" unless the output says otherwise.
+system is g, cm, 10 µs (docs/design.md §2), so velocities are km/s, pressures GPa and densities
+g/cm^3; outputs give times in µs ("us"; files of mscale before the unit change say "10us"),
+and every reader takes the unit the file names.
 """
 import re
 

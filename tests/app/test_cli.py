@@ -110,6 +110,12 @@ if head:
 build = info.get("build") or {}
 check(re.match(r"^\S+ \d+", build.get("compiler", "")), "build.compiler %r" % build)
 check("-O" in build.get("flags", ""), "build.flags %r" % build.get("flags"))
+check(build.get("cd_kernel") in ("scalar", "avx2", "avx512"), "build.cd_kernel %r" % build)
+r = mscale("--version")  # the same kernel, and MSCALE_CD_KERNEL lowers it
+check("cluster-dynamics kernels: %s" % build.get("cd_kernel") in r.stdout, "--version kernel")
+r = subprocess.run([MSCALE, "--version"], env=dict(ENV, MSCALE_CD_KERNEL="scalar"),
+                   capture_output=True, text=True, timeout=60)
+check("cluster-dynamics kernels: scalar" in r.stdout, "MSCALE_CD_KERNEL=scalar: %r" % r.stdout)
 libs = info.get("libraries") or {}
 for lib in ("hdf5", "sundials", "metis", "libyaml"):
     check(re.match(r"^\d+\.\d+\.\d+$", str(libs.get(lib, ""))), "libraries.%s = %r" %

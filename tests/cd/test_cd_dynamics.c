@@ -281,9 +281,7 @@ static void test_fit_path_vs_table(void **state) {
   for (int32_t q = 0; q < nl->layer_start[nl->nlayer]; q++) nimg += nl->nimg[q];
   assert_true(nimg > 0); /* periodic images are exercised */
   assert_true(cd_sim_rebuilds(s) > 3);
-#if defined(__AVX512F__)
-  assert_true(nl->full); /* the fast path is on */
-#endif
+  if (cd_simd_level_ == CD_SIMD_AVX512) assert_true(nl->full); /* the fast path is on */
   ptl_state *p = s->p;
   double *ff = malloc(3 * n * sizeof *ff);
   cd_compute_forces(s, NULL, NULL, true); /* fast path */
@@ -516,40 +514,42 @@ static void test_kernels_vs_scalar(void **state) {
   ptl_state *p = s->p;
   const cd_neigh *nl = s->nl;
   const size_t n = p->n;
-#if defined(__AVX512F__)
-  assert_true(nl->full); /* lists live ~25 steps (test_fit_path_vs_table): still the first */
-  const cd_pair_table *t = s->pair[0][0];
-  double *f0 = malloc(6 * n * sizeof *f0), *v0 = malloc(3 * n * sizeof *v0);
-  double *arr[6] = {p->fx, p->fy, p->fz, p->vx, p->vy, p->vz};
-  for (size_t i = 0; i < n; i++)
-    for (int c = 0; c < 3; c++) v0[3 * i + c] = arr[3 + c][i];
-  long compared = 0;
-  for (int pass = 0; pass < 2; pass++) { /* hdt = 0: forces only; hdt > 0: the closing kick */
-    const double hdt = pass ? 0.5 * s->cfg.dt : 0.0;
-    for (int kernel = 0; kernel < 2; kernel++) {
-      for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++) {
-          arr[c][i] = 0.0;
-          arr[3 + c][i] = v0[3 * i + c];
+#if defined(CD_FIT_AVX512) /* the kernel is in the build: compared where the CPU runs it */
+  if (cd_simd_level_ == CD_SIMD_AVX512) {
+    assert_true(nl->full); /* lists live ~25 steps (test_fit_path_vs_table): still the first */
+    const cd_pair_table *t = s->pair[0][0];
+    double *f0 = malloc(6 * n * sizeof *f0), *v0 = malloc(3 * n * sizeof *v0);
+    double *arr[6] = {p->fx, p->fy, p->fz, p->vx, p->vy, p->vz};
+    for (size_t i = 0; i < n; i++)
+      for (int c = 0; c < 3; c++) v0[3 * i + c] = arr[3 + c][i];
+    long compared = 0;
+    for (int pass = 0; pass < 2; pass++) { /* hdt = 0: forces only; hdt > 0: the closing kick */
+      const double hdt = pass ? 0.5 * s->cfg.dt : 0.0;
+      for (int kernel = 0; kernel < 2; kernel++) {
+        for (size_t i = 0; i < n; i++)
+          for (int c = 0; c < 3; c++) {
+            arr[c][i] = 0.0;
+            arr[3 + c][i] = v0[3 * i + c];
+          }
+        for (int l = 0; l < nl->nlayer; l++) {
+          if (kernel == 0) cd_layer_forces_fit_scalar(nl, p, t, l, hdt);
+          else cd_layer_forces_fit_avx512(nl, p, t, l, hdt);
         }
-      for (int l = 0; l < nl->nlayer; l++) {
-        if (kernel == 0) cd_layer_forces_fit_scalar(nl, p, t, l, hdt);
-        else cd_layer_forces_fit_avx512(nl, p, t, l, hdt);
+        for (size_t i = 0; i < n; i++)
+          for (int c = 0; c < 6; c++) {
+            if (kernel == 0) f0[6 * i + c] = arr[c][i];
+            else assert_true(arr[c][i] == f0[6 * i + c]);
+          }
       }
-      for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 6; c++) {
-          if (kernel == 0) f0[6 * i + c] = arr[c][i];
-          else assert_true(arr[c][i] == f0[6 * i + c]);
-        }
+      compared += (long)n;
     }
-    compared += (long)n;
+    double fmax_ = 0.0;
+    for (size_t i = 0; i < 3 * n; i++) fmax_ = fmax(fmax_, fabs(f0[i]));
+    assert_true(fmax_ > 0.0); /* a hot block: the forces are not all zero */
+    printf("fit kernels: AVX-512 == scalar on %ld particle evaluations\n", compared);
+    free(f0);
+    free(v0);
   }
-  double fmax_ = 0.0;
-  for (size_t i = 0; i < 3 * n; i++) fmax_ = fmax(fmax_, fabs(f0[i]));
-  assert_true(fmax_ > 0.0); /* a hot block: the forces are not all zero */
-  printf("fit kernels: AVX-512 == scalar on %ld particle evaluations\n", compared);
-  free(f0);
-  free(v0);
 #endif
 #if defined(CD_SELECT_AVX2)
   fill_compress_lut(); /* this file's copy of the table (neighbour_select_simd.h) */
@@ -562,9 +562,11 @@ static void test_kernels_vs_scalar(void **state) {
           *b = malloc((size_t)(npos + 16) * sizeof *b);
   const float rl2 = (float)(nl->rlist * nl->rlist), shift[3] = {(float)(5 * sqrt(2.0) * R0), 0, 0};
   long taken = 0;
-  for (int k = 0; k < 500; k++) {
-    const int32_t q = (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)k) * npos);
-    const int32_t len = 1 + (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)k + 1) * 60);
+  const int detected = cd_simd_level_;
+  for (int k = 0; k < 500 * (detected + 1); k++) { /* every kernel this CPU runs */
+    cd_simd_level_ = k / 500;
+    const int32_t q = (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)(k % 500)) * npos);
+    const int32_t len = 1 + (int32_t)(ptl_splitmix64_uniform(19, 3 * (uint64_t)(k % 500) + 1) * 60);
     const int32_t q0 = q, q1 = q + len < npos ? q + len : npos;
     const int32_t i = nl->sorted[q0 + (q1 - q0) / 2]; /* a query among the candidates */
     const float *sv = k % 2 ? shift : NULL;
@@ -575,8 +577,10 @@ static void test_kernels_vs_scalar(void **state) {
     for (int m = 0; m < na; m++) assert_int_equal(a[m], b[m]);
     taken += na;
   }
+  cd_simd_level_ = detected;
   assert_true(taken > 0);
-  printf("candidate selection: the build's kernel == scalar on 500 ranges (%ld taken)\n", taken);
+  printf("candidate selection: the %s, ... kernels == scalar on 500 ranges each (%ld taken)\n",
+         cd_kernel_name(), taken);
   free(a);
   free(b);
   cd_sim_destroy(&s);

@@ -189,6 +189,60 @@ static void test_hdf5_checkpoint_helpers(void **state) {
   dk_errors_free(&e);
 }
 
+static char *slurp(const char *path) {
+  FILE *f = fopen(path, "r");
+  assert_non_null(f);
+  static char buf[4096];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  buf[n] = 0;
+  fclose(f);
+  return buf;
+}
+
+/* Output units (docs/output.md, "Units"): a column declared in the internal 10 us is written in
+ * us, header and values (x 10, one rounding: compared with %.10g's text); other columns are
+ * untouched; after a checkpoint's text is copied back (ms_csv_resume) the rows go on in us; and
+ * the table reader takes the file's time unit back to internal 10 us exactly for these values. */
+static void test_output_time_unit(void **state) {
+  (void)state;
+  const char *path = "/tmp/mscale_test_units.csv";
+  ms_afile af;
+  assert_int_equal(ms_afile_open(&af, path), MS_OK);
+  const char *names[] = {"t", "x", "J"}, *units[] = {"10us", "cm", "GPa*10us"};
+  ms_csv_header(af.f, "a history at t = 1 us", 3, names, units);
+  ms_csv_row(af.f, 3, (const double[]){0.25, 0.25, 2.0});
+  assert_int_equal(ms_afile_commit(&af), MS_OK);
+  assert_string_equal(slurp(path), "# a history at t = 1 us\n"
+                                   "# units: t [us], x [cm], J [GPa*us]\n"
+                                   "t,x,J\n"
+                                   "2.5,0.25,20\n");
+  /* a restarted run: the text so far copied back, then one more row */
+  char text[4096];
+  snprintf(text, sizeof text, "%s", slurp(path));
+  assert_int_equal(ms_afile_open(&af, path), MS_OK);
+  fputs(text, af.f);
+  ms_csv_resume(af.f, text, strlen(text));
+  ms_csv_row(af.f, 3, (const double[]){0.5, 1.0, 3.0});
+  assert_int_equal(ms_afile_commit(&af), MS_OK);
+  assert_non_null(strstr(slurp(path), "t,x,J\n2.5,0.25,20\n5,1,30\n"));
+  /* a file without the header's registration: nothing converted */
+  FILE *f = fopen(path, "w");
+  ms_csv_row(f, 2, (const double[]){0.5, 1.0});
+  fclose(f);
+  assert_string_equal(slurp(path), "0.5,1\n");
+  /* read back as a history: the units line names the time unit */
+  write_file(path, "# units: t [us], u [km/s]\nt,u\n0,1\n2.5,2\n");
+  assert_true(ms_table_time_factor(path, 0, 1.0) == 0.1);
+  assert_true(ms_table_time_factor(path, 1, 7.0) == 7.0); /* not a time unit: the fallback */
+  write_file(path, "# units: t [s], u [m/s]\nt,u\n0,1\n");
+  assert_true(ms_table_time_factor(path, 0, 1.0) == 1e5);
+  write_file(path, "# t [us] in a comment, not a units line\nt,u\n0,1\n");
+  assert_true(ms_table_time_factor(path, 0, 1.0) == 1.0);
+  assert_string_equal(ms_out_unit("10us", NULL), "us");
+  assert_string_equal(ms_out_unit("km/s", NULL), "km/s");
+  remove(path);
+}
+
 static void test_xdmf(void **state) {
   (void)state;
   const char *path = "/tmp/mscale_test.xmf";
@@ -207,9 +261,11 @@ static void test_xdmf(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_atomic_file), cmocka_unit_test(test_table_reader),
-      cmocka_unit_test(test_hdf5_round_trip), cmocka_unit_test(test_hdf5_checkpoint_helpers),
-      cmocka_unit_test(test_xdmf)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_atomic_file),
+                                     cmocka_unit_test(test_table_reader),
+                                     cmocka_unit_test(test_hdf5_round_trip),
+                                     cmocka_unit_test(test_hdf5_checkpoint_helpers),
+                                     cmocka_unit_test(test_xdmf),
+                                     cmocka_unit_test(test_output_time_unit)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

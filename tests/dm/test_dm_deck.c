@@ -364,7 +364,8 @@ static void test_snapshot_layout(void **state) {
   assert_true(wmax > 0); /* the displaced rod, not a zero field */
   assert_int_equal(ms_h5_read_attr_double(h, "particles", "time", &t, &L.e), MS_OK);
   assert_int_equal(ms_h5_read_attr_double(h, "particles", "step", &step, &L.e), MS_OK);
-  assert_true(fabs(t - 0.004) < 1e-15); /* step 2 of dt = 0.002 (rounding of 2 x 0.002 only) */
+  /* step 2 of dt = 0.002 (10 us), written in us: 10 x 2 x 0.002 (two roundings only) */
+  assert_true(fabs(t - 0.04) < 1e-15);
   assert_true(step == 2.0);
   ms_h5_close_read(h);
   free(x), free(X), free(w);

@@ -102,8 +102,11 @@ for k, (p, t) in enumerate(zip(r.profiles, times)):
     path = os.path.join(sod, f"profile_{k:04d}.csv")
     check(p.path == path, f"profile {k} is {p.path}")
     check(len(p) == ncell, f"{path}: {len(p)} rows for {ncell} cells")
-    # the title prints the time with %g (6 significant digits): relative 5e-6 at most
-    check(abs(p.time - t) <= 5e-6 * abs(t), f"{path}: time {p.time} != {t}")
+    # the title prints the time with %g (6 significant digits): relative 5e-6 at most; the
+    # deck's times are internal (10 us), the title's in the unit it names (us)
+    t_us, pt_us = mscale.to_us(t, "10us"), mscale.to_us(p.time, p.time_unit)
+    check(p.time_unit == "us", f"{path}: time unit {p.time_unit}")
+    check(abs(pt_us - t_us) <= 5e-6 * abs(t_us), f"{path}: time {p.time} {p.time_unit} != {t}")
     check(p["cell"].dtype == np.int64 and np.array_equal(p["cell"], np.arange(ncell)),
           f"{path}: the cell column is not the int64 index 0..n-1")
     check(p["rho"].dtype == np.float64, f"{path}: rho is {p['rho'].dtype}")
@@ -112,6 +115,9 @@ for k, (p, t) in enumerate(zip(r.profiles, times)):
         for n in ("x", "rho", "e", "p", "c"):
             close(p[n], h["cells"][n][()], f"{path}: {n}")
             check(p.units[n] == h5_units(h["cells"][n]), f"{path}: unit of {n} differs from HDF5")
+        # planar geometry: a cell's mass is per unit area; the step a count (docs/output.md)
+        check(h5_units(h["cells"]["mass"]) == "g/cm^2", f"{path}: cells/mass unit")
+        check(np.issubdtype(h.attrs["step"].dtype, np.integer), f"{path}: step not an integer")
         tu = h.attrs["time_units"]
         check(p.time_unit == (tu.decode() if isinstance(tu, bytes) else tu), f"{path}: time unit")
 same_as_csv(r.final_profile, os.path.join(sod, "profile_final.csv"))
@@ -127,6 +133,8 @@ for tag in tags:
             close(hist[n], g[n][()], f"{path}: {n}")
             check(hist.units[n] == h5_units(g[n]), f"{path}: unit of {n} differs from HDF5")
             check(np.array_equal(exact[tag][n], g[n][()]), f"history.h5 {tag}/{n} not exact")
+        check(np.issubdtype(g.attrs["node"].dtype, np.integer), f"history.h5 {tag}: node")
+        check(h5_units(g["t"]) == "us", f"history.h5 {tag}/t: unit {h5_units(g['t'])}")
 xt = r.xt
 nf = len(xt["t"])
 check(nf >= 2 and xt["x"].shape == (nf, ncell + 1), f"xt x {xt['x'].shape}, {nf} frames")
@@ -186,11 +194,18 @@ both = mscale.write_extxyz(snaps, None)
 ref2 = subprocess.run([mscale_bin, "export"] + [s.path for s in snaps] + ["--format", "extxyz"],
                       env=RUN_ENV, check=True, capture_output=True, text=True).stdout
 check(both == ref2, "several frames differ from mscale export")
+# the run's snapshots name their one material (docs/output.md, "Units")
+names = [m["name"] for m in r.deck["materials"]]
+check(last.material_names is not None and len(last.material_names) == 1
+      and last.material_names[0] in names and np.all(last["material"] == 0),
+      f"material table of {last.path}: {last.material_names}")
 # species from a material table: a copy of the snapshot given a material per particle (0, 1,
 # and 2, which the table does not name) and the names "pb,air" (Pb, then X: not an element)
 named = os.path.join(work, "named.h5")
 with h5py.File(last.path, "r") as src_h, h5py.File(named, "w") as h:
     src_h.copy("particles", h)
+    if "material" in h["particles"]:  # the run's own table (one material): replaced here
+        del h["particles"]["material"]
     h["particles"].create_dataset("material", data=np.arange(len(last)) % 3)
     h["particles"].attrs["material_names"] = np.bytes_("pb,air")
 ref = subprocess.run([mscale_bin, "export", named, "--format", "extxyz"], env=RUN_ENV,

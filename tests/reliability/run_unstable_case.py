@@ -55,7 +55,8 @@ def main():
         info = os.path.join(out, "run_info.yaml")  # the run directory records the failure too
         if not os.path.exists(info) or "status: failed" not in open(info).read():
             fail.append("run_info.yaml missing or without 'status: failed'")
-        m = re.search(r"unstable at step (\d+), t = ([-+0-9.eE]+):", r.stderr)
+        # the time in the output unit the snapshot's time attribute has too (us)
+        m = re.search(r"unstable at step (\d+), t = ([-+0-9.eE]+)(?: us)?:", r.stderr)
         if not m:
             fail.append("no 'unstable at step N, t = T:' message")
         elif snapshot and len(snapshot) == 3:
