@@ -178,9 +178,10 @@ void dmf_report_unstable(dmf_run *r, size_t particle, const char *what, double v
   static const char name[] = "dm_fin_snapshot_unstable.h5";
   if (r->ctx->rank == 0) /* replicated: every rank found the same */
     ms_log(r->ctx, MS_LOG_ERROR,
-           "discrete model (response eos): step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = "
-           "%g; the run stops, the last good state (step %ld, t = %.9g) is in %s",
-           b->step + 1, t, particle, X[0], X[1], X[2], what, value, b->step, b->t, name);
+           "discrete model (response eos): step %ld, t = %.9g %s: particle %zu (X = %g %g %g): "
+           "%s = %g; the run stops, the last good state (step %ld, t = %.9g %s) is in %s",
+           b->step + 1, ms_out_time(t), ms_out_time_label(), particle, X[0], X[1], X[2], what,
+           value, b->step, ms_out_time(b->t), ms_out_time_label(), name);
   if (!b->valid) return;
   const dmf_fields fl = {.w = b->w,
                          .u = b->u,

@@ -137,8 +137,8 @@ bad = deck_text.replace("velocity: 0.3", "velocity: 8.0").replace(
     "  piston:", "  viscosity: {quadratic: 0.0, linear: 0.0}\n  courant: 1.0\n  piston:").replace(
     "checkpoint_every: 60", "checkpoint_every: 0")
 out, err = run(bad, "fails", expect=1)
-m_ = re.search(r"step (\d+), t = \S+: particle (\d+) \(X = [^)]*\): (.+?) = (\S+); the run stops, "
-               r"the last good state \(step (\d+), t = ([^)]*)\) is in dm_fin_snapshot_unstable.h5",
+m_ = re.search(r"step (\d+), t = \S+ us: particle (\d+) \(X = [^)]*\): (.+?) = (\S+); the run stops, "
+               r"the last good state \(step (\d+), t = (\S+) us\) is in dm_fin_snapshot_unstable.h5",
                err)
 assert m_, err
 step, good = int(m_.group(1)), int(m_.group(5))
