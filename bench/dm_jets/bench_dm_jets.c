@@ -39,7 +39,7 @@ static int parse_list(const char *s, double *v) {
 
 typedef struct opts {
   const char *deck, *material, *outdir;
-  double up, h, depth, obs, fit_from, dt_margin, G, skh0;
+  double up, h, depth, obs, fit_from, fit_to, dt_margin, G, skh0, sobs, sdepth;
   double kh0[MAXL], ncol[MAXL], Y[MAXL];
   int nk, nn, ny, trace;
   long sncol;
@@ -72,6 +72,7 @@ static jets_case base_case(const opts *o, const eos_t *eos) {
                      .depth_wl = o->depth,
                      .obs_wl = o->obs,
                      .fit_from = o->fit_from,
+                     .fit_to = o->fit_to,
                      .dt_margin = o->dt_margin,
                      .G = o->G};
 }
@@ -144,7 +145,8 @@ static int sweep_strength(const opts *o, const eos_t *eos) {
   double v_lin0 = NAN; /* the strength-free growth rate (the first case, Y = 0) */
   for (int b = -1; b < o->ny; b++) {
     jets_case c = base_case(o, eos);
-    c.ncol = o->sncol, c.kh0 = o->skh0, c.Y = b < 0 ? 0.0 : o->Y[b];
+    c.ncol = o->sncol, c.kh0 = o->skh0, c.Y = b < 0 ? 0.0 : o->Y[b], c.obs_wl = o->sobs;
+    c.depth_wl = o->sdepth;
     jets_result r;
     FILE *tr = open_trace(o, "Y", b + 1);
     ms_status st = jets_run(&c, &r, tr, 10);
@@ -179,6 +181,9 @@ int main(int argc, char **argv) {
             .depth = 1.5,
             .obs = 3.0,
             .fit_from = 1.0,
+            .fit_to = 3.0,
+            .sobs = 5.5,
+            .sdepth = 3.0,
             .dt_margin = 0.35,
             .G = 8.6,
             .skh0 = 0.5,
@@ -214,6 +219,9 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--depth")) o.depth = atof(v);
     else if (!strcmp(a, "--obs")) o.obs = atof(v);
     else if (!strcmp(a, "--fit-from")) o.fit_from = atof(v);
+    else if (!strcmp(a, "--fit-to")) o.fit_to = atof(v);
+    else if (!strcmp(a, "--strength-obs")) o.sobs = atof(v);
+    else if (!strcmp(a, "--strength-depth")) o.sdepth = atof(v);
     else if (!strcmp(a, "--dt-margin")) o.dt_margin = atof(v);
     else if (!strcmp(a, "--shear-modulus")) o.G = atof(v);
     else if (!strcmp(a, "--strength-kh0")) o.skh0 = atof(v);

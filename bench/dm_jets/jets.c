@@ -16,7 +16,7 @@
  *   x_fs, u_fs  the flat strip's free-surface position and velocity (the same drive and depth,
  *            5 columns), i.e. the bulk free surface the spike is measured against.
  * The spike-tip velocity relative to the free surface is the least-squares slope of
- * x_spike − x_fs over the fit window [t_b + fit_from λ/U_s, t_end], t_b the flat strip's
+ * x_spike − x_fs over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
  * breakout; it is compared with Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960] with
  * a0⁺ = a0 (1 − u_p/U_s) and Δu the flat surface's velocity over the window, as [Buttler2012]
  * apply it to metals. */
@@ -214,14 +214,16 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   r->t_end = n ? tt[n - 1] : 0;
   /* the fit window and the breakout amplitude */
   const double t_fit = r->t_break + c->fit_from * r->lambda / r->us;
-  long k0 = 0, kb = 0;
+  const double t_fit_end = r->t_break + c->fit_to * r->lambda / r->us;
+  long k0 = 0, kb = 0, k1 = 0;
   while (k0 < n && tt[k0] < t_fit) k0++;
   while (kb < n && tt[kb] < r->t_break) kb++;
-  const long nfit = n - k0;
+  while (k1 < n && tt[k1] <= t_fit_end) k1++;
+  const long nfit = k1 - k0;
   r->v_lin = r->v_spike = r->v_tip = r->v_eta = r->du = r->v_spike_peak = r->v_spike_late = NAN;
   if (nfit >= 10) {
     double du = 0, vtip = 0;
-    for (long k = k0; k < n; k++) du += u_fs[k], vtip += vt[k];
+    for (long k = k0; k < k1; k++) du += u_fs[k], vtip += vt[k];
     r->du = du / (double)nfit;
     r->v_tip = vtip / (double)nfit;
     r->v_spike = jets_slope(tt + k0, rel + k0, nfit);
@@ -231,9 +233,9 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
      * over the last λ/U_s (a jet held by its neck decelerates) */
     const long w = (long)ceil(r->lambda / r->us / r->dt);
     r->v_spike_peak = -INFINITY;
-    for (long k = kb; k + w <= n; k += w / 8 + 1)
+    for (long k = kb; k + w <= k1; k += w / 8 + 1)
       r->v_spike_peak = fmax(r->v_spike_peak, jets_slope(tt + k, rel + k, w));
-    if (n - w >= kb) r->v_spike_late = jets_slope(tt + n - w, rel + n - w, w);
+    if (k1 - w >= kb) r->v_spike_late = jets_slope(tt + k1 - w, rel + k1 - w, w);
   }
   if (kb < n) {
     r->eta_b = eta[kb];
@@ -242,7 +244,7 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
       if (eta[k] > eta[kmax]) kmax = k;
     r->deta_max = eta[kmax] - r->eta_b;
     r->t_eta_max = tt[kmax] - r->t_break;
-    r->arrested = r->status == 0 && kmax < kb + (long)(0.9 * (double)(n - kb));
+    r->arrested = kmax < kb + (long)(0.9 * (double)(n - kb));
   }
   r->spike_len = n ? 2 * eta[n - 1] : 0;
   free(role);

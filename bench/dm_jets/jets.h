@@ -21,6 +21,7 @@ typedef struct jets_case {
   double depth_wl;  /* slab depth (drive face to the groove peaks) in wavelengths */
   double obs_wl;    /* run time after breakout, in λ/U_s */
   double fit_from;  /* the fit window starts this many λ/U_s after breakout */
+  double fit_to;    /* and ends this many (or at the run's end) */
   double Y, G;      /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
   double dt_margin; /* the region's dt_margin */
 } jets_case;
