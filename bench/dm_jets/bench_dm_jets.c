@@ -13,7 +13,8 @@
  * obs 3 λ/U_s after breakout, fit from 1 λ/U_s, dt_margin 0.35; strength at kh0 0.5 and
  * ncol 64 with Y = 0 (none) and the --yield list, G from --shear-modulus.
  * Writes OUTDIR/jets_kh0.csv and OUTDIR/jets_strength.csv (units in the headers), with
- * --trace the histories OUTDIR/trace_<kind>_<i>.csv; one line per case on stdout.
+ * --trace the histories OUTDIR/trace_<kind>_<i>.csv and the final particle snapshots
+ * OUTDIR/snap_<kind>_<i>.h5 (pressure, density); one line per case on stdout.
  * Plot: /usr/bin/python3 tools/plot_jets.py OUTDIR. Threads: OMP_NUM_THREADS. */
 #include <errno.h>
 #include <math.h>
@@ -46,12 +47,12 @@ typedef struct opts {
 } opts;
 
 static const char *const kh0_names[] = {
-    "kh0",          "ncol",    "h",       "lambda",  "a0_over_h0", "up",    "us",
-    "du",           "v_lin",   "v_spike", "v_tip",   "v_eta",      "ratio", "v_spike_peak",
-    "v_spike_late", "eta_end", "t_end",   "stopped", "particles"};
-static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",        "km/s", "km/s",
-                                        "km/s", "km/s", "km/s", "km/s", "km/s",     "1",    "km/s",
-                                        "km/s", "cm",   "10us", "1",    "particles"};
+    "kh0",          "ncol",        "h",       "lambda", "a0_over_h0", "up",       "us",
+    "du",           "v_lin",       "v_spike", "v_tip",  "v_eta",      "ratio",    "v_spike_peak",
+    "v_spike_late", "v_spike_max", "eta_end", "t_end",  "stopped",    "particles"};
+static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",    "km/s",     "km/s",
+                                        "km/s", "km/s", "km/s", "km/s", "km/s", "1",        "km/s",
+                                        "km/s", "km/s", "cm",   "10us", "1",    "particles"};
 static const char *const str_names[] = {
     "Y",        "G",         "kh0",      "ncol",   "lambda",         "du",      "v_lin", "eta_b",
     "deta_max", "t_eta_max", "arrested", "k_deta", "rho_v2_over_kY", "stopped", "t_end"};
@@ -93,6 +94,9 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
       c.ncol = (long)o->ncol[a], c.kh0 = o->kh0[b];
       jets_result r;
       FILE *tr = open_trace(o, "kh0", i);
+      char snap[1024];
+      snprintf(snap, sizeof snap, "%s/snap_kh0_%d.h5", o->outdir, i);
+      c.snapshot = o->trace ? snap : NULL;
       ms_status st = jets_run(&c, &r, tr, 10);
       if (tr) fclose(tr);
       if (st != MS_OK) {
@@ -115,19 +119,21 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
                             r.v_spike / r.v_lin,
                             r.v_spike_peak,
                             r.v_spike_late,
+                            r.v_spike_max,
                             0.5 * r.spike_len,
                             r.t_end,
                             r.status,
                             (double)r.particles};
       ms_csv_row(af.f, sizeof row / sizeof *row, row);
       fflush(af.f);
-      printf(
-          "kh0 %-5g ncol %-4ld a0/h0 %.3f du %.4f v_lin %.4f v_spike %.4f (ratio %.3f) "
-          "peak %.4f late %.4f v_tip %.4f v_eta %.4f eta_b %.3g eta_end %.3g  %ld particles, %ld "
-          "steps%s%s\n",
-          c.kh0, c.ncol, r.a0 / r.h0, r.du, r.v_lin, r.v_spike, r.v_spike / r.v_lin, r.v_spike_peak,
-          r.v_spike_late, r.v_tip, r.v_eta, r.eta_b, 0.5 * r.spike_len, r.particles, r.steps,
-          r.status ? "; STOPPED: " : "", r.status ? r.err : "");
+      printf("kh0 %-5g ncol %-4ld a0/h0 %.3f du %.4f v_lin %.4f v_spike %.4f (ratio %.3f) "
+             "peak %.4f late %.4f max %.4f v_tip %.4f v_eta %.4f eta_b %.3g eta_end %.3g  %ld "
+             "particles, %ld "
+             "steps%s%s\n",
+             c.kh0, c.ncol, r.a0 / r.h0, r.du, r.v_lin, r.v_spike, r.v_spike / r.v_lin,
+             r.v_spike_peak, r.v_spike_late, r.v_spike_max, r.v_tip, r.v_eta, r.eta_b,
+             0.5 * r.spike_len, r.particles, r.steps, r.status ? "; STOPPED: " : "",
+             r.status ? r.err : "");
       fflush(stdout);
     }
   return ms_afile_commit(&af) == MS_OK ? 0 : 1;
@@ -149,6 +155,9 @@ static int sweep_strength(const opts *o, const eos_t *eos) {
     c.depth_wl = o->sdepth;
     jets_result r;
     FILE *tr = open_trace(o, "Y", b + 1);
+    char snap[1024];
+    snprintf(snap, sizeof snap, "%s/snap_Y_%d.h5", o->outdir, b + 1);
+    c.snapshot = o->trace ? snap : NULL;
     ms_status st = jets_run(&c, &r, tr, 10);
     if (tr) fclose(tr);
     if (st != MS_OK) {

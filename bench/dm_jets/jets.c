@@ -15,8 +15,10 @@
  *            shock has passed, growing through 0 (the inversion) to the spike–bubble amplitude;
  *   x_fs, u_fs  the flat strip's free-surface position and velocity (the same drive and depth,
  *            5 columns), i.e. the bulk free surface the spike is measured against.
+ *   x_valley the mean x of the surface particles of the two columns either side of the valley
+ *            centre: the spike's leading particles on its axis.
  * The spike-tip velocity relative to the free surface is the least-squares slope of
- * x_spike − x_fs over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
+ * x_valley − x_fs (v_spike; of x_spike − x_fs: v_spike_max) over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
  * breakout; it is compared with Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960] with
  * a0⁺ = a0 (1 − u_p/U_s) and Δu the flat surface's velocity over the window, as [Buttler2012]
  * apply it to metals. */
@@ -182,7 +184,8 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
     fprintf(trace,
             "# jets trace: kh0 %g, lambda %g cm, up %g km/s, Y %g GPa\n"
             "# units: t [10us], x_spike [cm], x_bubble [cm], x_fs [cm], eta [cm], "
-            "v_tip [km/s], u_fs [km/s]\nt,x_spike,x_bubble,x_fs,eta,v_tip,u_fs\n",
+            "v_tip [km/s], u_fs [km/s], x_valley [cm]\nt,x_spike,x_bubble,x_fs,eta,v_tip,u_fs,"
+            "x_valley\n",
             c->kh0, r->lambda, c->up, c->Y);
   long n = 0;
   for (long k = 0; k < nsteps; k++) {
@@ -203,14 +206,16 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
     const double x_bu = x_pk / n_pk;
     x_va /= n_va;
     tt[k] = (double)(k + 1) * r->dt;
-    xs[k] = x_sp, eta[k] = 0.5 * (x_va - x_bu), vt[k] = v_sp - u_fs[k];
-    rel[k] = x_sp - x_fs[k];
+    xs[k] = x_sp - x_fs[k], eta[k] = 0.5 * (x_va - x_bu), vt[k] = v_sp - u_fs[k];
+    rel[k] = x_va - x_fs[k];
     n = k + 1;
     if (trace && (k % every == 0 || k == nsteps - 1))
-      fprintf(trace, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", tt[k], x_sp, x_bu, x_fs[k], eta[k],
-              v_sp, u_fs[k]);
+      fprintf(trace, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", tt[k], x_sp, x_bu, x_fs[k],
+              eta[k], v_sp, u_fs[k], x_va);
   }
   r->steps = n;
+  if (c->snapshot && ptl_region_write_snapshot(reg, c->snapshot) != MS_OK)
+    fprintf(stderr, "jets: could not write %s\n", c->snapshot);
   r->t_end = n ? tt[n - 1] : 0;
   /* the fit window and the breakout amplitude */
   const double t_fit = r->t_break + c->fit_from * r->lambda / r->us;
@@ -220,13 +225,15 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   while (kb < n && tt[kb] < r->t_break) kb++;
   while (k1 < n && tt[k1] <= t_fit_end) k1++;
   const long nfit = k1 - k0;
-  r->v_lin = r->v_spike = r->v_tip = r->v_eta = r->du = r->v_spike_peak = r->v_spike_late = NAN;
+  r->v_lin = r->v_spike = r->v_tip = r->v_eta = r->du = r->v_spike_peak = r->v_spike_late =
+      r->v_spike_max = NAN;
   if (nfit >= 10) {
     double du = 0, vtip = 0;
     for (long k = k0; k < k1; k++) du += u_fs[k], vtip += vt[k];
     r->du = du / (double)nfit;
     r->v_tip = vtip / (double)nfit;
     r->v_spike = jets_slope(tt + k0, rel + k0, nfit);
+    r->v_spike_max = jets_slope(tt + k0, xs + k0, nfit);
     r->v_eta = jets_slope(tt + k0, eta + k0, nfit);
     r->v_lin = r->k * r->a0 * (1 - c->up / r->us) * r->du;
     /* the tip's history: the largest slope over a sliding λ/U_s after breakout, and the slope

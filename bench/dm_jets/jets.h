@@ -13,17 +13,18 @@
 #include "ptl_region.h"
 
 typedef struct jets_case {
-  const eos_t *eos; /* the sample's EOS */
-  double up;        /* piston velocity, km/s */
-  double h;         /* lattice spacing, cm */
-  long ncol;        /* spacings per groove wavelength (λ = ncol h, the slab's width) */
-  double kh0;       /* k h0 of the groove: depth 2 h0 (peak to valley), k = 2π/λ */
-  double depth_wl;  /* slab depth (drive face to the groove peaks) in wavelengths */
-  double obs_wl;    /* run time after breakout, in λ/U_s */
-  double fit_from;  /* the fit window starts this many λ/U_s after breakout */
-  double fit_to;    /* and ends this many (or at the run's end) */
-  double Y, G;      /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
-  double dt_margin; /* the region's dt_margin */
+  const eos_t *eos;     /* the sample's EOS */
+  double up;            /* piston velocity, km/s */
+  double h;             /* lattice spacing, cm */
+  long ncol;            /* spacings per groove wavelength (λ = ncol h, the slab's width) */
+  double kh0;           /* k h0 of the groove: depth 2 h0 (peak to valley), k = 2π/λ */
+  double depth_wl;      /* slab depth (drive face to the groove peaks) in wavelengths */
+  double obs_wl;        /* run time after breakout, in λ/U_s */
+  double fit_from;      /* the fit window starts this many λ/U_s after breakout */
+  double fit_to;        /* and ends this many (or at the run's end) */
+  double Y, G;          /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
+  double dt_margin;     /* the region's dt_margin */
+  const char *snapshot; /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
 } jets_case;
 
 typedef struct jets_result {
@@ -41,7 +42,8 @@ typedef struct jets_result {
   double du;           /* Δu: the flat strip's free-surface velocity, mean over the fit window */
   double eta_b;        /* η at the flat strip's breakout (jets.c: −a0⁺ before the inversion) */
   double v_lin;        /* Richtmyer's impulsive k a0 (1 − u_p/U_s) Δu */
-  double v_spike;      /* slope of x_spike − x_fs(flat) over the fit window, km/s */
+  double v_spike;      /* slope of x_valley − x_fs(flat) over the fit window, km/s (jets.c) */
+  double v_spike_max;  /* the same for x_spike (the foremost particle of the valley half) */
   double v_spike_peak; /* the largest such slope over a sliding λ/U_s after breakout */
   double v_spike_late; /* the slope over the run's last λ/U_s */
   double v_tip;        /* the leading particle's velocity − u_fs(flat), mean over the window */
