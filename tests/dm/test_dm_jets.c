@@ -11,8 +11,10 @@
  *     x_spike − x_fs over [t_b + λ/U_s, t_b + 3 λ/U_s], is Richtmyer's impulsive
  *     k a0 (1 − u_p/U_s) Δu [Richtmyer1960; Buttler2012] within 10 %;
  *   - k h0 = 0.5 with strength (elastic–perfectly plastic, G = 8.6 GPa): the growth η_max − η_b
- *     is arrested at Y = 2 and 4 GPa, and halves when Y doubles (∝ 1/Y, [Dimonte2011]) to
- *     within a log–log slope of −1 ± 0.25. */
+ *     is arrested at Y = 1 and 2 GPa, and halves when Y doubles (∝ 1/Y, [Piriz2008;
+ *     Dimonte2011]) to within a log–log slope of −1 ± 0.25. Why these two: below 1 GPa the
+ *     arrested k (η_max − η_b) exceeds 1 (nonlinear, not strength-limited; the sweep's slope
+ *     flattens to −0.5), at 4 GPa η_max − η_b is 1.6 spacings (unresolved). */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -95,7 +97,7 @@ static void test_linear_growth(void **state) {
 
 static void test_strength_arrests_growth(void **state) {
   (void)state;
-  const double Y[2] = {2.0, 4.0};
+  const double Y[2] = {1.0, 2.0};
   double deta[2];
   for (int i = 0; i < 2; i++) {
     jets_case c = coarse(0.5);
