@@ -7,7 +7,8 @@ Usage:  /usr/bin/python3 tools/plot_jets.py OUTDIR [-o FILE.png]
 Reads OUTDIR/jets_kh0.csv (spike-tip velocity vs k h0, one row per case and resolution) and,
 if present, OUTDIR/jets_strength.csv (arrested growth vs the yield stress), both written by
 build/bench/dm_jets/bench_dm_jets -o OUTDIR (docs/validation.md "Microjets"). Left: the
-spike velocity over the free surface, v_spike / (k a0 du) against k h0 per resolution, with
+spike velocity over the free surface, v_spike / (k a0+ du), and the amplitude's rate v_eta /
+(k a0+ du) against k h0 per resolution, with
 Richtmyer's impulsive prediction (1) and the 10 % band; the peak and late slopes as the
 bars' ends. Right: k (eta_max - eta_b) against Y on log-log axes, with the fitted power law
 and slope -1. Also prints the fit. Writes OUTDIR/jets.png unless -o is given.
@@ -27,10 +28,12 @@ import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 
 
 def strength_fit(t):
-    """Power-law fit k deta_max = C (rho v^2/(k Y))^... on the arrested cases with Y > 0:
-    returns (slope, constant of k deta = C rho v_lin0^2 / Y for slope -1, mask)."""
+    """Power law k deta_max ~ Y^slope over the strength-limited, resolved cases: arrested,
+    Y > 0, k deta_max < 1 (beyond, the growth is nonlinear) and deta_max >= 3 spacings.
+    Returns (slope, C of k deta = C rho v_lin0^2 / Y (geometric mean), mask)."""
     y = t["Y"]
-    keep = (y > 0) & (t["arrested"] > 0) & (t["stopped"] == 0)
+    h = t["lambda"] / t["ncol"]
+    keep = (y > 0) & (t["arrested"] > 0) & (t["k_deta"] < 1) & (t["deta_max"] >= 3 * h)
     if keep.sum() < 2:
         return None, None, keep
     slope = np.polyfit(np.log(y[keep]), np.log(t["k_deta"][keep]), 1)[0]
@@ -52,7 +55,9 @@ def plot_jets(outdir, output=None):
         lo = kh["v_spike_late"][m] / kh["v_lin"][m]
         hi = kh["v_spike_peak"][m] / kh["v_lin"][m]
         ax.errorbar(x, r, yerr=[np.clip(r - lo, 0, None), np.clip(hi - r, 0, None)], marker="o",
-                    capsize=3, label=f"lambda = {int(ncol)} h")
+                    capsize=3, label=f"spike axis, lambda = {int(ncol)} h")
+        ax.plot(x, kh["v_eta"][m] / kh["v_lin"][m], "--^", ms=4,
+                label=f"amplitude (spike - bubble)/2, lambda = {int(ncol)} h")
     xx = np.linspace(0, max(kh["kh0"]) * 1.05, 50)
     ax.plot(xx, np.ones_like(xx), "k-", lw=1, label="impulsive k a0+ du [Richtmyer1960]")
     ax.fill_between(xx, 0.9, 1.1, color="0.85", label="10 %")
@@ -65,9 +70,14 @@ def plot_jets(outdir, output=None):
         slope, const, keep = strength_fit(st)
         y = st["Y"]
         pos = y > 0
-        ax.loglog(y[pos & keep], st["k_deta"][pos & keep], "o", label="arrested")
-        if (pos & ~keep).any():
-            ax.loglog(y[pos & ~keep], st["k_deta"][pos & ~keep], "x",
+        arr = st["arrested"] > 0
+        ax.loglog(y[pos & keep], st["k_deta"][pos & keep], "o",
+                  label="strength-limited (k deta < 1, >= 3 spacings): fitted")
+        if (pos & arr & ~keep).any():
+            ax.loglog(y[pos & arr & ~keep], st["k_deta"][pos & arr & ~keep], "s", mfc="none",
+                      label="arrested, not in the fit")
+        if (pos & ~arr).any():
+            ax.loglog(y[pos & ~arr], st["k_deta"][pos & ~arr], "x",
                       label="not arrested in the run (lower bound)")
         if slope is not None:
             yy = np.geomspace(y[keep].min(), y[keep].max(), 20)

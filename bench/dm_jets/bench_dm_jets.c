@@ -83,10 +83,11 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
   snprintf(path, sizeof path, "%s/jets_kh0.csv", o->outdir);
   ms_afile af;
   if (ms_afile_open(&af, path) != MS_OK) return 1;
-  ms_csv_header(af.f,
-                "Richtmyer-Meshkov spike velocity vs kh0 (discrete model, bench_dm_jets; "
-                "v_spike = slope of x_spike - x_fs, v_lin = k a0 (1 - up/Us) du)",
-                sizeof kh0_names / sizeof *kh0_names, kh0_names, kh0_units);
+  ms_csv_header(
+      af.f,
+      "Richtmyer-Meshkov spike velocity vs kh0 (discrete model, bench_dm_jets; v_spike = slope "
+      "of x_valley - x_fs, v_eta of (x_valley - x_peak)/2, v_lin = k a0 (1 - up/Us) du)",
+      sizeof kh0_names / sizeof *kh0_names, kh0_names, kh0_units);
   int i = 0;
   for (int a = 0; a < o->nn; a++)
     for (int b = 0; b < o->nk; b++, i++) {

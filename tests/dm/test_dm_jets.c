@@ -5,11 +5,11 @@
  *
  * Lead, inputs/eos-materials.yaml's `pb` (cold-curve Mie–Grüneisen), yield: none, a constant
  * 0.8 km/s piston: 26.2 GPa, U_s = 2.887 km/s (`mscale hugoniot inputs/eos-materials.yaml
- * --material pb --up 0.8`). A sine groove of wavelength λ = 64 h (h = 1 µm) on the free
- * surface, one wavelength wide and periodic, slab depth 1.5 λ:
- *   - k h0 = 0.1 and 0.2: the spike tip's velocity over the free surface, the slope of
- *     x_spike − x_fs over [t_b + λ/U_s, t_b + 3 λ/U_s], is Richtmyer's impulsive
- *     k a0 (1 − u_p/U_s) Δu [Richtmyer1960; Buttler2012] within 10 %;
+ * --material pb --up 0.8`). A sine groove of wavelength λ = 64 or 128 h (h = 1 µm) on the
+ * free surface, one wavelength wide and periodic, slab depth 1.5 λ:
+ *   - k h0 = 0.1 (λ = 128 h): the amplitude's growth rate over [t_b + λ/U_s, t_b + 3 λ/U_s]
+ *     (the slope of (x_valley − x_peak)/2) is Richtmyer's impulsive k a0 (1 − u_p/U_s) Δu
+ *     [Richtmyer1960; Buttler2012] within 10 %, and the spike tip runs ahead of it;
  *   - k h0 = 0.5 with strength (elastic–perfectly plastic, G = 8.6 GPa): the growth η_max − η_b
  *     is arrested at Y = 1 and 2 GPa, and halves when Y doubles (∝ 1/Y, [Piriz2008;
  *     Dimonte2011]) to within a log–log slope of −1 ± 0.25. Why these two: below 1 GPa the
@@ -56,8 +56,8 @@ static int teardown(void **state) {
 
 /* The coarse resolution of the sweep (bench_dm_jets defaults): λ = 64 h, depth 1.5 λ, run to
  * 3 λ/U_s after breakout (before the release reflected at the piston returns to the surface,
- * ≈ 3.1 λ/U_s here), dt_margin 0.35 (0.5 stops the grooved runs: the viscosity at the
- * converging groove lowers the stable step). */
+ * ≈ 3.1 λ/U_s here), dt_margin 0.35 (the sweep's; the region's default 0.5 gives the same
+ * spike velocities to 1e-4 km/s at k h0 = 0.1 and 1.5, measured). */
 static jets_case coarse(double kh0) {
   return (jets_case){.eos = pb,
                      .up = 0.8,
@@ -72,27 +72,32 @@ static jets_case coarse(double kh0) {
                      .G = 8.6};
 }
 
+/* k h0 = 0.1 at λ = 128 h. The impulsive model is a linear theory: what it predicts is the
+ * growth of the fundamental, measured by η = (x_valley − x_peak)/2, in which the second
+ * harmonic of the weakly nonlinear profile cancels. The spike's leading particles run ahead of
+ * it: by the end of the window k η ≈ 0.6, and at a free surface (|A| = 1) the spike speeds up
+ * and the bubble slows down as the profile steepens (docs/validation.md "Microjets"). */
 static void test_linear_growth(void **state) {
   (void)state;
-  const double kh0[2] = {0.1, 0.2};
-  for (int i = 0; i < 2; i++) {
-    jets_case c = coarse(kh0[i]);
-    jets_result r;
-    assert_int_equal(jets_run(&c, &r, NULL, 1), MS_OK);
-    printf("kh0 %.2f: a0/h0 %.3f, du %.4f km/s, v_spike - u_fs %.4f vs k a0+ du %.4f km/s "
-           "(%+.1f %%), peak %.4f, late %.4f\n",
-           kh0[i], r.a0 / r.h0, r.du, r.v_spike, r.v_lin, 100 * (r.v_spike / r.v_lin - 1),
-           r.v_spike_peak, r.v_spike_late);
-    assert_int_equal(r.status, 0);
-    /* the flat surface's jump: 2 u_p up to the release isentrope's difference from the
-     * Hugoniot (≈ 1 % at u_p/c0 = 0.4 in lead; measured 1.6200 = 2 u_p + 1.25 %) */
-    assert_true(fabs(r.du / (2 * c.up) - 1) < 0.03);
-    /* 10 %: the issue's bound for k h0 ≤ 0.2. The slope averages the tip's ringing (period
-     * ≈ λ/(4.3 km/s), ±40 % of the mean) over the two λ/U_s of the window; the amplitude is
-     * the cut lattice's fundamental a0 (1.10 h0 and 1.03 h0 here: the staircase of the
-     * 1-spacing lattice), not the nominal h0 */
-    assert_true(fabs(r.v_spike / r.v_lin - 1) < 0.10);
-  }
+  jets_case c = coarse(0.1);
+  c.ncol = 128;
+  jets_result r;
+  assert_int_equal(jets_run(&c, &r, NULL, 1), MS_OK);
+  printf("kh0 0.1, lambda 128 h: a0/h0 %.3f, du %.4f km/s, k a0+ du %.4f km/s; amplitude rate "
+         "%.4f (%+.1f %%); spike tip - u_fs %.4f (%+.1f %%; peak %.4f, late %.4f)\n",
+         r.a0 / r.h0, r.du, r.v_lin, r.v_eta, 100 * (r.v_eta / r.v_lin - 1), r.v_spike,
+         100 * (r.v_spike / r.v_lin - 1), r.v_spike_peak, r.v_spike_late);
+  assert_int_equal(r.status, 0);
+  /* the flat surface's jump: 2 u_p up to the release isentrope's difference from the
+   * Hugoniot (measured 1.6201 = 2 u_p + 1.3 %) */
+  assert_true(fabs(r.du / (2 * c.up) - 1) < 0.03);
+  /* 10 %: the issue's bound for k h0 ≤ 0.2 (measured −4.2 % here; −16 % at λ = 64 h, where
+   * a0 ≈ h: not resolved). The slope averages the ringing of the compressible start-up over
+   * the window's two λ/U_s; a0 is the cut lattice's fundamental (1.04 h0) */
+  assert_true(fabs(r.v_eta / r.v_lin - 1) < 0.10);
+  /* the spike leads the amplitude (measured +29 % over k a0+ du, +34 % over the amplitude's
+   * rate): a model without the nonlinear asymmetry (or with the jets held back) fails this */
+  assert_true(r.v_spike > 1.1 * r.v_eta);
 }
 
 static void test_strength_arrests_growth(void **state) {
