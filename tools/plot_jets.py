@@ -44,19 +44,36 @@ def strength_fit(t):
 
 def plot_jets(outdir, output=None):
     """Draw OUTDIR/jets.png (or output); returns its path."""
-    kh = mscale.read_csv(os.path.join(outdir, "jets_kh0.csv"))
+    kpath = os.path.join(outdir, "jets_kh0.csv")
     spath = os.path.join(outdir, "jets_strength.csv")
+    kh = mscale.read_csv(kpath) if os.path.exists(kpath) else None
     st = mscale.read_csv(spath) if os.path.exists(spath) else None
-    fig, axes = plt.subplots(1, 2 if st is not None else 1, figsize=(11 if st else 6, 4.5))
-    ax = axes[0] if st is not None else axes
+    if kh is None and st is None:
+        raise SystemExit(f"{outdir}: neither jets_kh0.csv nor jets_strength.csv")
+    npan = (kh is not None) + (st is not None)
+    fig, axes = plt.subplots(1, npan, figsize=(5.5 * npan + 0.5, 4.5), squeeze=False)
+    axes = list(axes[0])
+    if kh is not None:
+        plot_kh0(axes[0], kh)
+    if st is not None:
+        plot_strength(axes[-1], st)
+    fig.tight_layout()
+    out = output or os.path.join(outdir, "jets.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+def plot_kh0(ax, kh):
+    """Spike and amplitude velocities over the impulsive prediction, per resolution."""
     for ncol in np.unique(kh["ncol"]):
         m = kh["ncol"] == ncol
         x, r = kh["kh0"][m], kh["ratio"][m]
         lo = kh["v_spike_late"][m] / kh["v_lin"][m]
         hi = kh["v_spike_peak"][m] / kh["v_lin"][m]
-        ax.errorbar(x, r, yerr=[np.clip(r - lo, 0, None), np.clip(hi - r, 0, None)], marker="o",
-                    capsize=3, label=f"spike axis, lambda = {int(ncol)} h")
-        ax.plot(x, kh["v_eta"][m] / kh["v_lin"][m], "--^", ms=4,
+        eb = ax.errorbar(x, r, yerr=[np.clip(r - lo, 0, None), np.clip(hi - r, 0, None)],
+                         marker="o", capsize=3, label=f"spike axis, lambda = {int(ncol)} h")
+        ax.plot(x, kh["v_eta"][m] / kh["v_lin"][m], "--^", ms=4, color=eb[0].get_color(),
                 label=f"amplitude (spike - bubble)/2, lambda = {int(ncol)} h")
     xx = np.linspace(0, max(kh["kh0"]) * 1.05, 50)
     ax.plot(xx, np.ones_like(xx), "k-", lw=1, label="impulsive k a0+ du [Richtmyer1960]")
@@ -65,36 +82,33 @@ def plot_jets(outdir, output=None):
     ax.set_ylabel("(v_spike - u_fs) / (k a0+ du)")
     ax.set_title("spike tip over the free surface (bars: peak, late)")
     ax.legend(fontsize=8)
-    if st is not None:
-        ax = axes[1]
-        slope, const, keep = strength_fit(st)
-        y = st["Y"]
-        pos = y > 0
-        arr = st["arrested"] > 0
-        ax.loglog(y[pos & keep], st["k_deta"][pos & keep], "o",
-                  label="strength-limited (k deta < 1, >= 3 spacings): fitted")
-        if (pos & arr & ~keep).any():
-            ax.loglog(y[pos & arr & ~keep], st["k_deta"][pos & arr & ~keep], "s", mfc="none",
-                      label="arrested, not in the fit")
-        if (pos & ~arr).any():
-            ax.loglog(y[pos & ~arr], st["k_deta"][pos & ~arr], "x",
-                      label="not arrested in the run (lower bound)")
-        if slope is not None:
-            yy = np.geomspace(y[keep].min(), y[keep].max(), 20)
-            scale = st["rho_v2_over_kY"][keep][0] * y[keep][0]
-            ax.loglog(yy, const * scale / yy, "k--",
-                      label=f"C rho v0^2/(kY), C = {const:.3g}; fitted slope {slope:.2f}")
-            print(f"strength: log-log slope {slope:.3f}, k deta_max = {const:.4g} rho v0^2/Y "
-                  f"over {int(keep.sum())} arrested cases")
-        ax.set_xlabel(f"Y [{st.units.get('Y', 'GPa')}]")
-        ax.set_ylabel("k (eta_max - eta_b)")
-        ax.set_title(f"growth arrested by strength, k h0 = {st['kh0'][0]:g}")
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    out = output or os.path.join(outdir, "jets.png")
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+
+
+def plot_strength(ax, st):
+    """Arrested growth vs Y (log-log) with the fit of strength_fit."""
+    slope, const, keep = strength_fit(st)
+    y = st["Y"]
+    pos = y > 0
+    arr = st["arrested"] > 0
+    ax.loglog(y[pos & keep], st["k_deta"][pos & keep], "o",
+              label="strength-limited (k deta < 1, >= 3 spacings): fitted")
+    if (pos & arr & ~keep).any():
+        ax.loglog(y[pos & arr & ~keep], st["k_deta"][pos & arr & ~keep], "s", mfc="none",
+                  label="arrested, not in the fit")
+    if (pos & ~arr).any():
+        ax.loglog(y[pos & ~arr], st["k_deta"][pos & ~arr], "x",
+                  label="not arrested in the run (lower bound)")
+    if slope is not None:
+        yy = np.geomspace(y[keep].min(), y[keep].max(), 20)
+        scale = st["rho_v2_over_kY"][keep][0] * y[keep][0]
+        ax.loglog(yy, const * scale / yy, "k--",
+                  label=f"C rho v0^2/(kY), C = {const:.3g}; fitted slope {slope:.2f}")
+        print(f"strength: log-log slope {slope:.3f}, k deta_max = {const:.4g} rho v0^2/Y "
+              f"over {int(keep.sum())} arrested cases")
+    ax.set_xlabel(f"Y [{st.units.get('Y', 'GPa')}]")
+    ax.set_ylabel("k (eta_max - eta_b)")
+    ax.set_title(f"growth arrested by strength, k h0 = {st['kh0'][0]:g}")
+    ax.legend(fontsize=8)
 
 
 def main(argv=None):
