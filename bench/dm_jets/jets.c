@@ -8,20 +8,21 @@
  * groove inverts after breakout and the valley grows into a spike (jet), the peak into a bubble.
  *
  * Measured from the particles (no fragments, no bonds broken):
+ *   x_valley, x_peak  the mean x of the surface particles of the two columns either side of
+ *            the valley and of the peak centre: after the inversion the spike's leading
+ *            particles on its axis, and the bubble (the trace's x_bubble);
+ *   η        (x_valley − x_peak)/2: −a0⁺ once the shock has passed, through 0 at the inversion,
+ *            then the spike–bubble amplitude (its second harmonic cancels);
  *   x_spike  the largest x of the particles that started in the valley half |y − λ/2| < λ/4
- *            (after the inversion: the tip of the spike);
- *   η        (x_valley − x_peak)/2, x_valley and x_peak the mean x of the surface particles of
- *            the two columns either side of the valley and of the peak centre: −a0⁺ after the
- *            shock has passed, growing through 0 (the inversion) to the spike–bubble amplitude;
+ *            (the foremost particle, on or off the axis);
  *   x_fs, u_fs  the flat strip's free-surface position and velocity (the same drive and depth,
- *            5 columns), i.e. the bulk free surface the spike is measured against.
- *   x_valley the mean x of the surface particles of the two columns either side of the valley
- *            centre: the spike's leading particles on its axis.
- * The spike-tip velocity relative to the free surface is the least-squares slope of
- * x_valley − x_fs (v_spike; of x_spike − x_fs: v_spike_max) over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
- * breakout; it is compared with Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960] with
- * a0⁺ = a0 (1 − u_p/U_s) and Δu the flat surface's velocity over the window, as [Buttler2012]
- * apply it to metals. */
+ *            5 columns): the bulk free surface the spike is measured against.
+ * Over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
+ * breakout, the least-squares slopes of x_valley − x_fs (v_spike, the spike tip's velocity
+ * over the free surface), of x_spike − x_fs (v_spike_max) and of η (v_eta) are compared with
+ * Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960], a0⁺ = a0 (1 − u_p/U_s) and Δu the
+ * flat surface's mean velocity over the window, as [Buttler2012] apply it to metals; a0 is the
+ * cut lattice's amplitude (classify). */
 #include "jets.h"
 
 #include <math.h>
@@ -155,8 +156,8 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   const double depth = nearbyint(c->depth_wl * (double)c->ncol) * c->h;
   /* the shock leaves the piston layers (2 h) and reaches the peaks after (depth − 2h)/U_s */
   const double t_end = (depth - 2 * c->h) / r->us + c->obs_wl * r->lambda / r->us;
-  /* the step of the region at rest (dm_region.c): dt_margin · courant 0.4 · h/(c_L + C_l c0 2)
-   * is not known before the build; the flat strip's is the grooved slab's (same h, material) */
+  /* the region's fixed step (dt_margin × its Courant limit at rest, dm_region.c) comes with the
+   * build; the flat strip's must be the grooved slab's (same h and material), checked below */
   ptl_region *reg = NULL;
   ptl_region_params *pp = NULL;
   dk_doc *doc = NULL;
