@@ -91,9 +91,9 @@ static void test_linear_growth(void **state) {
   /* the flat surface's jump: 2 u_p up to the release isentrope's difference from the
    * Hugoniot (measured 1.6201 = 2 u_p + 1.3 %) */
   assert_true(fabs(r.du / (2 * c.up) - 1) < 0.03);
-  /* 10 %: the issue's bound for k h0 ≤ 0.2 (measured −4.2 % here, +1.1 % at λ = 256 h; −16 % at 64 h, where
-   * a0 ≈ h: not resolved). The slope averages the ringing of the compressible start-up over
-   * the window's two λ/U_s; a0 is the cut lattice's fundamental (1.04 h0) */
+  /* 10 %: the issue's bound for k h0 ≤ 0.2 (measured −4.2 % here, +1.1 % at λ = 256 h; −16 %
+   * at 64 h, where a0 ≈ h: not resolved). The slope averages the ringing of the compressible
+   * start-up over the window's two λ/U_s; a0 is the cut lattice's fundamental (1.04 h0) */
   assert_true(fabs(r.v_eta / r.v_lin - 1) < 0.10);
   /* the spike leads the amplitude (measured +29 % over k a0+ du, +34 % over the amplitude's
    * rate): a model without the nonlinear asymmetry (or with the jets held back) fails this */
