@@ -1,0 +1,262 @@
+/* SPDX-License-Identifier: MIT */
+/* jets.c — one Richtmyer–Meshkov jet case on the discrete model's particle region (jets.h).
+ *
+ * Geometry (particles/dm/dm_region.c): a simple-square lattice of spacing h from the drive face
+ * x = 0 to the groove peaks x_top, one groove wavelength λ = ncol h wide (periodic), the sine
+ * profile x_top − h0 (1 − cos k y) cutting it: peaks at y = 0, valleys at y = λ/2. The first two
+ * layers are the piston, driven at a constant u_p. At a free surface (Atwood number −1) the
+ * groove inverts after breakout and the valley grows into a spike (jet), the peak into a bubble.
+ *
+ * Measured from the particles (no fragments, no bonds broken):
+ *   x_valley, x_peak  the mean x of the surface particles of the two columns either side of
+ *            the valley and of the peak centre: after the inversion the spike's leading
+ *            particles on its axis, and the bubble (the trace's x_bubble);
+ *   η        (x_valley − x_peak)/2: −a0⁺ once the shock has passed, through 0 at the inversion,
+ *            then the spike–bubble amplitude (its second harmonic cancels);
+ *   x_spike  the largest x of the particles that started in the valley half |y − λ/2| < λ/4
+ *            (the foremost particle, on or off the axis);
+ *   x_fs, u_fs  the flat strip's free-surface position and velocity (the same drive and depth,
+ *            5 columns): the bulk free surface the spike is measured against.
+ * Over the fit window [t_b + fit_from λ/U_s, t_b + fit_to λ/U_s], t_b the flat strip's
+ * breakout, the least-squares slopes of x_valley − x_fs (v_spike, the spike tip's velocity
+ * over the free surface), of x_spike − x_fs (v_spike_max) and of η (v_eta) are compared with
+ * Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960], a0⁺ = a0 (1 − u_p/U_s) and Δu the
+ * flat surface's mean velocity over the window, as [Buttler2012] apply it to metals; a0 is the
+ * cut lattice's amplitude (classify). */
+#include "jets.h"
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+double jets_slope(const double *t, const double *y, long n) {
+  double st = 0, sy = 0;
+  for (long i = 0; i < n; i++) st += t[i], sy += y[i];
+  st /= (double)n, sy /= (double)n;
+  double num = 0, den = 0;
+  for (long i = 0; i < n; i++) num += (t[i] - st) * (y[i] - sy), den += (t[i] - st) * (t[i] - st);
+  return den > 0 ? num / den : NAN;
+}
+
+/* The region from a `particles:` section written as the coupled deck would give it. */
+static ms_status build(const jets_case *c, double width, bool grooved, double depth,
+                       ptl_region **out, ptl_region_params **pp_out, dk_doc **doc_out) {
+  char text[1024];
+  const double lambda = (double)c->ncol * c->h, h0 = c->kh0 * lambda / (2 * M_PI);
+  int len =
+      snprintf(text, sizeof text, "particles:\n  r0: %.17g\n  width: %.17g\n  dt_margin: %.17g\n",
+               c->h, width, c->dt_margin);
+  if (c->Y > 0)
+    len += snprintf(text + len, sizeof text - (size_t)len,
+                    "  yield: elastic_plastic\n  shear_modulus: %.17g\n  yield_stress: %.17g\n",
+                    c->G, c->Y);
+  if (grooved)
+    snprintf(text + len, sizeof text - (size_t)len,
+             "  surface: {profile: sine, depth: %.17g, wavelength: %.17g}\n", 2 * h0, lambda);
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(text, "jets.yaml", &e);
+  ptl_region_params *pp = NULL;
+  if (doc)
+    pp = ptl_region_params_read(ptl_region_model_find("discrete_model"), doc,
+                                dk_get(dk_root(doc), "particles"), &e);
+  if (e.n || !pp) {
+    dk_errors_print(&e, stderr);
+    dk_errors_free(&e);
+    ptl_region_params_destroy(&pp);
+    dk_free(doc);
+    return MS_ERR_INPUT;
+  }
+  dk_errors_free(&e);
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.verbosity = MS_LOG_WARN;
+  ms_status st = ptl_region_create(pp, &ctx, c->eos, 0.0, depth, out);
+  ms_ctx_close(&ctx);
+  if (st != MS_OK) {
+    ptl_region_params_destroy(&pp);
+    dk_free(doc);
+    return st;
+  }
+  const double t[1] = {0}, u[1] = {c->up}, dir[3] = {1, 0, 0};
+  ptl_region_set_piston(*out, 1, t, u, dir);
+  *pp_out = pp;
+  *doc_out = doc;
+  return ptl_region_init(*out);
+}
+
+static void release(ptl_region **r, ptl_region_params **pp, dk_doc **doc) {
+  ptl_region_destroy(r);
+  ptl_region_params_destroy(pp);
+  dk_free(*doc);
+  *doc = NULL;
+}
+
+/* The flat strip: its surface position and velocity at every step. */
+static ms_status run_flat(const jets_case *c, double depth, long nsteps, double *x_fs, double *u_fs,
+                          double *dt, jets_result *r) {
+  ptl_region *reg = NULL;
+  ptl_region_params *pp = NULL;
+  dk_doc *doc = NULL;
+  /* 5 columns: the least width for horizon 1.5 (3 horizons = 4.5 h) */
+  ms_status st = build(c, 5 * c->h, false, depth, &reg, &pp, &doc);
+  if (st != MS_OK) return st;
+  *dt = ptl_region_get_geometry(reg).dt;
+  const ptl_state *ps = ptl_region_state(reg);
+  r->t_break = NAN;
+  for (long k = 0; k < nsteps && st == MS_OK; k++) {
+    st = ptl_region_step(reg);
+    double sx = 0;
+    long ns = 0;
+    for (size_t i = 0; i < ps->n; i++)
+      if (ps->flags[i] & PTL_SURFACE) sx += ps->x[i], ns++;
+    x_fs[k] = sx / (double)ns;
+    u_fs[k] = ptl_region_free_surface_velocity(reg);
+    if (isnan(r->t_break) && u_fs[k] >= c->up) r->t_break = (double)(k + 1) * *dt;
+  }
+  if (st != MS_OK) snprintf(r->err, sizeof r->err, "flat strip: %s", ptl_region_error(reg));
+  release(&reg, &pp, &doc);
+  return st;
+}
+
+/* Which particles make the spike and the bubble, from their positions at t = 0: role 1 = the
+ * valley half |y − λ/2| < λ/4 (where the tip is looked for), role 2 | 4 = the surface particles
+ * of the two columns either side of the valley centre, role 8 = those either side of the peak
+ * centre (η); and the staircase's fundamental amplitude. */
+static void classify(const ptl_state *ps, double lambda, double k, double h, uint8_t *role,
+                     double *a0) {
+  double c1 = 0;
+  long ns = 0;
+  for (size_t i = 0; i < ps->n; i++) {
+    const double dy = fabs(ps->y[i] - 0.5 * lambda); /* 0 at the valley, λ/2 at the peaks */
+    role[i] = 0;
+    if (ps->flags[i] & PTL_DRIVEN) continue;
+    if (dy < 0.25 * lambda) role[i] |= 1;
+    if (ps->flags[i] & PTL_SURFACE) {
+      if (dy < h) role[i] |= 4;                       /* the columns at λ/2 ± h/2 */
+      if (dy > 0.5 * lambda - h) role[i] |= 8;        /* at ± h/2 around y = 0 (periodic) */
+      c1 += (ps->x[i] + 0.5 * h) * cos(k * ps->y[i]); /* the body ends h/2 beyond the layer */
+      ns++;
+    }
+  }
+  *a0 = 2 * c1 / (double)ns; /* x_top − h0 (1 − cos ky): the cosine coefficient is h0 */
+}
+
+ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) {
+  memset(r, 0, sizeof *r);
+  const double rho0 = eos_rho0(c->eos);
+  eos_hugoniot_point hp;
+  ms_status st = eos_hugoniot(c->eos, rho0, eos_e0(c->eos), 1, &c->up, &hp);
+  if (st != MS_OK) return st;
+  r->us = hp.us;
+  r->lambda = (double)c->ncol * c->h;
+  r->k = 2 * M_PI / r->lambda;
+  r->h0 = c->kh0 / r->k;
+  const double depth = nearbyint(c->depth_wl * (double)c->ncol) * c->h;
+  /* the shock leaves the piston layers (2 h) and reaches the peaks after (depth − 2h)/U_s */
+  const double t_end = (depth - 2 * c->h) / r->us + c->obs_wl * r->lambda / r->us;
+  /* the region's fixed step (dt_margin × its Courant limit at rest, dm_region.c) comes with the
+   * build; the flat strip's must be the grooved slab's (same h and material), checked below */
+  ptl_region *reg = NULL;
+  ptl_region_params *pp = NULL;
+  dk_doc *doc = NULL;
+  st = build(c, r->lambda, true, depth, &reg, &pp, &doc);
+  if (st != MS_OK) return st;
+  const ptl_region_geometry g = ptl_region_get_geometry(reg);
+  r->dt = g.dt;
+  r->particles = (long)g.particles;
+  const long nsteps = (long)ceil(t_end / r->dt);
+  double *buf = malloc(7 * (size_t)nsteps * sizeof *buf);
+  double *x_fs = buf, *u_fs = buf + nsteps, *tt = buf + 2 * nsteps, *xs = buf + 3 * nsteps;
+  double *eta = buf + 4 * nsteps, *vt = buf + 5 * nsteps, *rel = buf + 6 * nsteps;
+  double dt_flat = 0;
+  st = run_flat(c, depth, nsteps, x_fs, u_fs, &dt_flat, r);
+  if (st != MS_OK || fabs(dt_flat - r->dt) > 1e-12 * r->dt) {
+    if (st == MS_OK) snprintf(r->err, sizeof r->err, "flat strip step %g != %g", dt_flat, r->dt);
+    free(buf);
+    release(&reg, &pp, &doc);
+    return st == MS_OK ? MS_ERR_INPUT : st;
+  }
+  ptl_state *ps = ptl_region_state(reg);
+  uint8_t *role = malloc(ps->n);
+  classify(ps, r->lambda, r->k, c->h, role, &r->a0);
+  if (trace)
+    fprintf(trace,
+            "# jets trace: kh0 %g, lambda %g cm, up %g km/s, Y %g GPa\n"
+            "# units: t [10us], x_spike [cm], x_bubble [cm], x_fs [cm], eta [cm], "
+            "v_tip [km/s], u_fs [km/s], x_valley [cm]\nt,x_spike,x_bubble,x_fs,eta,v_tip,u_fs,"
+            "x_valley\n",
+            c->kh0, r->lambda, c->up, c->Y);
+  long n = 0;
+  for (long k = 0; k < nsteps; k++) {
+    st = ptl_region_step(reg);
+    if (st != MS_OK) {
+      r->status = 1;
+      snprintf(r->err, sizeof r->err, "%s", ptl_region_error(reg));
+      break;
+    }
+    double x_sp = -INFINITY, v_sp = 0, x_va = 0, x_pk = 0;
+    int n_va = 0, n_pk = 0;
+    for (size_t i = 0; i < ps->n; i++) {
+      if (!role[i]) continue;
+      if ((role[i] & 1) && ps->x[i] > x_sp) x_sp = ps->x[i], v_sp = ps->vx[i];
+      if (role[i] & 4) x_va += ps->x[i], n_va++;
+      if (role[i] & 8) x_pk += ps->x[i], n_pk++;
+    }
+    const double x_bu = x_pk / n_pk;
+    x_va /= n_va;
+    tt[k] = (double)(k + 1) * r->dt;
+    xs[k] = x_sp - x_fs[k], eta[k] = 0.5 * (x_va - x_bu), vt[k] = v_sp - u_fs[k];
+    rel[k] = x_va - x_fs[k];
+    n = k + 1;
+    if (trace && (k % every == 0 || k == nsteps - 1))
+      fprintf(trace, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", tt[k], x_sp, x_bu, x_fs[k],
+              eta[k], v_sp, u_fs[k], x_va);
+  }
+  r->steps = n;
+  if (c->snapshot && ptl_region_write_snapshot(reg, c->snapshot) != MS_OK)
+    fprintf(stderr, "jets: could not write %s\n", c->snapshot);
+  r->t_end = n ? tt[n - 1] : 0;
+  /* the fit window and the breakout amplitude */
+  const double t_fit = r->t_break + c->fit_from * r->lambda / r->us;
+  const double t_fit_end = r->t_break + c->fit_to * r->lambda / r->us;
+  long k0 = 0, kb = 0, k1 = 0;
+  while (k0 < n && tt[k0] < t_fit) k0++;
+  while (kb < n && tt[kb] < r->t_break) kb++;
+  while (k1 < n && tt[k1] <= t_fit_end) k1++;
+  const long nfit = k1 - k0;
+  r->v_lin = r->v_spike = r->v_tip = r->v_eta = r->du = r->v_spike_peak = r->v_spike_late =
+      r->v_spike_max = NAN;
+  if (nfit >= 10) {
+    double du = 0, vtip = 0;
+    for (long k = k0; k < k1; k++) du += u_fs[k], vtip += vt[k];
+    r->du = du / (double)nfit;
+    r->v_tip = vtip / (double)nfit;
+    r->v_spike = jets_slope(tt + k0, rel + k0, nfit);
+    r->v_spike_max = jets_slope(tt + k0, xs + k0, nfit);
+    r->v_eta = jets_slope(tt + k0, eta + k0, nfit);
+    r->v_lin = r->k * r->a0 * (1 - c->up / r->us) * r->du;
+    /* the tip's history: the largest slope over a sliding λ/U_s after breakout, and the slope
+     * over the last λ/U_s (a jet held by its neck decelerates) */
+    const long w = (long)ceil(r->lambda / r->us / r->dt);
+    r->v_spike_peak = -INFINITY;
+    for (long k = kb; k + w <= k1; k += w / 8 + 1)
+      r->v_spike_peak = fmax(r->v_spike_peak, jets_slope(tt + k, rel + k, w));
+    if (k1 - w >= kb) r->v_spike_late = jets_slope(tt + k1 - w, rel + k1 - w, w);
+  }
+  if (kb < n) {
+    r->eta_b = eta[kb];
+    long kmax = kb;
+    for (long k = kb; k < n; k++)
+      if (eta[k] > eta[kmax]) kmax = k;
+    r->deta_max = eta[kmax] - r->eta_b;
+    r->t_eta_max = tt[kmax] - r->t_break;
+    r->arrested = kmax < kb + (long)(0.9 * (double)(n - kb));
+  }
+  r->spike_len = n ? 2 * eta[n - 1] : 0;
+  free(role);
+  free(buf);
+  release(&reg, &pp, &doc);
+  return MS_OK;
+}

@@ -1,0 +1,67 @@
+/* SPDX-License-Identifier: MIT */
+/* jets.h — Richtmyer–Meshkov jets from a sinusoidal groove on the free surface of the
+ * finite-deformation discrete model (the coupled problem's particle region `discrete_model`,
+ * driven through particles/ptl_region.h without a grid). One case = a grooved slab (one groove
+ * wavelength wide, periodic across) and a flat strip of the same depth and drive (5 columns),
+ * both hit by a constant-velocity piston; the spike, bubble and free surface are measured from
+ * the particles' positions (no fragments). docs/validation.md "Microjets". */
+#ifndef MSCALE_BENCH_JETS_H
+#define MSCALE_BENCH_JETS_H
+
+#include <stdio.h>
+
+#include "ptl_region.h"
+
+typedef struct jets_case {
+  const eos_t *eos;     /* the sample's EOS */
+  double up;            /* piston velocity, km/s */
+  double h;             /* lattice spacing, cm */
+  long ncol;            /* spacings per groove wavelength (λ = ncol h, the slab's width) */
+  double kh0;           /* k h0 of the groove: depth 2 h0 (peak to valley), k = 2π/λ */
+  double depth_wl;      /* slab depth (drive face to the groove peaks) in wavelengths */
+  double obs_wl;        /* run time after breakout, in λ/U_s */
+  double fit_from;      /* the fit window starts this many λ/U_s after breakout */
+  double fit_to;        /* and ends this many (or at the run's end) */
+  double Y, G;          /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
+  double dt_margin;     /* the region's dt_margin */
+  const char *snapshot; /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
+} jets_case;
+
+typedef struct jets_result {
+  int status;          /* 0 ran to the end; 1 the region stopped (err) */
+  char err[600];       /* the region's finding when it stopped */
+  double us;           /* Hugoniot shock speed at up, km/s */
+  double lambda;       /* groove wavelength, cm */
+  double k;            /* 2π/λ, 1/cm */
+  double h0;           /* nominal amplitude (half depth), cm */
+  double a0;           /* the cut lattice's amplitude: −(fundamental cosine coefficient) of the
+                     * surface particles' positions at t = 0 (the staircase's sine), cm */
+  double dt;           /* the fixed step, 10 µs */
+  double t_break;      /* breakout of the flat strip (half-rise of its surface to u_p), 10 µs */
+  double t_end;        /* the run's end (or where it stopped), 10 µs */
+  double du;           /* Δu: the flat strip's free-surface velocity, mean over the fit window */
+  double eta_b;        /* η at the flat strip's breakout (jets.c: −a0⁺ before the inversion) */
+  double v_lin;        /* Richtmyer's impulsive k a0 (1 − u_p/U_s) Δu */
+  double v_spike;      /* slope of x_valley − x_fs(flat) over the fit window, km/s (jets.c) */
+  double v_spike_max;  /* the same for x_spike (the foremost particle of the valley half) */
+  double v_spike_peak; /* the largest such slope over a sliding λ/U_s after breakout */
+  double v_spike_late; /* the slope over the run's last λ/U_s */
+  double v_tip;        /* the leading particle's velocity − u_fs(flat), mean over the window */
+  double v_eta;        /* slope of η over the fit window (the amplitude growth rate) */
+  double deta_max;     /* max η − η_b over the run, cm */
+  double t_eta_max;    /* when, after breakout, 10 µs */
+  int arrested;        /* η reached its maximum before the last 10 % of the run */
+  double spike_len;    /* x_spike − x_bubble at the end, cm */
+  long steps, particles;
+} jets_result;
+
+/* Run the case (the flat strip, then the grooved slab). trace: if not NULL, a CSV of the
+ * histories (t, x_spike, x_bubble, x_fs_flat, η, the tip's velocity, u_fs_flat) every `every`
+ * steps. Returns MS_OK if both ran (result->status tells whether the grooved run stopped
+ * early), an error if the set-up failed. */
+ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every);
+
+/* Least-squares slope of y(t) over n samples. */
+double jets_slope(const double *t, const double *y, long n);
+
+#endif
