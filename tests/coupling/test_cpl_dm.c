@@ -257,7 +257,7 @@ static void test_default_deck_drive(void **state) {
       {"times: [0.1, 0.2, 0.4], xt_frames: 300", "times: [0.1], xt_frames: 20"},
       {"    width: 0.03 ", "    width: 0.0025 "},
       {"    surface: {profile: sine,", "    surface: {profile: flat}  # "},
-      {"    end: 0.50 ", "    end: 0.135 "}, /* past t_break + depth/c0 (0.105 + 0.025) */
+      {"    end: 0.44 ", "    end: 0.135 "}, /* past t_break + depth/c0 (0.105 + 0.025) */
       {"    outputs: 6 ", "    outputs: 1 "},
       {"    every: 200 ", "    every: 20 "},
       {"    end: 2.5 ", "    end: 0.2 "},
