@@ -19,7 +19,8 @@ mpirun_cmd=(mpirun --oversubscribe -np 2)
 [[ $(id -u) -eq 0 ]] && mpirun_cmd+=(--allow-run-as-root)
 # name | ranks | deck
 cases=(
-  "default|1|inputs/default.yaml"
+  "default-cd|1|inputs/default-cd.yaml"
+  "coupled-dm-al|1|inputs/coupled-dm-al.yaml"
   "two-way|1|inputs/coupled-two-way.yaml"
   "two-way-gas|1|inputs/coupled-two-way-gas.yaml"
   "rz20|1|inputs/coupled-rz20.yaml"
@@ -28,7 +29,7 @@ cases=(
   "dm-sine|1|inputs/dm-rod-sine.yaml"
   "dm-contact|1|inputs/dm-contact-fe-be.yaml"
   "continuum-sod|1|inputs/continuum-sod.yaml"
-  "default-np2|2|inputs/default.yaml"
+  "default-cd-np2|2|inputs/default-cd.yaml"
   "dm-block-np2|2|inputs/dm-mpi-block.yaml"
 )
 # A CSV that differs only in its wall-time columns (wall_s, cpu_s, *_per_s: dm_summary.csv) is

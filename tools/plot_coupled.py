@@ -128,6 +128,10 @@ def plot_snapshot(path, out):
     # strip is drawn over two periods so the panel is not a sliver
     fs = x[in_bulk, 0].max() if in_bulk.any() else x[:, 0].max()
     lo, hi = fs - 1.0 * width, fs + 1.5 * width
+    # jets still attached to the bulk (a model without fracture) reach further than a width
+    # beyond its surface: keep the surface in view (the bulk's x below which 95 % of it lies)
+    if in_bulk.sum() > 20:
+        lo = min(lo, np.quantile(x[in_bulk, 0], 0.95) - 0.5 * width)
     copies = 2 if period > 0 else 1
     fig = plt.figure(figsize=(13, 5.2))
     gs = fig.add_gridspec(1, 2, width_ratios=[1.2, 1])

@@ -148,7 +148,10 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
     }
   f->rho[i] = rho, f->p[i] = p, f->q[i] = q;
   const double cL = sqrt(c * c + (strength ? 4.0 * G / (3.0 * rho) : 0.0));
-  const double nu_l = f->par.cq * ell * fabs(trD) + f->par.cl * c; /* ν_q / ℓ */
+  /* ν_q / ℓ; the quadratic term only where q acts (compression, not open): elsewhere it would
+   * only shrink the step — without bound in a stretching jet tip or a broken particle, whose
+   * |tr D| from a scattered family is large (docs/particles-dm.md "Time step") */
+  const double nu_l = (q > 0 ? f->par.cq * ell * -trD : 0.0) + f->par.cl * c;
   return f->par.courant * ell / (cL + 2.0 * nu_l);
 }
 

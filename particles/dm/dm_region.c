@@ -9,8 +9,9 @@
  * refreshed after every step; velocities it changes between steps (drag kicks) are copied back
  * into the model's u before the next one. The coupled loop steps with the fixed geometry.dt:
  * it is chosen at create as dt_margin × the model's own limit at the initial state (the
- * Courant limit of dm_fin, docs/particles-dm.md "Time step"), and every step checks that the
- * model's limit at the new state has not dropped below it (MS_ERR_UNSTABLE otherwise).
+ * Courant limit of dm_fin, docs/particles-dm.md "Time step"); where the model's limit at the
+ * current state falls below it, region_step sub-cycles (MS_ERR_UNSTABLE beyond
+ * DM_REGION_MAX_SUBSTEPS sub-steps).
  * Fracture (dm_fracture.c) breaks bonds; the fragments are the components of the unbroken ones
  * (region_links). Not yet: random surfaces. */
 #include "dm_columns.h"
@@ -23,6 +24,8 @@
 #include <string.h>
 
 enum { SURF_FLAT = 0, SURF_SINE };
+/* most model sub-steps per coupled step (region_step): beyond, the limit has collapsed */
+enum { DM_REGION_MAX_SUBSTEPS = 64 };
 static const char *const surface_names[] = {"flat", "sine", NULL};
 static const char *const response_names[] = {"eos", "linear_elastic", NULL};
 static const char *const yield_names[] = {"none", "elastic_plastic", "steinberg_guinan",
@@ -381,8 +384,8 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
    * The limit courant·ℓ/(c_L + 2(C_q ℓ|tr D| + C_l c)) falls under compression as c grows, ℓ
    * shrinks and the front's |tr D| adds viscosity: for Al at u_p = 0.5 km/s (c ≈ 6.7 km/s,
    * ℓ/h ≈ 0.96 in 2D, |tr D| ≈ u_p/(5 h)) by ≈ 1.35, so dt_margin 0.5 leaves room up to
-   * a 2 km/s piston (measured: u_p = 2 km/s runs, 3 km/s needs 0.35; docs/particles-dm.md);
-   * beyond, the step check below stops the run with the advice. */
+   * a 2 km/s piston without sub-cycling (docs/particles-dm.md); beyond, and in stretching jet
+   * tips, region_step sub-cycles. */
   r->link_start = ms_calloc(r->s.n + 1, sizeof *r->link_start);
   r->link_nbr = ms_calloc(r->m->nbonds + 1, sizeof *r->link_nbr);
   r->dt0_limit = r->f->dt_next;
@@ -511,28 +514,46 @@ static ms_status region_step(ptl_region *rr) {
     for (size_t i = 0; i < s->n; i++)
       if (s->bc[i] == DM_PRESCRIBED)
         for (int a = 0; a < 3; a++) s->u[3 * i + a] = a < s->dim ? up * r->pis.dir[a] : 0.0;
-  r->f->dt_next = dt;
-  ms_status st = dm_fin_step(r->f);
+  /* Sub-cycling: the coupled loop's step dt is fixed (dt_margin × the limit at rest), but the
+   * model's own limit falls under compression and in stretching jet tips. The rest of the step
+   * is split into k equal sub-steps, k = ⌈rest / limit⌉, with the limit of the current state
+   * (dm_fin's forces of the last sub-step; checkpointed as dt_next): each sub-step then obeys
+   * the explicit stability condition at its start, as the grid's own step does, and the
+   * coupled step, its outputs and its piston velocity are unchanged. Bounded by
+   * DM_REGION_MAX_SUBSTEPS: a limit that keeps falling is an instability, reported. */
+  double rest = dt;
+  long nsub = 0;
+  while (rest > 0.0) {
+    const double limit = r->f->dt_next;
+    const double k = ceil(rest / limit * (1.0 - 1e-12));
+    if (!(k >= 1.0) || nsub + (long)k > DM_REGION_MAX_SUBSTEPS) {
+      const size_t i = r->f->dt_particle; /* where the limit is smallest (dm_fin's forces) */
+      snprintf(r->err, sizeof r->err,
+               "discrete model: model step %ld, t = %.9g: the stable step %.6g would need more "
+               "than %d sub-steps of the coupled step %.6g (limiting particle %zu at X = %g %g "
+               "%g: rho = %g, p = %g GPa, q = %g GPa); the limit at rest was %.6g",
+               r->f->step, r->t, limit, DM_REGION_MAX_SUBSTEPS, dt, i, s->X[3 * i], s->X[3 * i + 1],
+               s->X[3 * i + 2], r->f->rho[i], r->f->p[i], r->f->q[i], r->dt0_limit);
+      sync_state(r);
+      return MS_ERR_UNSTABLE;
+    }
+    const double h = k > 1.0 ? rest / k : rest;
+    r->f->dt_next = h;
+    ms_status st = dm_fin_step(r->f);
+    nsub++;
+    rest = k > 1.0 ? rest - h : 0.0;
+    if (st != MS_OK) {
+      r->t += dt - rest;
+      sync_state(r);
+      const double *X = &s->X[3 * r->f->bad];
+      snprintf(r->err, sizeof r->err,
+               "discrete model: model step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = %g",
+               r->f->step, r->t, r->f->bad, X[0], X[1], X[2], r->f->bad_what, r->f->bad_value);
+      return MS_ERR_UNSTABLE;
+    }
+  }
   r->t += dt;
   sync_state(r);
-  if (st != MS_OK) {
-    const double *X = &s->X[3 * r->f->bad];
-    snprintf(r->err, sizeof r->err,
-             "discrete model: step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = %g", r->f->step,
-             r->t, r->f->bad, X[0], X[1], X[2], r->f->bad_what, r->f->bad_value);
-    return MS_ERR_UNSTABLE;
-  }
-  if (r->f->dt_next < dt) {
-    const size_t i = r->f->dt_particle; /* where the limit is smallest (dm_fin's forces) */
-    snprintf(r->err, sizeof r->err,
-             "discrete model: step %ld, t = %.9g: the stable step %.6g fell below the fixed "
-             "step %.6g (limiting particle %zu at X = %g %g %g: rho = %g, p = %g GPa, q = %g "
-             "GPa); lower particles.dt_margin (the fixed step is dt_margin x the limit at rest, "
-             "%.6g)",
-             r->f->step, r->t, r->f->dt_next, dt, i, s->X[3 * i], s->X[3 * i + 1], s->X[3 * i + 2],
-             r->f->rho[i], r->f->p[i], r->f->q[i], r->dt0_limit);
-    return MS_ERR_UNSTABLE;
-  }
   return MS_OK;
 }
 

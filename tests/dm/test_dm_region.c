@@ -218,8 +218,11 @@ static void test_kicks_are_kept(void **state) {
 }
 
 /* With dt_margin 1 the fixed step is the limit at rest; a 3 km/s shock lowers the limit (c and
- * the viscosity grow), so a step must stop the run with the finding. */
-static void test_step_beyond_the_limit_stops(void **state) {
+ * the viscosity grow). The region sub-cycles there (region_step): the run goes on (before
+ * sub-cycling it stopped with "fell below the fixed step"), the shock crosses the slab
+ * (the last layer moves), and the kick–drift–kick energy identity K + U − W = E0 still closes per
+ * sub-step: to 1e-10 of the work (round-off of ~1e4 sub-steps is ~1e-13). */
+static void test_step_beyond_the_limit_subcycles(void **state) {
   (void)state;
   dk_errors e;
   dk_errors_init(&e);
@@ -231,21 +234,21 @@ static void test_step_beyond_the_limit_stops(void **state) {
   const double t[1] = {0}, u[1] = {3.0}, dir[3] = {1, 0, 0};
   ptl_region_set_piston(r, 1, t, u, dir);
   assert_int_equal(ptl_region_init(r), MS_OK);
+  ptl_region_energy e0, en;
+  ptl_region_energy_get(r, &e0);
   ms_status st = MS_OK;
-  for (int k = 0; k < 2000 && st == MS_OK; k++) st = ptl_region_step(r);
-  assert_int_equal(st, MS_ERR_UNSTABLE);
-  assert_non_null(strstr(ptl_region_error(r), "fell below the fixed step"));
-  assert_non_null(strstr(ptl_region_error(r), "limiting particle"));
-  /* the state it found, as the coupled run writes it (particles_unstable.h5) */
-  char tmp[] = "/tmp/mscale_test_dmr_XXXXXX", path[96], cmd[128];
-  assert_non_null(mkdtemp(tmp));
-  snprintf(path, sizeof path, "%s/particles_unstable.h5", tmp);
-  assert_int_equal(ptl_region_write_snapshot(r, path), MS_OK);
-  FILE *fh = fopen(path, "rb");
-  assert_non_null(fh);
-  fclose(fh);
-  snprintf(cmd, sizeof cmd, "rm -rf %s", tmp);
-  assert_int_equal(system(cmd), 0);
+  for (int k = 0; k < 400 && st == MS_OK; k++) st = ptl_region_step(r);
+  if (st != MS_OK) fprintf(stderr, "%s\n", ptl_region_error(r));
+  assert_int_equal(st, MS_OK);
+  ptl_region_energy_get(r, &en);
+  const ptl_state *ps = ptl_region_state(r);
+  double vmax = 0; /* the fastest free particle: the shock has passed (u_p ≈ 3 km/s) */
+  for (size_t i = 0; i < ps->n; i++) vmax = fmax(vmax, ps->vx[i]);
+  printf("sub-cycling, dt_margin 1, 3 km/s piston: 400 coupled steps, fastest particle %.4f "
+         "km/s, energy balance %.3g of the work\n",
+         vmax, (en.total - e0.total) / en.piston_work);
+  assert_true(vmax > 2.5);
+  assert_true(fabs((en.total - e0.total) / en.piston_work) < 1e-10);
   ptl_region_destroy(&r);
   ptl_region_params_destroy(&pp);
   eos_destroy(&eos);
@@ -453,7 +456,7 @@ int main(void) {
       cmocka_unit_test(test_kicks_are_kept),
       cmocka_unit_test(test_three_d),
       cmocka_unit_test(test_strength_precursor),
-      cmocka_unit_test(test_step_beyond_the_limit_stops),
+      cmocka_unit_test(test_step_beyond_the_limit_subcycles),
       cmocka_unit_test(test_fin_limiting_particle),
       cmocka_unit_test(test_deck_errors),
   };
