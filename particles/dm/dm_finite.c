@@ -218,6 +218,38 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   return f->par.courant * ell / (cL + 2.0 * nu_l);
 }
 
+/* The force on particle i, F_i = Σ_k [(Q_i + Q_k) ξ_ik + (κ_i + κ_k) Δw_ik] (dm_model.c's
+ * gather_force, the same sum): Q_k ξ as three 4-lane rows (row a of Q_k loaded with the next
+ * element in the 4th lane, times ξ padded with 0 there; row 2 is loaded one element early so
+ * the load stays inside Q, against ξ shifted by one lane), summed over lanes at the end. */
+static void gather_one(const dm_model *restrict m, const double *restrict w, size_t i,
+                       double *restrict F) {
+  typedef double v4d __attribute__((vector_size(32)));
+  const double *restrict X = m->s->X, *restrict Q = m->Q, *restrict kap = m->kappa;
+  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
+  const v4d wi = {w[3 * i], w[3 * i + 1], w[3 * i + 2], 0.0};
+  v4d r0 = {0}, r1 = {0}, r2 = {0}, fw = {0}, sxi = {0};
+  const size_t e = m->start[i + 1];
+  for (size_t b = m->start[i]; b < e; ++b) {
+    const size_t k = m->nbr[b];
+    const double *sh = m->shift[m->img[b]];
+    const double x = X[3 * k] + sh[0] - x0, y = X[3 * k + 1] + sh[1] - y0,
+                 z = X[3 * k + 2] + sh[2] - z0;
+    const v4d xi = {x, y, z, 0.0}, xs = {0.0, x, y, z};
+    const v4d wk = {w[3 * k], w[3 * k + 1], w[3 * k + 2], 0.0};
+    v4d q0, q1, q2;
+    memcpy(&q0, &Q[9 * k], sizeof q0), memcpy(&q1, &Q[9 * k + 3], sizeof q1);
+    memcpy(&q2, &Q[9 * k + 5], sizeof q2);
+    r0 += q0 * xi, r1 += q1 * xi, r2 += q2 * xs;
+    fw += (ki + kap[k]) * (wk - wi);
+    sxi += xi;
+  }
+  const double *qi = &Q[9 * i];
+  F[3 * i] = r0[0] + r0[1] + r0[2] + fw[0] + qi[0] * sxi[0] + qi[1] * sxi[1] + qi[2] * sxi[2];
+  F[3 * i + 1] = r1[0] + r1[1] + r1[2] + fw[1] + qi[3] * sxi[0] + qi[4] * sxi[1] + qi[5] * sxi[2];
+  F[3 * i + 2] = r2[1] + r2[2] + r2[3] + fw[2] + qi[6] * sxi[0] + qi[7] * sxi[1] + qi[8] * sxi[2];
+}
+
 static ms_status bad_energy(dm_fin *f, long i) {
   f->bad = (size_t)i, f->bad_what = "specific internal energy e", f->bad_value = f->e[i];
   return MS_ERR_UNSTABLE;
@@ -264,7 +296,8 @@ static ms_status forces(dm_fin *f, double dt, double h) {
     f->bad = (size_t)bad, f->bad_what = what, f->bad_value = val;
     return MS_ERR_UNSTABLE;
   }
-  dm_gather_pass(f->m, st->w, f->frc, f->n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
     const double dext = f->ext(f->ext_user, f, f->fext);
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
