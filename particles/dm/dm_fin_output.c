@@ -39,22 +39,24 @@ static double det3(const double *a) {
          a[2] * (a[3] * a[7] - a[4] * a[6]);
 }
 
-/* F_i of displacements w (the least-squares fit of dm_finite.c: F = I + Σ_k Δw_ik ⊗ A⁻¹ξ_ik)
+/* F_i of displacements w (the least-squares fit of dm_finite.c: F = I + (Σ_k Δw_ik ⊗ ξ_ik) A⁻¹,
+ * in the same order of operations as its stress pass, so a state's J is the same bits here)
  * and the family's non-affine part: √(Σ_k |Δw_ik − (F − I)ξ_ik|² / Σ_k |ξ_ik|²), the bond
  * stretch the fit cannot represent — the zero-energy (hourglass) modes the bond penalty acts
  * on (docs/particles-dm.md "Finite deformation"); 0 under any uniform deformation. */
 static double kinematics(const dm_model *m, const double *w, size_t i, double F[9]) {
   const double *Ai = &m->Ainv[9 * i];
-  double C[9] = {0};
+  double B[9] = {0}, C[9];
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
-    double xi[3], g[3];
+    double xi[3];
     dm_bond_vector(m, i, b, xi);
     for (int a = 0; a < 3; ++a)
-      g[a] = Ai[3 * a] * xi[0] + Ai[3 * a + 1] * xi[1] + Ai[3 * a + 2] * xi[2];
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c) C[3 * a + c] += (w[3 * k + a] - w[3 * i + a]) * g[c];
+      for (int c = 0; c < 3; ++c) B[3 * a + c] += (w[3 * k + a] - w[3 * i + a]) * xi[c];
   }
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      C[3 * a + c] = B[3 * a] * Ai[c] + B[3 * a + 1] * Ai[3 + c] + B[3 * a + 2] * Ai[6 + c];
   double zz = 0, xx = 0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];

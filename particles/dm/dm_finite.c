@@ -38,24 +38,90 @@ static void inv3(const double *a, double det, double *r) {
 
 static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED; }
 
-/* Strain, stress and Q of particle i at the current w, with rates from u; advances the deviator
- * by dt. Returns the particle's stable time step, or −1 (bad state, recorded in *what). */
-static double stress_one(dm_fin *f, size_t i, double dt, const char **what, double *val) {
+/* The bond moments of particle i, each Σ_k Δa_ik ⊗ ξ_ik (row a, column b: Σ Δa_a ξ_b), so that
+ * per-bond products with A⁻¹, P or C become one 3×3 product per particle afterwards (C =
+ * (Σ Δw ⊗ ξ) A⁻¹, since g_ik = A⁻¹ξ_ik and A symmetric). Bw: of the displacement after a drift
+ * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. With vb: Bv of
+ * the half kick's mean velocity v̄ and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift). The
+ * accumulators are independent (no long dependency chain; the compiler keeps them in registers).
+ * `kick` and `stress` are constants at each call site, so each use compiles to its own loop. */
+static inline void bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
+                                const double *restrict u, const double *restrict vb, double dt,
+                                bool stress, bool kick, double *restrict Bw, double *restrict Bu,
+                                double *restrict Bv, double *restrict sv) {
+  const double *restrict X = m->s->X;
+  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
+  double wi[3], wn[3], ui[3], vi[3];
+  for (int a = 0; a < 3; ++a) {
+    wi[a] = w[3 * i + a], ui[a] = u ? u[3 * i + a] : 0.0, vi[a] = vb ? vb[3 * i + a] : 0.0;
+    wn[a] = wi[a] + dt * ui[a];
+  }
+  /* rows of acc: Δ(w + dt u)_a, Δu_a (stress), Δv̄_a (kick); each row is a 4-lane vector over
+   * ξ's components (4th lane 0), so a row update is one multiply-add of ξ by a scalar (GCC/Clang
+   * vector extension; lowered to what the target has) */
+  typedef double v4d __attribute__((vector_size(32)));
+  const int r0 = stress ? 0 : 6, r1 = kick ? 9 : 6;
+  v4d acc[9] = {{0}};
+  double s0 = 0.0;
+  const size_t e = m->start[i + 1];
+  for (size_t b = m->start[i]; b < e; ++b) {
+    const size_t k = m->nbr[b];
+    const double *sh = m->shift[m->img[b]];
+    const v4d xi = {X[3 * k] + sh[0] - x0, X[3 * k + 1] + sh[1] - y0, X[3 * k + 2] + sh[2] - z0,
+                    0.0};
+    double d[9];
+    for (int a = 0; a < 3; ++a) {
+      const double wk = w[3 * k + a];
+      if (stress) {
+        const double uk = u[3 * k + a];
+        d[a] = wk + dt * uk - wn[a], d[3 + a] = uk - ui[a];
+      }
+      if (kick) d[6 + a] = vb[3 * k + a] - vi[a], s0 += d[6 + a] * (wk - wi[a]);
+    }
+    for (int r = r0; r < r1; ++r) acc[r] += d[r] * xi;
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) {
+      if (stress) Bw[3 * a + c] = acc[a][c], Bu[3 * a + c] = acc[3 + a][c];
+      if (kick) Bv[3 * a + c] = acc[6 + a][c];
+    }
+  if (kick) *sv = s0;
+}
+
+/* r = B A (3×3, row-major) */
+static inline void mul33(const double *restrict B, const double *restrict A, double *restrict r) {
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
+}
+
+/* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
+ * and the Q_P and F of the last force evaluation: Σ_k Δv̄·(Q_P ξ) = Q_P : Bv and
+ * Σ_k Δv̄·z = sv − (F − I) : Bv (z = Δw − (F − I) ξ). Returns false if e is not finite. */
+static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double sv) {
+  const double *QP = &f->QP[9 * i], *F = &f->F[9 * i];
+  double pw = 0.0, ph = sv + Bv[0] + Bv[4] + Bv[8];
+  for (int a = 0; a < 9; ++a) pw += QP[a] * Bv[a], ph -= F[a] * Bv[a];
+  f->e[i] += h * pw / f->m->s->mass[i];
+  f->ehg[i] += h * f->m->kappa[i] * ph;
+  return isfinite(f->e[i]);
+}
+
+/* Strain, stress and Q of particle i at w + dt u (the drift of this step, done after the pass),
+ * with rates from u; advances the deviator by dt. With h > 0 first the energy increments of the
+ * half kick just made (its v̄ in f->vbar; *bad_e set if e is not finite). Returns the particle's
+ * stable time step, or −1 (bad state, recorded in *what). */
+static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, const char **what,
+                         double *val) {
   dm_model *m = f->m;
   const dm_state *st = m->s;
-  const double *w = st->w, *u = st->u, *Ai = &m->Ainv[9 * i];
-  double C[9] = {0}, Fd[9] = {0};
-  for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-    const size_t k = m->nbr[b];
-    double xi[3], g[3];
-    dm_bond_vector(m, i, b, xi);
-    for (int a = 0; a < 3; ++a)
-      g[a] = Ai[3 * a] * xi[0] + Ai[3 * a + 1] * xi[1] + Ai[3 * a + 2] * xi[2];
-    for (int a = 0; a < 3; ++a) {
-      const double dw = w[3 * k + a] - w[3 * i + a], dv = u[3 * k + a] - u[3 * i + a];
-      for (int c = 0; c < 3; ++c) C[3 * a + c] += dw * g[c], Fd[3 * a + c] += dv * g[c];
-    }
-  }
+  const double *Ai = &m->Ainv[9 * i];
+  double C[9], Fd[9], Bw[9], Bu[9], Bv[9], sv = 0;
+  if (h > 0) {
+    bond_moments(m, i, st->w, st->u, f->vbar, dt, true, true, Bw, Bu, Bv, &sv);
+    if (!kick_energy(f, i, h, Bv, sv)) *bad_e = true;
+  } else bond_moments(m, i, st->w, st->u, NULL, dt, true, false, Bw, Bu, NULL, NULL);
+  mul33(Bw, Ai, C), mul33(Bu, Ai, Fd);
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
@@ -155,20 +221,61 @@ static double stress_one(dm_fin *f, size_t i, double dt, const char **what, doub
   return f->par.courant * ell / (cL + 2.0 * nu_l);
 }
 
-/* All stresses and the forces; sets dt_next. */
-static ms_status forces(dm_fin *f, double dt) {
+/* The force on particle i, F_i = Σ_k [(Q_i + Q_k) ξ_ik + (κ_i + κ_k) Δw_ik] (dm_model.c's
+ * gather_force, the same sum): Q_k ξ as three 4-lane rows (row a of Q_k loaded with the next
+ * element in the 4th lane, times ξ padded with 0 there; row 2 is loaded one element early so
+ * the load stays inside Q, against ξ shifted by one lane), summed over lanes at the end. */
+static void gather_one(const dm_model *restrict m, const double *restrict w, size_t i,
+                       double *restrict F) {
+  typedef double v4d __attribute__((vector_size(32)));
+  const double *restrict X = m->s->X, *restrict Q = m->Q, *restrict kap = m->kappa;
+  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
+  const v4d wi = {w[3 * i], w[3 * i + 1], w[3 * i + 2], 0.0};
+  v4d r0 = {0}, r1 = {0}, r2 = {0}, fw = {0}, sxi = {0};
+  const size_t e = m->start[i + 1];
+  for (size_t b = m->start[i]; b < e; ++b) {
+    const size_t k = m->nbr[b];
+    const double *sh = m->shift[m->img[b]];
+    const double x = X[3 * k] + sh[0] - x0, y = X[3 * k + 1] + sh[1] - y0,
+                 z = X[3 * k + 2] + sh[2] - z0;
+    const v4d xi = {x, y, z, 0.0}, xs = {0.0, x, y, z};
+    const v4d wk = {w[3 * k], w[3 * k + 1], w[3 * k + 2], 0.0};
+    v4d q0, q1, q2;
+    memcpy(&q0, &Q[9 * k], sizeof q0), memcpy(&q1, &Q[9 * k + 3], sizeof q1);
+    memcpy(&q2, &Q[9 * k + 5], sizeof q2);
+    r0 += q0 * xi, r1 += q1 * xi, r2 += q2 * xs;
+    fw += (ki + kap[k]) * (wk - wi);
+    sxi += xi;
+  }
+  const double *qi = &Q[9 * i];
+  F[3 * i] = r0[0] + r0[1] + r0[2] + fw[0] + qi[0] * sxi[0] + qi[1] * sxi[1] + qi[2] * sxi[2];
+  F[3 * i + 1] = r1[0] + r1[1] + r1[2] + fw[1] + qi[3] * sxi[0] + qi[4] * sxi[1] + qi[5] * sxi[2];
+  F[3 * i + 2] = r2[1] + r2[2] + r2[3] + fw[2] + qi[6] * sxi[0] + qi[7] * sxi[1] + qi[8] * sxi[2];
+}
+
+static ms_status bad_energy(dm_fin *f, long i) {
+  f->bad = (size_t)i, f->bad_what = "specific internal energy e", f->bad_value = f->e[i];
+  return MS_ERR_UNSTABLE;
+}
+
+/* All stresses and the forces; sets dt_next. With dt > 0 (a step): first the energy increments
+ * of the half kick of length h just made, then the stress at w + dt u, then the drift
+ * w += dt u itself (one pass over the bonds for both; stress_one). */
+static ms_status forces(dm_fin *f, double dt, double h) {
   const long n = (long)f->n;
   double dtmin = INFINITY;
-  long bad = n, imin = 0;
+  long bad = n, bad_e = n, imin = 0;
 #pragma omp parallel if (n > 4096)
   { /* the smallest step and its particle (the smallest index of ties: thread-count independent) */
     double tdt = INFINITY;
-    long tbad = n, ti = n;
+    long tbad = n, tbad_e = n, ti = n;
 #pragma omp for schedule(static) nowait
     for (long i = 0; i < n; ++i) {
       const char *what = NULL;
       double val = 0;
-      double d = stress_one(f, (size_t)i, dt, &what, &val);
+      bool be = false;
+      double d = stress_one(f, (size_t)i, dt, h, &be, &what, &val);
+      if (be && i < tbad_e) tbad_e = i;
       if (d < 0) {
         if (i < tbad) tbad = i;
       } else if (d < tdt) tdt = d, ti = i;
@@ -176,17 +283,24 @@ static ms_status forces(dm_fin *f, double dt) {
 #pragma omp critical(dm_fin_forces_min)
     {
       if (tbad < bad) bad = tbad;
+      if (tbad_e < bad_e) bad_e = tbad_e;
       if (tdt < dtmin || (tdt == dtmin && ti < imin)) dtmin = tdt, imin = ti;
     }
   }
+  if (bad_e < n) return bad_energy(f, bad_e); /* the kick failed: no drift */
+  dm_state *st = f->m->s;
+  if (dt > 0)
+    for (size_t j = 0; j < 3 * f->n; ++j) st->w[j] += dt * st->u[j];
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
     double val = 0;
-    stress_one(f, (size_t)bad, 0.0, &what, &val);
+    bool be = false;
+    stress_one(f, (size_t)bad, 0.0, 0.0, &be, &what, &val);
     f->bad = (size_t)bad, f->bad_what = what, f->bad_value = val;
     return MS_ERR_UNSTABLE;
   }
-  dm_gather_pass(f->m, f->m->s->w, f->frc, f->n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
     const double dext = f->ext(f->ext_user, f, f->fext);
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
@@ -202,12 +316,12 @@ static ms_status forces(dm_fin *f, double dt) {
   return MS_OK;
 }
 
-ms_status dm_fin_refresh(dm_fin *f) { return forces(f, 0.0); }
+ms_status dm_fin_refresh(dm_fin *f) { return forces(f, 0.0, 0.0); }
 
-/* Half kick of length h = dt/2 with the current forces, and the matching energy updates. */
-static ms_status half_kick(dm_fin *f, double h) {
-  dm_model *m = f->m;
-  dm_state *st = m->s;
+/* The velocity part of a half kick of length h = dt/2 with the current forces: u, its mean v̄
+ * over the kick, and the work of the driven particles and of the external force. */
+static void kick_velocities(dm_fin *f, double h) {
+  dm_state *st = f->m->s;
   const long n = (long)f->n;
   double dW = 0.0, dWe = 0.0;
   for (long i = 0; i < n; ++i) {
@@ -226,44 +340,31 @@ static ms_status half_kick(dm_fin *f, double h) {
     }
   }
   f->work += dW, f->ext_work += dWe;
+}
+
+/* The energy part of the closing half kick (the opening one's is in the stress pass). */
+static ms_status kick_energies(dm_fin *f, double h) {
+  dm_model *m = f->m;
+  const dm_state *st = m->s;
+  const long n = (long)f->n;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
   for (long i = 0; i < n; ++i) {
-    const double *QP = &f->QP[9 * i], *C = &f->F[9 * i], *w = st->w, *vb = f->vbar;
-    double pw = 0.0, ph = 0.0;
-    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-      const size_t k = m->nbr[b];
-      double xi[3];
-      dm_bond_vector(m, (size_t)i, b, xi);
-      for (int a = 0; a < 3; ++a) {
-        const double dv = vb[3 * k + a] - vb[3 * i + a];
-        const double qx = QP[3 * a] * xi[0] + QP[3 * a + 1] * xi[1] + QP[3 * a + 2] * xi[2];
-        /* z = Δw − (F − I) ξ */
-        const double z = w[3 * k + a] - w[3 * i + a] -
-                         (C[3 * a] * xi[0] + C[3 * a + 1] * xi[1] + C[3 * a + 2] * xi[2] - xi[a]);
-        pw += dv * qx, ph += dv * z;
-      }
-    }
-    f->e[i] += h * pw / st->mass[i];
-    f->ehg[i] += h * m->kappa[i] * ph;
-    if (!isfinite(f->e[i]) && i < bad) bad = i;
+    double Bv[9], sv;
+    bond_moments(m, (size_t)i, st->w, NULL, f->vbar, 0.0, false, true, NULL, NULL, Bv, &sv);
+    if (!kick_energy(f, (size_t)i, h, Bv, sv) && i < bad) bad = i;
   }
-  if (bad < n) {
-    f->bad = (size_t)bad, f->bad_what = "specific internal energy e", f->bad_value = f->e[bad];
-    return MS_ERR_UNSTABLE;
-  }
-  return MS_OK;
+  return bad < n ? bad_energy(f, bad) : MS_OK;
 }
 
+/* Kick (u; e in the stress pass) – drift (after the stress pass) – forces – kick (u, e). */
 ms_status dm_fin_step(dm_fin *f) {
-  dm_state *st = f->m->s;
   const double dt = f->dt_next;
-  ms_status r = half_kick(f, 0.5 * dt);
+  kick_velocities(f, 0.5 * dt);
+  ms_status r = forces(f, dt, 0.5 * dt);
   if (r != MS_OK) return r;
-  for (size_t i = 0; i < 3 * f->n; ++i) st->w[i] += dt * st->u[i];
-  r = forces(f, dt);
-  if (r != MS_OK) return r;
-  r = half_kick(f, 0.5 * dt);
+  kick_velocities(f, 0.5 * dt);
+  r = kick_energies(f, 0.5 * dt);
   ++f->step;
   return r;
 }
@@ -324,7 +425,7 @@ void dm_fin_bond_penalty(dm_fin *f) {
 ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user) {
   f->ext = fn, f->ext_user = user;
   if (fn && !f->fext) f->fext = ms_calloc(3 * (f->n ? f->n : 1), sizeof(double));
-  return forces(f, 0.0);
+  return forces(f, 0.0, 0.0);
 }
 
 void dm_fin_destroy(dm_fin **fp) {
@@ -366,7 +467,7 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   dm_frac_alloc(f);
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);
-  const ms_status status = forces(f, 0.0);
+  const ms_status status = forces(f, 0.0, 0.0);
   if (status != MS_OK) {
     dm_fin_destroy(&f);
     return status;
