@@ -185,28 +185,26 @@ static hid_t open_object(hid_t file, const char *obj) {
   return H5Oopen(file, obj, H5P_DEFAULT);
 }
 
-ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v) {
+/* A scalar attribute of the file type `ftype`, written from `v` in the memory type `mtype`. */
+static ms_status attr_scalar(ms_h5 *h, const char *obj, const char *attr, hid_t ftype, hid_t mtype,
+                             const void *v) {
   hid_t o = open_object(h->file, obj);
   if (o < 0) return MS_ERR_IO;
   hid_t space = H5Screate(H5S_SCALAR);
-  hid_t a = H5Acreate2(o, attr, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
-  herr_t rc = a >= 0 ? H5Awrite(a, H5T_NATIVE_DOUBLE, &v) : -1;
+  hid_t a = H5Acreate2(o, attr, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
+  herr_t rc = a >= 0 ? H5Awrite(a, mtype, v) : -1;
   if (a >= 0) H5Aclose(a);
   H5Sclose(space);
   H5Oclose(o);
   return rc < 0 ? MS_ERR_IO : MS_OK;
 }
 
+ms_status ms_h5_attr_double(ms_h5 *h, const char *obj, const char *attr, double v) {
+  return attr_scalar(h, obj, attr, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v);
+}
+
 ms_status ms_h5_attr_int(ms_h5 *h, const char *obj, const char *attr, int64_t v) {
-  hid_t o = open_object(h->file, obj);
-  if (o < 0) return MS_ERR_IO;
-  hid_t space = H5Screate(H5S_SCALAR);
-  hid_t a = H5Acreate2(o, attr, H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT);
-  herr_t rc = a >= 0 ? H5Awrite(a, H5T_NATIVE_INT64, &v) : -1;
-  if (a >= 0) H5Aclose(a);
-  H5Sclose(space);
-  H5Oclose(o);
-  return rc < 0 ? MS_ERR_IO : MS_OK;
+  return attr_scalar(h, obj, attr, H5T_STD_I64LE, H5T_NATIVE_INT64, &v);
 }
 
 ms_status ms_h5_attr_string(ms_h5 *h, const char *obj, const char *attr, const char *v) {
