@@ -188,6 +188,7 @@ static ms_status run_steps(dmf_run *r) {
   const double t_end = p->steps > 0 ? INFINITY : p->t_end;
   const long every = p->energy_every, nyz = p->ncell[1] * p->ncell[2];
   ms_status st = MS_OK;
+  bool stopping = false; /* SIGINT/SIGTERM: stop at the next checkpoint (docs/reliability.md) */
   for (long step = r->step0;; ++step) {
     double K, U, H;
     dm_fin_energies(f, &K, &U, &H);
@@ -205,6 +206,22 @@ static ms_status run_steps(dmf_run *r) {
     if (p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 && !last) {
       st = dmf_checkpoint_write(r);
       if (st != MS_OK) return st;
+      if (stopping) { /* `mscale run --continue` goes on from here */
+        ms_log(r->ctx, MS_LOG_WARN,
+               "discrete model (response eos): interrupted; checkpoint at step %ld written", step);
+        return MS_INTERRUPTED;
+      }
+    }
+    if (!stopping && !last && ms_interrupt_agreed(r->ctx)) { /* collective on ranks */
+      stopping = true;
+      if (p->checkpoint_every <= 0) {
+        ms_log(r->ctx, MS_LOG_WARN,
+               "discrete model (response eos): interrupted at step %ld (no checkpoints)", step);
+        return MS_INTERRUPTED;
+      }
+      ms_log(r->ctx, MS_LOG_WARN,
+             "discrete model (response eos): interrupt: stopping at the next checkpoint (step %ld)",
+             (step / p->checkpoint_every + 1) * p->checkpoint_every);
     }
     const double bal =
         K + U + H + dm_fin_broken_energy(f) - f->work - r->E0; /* broken: 0 without fracture */
