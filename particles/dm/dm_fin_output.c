@@ -34,29 +34,14 @@ dmf_fields dmf_live_fields(dmf_run *r) {
                       .J = f->J};
 }
 
-static double det3(const double *a) {
-  return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
-         a[2] * (a[3] * a[7] - a[4] * a[6]);
-}
-
-/* F_i of displacements w (the least-squares fit of dm_finite.c: F = I + (Σ_k Δw_ik ⊗ ξ_ik) A⁻¹,
- * in the same order of operations as its stress pass, so a state's J is the same bits here)
+/* F_i of displacements w (the least-squares fit of dm_finite.c, its own arithmetic: a state's J
+ * is the same bits here)
  * and the family's non-affine part: √(Σ_k |Δw_ik − (F − I)ξ_ik|² / Σ_k |ξ_ik|²), the bond
  * stretch the fit cannot represent — the zero-energy (hourglass) modes the bond penalty acts
  * on (docs/particles-dm.md "Finite deformation"); 0 under any uniform deformation. */
 static double kinematics(const dm_model *m, const double *w, size_t i, double F[9]) {
-  const double *Ai = &m->Ainv[9 * i];
-  double B[9] = {0}, C[9];
-  for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-    const size_t k = m->nbr[b];
-    double xi[3];
-    dm_bond_vector(m, i, b, xi);
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c) B[3 * a + c] += (w[3 * k + a] - w[3 * i + a]) * xi[c];
-  }
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c)
-      C[3 * a + c] = B[3 * a] * Ai[c] + B[3 * a + 1] * Ai[3 + c] + B[3 * a + 2] * Ai[6 + c];
+  double C[9];
+  dm_fin_displacement_gradient(m, w, i, C);
   double zz = 0, xx = 0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
@@ -93,7 +78,7 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
       v[a * n + i] = fl->u[3 * i + a];
     }
     const double rho0 = s->mass[i] / s->vol[i];
-    J[i] = fl->J ? fl->J[i] : det3(F);
+    J[i] = fl->J ? fl->J[i] : dm_det3(F);
     rho[i] = rho0 / J[i];
     pres[i] = fl->p[i];
     ehs[i] = fl->ehg[i] / s->mass[i];

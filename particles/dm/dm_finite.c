@@ -18,11 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double det3(const double *a) {
-  return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
-         a[2] * (a[3] * a[7] - a[4] * a[6]);
-}
-
 static void inv3(const double *a, double det, double *r) {
   const double id = 1.0 / det;
   r[0] = (a[4] * a[8] - a[5] * a[7]) * id;
@@ -95,6 +90,12 @@ static inline void mul33(const double *restrict B, const double *restrict A, dou
       r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
 }
 
+void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]) {
+  double Bw[9], Bu[9]; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
+  bond_moments(m, i, w, w, NULL, 0.0, true, false, Bw, Bu, NULL, NULL);
+  mul33(Bw, &m->Ainv[9 * i], C);
+}
+
 /* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
  * and the Q_P and F of the last force evaluation: Σ_k Δv̄·(Q_P ξ) = Q_P : Bv and
  * Σ_k Δv̄·z = sv − (F − I) : Bv (z = Δw − (F − I) ξ). Returns false if e is not finite. */
@@ -125,7 +126,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = det3(F);
+  const double J = dm_det3(F);
   f->J[i] = J;
   if (!(J > 0) || !isfinite(J)) {
     *what = "J = det F", *val = J;

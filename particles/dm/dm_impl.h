@@ -52,6 +52,17 @@ bool dm_jc_set(const char *name, dm_sg *out);
 void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
                 dm_sg *out);
 
+/* det of a 3×3 matrix (row-major). */
+static inline double dm_det3(const double *a) {
+  return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
+         a[2] * (a[3] * a[7] - a[4] * a[6]);
+}
+
+/* The displacement gradient C_i = F_i − I = (Σ_k Δw_ik ⊗ ξ_ik) A_i⁻¹ of displacements w, by the
+ * stress pass's own arithmetic (dm_finite.c), so a state's F and J are the same bits wherever
+ * they are computed (snapshots of the last good state). */
+void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]);
+
 /* ξ_ik = X_k + image shift − X_i of bond b of particle i. */
 static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double xi[3]) {
   const double *X = m->s->X;
