@@ -43,16 +43,10 @@ static char *default_outdir(const char *deck) {
   return out;
 }
 
-/* A YAML double-quoted scalar: the command line and paths may hold quotes, backslashes or
- * control characters, and run_info.yaml must still load (docs/reliability.md §6). */
+/* `prefix`, then s escaped for a YAML double-quoted scalar (app_put_yaml_escaped). */
 static void put_quoted(FILE *f, const char *prefix, const char *s) {
   fputs(prefix, f);
-  for (; *s; s++) {
-    unsigned char c = (unsigned char)*s;
-    if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
-    else if (c < 0x20 || c == 0x7f) fprintf(f, "\\x%02x", c);
-    else fputc(c, f);
-  }
+  app_put_yaml_escaped(f, s);
 }
 
 /* The directory before the run and, for --continue, the previous run's files: what the

@@ -37,6 +37,11 @@ void app_deck_free(app_deck *d);
 /* One line per problem type, for --help. */
 void app_print_problem_types(FILE *f);
 
+/* The characters of `s` inside a YAML double-quoted scalar (", \ and control characters
+ * escaped), and `s` as such a scalar, quotes included: command lines, paths and values from the
+ * environment may hold anything, and run_info.yaml must still load (app/provenance.c). */
+void app_put_yaml_escaped(FILE *f, const char *s);
+void app_put_yaml_quoted(FILE *f, const char *s);
 /* The version: `git describe` at build time, else the project version (app/provenance.c). */
 const char *app_version(void);
 /* `mscale --version`: version, commit, compiler and flags, library versions. */

@@ -197,14 +197,9 @@ void app_manifest_write(FILE *f, const char *dir, const app_listing *before,
   qsort(names, n, sizeof *names, cmp_str);
   fprintf(f, "manifest:  # every file of this run (mscale run --force removes them first)\n");
   for (size_t i = 0; i < n; i++) {
-    fputs("  - \"", f);
-    for (const char *c = names[i]; *c; c++) {
-      unsigned char u = (unsigned char)*c;
-      if (u == '"' || u == '\\') fprintf(f, "\\%c", u);
-      else if (u < 0x20 || u == 0x7f) fprintf(f, "\\x%02x", u);
-      else fputc(u, f);
-    }
-    fputs("\"\n", f);
+    fputs("  - ", f);
+    app_put_yaml_quoted(f, names[i]);
+    fputc('\n', f);
   }
   free(names);
   app_listing_free(&now);

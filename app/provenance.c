@@ -14,22 +14,24 @@
 
 const char *app_version(void) { return MSCALE_GIT_VERSION; }
 
-/* A YAML double-quoted scalar (the values come from the environment: host names, compiler
- * flags and library banners may hold anything). */
-static void put_quoted(FILE *f, const char *s) {
-  fputc('"', f);
+void app_put_yaml_escaped(FILE *f, const char *s) {
   for (; *s; s++) {
     unsigned char c = (unsigned char)*s;
     if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
     else if (c < 0x20 || c == 0x7f) fprintf(f, "\\x%02x", c);
     else fputc(c, f);
   }
+}
+
+void app_put_yaml_quoted(FILE *f, const char *s) {
+  fputc('"', f);
+  app_put_yaml_escaped(f, s);
   fputc('"', f);
 }
 
 static void put_field(FILE *f, const char *indent, const char *key, const char *value) {
   fprintf(f, "%s%s: ", indent, key);
-  put_quoted(f, value);
+  app_put_yaml_quoted(f, value);
   fputc('\n', f);
 }
 
