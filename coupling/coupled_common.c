@@ -175,7 +175,7 @@ ms_status cpl_drag_kick(const cpl_problem *p, cpl_particle_phase *ph, const cpl_
 ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long index, double t,
                               const cpl_particles *view) {
   char name[64];
-  snprintf(name, sizeof name, "particles_%04ld.h5", index);
+  ptl_snapshot_name(name, sizeof name, index);
   char *path = ms_out_path(ctx, name);
   cpl_snapshot_info info = {t, ph->geo.spacing, ph->geo.rho0, ph->fo.box, ph->material};
   ms_status st = cpl_write_snapshot(path, view, &ph->fr, &info);
@@ -189,9 +189,9 @@ void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, doub
   ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g %s): %s",
          ms_out_time(t_start), ms_out_time_label(),
          st == MS_ERR_UNSTABLE ? ptl_region_error(r) : ms_status_str(st));
-  char *path = ms_out_path(ctx, "particles_unstable.h5");
+  char *path = ms_out_path(ctx, PTL_SNAPSHOT_UNSTABLE);
   if (ptl_region_write_snapshot(r, path) == MS_OK)
-    ms_log(ctx, MS_LOG_ERROR, "coupled: final state written to particles_unstable.h5");
+    ms_log(ctx, MS_LOG_ERROR, "coupled: final state written to " PTL_SNAPSHOT_UNSTABLE);
   free(path);
 }
 

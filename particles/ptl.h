@@ -85,8 +85,8 @@ enum {
  * attributes attr[0..nattr) of /particles, in order ("time" in the output time unit with
  * time_units beside it, "step" as an integer) and material_names. `omit` leaves out v, mass, vertex (and the
  * time series). The sidecar (PATH with .h5 replaced by .xmf, naming the file by its base name)
- * shows xdmf[0..nxdmf) at `time`; with it, the time series DIR/particles.xmf of every sidecar
- * of the file's prefix (its name up to the first digit). Collective when dist: every rank gives
+ * shows xdmf[0..nxdmf) at `time`; with it, for a numbered name, the time series
+ * DIR/particles.xmf of every sidecar of the file's prefix (its name up to the first digit). Collective when dist: every rank gives
  * its own n particles, stored in rank order (docs/mpi.md). */
 typedef struct ptl_snapshot {
   size_t n;
@@ -118,6 +118,15 @@ void ptl_snapshot_period_add(ptl_snapshot *snap, int axis, double period, double
 /* Writes the snapshot to path (and its sidecar, rank 0's under MPI). dist: every rank calls it
  * and gets the same status. */
 ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *snap);
+
+/* The one naming scheme of every particle problem's snapshots (docs/output.md, "Files"): the
+ * index-th snapshot of a run is particles_NNNN.h5 (4 digits, wider beyond 9999), with its
+ * sidecar particles_NNNN.xmf and the run's time series particles.xmf; the last good state of a
+ * run that went unstable is PTL_SNAPSHOT_UNSTABLE (not part of the series). */
+#define PTL_SNAPSHOT_UNSTABLE "particles_unstable.h5"
+void ptl_snapshot_name(char *name, size_t size, long index);
+/* Appends `name` to the material table `table` (size bytes, "" at first): "al" -> "al,pb". */
+void ptl_material_table_add(char *table, size_t size, const char *name);
 
 /* === Graph partition (ptl_partition.c): the one METIS wrapper of the particle models === */
 

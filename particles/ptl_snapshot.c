@@ -100,9 +100,10 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
   ms_status st = ms_xdmf_write_particles(xmf, base, "particles/x", vertex, nglobal, 3,
                                          ms_out_time(sn->time), sn->nxdmf, sn->xdmf);
   free(xmf);
-  if (sn->omit & PTL_SNAPSHOT_NO_SERIES) return st;
-  /* the run's time series: every sidecar of this prefix (the name up to its number) */
+  /* the run's time series: every sidecar of this prefix (the name up to its number); a name
+   * without a number (particles_unstable.h5) is no part of it and leaves it as it is */
   size_t dirlen = (size_t)(base - path), plen = strcspn(base, "0123456789");
+  if ((sn->omit & PTL_SNAPSHOT_NO_SERIES) || !base[plen]) return st;
   char *dir = ms_calloc(dirlen + 2, 1), *prefix = ms_calloc(plen + 1, 1);
   memcpy(dir, path, dirlen);
   if (dirlen == 0) strcpy(dir, ".");
@@ -133,4 +134,13 @@ ms_status ptl_write_snapshot(const char *path, const ptl_snapshot *sn) {
   const size_t nglobal = sn->dist ? (size_t)par_sum_long((long)n) : n;
   if (st == MS_OK && (!sn->dist || par_rank() == 0)) st = write_sidecar(path, sn, nglobal);
   return sn->dist ? par_agree_status(st) : st; /* the sidecar is rank 0's */
+}
+
+void ptl_snapshot_name(char *name, size_t size, long index) {
+  snprintf(name, size, "particles_%04ld.h5", index);
+}
+
+void ptl_material_table_add(char *table, size_t size, const char *name) {
+  const size_t len = strlen(table);
+  if (len < size) snprintf(table + len, size - len, "%s%s", len ? "," : "", name);
 }

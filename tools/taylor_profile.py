@@ -5,7 +5,8 @@
 
   taylor_profile.py OUTDIR [OUTDIR2 ...] [-o taylor.png] [--exp-length MM --exp-footprint MM]
 
-For body 0 (a cylinder whose axis is the wall normal) of impact_particles_final.csv:
+For body 0 (a cylinder whose axis is the wall normal) of the run's last particle snapshot
+(particles_NNNN.h5, the final state; read through python/mscale):
 
 * length L = the axial extent of its particles + h (half a spacing beyond each end layer);
 * footprint D = D0 max(r/r0) over its outer particles (initial radius r0 within h/2 of the
@@ -39,15 +40,19 @@ def rod_geometry(run):
             np.array(body["center"], dtype=float))
 
 
-def measure(outdir, name="impact_particles_final.csv"):
-    """Length, footprint (cm), the profile (z, r) and the initial geometry of body 0."""
+def measure(outdir, snapshot=-1):
+    """Length, footprint (cm), the profile (z, r) and the initial geometry of body 0 in the
+    run's particle snapshot number `snapshot` (an index into Run.snapshots; -1: the final
+    state)."""
     run = mscale.Run(outdir)
     h, R0, L0, axis, centre = rod_geometry(run)
-    t = run.table(name)
-    sel = np.asarray(t["body"]) == 0
+    if not run.snapshots:
+        raise SystemExit(f"{run.path}: no particle snapshots (particles_NNNN.h5)")
+    snap = run.snapshots[snapshot]
+    sel = np.asarray(snap["body"]) == 0
     q = [(axis + 1) % 3, (axis + 2) % 3]
-    cur = np.stack([np.asarray(t[c], float)[sel] for c in ("x", "y", "z")], axis=1)
-    ref = np.stack([np.asarray(t[c], float)[sel] for c in ("X0", "Y0", "Z0")], axis=1)
+    cur = np.asarray(snap["x"], float)[sel]
+    ref = np.asarray(snap["X0"], float)[sel]
     z = cur[:, axis]
     r = np.hypot(cur[:, q[0]] - centre[q[0]], cur[:, q[1]] - centre[q[1]])
     r0 = np.hypot(ref[:, q[0]] - centre[q[0]], ref[:, q[1]] - centre[q[1]])

@@ -287,9 +287,7 @@ static ms_status sim_create(cd_run *r) {
                        .thickness = p->thickness,
                        .integrator = p->integrator};
   char names[CD_MAX_MATERIALS * 64] = ""; /* the snapshots' material table, "al,pb" */
-  for (int k = 0; k < p->nmat; k++)
-    snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? "," : "",
-             p->mat[k]->name);
+  for (int k = 0; k < p->nmat; k++) ptl_material_table_add(names, sizeof names, p->mat[k]->name);
   ms_must(cd_sim_create(&(cd_sim_params){.particles = r->ps,
                                          .box = &p->box,
                                          .cfg = &r->cfg,
@@ -449,7 +447,7 @@ static ms_status run_steps(cd_run *r) {
     }
     if (snap_every && (k % snap_every == 0 || k == nsteps)) {
       char name[64];
-      snprintf(name, sizeof name, "cd_snap_%06ld.h5", k);
+      ptl_snapshot_name(name, sizeof name, (k + snap_every - 1) / snap_every); /* ⌈k/every⌉ */
       char *sp = ms_out_path(ctx, name);
       if (cd_write_snapshot(s, sp) != MS_OK) st = MS_ERR_IO;
       free(sp);
@@ -459,9 +457,9 @@ static ms_status run_steps(cd_run *r) {
   if (st == MS_ERR_UNSTABLE) { /* the guard's finding, the state it found, the series so far */
     if (cd_sim_error(s)[0])    /* on the rank that found it */
       ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: %s", cd_sim_error(s));
-    char *sp = ms_out_path(ctx, "cd_snap_unstable.h5");
+    char *sp = ms_out_path(ctx, PTL_SNAPSHOT_UNSTABLE);
     if (cd_write_snapshot(s, sp) == MS_OK)
-      ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: final state written to cd_snap_unstable.h5");
+      ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: final state written to " PTL_SNAPSHOT_UNSTABLE);
     free(sp);
   }
   return st;

@@ -109,6 +109,9 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
                                {"hourglass", "particles/hourglass", 1, false}};
   const double *const xc[3] = {x, x + n, x + 2 * n}, *const vc[3] = {v, v + n, v + 2 * n};
   ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
+  char names[4096];
+  dmp_material_table(p, names, sizeof names);
+  snap.material_names = names; /* the index table of particles/material */
   snap.ndata = sizeof data / sizeof data[0];
   snap.data = data;
   snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
@@ -162,7 +165,7 @@ void dmf_backup_take(dmf_run *r, double t) {
 void dmf_report_unstable(dmf_run *r, size_t particle, const char *what, double value, double t) {
   const dmf_backup *b = &r->bk;
   const double *X = &r->s.X[3 * (particle < r->s.n ? particle : 0)];
-  static const char name[] = "dm_fin_snapshot_unstable.h5";
+  static const char name[] = PTL_SNAPSHOT_UNSTABLE;
   if (r->ctx->rank == 0) /* replicated: every rank found the same */
     ms_log(r->ctx, MS_LOG_ERROR,
            "discrete model (response eos): step %ld, t = %.9g %s: particle %zu (X = %g %g %g): "

@@ -67,7 +67,7 @@ void dmf_backup_free(dmf_run *r);
 /* Copies the live state (good: checked) as the last good state at time t. */
 void dmf_backup_take(dmf_run *r, double t);
 /* A step failed: the report (particle, step, quantity) and the last good state's snapshot
- * dm_fin_snapshot_unstable.h5. `what`, `value`, `particle` describe the finding. */
+ * particles_unstable.h5. `what`, `value`, `particle` describe the finding. */
 void dmf_report_unstable(dmf_run *r, size_t particle, const char *what, double value, double t);
 
 /* ---- dm_fin_restart.c: OUTDIR/dm_checkpoint.h5 (every rank calls both) ---- */

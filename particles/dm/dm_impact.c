@@ -105,31 +105,65 @@ static void taylor_measures(const dm_impact *p, const dm_state *s, const double 
   *length = zmax - zmin + p->h, *footprint = D;
 }
 
-/* OUTDIR/NAME: every particle (body, first reference X0, current x, u, ρ, p, e, ε_p, J). */
-static void write_particles(const ms_ctx *ctx, const char *name, const dm_fin *f, const double *X0,
-                            const uint8_t *imat, double t) {
+/* OUTDIR/NAME: an HDF5 snapshot of every particle in the layout of every particle problem
+ * (docs/output.md, "Particle snapshots"; ptl_write_snapshot with the particles.xmf series):
+ * current x, velocity u, mass, material (index into material_names: the bodies' materials,
+ * each name once), then the model's fields: body, first reference X0, ρ, p, e, ε_p, J;
+ * attributes time, step, r0 = h. */
+static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *name,
+                            const dm_fin *f, const double *X0, const uint8_t *imat, double t) {
+  if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = f->m->s;
-  const size_t nc = 15;
-  double *rows = ms_calloc(nc * (f->n ? f->n : 1), sizeof(double));
-  for (size_t i = 0; i < f->n; ++i) {
-    double *r = &rows[nc * i];
-    r[0] = imat[i];
-    for (int a = 0; a < 3; ++a) {
-      r[1 + a] = X0[3 * i + a];
-      r[4 + a] = s->X[3 * i + a] + s->w[3 * i + a];
-      r[7 + a] = s->u[3 * i + a];
-    }
-    r[10] = f->rho[i], r[11] = f->p[i], r[12] = f->e[i], r[13] = f->eps_p[i], r[14] = f->J[i];
+  const size_t n = f->n;
+  double *xv = ms_calloc(6 * n + 1, sizeof(double));
+  int64_t *ids = ms_calloc(2 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n;
+  /* the table: every body's material once, in body order; bmat[b] its index */
+  char names[4096] = "";
+  int64_t *bmat = ms_calloc(p->nbodies + 1, sizeof *bmat);
+  for (size_t b = 0, nm = 0; b < p->nbodies; ++b) {
+    bmat[b] = (int64_t)nm;
+    for (size_t c = 0; c < b; ++c)
+      if (!strcmp(p->bodies[c].material, p->bodies[b].material)) bmat[b] = bmat[c];
+    if (bmat[b] == (int64_t)nm) ptl_material_table_add(names, sizeof names, p->bodies[b].material);
+    if (bmat[b] == (int64_t)nm) ++nm;
   }
-  const char *nm[] = {"body", "X0",  "Y0",  "Z0", "x", "y",     "z", "u_x",
-                      "u_y",  "u_z", "rho", "p",  "e", "eps_p", "J"};
-  const char *un[] = {"1",    "cm",   "cm",    "cm",  "cm",   "cm", "cm", "km/s",
-                      "km/s", "km/s", "g/cm3", "GPa", "kJ/g", "1",  "1"};
-  char title[160];
-  snprintf(title, sizeof title,
-           "impact particles at t = %.9g (10 us): first reference X0, current x", t);
-  dmp_write_series(ctx, name, title, nc, nm, un, rows, f->n);
-  free(rows);
+  for (size_t i = 0; i < n; ++i) {
+    body[i] = imat[i], mat[i] = bmat[imat[i]];
+    for (int a = 0; a < 3; ++a) {
+      xv[a * n + i] = s->X[3 * i + a] + s->w[3 * i + a];
+      xv[(3 + a) * n + i] = s->u[3 * i + a];
+    }
+  }
+  const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
+                                    {"particles/body", NULL, body, 1, NULL},
+                                    {"particles/X0", X0, NULL, 3, "cm"},
+                                    {"particles/density", f->rho, NULL, 1, "g/cm^3"},
+                                    {"particles/pressure", f->p, NULL, 1, "GPa"},
+                                    {"particles/energy", f->e, NULL, 1, "kJ/g"},
+                                    {"particles/eps_p", f->eps_p, NULL, 1, "1"},
+                                    {"particles/J", f->J, NULL, 1, "1"}};
+  const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
+                               {"mass", "particles/mass", 1, false},
+                               {"density", "particles/density", 1, false},
+                               {"pressure", "particles/pressure", 1, false},
+                               {"energy", "particles/energy", 1, false},
+                               {"eps_p", "particles/eps_p", 1, false},
+                               {"J", "particles/J", 1, false}};
+  const double *const xc[3] = {xv, xv + n, xv + 2 * n};
+  const double *const vc[3] = {xv + 3 * n, xv + 4 * n, xv + 5 * n};
+  ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
+  snap.ndata = sizeof data / sizeof data[0];
+  snap.data = data;
+  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
+  snap.xdmf = xdmf;
+  snap.material_names = names;
+  ptl_snapshot_attr_add(&snap, "time", t);
+  ptl_snapshot_attr_add(&snap, "step", (double)f->step);
+  ptl_snapshot_attr_add(&snap, "r0", p->h);
+  char *path = ms_out_path(ctx, name);
+  if (ptl_write_snapshot(path, &snap) != MS_OK)
+    ms_log(ctx, MS_LOG_WARN, "impact: could not write %s", path);
+  free(path), free(xv), free(ids), free(bmat);
 }
 
 typedef struct run_state {
@@ -274,12 +308,18 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
   for (long step = 0;; ++step) {
     const int last = r->t >= p->t_end * (1 - 1e-12);
     if (step % p->energy_every == 0 || last) record(r);
+    /* particles_NNNN.h5 at output.particle_times, and the final state always the last one */
+    const size_t first_now = next_out;
+    char name[64];
     while (next_out < p->nparticle_times &&
            (r->t >= p->particle_times[next_out] * (1 - 1e-12) || last)) {
-      char name[64];
-      snprintf(name, sizeof name, "impact_particles_%03zu.csv", next_out);
-      write_particles(ctx, name, f, r->X0, imat, r->t);
+      ptl_snapshot_name(name, sizeof name, (long)next_out);
+      write_particles(ctx, p, name, f, r->X0, imat, r->t);
       ++next_out;
+    }
+    if (last && next_out == first_now) {
+      ptl_snapshot_name(name, sizeof name, (long)next_out);
+      write_particles(ctx, p, name, f, r->X0, imat, r->t);
     }
     if (last) break;
     if (r->t + f->dt_next > p->t_end) f->dt_next = p->t_end - r->t;
@@ -377,7 +417,6 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
            p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
            p->sum.ref_updates, p->sum.length, p->sum.length / p->sum.length0, p->sum.footprint,
            p->sum.footprint / p->sum.footprint0);
-    if (st == MS_OK) write_particles(ctx, "impact_particles_final.csv", f, X0, imat, r.t);
     write_outputs(ctx, &r);
   } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
   p->energy_every = energy_every;

@@ -67,22 +67,38 @@ void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size
   free(path);
 }
 
-/* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView), by ptl_write_snapshot:
- * current positions X + w (particles/x), reference positions, w, u, |u|, Cauchy stress (9
- * components) and its pressure −tr Σ/3, von Mises intensity and Σ_xx; attributes time, step.
- * The velocity is particles/u (no particles/v), no mass, no vertex ids, no time series. */
-void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, long step,
-                        const char *name) {
+/* The material table of the snapshots: the layers' names in layer order ("cu,cu,pb"; the
+ * index of a particle's layer is its particles/material) into names[size]. */
+void dmp_material_table(const dm_problem *p, char *names, size_t size) {
+  names[0] = 0;
+  for (size_t k = 0; k < p->nlayers; ++k)
+    ptl_material_table_add(names, size, p->layers[k].name ? p->layers[k].name : "");
+}
+
+/* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView), by ptl_write_snapshot,
+ * in the layout every particle problem shares (docs/output.md, "Particle snapshots"): current
+ * positions X + w (particles/x), velocity u (particles/v), mass, the layer's material index
+ * (particles/material, names in material_names), the vertex ids and the particles.xmf series;
+ * then the model's fields: reference positions, w, |u|, Cauchy stress (9 components) and its
+ * pressure −tr Σ/3, von Mises intensity and Σ_xx; attributes time, step. */
+void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
+                        long step, const char *name) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = m->s;
   char *path = ms_out_path(ctx, name);
   double *S = malloc(9 * s->n * sizeof(double));
-  double *x = malloc((3 * nreal + 1) * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
+  double *x = malloc((6 * nreal + 1) * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
+  double *v = x + 3 * nreal;
+  int64_t *mat = ms_calloc(nreal + 1, sizeof *mat);
   dm_cauchy_stress(m, S);
   double *speed = sc, *pres = sc + nreal, *vm = sc + 2 * nreal, *sxx = sc + 3 * nreal;
   for (size_t i = 0; i < nreal; ++i) {
     const double *u = &s->u[3 * i], *T = &S[9 * i];
-    for (int a = 0; a < 3; ++a) x[a * nreal + i] = s->X[3 * i + a] + s->w[3 * i + a];
+    for (int a = 0; a < 3; ++a) {
+      x[a * nreal + i] = s->X[3 * i + a] + s->w[3 * i + a];
+      v[a * nreal + i] = u[a];
+    }
+    mat[i] = dmp_layer_at(p, s->X[3 * i]) - p->layers;
     speed[i] = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     pres[i] = -(T[0] + T[4] + T[8]) / 3.0;
     double s12 = 0.5 * (T[1] + T[3]), s23 = 0.5 * (T[5] + T[7]), s31 = 0.5 * (T[2] + T[6]);
@@ -91,22 +107,25 @@ void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, 
     sxx[i] = T[0];
   }
   const ptl_snapshot_data data[] = {
-      {"particles/X", s->X, NULL, 3, "cm"},        {"particles/w", s->w, NULL, 3, "cm"},
-      {"particles/u", s->u, NULL, 3, "km/s"},      {"particles/speed", speed, NULL, 1, "km/s"},
+      {"particles/material", NULL, mat, 1, NULL},  {"particles/X", s->X, NULL, 3, "cm"},
+      {"particles/w", s->w, NULL, 3, "cm"},        {"particles/speed", speed, NULL, 1, "km/s"},
       {"particles/cauchy", S, NULL, 9, "GPa"},     {"particles/pressure", pres, NULL, 1, "GPa"},
       {"particles/von_mises", vm, NULL, 1, "GPa"}, {"particles/sigma_xx", sxx, NULL, 1, "GPa"}};
   const ms_xdmf_attr xdmf[] = {
-      {"displacement", "particles/w", 3, false},      {"velocity", "particles/u", 3, false},
-      {"speed", "particles/speed", 1, false},         {"pressure", "particles/pressure", 1, false},
-      {"von_mises", "particles/von_mises", 1, false}, {"sigma_xx", "particles/sigma_xx", 1, false}};
-  const double *const xc[3] = {x, x + nreal, x + 2 * nreal}, *const none[3] = {NULL, NULL, NULL};
-  ptl_snapshot snap = ptl_snapshot_of(nreal, xc, none, NULL, t, false);
-  snap.omit =
-      PTL_SNAPSHOT_NO_V | PTL_SNAPSHOT_NO_MASS | PTL_SNAPSHOT_NO_VERTEX | PTL_SNAPSHOT_NO_SERIES;
+      {"velocity", "particles/v", 3, false},        {"mass", "particles/mass", 1, false},
+      {"displacement", "particles/w", 3, false},    {"speed", "particles/speed", 1, false},
+      {"pressure", "particles/pressure", 1, false}, {"von_mises", "particles/von_mises", 1, false},
+      {"sigma_xx", "particles/sigma_xx", 1, false}};
+  const double *const xc[3] = {x, x + nreal, x + 2 * nreal};
+  const double *const vc[3] = {v, v + nreal, v + 2 * nreal};
+  char names[4096];
+  dmp_material_table(p, names, sizeof names);
+  ptl_snapshot snap = ptl_snapshot_of(nreal, xc, vc, s->mass, t, false);
   snap.ndata = sizeof data / sizeof data[0];
   snap.data = data;
   snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
   snap.xdmf = xdmf;
+  snap.material_names = names;
   ptl_snapshot_attr_add(&snap, "time", t);
   ptl_snapshot_attr_add(&snap, "step", (double)step);
   if (ptl_write_snapshot(path, &snap) != MS_OK)
@@ -115,6 +134,7 @@ void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, 
   free(S);
   free(x);
   free(sc);
+  free(mat);
 }
 
 void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_state *s,
@@ -168,9 +188,9 @@ ms_status dmp_write_series(const ms_ctx *ctx, const char *file, const char *titl
  * non-finite acceleration and left the state at the step's start, time t). Names the first
  * particle whose displacement, velocity or acceleration at that state is not finite (each rank
  * looks at the particles it owns: dm_dist_accel is the integrator's own, collective force
- * call), and rank 0 writes the gathered state (m->s) as dm_snapshot_unstable.h5. */
-void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_dist *d,
-                         const dm_state *ls, size_t nreal, long step, double t) {
+ * call), and rank 0 writes the gathered state (m->s) as particles_unstable.h5. */
+void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, const dm_problem *p, dm_model *m,
+                         dm_dist *d, const dm_state *ls, size_t nreal, long step, double t) {
   const dm_state *s = m->s;
   double *acc = ms_calloc(3 * ls->n + 1, sizeof *acc);
   dm_dist_accel(d, t, ls->w, acc); /* its status is the finding itself */
@@ -194,8 +214,8 @@ void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_
                    : "non-finite acceleration in a stage of the step (the state at its "
                      "start is finite)");
   if (ctx->rank == 0) {
-    dmp_write_snapshot(octx, m, nreal, t, step, "dm_snapshot_unstable.h5");
-    ms_log(ctx, MS_LOG_ERROR, "discrete model: final state written to dm_snapshot_unstable.h5");
+    dmp_write_snapshot(octx, p, m, nreal, t, step, PTL_SNAPSHOT_UNSTABLE);
+    ms_log(ctx, MS_LOG_ERROR, "discrete model: final state written to " PTL_SNAPSHOT_UNSTABLE);
   }
 }
 

@@ -511,8 +511,8 @@ static void run_write_fields(dm_run *r, long step, double t) {
         dmp_write_profile(&r->octx, p, r->m, r->nreal, t, (int)q);
       } else {
         char name[64];
-        snprintf(name, sizeof name, "dm_snapshot_%03d.h5", (int)q);
-        dmp_write_snapshot(&r->octx, r->m, r->nreal, t, step, name);
+        ptl_snapshot_name(name, sizeof name, (long)q);
+        dmp_write_snapshot(&r->octx, p, r->m, r->nreal, t, step, name);
       }
     }
   }
@@ -602,7 +602,7 @@ static void run_finish(dm_run *r, ms_status st) {
   sum->cpu_s = r->cpu;
   sum->particle_steps_per_s = r->wall > 0 ? (double)r->nreal * (r->nsteps - r->step0) / r->wall : 0;
   if (st == MS_ERR_UNSTABLE)
-    dmp_report_unstable(r->ctx, &r->octx, r->m, r->d, r->ls, r->nreal, r->last_step,
+    dmp_report_unstable(r->ctx, &r->octx, r->p, r->m, r->d, r->ls, r->nreal, r->last_step,
                         r->last_step * r->dt);
 }
 

@@ -136,7 +136,7 @@ static void write_fields(dmf_run *r, double t, int last) {
   for (size_t q = 0; q < p->nsnapshot_times; ++q)
     if (!r->snap_done[q] && (t >= p->snapshot_times[q] * (1 - 1e-12) || last)) {
       char name[64];
-      snprintf(name, sizeof name, "dm_fin_snapshot_%03d.h5", (int)q);
+      ptl_snapshot_name(name, sizeof name, (long)q);
       const dmf_fields fl = dmf_live_fields(r);
       dmf_write_snapshot(r, &fl, t, r->f->step, name);
       r->snap_done[q] = 1;

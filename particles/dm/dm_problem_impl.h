@@ -95,8 +95,9 @@ ms_status dmp_write_series(const ms_ctx *ctx, const char *file, const char *titl
                            size_t nrow);
 void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
                        int index);
-void dmp_write_snapshot(const ms_ctx *ctx, dm_model *m, size_t nreal, double t, long step,
-                        const char *name);
+void dmp_material_table(const dm_problem *p, char *names, size_t size);
+void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
+                        long step, const char *name);
 void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_state *s,
                              size_t nreal, double t);
 void dmp_write_fin_profile(const ms_ctx *ctx, const dm_problem *p, const dm_fin *f, size_t nreal,
@@ -105,8 +106,8 @@ void dmp_write_probes(const ms_ctx *ctx, const dm_problem *p, const probe_rec *p
                       const double *hist, size_t nrec);
 void dmp_write_energy(const ms_ctx *ctx, const double *ehist, size_t nerec);
 void dmp_write_summary(const ms_ctx *ctx, const dm_run_summary *sum);
-void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, dm_model *m, dm_dist *d,
-                         const dm_state *ls, size_t nreal, long step, double t);
+void dmp_report_unstable(const ms_ctx *ctx, const ms_ctx *octx, const dm_problem *p, dm_model *m,
+                         dm_dist *d, const dm_state *ls, size_t nreal, long step, double t);
 
 /* ---- analyses against the exact solutions (dm_analysis.c): fill p->sum ---- */
 void dmp_rod_analysis(dm_problem *p, const double *hist, size_t nrec, double xprobe);

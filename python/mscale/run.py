@@ -113,7 +113,8 @@ class Run:
         the particle models' energy balance (``cd_energy.csv``, ``*dm*energy.csv``), a Table.
     ``snapshots``
         the particle snapshots in order, a list of :class:`mscale.Snapshot`
-        (``particles_NNNN.h5``, ``cd_snap_NNNNNN.h5``, ``*snapshot_NNN.h5``).
+        (``particles_NNNN.h5``, the one name of every particle problem's snapshots;
+        ``unstable_snapshot`` is the last good state of a run that went unstable).
     ``fragments``
         ``fragments.csv`` (one row per fragment at the end of the particle phase), a Table.
     ``spectra``
@@ -294,11 +295,16 @@ class Run:
 
     # -- HDF5 ---------------------------------------------------------------------------
     @property
+    def unstable_snapshot(self):
+        """The last good state of a run that went unstable (``particles_unstable.h5``), a
+        :class:`mscale.Snapshot`, or None."""
+        return self._once("unstable_snapshot", lambda: Snapshot(self.file("particles_unstable.h5"))
+                          if self.has("particles_unstable.h5") else None)
+
+    @property
     def snapshots(self):
         def make():
-            paths = (_numbered(self._glob("particles_*.h5"), r"particles_(\d+)\.h5")
-                     or _numbered(self._glob("cd_snap_*.h5"), r"cd_snap_(\d+)\.h5")
-                     or _numbered(self._glob("*snapshot_*.h5"), r".*snapshot_(\d+)\.h5"))
+            paths = _numbered(self._glob("particles_*.h5"), r"particles_(\d+)\.h5")
             return [Snapshot(p) for p in paths]
         return self._once("snapshots", make)
 

@@ -1,11 +1,13 @@
 # SPDX-License-Identifier: MIT
-"""Particle snapshots: the HDF5 files of the particle problems (``particles_NNNN.h5`` of the
-coupled problem, ``cd_snap_NNNNNN.h5`` of cluster dynamics, the discrete model's snapshots),
-read with h5py, and their extended-XYZ export.
+"""Particle snapshots: the HDF5 files of every particle problem (``particles_NNNN.h5`` of the
+coupled problem, cluster dynamics, the discrete model and the impact problem; docs/output.md,
+"Particle snapshots"), read with h5py, and their extended-XYZ export.
 
-A snapshot holds the group ``/particles``: ``x`` [n][3] (cm), ``v`` [n][3] (km/s), ``mass`` (g)
-and the model's per-particle datasets, each with a ``units`` attribute (integer datasets such as
-``gid``, ``fragment`` and ``vertex`` carry none), and the group's attributes (``time``, ``r0``,
+A snapshot holds the group ``/particles``: ``x`` [n][3] (cm), ``v`` [n][3] (km/s), ``mass`` (g),
+``material`` (an index into the attribute ``material_names``), ``vertex``, ``fragment`` where
+the problem finds fragments, and the model's per-particle datasets, each float dataset with a
+``units`` attribute (integer datasets such as ``gid``, ``material``, ``fragment`` and ``vertex``
+carry none), and the group's attributes (``time``, ``time_units``, ``step``, ``r0``,
 ``period_y``, ``material_names``, ...).
 """
 import io

@@ -117,7 +117,7 @@ static void test_good_deck_runs(void **state) {
   FILE *f = fopen(path, "r");
   assert_non_null(f); /* the energy balance was written */
   fclose(f);
-  snprintf(path, sizeof path, "%s/cd_snap_000000.xmf", dir);
+  snprintf(path, sizeof path, "%s/particles_0000.xmf", dir);
   assert_int_equal(access(path, R_OK), 0);
   remove_run_dir(dir);
   free_deck(p, m, doc, &e);
@@ -211,7 +211,7 @@ static void test_polycrystal_profiled(void **state) {
   char dir[] = "/tmp/cd_poly_test_XXXXXX";
   cd_problem *p = run_deck(text, dir, &e, &doc, &m);
   char path[512];
-  snprintf(path, sizeof path, "%s/cd_snap_000000.h5", dir);
+  snprintf(path, sizeof path, "%s/particles_0000.h5", dir);
   ms_h5r *h = ms_h5_open_read(path, &e);
   assert_non_null(h);
   double *x = NULL;

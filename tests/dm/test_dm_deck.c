@@ -310,10 +310,11 @@ static void test_finite_degenerate_stops(void **state) {
 }
 
 
-/* A snapshot (written through ptl_write_snapshot, docs/input-dm.md) holds exactly the DM's
- * datasets, one row per real particle, with particles/x = X + w to the bit (the same sum) and
- * the attributes time and step; its sidecar names the file and no vertex dataset, and no time
- * series is written (the DM layout leaves out v, mass, vertex and the series). */
+/* A snapshot (written through ptl_write_snapshot, docs/input-dm.md) holds exactly the layout
+ * every particle problem shares (docs/output.md, "Particle snapshots": x, v, mass, material,
+ * vertex) and the DM's own datasets, one row per real particle, with particles/x = X + w and
+ * particles/v = u to the bit and the attributes time and step; its sidecar names the file and
+ * the vertex dataset, and the time series particles.xmf lists it. */
 static void test_snapshot_layout(void **state) {
   (void)state;
   loaded L;
@@ -337,15 +338,16 @@ static void test_snapshot_layout(void **state) {
   assert_int_equal(dm_problem_run(&ctx, L.p), MS_OK);
   ms_ctx_close(&ctx);
   char path[512];
-  snprintf(path, sizeof path, "%s/dm_snapshot_000.h5", dir);
+  snprintf(path, sizeof path, "%s/particles_0000.h5", dir);
   ms_h5r *h = ms_h5_open_read(path, &L.e);
   assert_non_null(h);
   ms_h5_entry *items = NULL;
   size_t nitems = 0;
   assert_int_equal(ms_h5_list(h, "particles", &items, &nitems, &L.e), MS_OK);
-  static const char *const want[] = {"X", "cauchy",    "pressure", "sigma_xx", "speed",
-                                     "u", "von_mises", "w",        "x"};
-  static const size_t cols[] = {3, 9, 1, 1, 1, 3, 1, 3, 3};
+  static const char *const want[] = {"X",        "cauchy",    "mass",  "material",
+                                     "pressure", "sigma_xx",  "speed", "v",
+                                     "vertex",   "von_mises", "w",     "x"};
+  static const size_t cols[] = {3, 9, 1, 1, 1, 1, 1, 3, 1, 1, 3, 3};
   assert_int_equal(nitems, sizeof want / sizeof want[0]);
   for (size_t k = 0; k < nitems; k++) {
     assert_string_equal(items[k].name, want[k]);
@@ -353,8 +355,13 @@ static void test_snapshot_layout(void **state) {
     assert_int_equal(items[k].cols, cols[k]);
   }
   ms_h5_entries_free(items, nitems);
-  double *x = NULL, *X = NULL, *w = NULL, t = 0, step = 0;
+  double *x = NULL, *X = NULL, *w = NULL, *v = NULL, *speed = NULL, t = 0, step = 0;
   size_t n0 = 0, n1 = 0;
+  assert_int_equal(ms_h5_read_doubles(h, "particles/v", &v, &n0, &n1, &L.e), MS_OK);
+  assert_int_equal(ms_h5_read_doubles(h, "particles/speed", &speed, &n0, &n1, &L.e), MS_OK);
+  for (size_t i = 0; i < n0; i++) /* |u| from the same u: the speed of v, to the bit */
+    assert_true(speed[i] == sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] +
+                                 v[3 * i + 2] * v[3 * i + 2]));
   assert_int_equal(ms_h5_read_doubles(h, "particles/x", &x, &n0, &n1, &L.e), MS_OK);
   assert_int_equal(ms_h5_read_doubles(h, "particles/X", &X, &n0, &n1, &L.e), MS_OK);
   assert_int_equal(ms_h5_read_doubles(h, "particles/w", &w, &n0, &n1, &L.e), MS_OK);
@@ -367,20 +374,29 @@ static void test_snapshot_layout(void **state) {
   /* step 2 of dt = 0.002 (10 us), written in us: 10 x 2 x 0.002 (two roundings only) */
   assert_true(fabs(t - 0.04) < 1e-15);
   assert_true(step == 2.0);
+  char *names = NULL; /* the material table: the one layer's material */
+  assert_int_equal(ms_h5_read_attr_string(h, "particles", "material_names", &names, &L.e), MS_OK);
+  assert_string_equal(names, "steel");
+  free(names);
   ms_h5_close_read(h);
-  free(x), free(X), free(w);
-  snprintf(path, sizeof path, "%s/dm_snapshot_000.xmf", dir);
+  free(x), free(X), free(w), free(v), free(speed);
+  snprintf(path, sizeof path, "%s/particles_0000.xmf", dir);
   FILE *f = fopen(path, "r");
   assert_non_null(f);
   char xmf[8192];
   size_t len = fread(xmf, 1, sizeof xmf - 1, f);
   fclose(f);
   xmf[len] = 0;
-  assert_non_null(strstr(xmf, "dm_snapshot_000.h5:particles/x"));
-  assert_non_null(strstr(xmf, "dm_snapshot_000.h5:particles/u"));
-  assert_null(strstr(xmf, "particles/vertex"));
+  assert_non_null(strstr(xmf, "particles_0000.h5:particles/x"));
+  assert_non_null(strstr(xmf, "particles_0000.h5:particles/v"));
+  assert_non_null(strstr(xmf, "particles_0000.h5:particles/vertex"));
   snprintf(path, sizeof path, "%s/particles.xmf", dir);
-  assert_int_equal(access(path, F_OK), -1);
+  f = fopen(path, "r");
+  assert_non_null(f);
+  len = fread(xmf, 1, sizeof xmf - 1, f);
+  fclose(f);
+  xmf[len] = 0;
+  assert_non_null(strstr(xmf, "href=\"particles_0000.xmf\""));
   DIR *d = opendir(dir);
   assert_non_null(d);
   for (struct dirent *de; (de = readdir(d));)

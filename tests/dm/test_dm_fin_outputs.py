@@ -5,7 +5,8 @@ docs/output.md), read back with h5py:
     python3 tests/dm/test_dm_fin_outputs.py MSCALE SOURCE_DIR WORKDIR
 
 1. tests/dm/data/dm_fin_piston_2d.yaml (an elastic-plastic slab hit by a piston, 2D):
-   - every float dataset of /particles carries its units; particles.xmf lists both snapshots;
+   - every float dataset of /particles carries its units; particles.xmf lists both snapshots
+     (particles_NNNN.h5); particles/material indexes the table material_names ("al6061");
    - each snapshot agrees with the layer-averaged profile written at the same step (p, q, e,
      eps_p, sigma_u, J, rho, x, u_x: an independent path through the model's arrays), with
      x = X + w, rho J = rho0, the piston layers' velocity and the masses;
@@ -14,7 +15,7 @@ docs/output.md), read back with h5py:
    - the hourglass indicator equals a numpy least-squares fit of each family's displacements
      (the family and the fit built here from the particles' positions alone).
 2. The same slab with a piston too fast for an inviscid step (courant 1, no viscosity): the run
-   stops with exit 1 naming step, particle and quantity, writes dm_fin_snapshot_unstable.h5 of
+   stops with exit 1 naming step, particle and quantity, writes particles_unstable.h5 of
    the last good step, and no output holds a NaN; that snapshot equals the snapshot of a run of
    the same deck stopped (steps: N) at that step, dataset by dataset, bit for bit.
 """
@@ -91,7 +92,8 @@ def hourglass_numpy(X, w, period_y, delta):
 
 # ---- 1. snapshots of a run that completes ----
 out, _ = run(deck_text, "piston")
-snaps = sorted(glob.glob(os.path.join(out, "dm_fin_snapshot_[0-9]*.h5")))
+snaps = sorted(glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
+assert [os.path.basename(p) for p in snaps] == ["particles_0000.h5", "particles_0001.h5"], snaps
 assert len(snaps) == 2, snaps
 xmf = open(os.path.join(out, "particles.xmf")).read()
 assert all(os.path.basename(s)[:-3] + ".xmf" in xmf for s in snaps), xmf
@@ -111,6 +113,9 @@ for k, path in enumerate(snaps):
                      ("x", s["x"][:, 0]), ("u_x", s["v"][:, 0])]:
         worst = max(worst, close(lay(arr), prof[col], 1e-9, f"{path}: {col} vs the profile"))
     assert np.array_equal(s["x"], s["X"] + s["w"]), path
+    names = s["attrs"]["material_names"]
+    names = names.decode() if isinstance(names, bytes) else str(names)
+    assert names == "al6061" and np.all(s["material"] == 0), (path, names)
     close(s["density"] * s["J"], RHO0, 1e-14, f"{path}: rho J = rho0")
     piston = (np.arange(NX * NY) % NX) < 2
     assert np.all(s["v"][piston, 0] == UP), path
@@ -138,12 +143,12 @@ bad = deck_text.replace("velocity: 0.3", "velocity: 8.0").replace(
     "checkpoint_every: 60", "checkpoint_every: 0")
 out, err = run(bad, "fails", expect=1)
 m_ = re.search(r"step (\d+), t = \S+ us: particle (\d+) \(X = [^)]*\): (.+?) = (\S+); the run stops, "
-               r"the last good state \(step (\d+), t = (\S+) us\) is in dm_fin_snapshot_unstable.h5",
+               r"the last good state \(step (\d+), t = (\S+) us\) is in particles_unstable.h5",
                err)
 assert m_, err
 step, good = int(m_.group(1)), int(m_.group(5))
 assert good == step - 1 and step > 1, err
-s = snapshot(os.path.join(out, "dm_fin_snapshot_unstable.h5"))
+s = snapshot(os.path.join(out, "particles_unstable.h5"))
 assert s["attrs"]["step"] == good and abs(s["attrs"]["time"] - float(m_.group(6))) <= 1e-8, s["attrs"]
 for f in glob.glob(os.path.join(out, "*.csv")) + glob.glob(os.path.join(out, "*.h5")):
     if f.endswith(".csv"):
@@ -155,7 +160,7 @@ for f in glob.glob(os.path.join(out, "*.csv")) + glob.glob(os.path.join(out, "*.
 stopped = bad.replace("t_end: 0.06", f"steps: {good}").replace("snapshot_times: [0.03, 0.06]",
                                                                 "snapshot_times: [1.0]")
 out2, _ = run(stopped, "stopped")
-ref = snapshot(os.path.join(out2, "dm_fin_snapshot_000.h5"))
+ref = snapshot(os.path.join(out2, "particles_0000.h5"))
 for k in UNITS:
     assert np.array_equal(s[k], ref[k]), f"unstable snapshot's {k} differs from the state at step {good}"
 print(f"failure: step {step}, particle {m_.group(2)}, {m_.group(3)} = {m_.group(4)}; the snapshot "

@@ -20,7 +20,7 @@ done
 for f in cd_energy.csv cd_profiles.csv cd_front.csv; do
   cmp "$work/full/$f" "$work/cont2/$f" || { echo "FAIL: $f differs after a restart on 2 ranks"; exit 1; }
 done
-h5diff -q "$work/full/cd_snap_000803.h5" "$work/cont2/cd_snap_000803.h5" ||
+h5diff -q "$work/full/particles_0002.h5" "$work/cont2/particles_0002.h5" ||
   { echo "FAIL: the final snapshot differs after a restart on 2 ranks"; exit 1; }
 echo "2 ranks -> 2 ranks: bitwise"
 for np in 1 3; do

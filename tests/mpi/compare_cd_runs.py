@@ -20,8 +20,8 @@ for f in ("cd_energy.csv", "cd_profiles.csv", "cd_front.csv"):
     err = (np.abs(x - y) / np.maximum(np.abs(x).max(axis=0), 1e-300)).max()
     print(f"{os.path.basename(run)}: {f} max deviation {err:.2e} of the column scale")
     assert err < 1e-8, (f, err)
-snaps = sorted(glob.glob(os.path.join(run, "cd_snap_*.h5")))
-refs = sorted(glob.glob(os.path.join(ref, "cd_snap_*.h5")))
+snaps = sorted(glob.glob(os.path.join(run, "particles_[0-9]*.h5")))
+refs = sorted(glob.glob(os.path.join(ref, "particles_[0-9]*.h5")))
 assert snaps and refs and os.path.basename(snaps[-1]) == os.path.basename(refs[-1]), (snaps, refs)
 with h5py.File(snaps[-1]) as h, h5py.File(refs[-1]) as r:
     g, gr = h["particles/gid"][:], r["particles/gid"][:]

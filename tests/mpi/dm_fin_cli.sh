@@ -14,8 +14,8 @@ files="dm_fin_energy.csv dm_fin_profile_000.csv dm_fin_profile_001.csv dm_probes
 same() { # DIR_A DIR_B WHAT [FIRST_SNAPSHOT]
   for f in $files; do cmp -s "$1/$f" "$2/$f" || { echo "FAIL: $f differs ($3)"; exit 1; }; done
   for k in ${4:-0} 1; do
-    h5diff -q "$1/dm_fin_snapshot_00$k.h5" "$2/dm_fin_snapshot_00$k.h5" ||
-      { echo "FAIL: dm_fin_snapshot_00$k.h5 differs ($3)"; exit 1; }
+    h5diff -q "$1/particles_000$k.h5" "$2/particles_000$k.h5" ||
+      { echo "FAIL: particles_000$k.h5 differs ($3)"; exit 1; }
   done
 }
 "$mscale" run "$deck" -o "$work/serial" --quiet
@@ -42,6 +42,6 @@ for np in 1 2; do
   n=$(grep -c "the run stops" "$work/fail$np.err" || true)
   [ "$n" == 1 ] || { cat "$work/fail$np.err"; echo "FAIL: $n reports on $np ranks"; exit 1; }
 done
-h5diff -q "$work/fail1/dm_fin_snapshot_unstable.h5" "$work/fail2/dm_fin_snapshot_unstable.h5" ||
+h5diff -q "$work/fail1/particles_unstable.h5" "$work/fail2/particles_unstable.h5" ||
   { echo "FAIL: the last good state differs on 2 ranks"; exit 1; }
 echo "OK: serial = 2 ranks = 3 ranks = restarts on 3 and 1 ranks; a failure on 2 ranks = serial"

@@ -20,7 +20,7 @@ grep -q "t_end: 6.0e-3" "$work/deck.yaml" || { echo "deck edit failed"; exit 1; 
 "$mscale" run "$work/deck.yaml" -o "$work/np1" --quiet
 mpirun 2 "$mscale" run "$work/deck.yaml" -o "$work/np2" --quiet
 for np in 1 2; do
-  snap=$(ls "$work/np$np"/cd_snap_*.h5 | tail -1)
+  snap=$(ls "$work/np$np"/particles_[0-9]*.h5 | tail -1)
   h5dump -a /particles/period_x "$snap" | grep -q "0.01" || { echo "no period_x"; exit 1; }
   "$mscale" spectrum "$snap" --fragments "$work/frag$np.csv" |
     grep -v '^#' > "$work/spec$np.csv"

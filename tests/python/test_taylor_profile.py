@@ -5,10 +5,10 @@
 
 Runs a small `impact` deck (a copper cylinder of radius 3 h and 12 layers at 0.3 km/s onto the
 wall, 3 µs) and checks that the tool's length and footprint (read through python/mscale from
-impact_particles_final.csv) equal the ones particles/dm/dm_impact.c wrote to impact_summary.csv,
-and that at t = 0 (impact_particles_000.csv) they are the rod's L0 = 12 h and D0: the two
-implementations of docs/input-impact.md's definitions agree. Tolerance: both come from CSVs of
-10 significant digits (core/csv.c), so 1e-8 relative.
+the last particle snapshot, particles_0001.h5, the final state) equal the ones
+particles/dm/dm_impact.c wrote to impact_summary.csv, and that at t = 0 (particles_0000.h5) they
+are the rod's L0 = 12 h and D0: the two implementations of docs/input-impact.md's definitions
+agree. Tolerance: the summary is a CSV of 10 significant digits (core/csv.c), so 1e-8 relative.
 """
 import os
 import subprocess
@@ -46,7 +46,9 @@ if res.returncode != 0:
     sys.exit(f"test_taylor_profile: mscale run failed ({res.returncode}):\n{res.stderr}")
 summary = mscale.Run(out).table("impact_summary")
 m = taylor_profile.measure(out)
-m0 = taylor_profile.measure(out, "impact_particles_000.csv")
+names = [os.path.basename(s.path) for s in mscale.Run(out).snapshots]
+assert names == ["particles_0000.h5", "particles_0001.h5"], names  # t = 0, then the final state
+m0 = taylor_profile.measure(out, 0)
 rtol = 1e-8
 checks = [
     (abs(m["length"] / float(summary["length"][0]) - 1) < rtol, "final length"),
