@@ -101,9 +101,10 @@ static ms_status write_sidecar(const char *path, const ptl_snapshot *sn, size_t 
                                          ms_out_time(sn->time), sn->nxdmf, sn->xdmf);
   free(xmf);
   /* the run's time series: every sidecar of this prefix (the name up to its number); a name
-   * without a number (particles_unstable.h5) is no part of it and leaves it as it is */
+   * without a number before its extension (particles_unstable.h5: the 5 of .h5 is none) is no
+   * part of it and leaves it as it is */
   size_t dirlen = (size_t)(base - path), plen = strcspn(base, "0123456789");
-  if ((sn->omit & PTL_SNAPSHOT_NO_SERIES) || !base[plen]) return st;
+  if ((sn->omit & PTL_SNAPSHOT_NO_SERIES) || plen >= strcspn(base, ".")) return st;
   char *dir = ms_calloc(dirlen + 2, 1), *prefix = ms_calloc(plen + 1, 1);
   memcpy(dir, path, dirlen);
   if (dirlen == 0) strcpy(dir, ".");
