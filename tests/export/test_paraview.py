@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """ParaView (Debian's python3-paraview, run by pvpython offscreen) opens a run's temporal XDMF
-collections: the coupled problem's particles.xmf, a continuum run's profiles.xmf and the
-finite-deformation discrete model's particles.xmf.
+collections: a continuum run's profiles.xmf and the particles.xmf of every particle problem (the
+coupled problem, cluster dynamics, the discrete model, linear and with response: eos, and the
+impact problem), each a series of particles_NNNN.h5.
 
     pvpython --force-offscreen-rendering tests/export/test_paraview.py MSCALE SOURCE_DIR WORKDIR
 
@@ -62,10 +63,58 @@ cont = run("inputs/continuum-sod.yaml", os.path.join(work, "sod"))
 profiles = sorted(glob.glob(os.path.join(cont, "profile_[0-9]*.h5")))
 n2 = check_series(os.path.join(cont, "profiles.xmf"), profiles, "nodes/xyz",
                   ("rho", "cells/rho"), False)
-# the discrete model at finite deformation (response: eos): its snapshots' own series
-dm = run("tests/dm/data/dm_fin_piston_2d.yaml", os.path.join(work, "dm_fin"))
-dm_snaps = sorted(glob.glob(os.path.join(dm, "dm_fin_snapshot_[0-9]*.h5")))
-n3 = check_series(os.path.join(dm, "particles.xmf"), dm_snaps, "particles/x",
-                  ("von_mises", "particles/von_mises"), True)
-print(f"paraview: particles.xmf {n1} steps, profiles.xmf {n2} steps, discrete model (eos) "
-      f"particles.xmf {n3} steps, as in the HDF5 files")
+# every other particle problem: the same particles_NNNN.h5 series (docs/output.md, "Particle
+# snapshots"): cluster dynamics, the discrete model (linear and response: eos) and impact
+DM_LINEAR = """problem: discrete_model
+materials:
+  - name: steel
+    eos: {type: linear_elastic, rho0: 7.85, bulk_modulus: 66.666666666666667}
+    shear_modulus: 100.0
+discrete_model:
+  spacing: 0.05
+  domain: {lo: [0], hi: [1]}
+  boundaries: {x_lo: wall, x_hi: free}
+  layers: [{material: steel}]
+  initial: {profile: rod_sine, amplitude: 0.001, length: 1}
+  steps: 4
+  dt: 0.002
+  output: {snapshot_times: [0, 0.004, 0.008]}
+"""
+IMPACT = """problem: impact
+materials:
+  - name: cu
+    eos: {type: mg_linear, rho0: 8.93, c0: 3.94, s: 1.489, gamma0: 2.02}
+impact:
+  spacing: 0.05
+  domain: {lo: [-1, -1, 0], hi: [1, 1, 1.5]}
+  bodies:
+    - {shape: cylinder, axis: z, center: [0, 0, 0.3], radius: 0.15, length: 0.6,
+       material: cu, yield: johnson_cook, strength_set: Cu_OFHC_JC, velocity: [0, 0, -0.3]}
+  wall: {axis: z, position: 0}
+  t_end: 0.05
+  output: {particle_times: [0, 0.02]}
+"""
+
+
+def deck_file(name, text):
+    os.makedirs(work, exist_ok=True)
+    path = os.path.join(work, name + ".yaml")
+    with open(path, "w") as f:
+        f.write(text)
+    return os.path.abspath(path)  # os.path.join(src, an absolute path) is that path
+
+
+counts = {}
+for name, deck, array in [
+        ("cluster_dynamics", "tests/cd/data/cd_restart_2d.yaml", "pressure"),
+        ("discrete_model", deck_file("dm_linear", DM_LINEAR), "von_mises"),
+        ("discrete_model (eos)", "tests/dm/data/dm_fin_piston_2d.yaml", "von_mises"),
+        ("impact", deck_file("impact", IMPACT), "pressure")]:
+    out = run(deck, os.path.join(work, name.replace(" ", "_").strip("()")))
+    snaps = sorted(glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
+    assert len(snaps) >= 2, (name, snaps)
+    counts[name] = check_series(os.path.join(out, "particles.xmf"), snaps, "particles/x",
+                                (array, "particles/" + array), True)
+print(f"paraview: coupled particles.xmf {n1} steps, profiles.xmf {n2} steps, " +
+      ", ".join(f"{k} particles.xmf {v} steps" for k, v in counts.items()) +
+      ", as in the HDF5 files")
