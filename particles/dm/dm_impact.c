@@ -105,15 +105,28 @@ static void taylor_measures(const dm_impact *p, const dm_state *s, const double 
   *length = zmax - zmin + p->h, *footprint = D;
 }
 
+/* The per-particle fields a snapshot shows: w, u ([n][3]), e, ρ, p, J, ε_p ([n]), of the live
+ * model or of the copy taken at the start of a step (the last good state when it fails). */
+enum { NFIELD = 7, FIELD_DOUBLES = 2 * 3 + 5 }; /* per particle */
+static void live_fields(const dm_fin *f, double *fld[NFIELD]) {
+  double *const live[NFIELD] = {f->m->s->w, f->m->s->u, f->e, f->rho, f->p, f->J, f->eps_p};
+  memcpy(fld, live, sizeof live);
+}
+static void copy_fields(double *buf, size_t n, double *fld[NFIELD]) {
+  for (int k = 0; k < NFIELD; buf += (k < 2 ? 3 : 1) * n, ++k) fld[k] = buf;
+}
+
 /* OUTDIR/NAME: an HDF5 snapshot of every particle in the layout of every particle problem
  * (docs/output.md, "Particle snapshots"; ptl_write_snapshot with the particles.xmf series):
- * current x, velocity u, mass, material (index into material_names: the bodies' materials,
- * each name once), then the model's fields: body, first reference X0, ρ, p, e, ε_p, J;
- * attributes time, step, r0 = h. */
+ * current x = X + w, velocity u, mass, material (index into material_names: the bodies'
+ * materials, each name once), then the model's fields: body, first reference X0, ρ, p, e,
+ * ε_p, J (fld: live_fields' order); attributes time, step, r0 = h. */
 static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *name,
-                            const dm_fin *f, const double *X0, const uint8_t *imat, double t) {
+                            const dm_fin *f, double *const fld[NFIELD], const double *X0,
+                            const uint8_t *imat, double t, long step) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = f->m->s;
+  const double *w = fld[0], *u = fld[1];
   const size_t n = f->n;
   double *xv = ms_calloc(6 * n + 1, sizeof(double));
   int64_t *ids = ms_calloc(2 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n;
@@ -130,18 +143,18 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   for (size_t i = 0; i < n; ++i) {
     body[i] = imat[i], mat[i] = bmat[imat[i]];
     for (int a = 0; a < 3; ++a) {
-      xv[a * n + i] = s->X[3 * i + a] + s->w[3 * i + a];
-      xv[(3 + a) * n + i] = s->u[3 * i + a];
+      xv[a * n + i] = s->X[3 * i + a] + w[3 * i + a];
+      xv[(3 + a) * n + i] = u[3 * i + a];
     }
   }
   const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
                                     {"particles/body", NULL, body, 1, NULL},
                                     {"particles/X0", X0, NULL, 3, "cm"},
-                                    {"particles/density", f->rho, NULL, 1, "g/cm^3"},
-                                    {"particles/pressure", f->p, NULL, 1, "GPa"},
-                                    {"particles/energy", f->e, NULL, 1, "kJ/g"},
-                                    {"particles/eps_p", f->eps_p, NULL, 1, "1"},
-                                    {"particles/J", f->J, NULL, 1, "1"}};
+                                    {"particles/density", fld[3], NULL, 1, "g/cm^3"},
+                                    {"particles/pressure", fld[4], NULL, 1, "GPa"},
+                                    {"particles/energy", fld[2], NULL, 1, "kJ/g"},
+                                    {"particles/eps_p", fld[6], NULL, 1, "1"},
+                                    {"particles/J", fld[5], NULL, 1, "1"}};
   const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
                                {"mass", "particles/mass", 1, false},
                                {"density", "particles/density", 1, false},
@@ -158,7 +171,7 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   snap.xdmf = xdmf;
   snap.material_names = names;
   ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)f->step);
+  ptl_snapshot_attr_add(&snap, "step", (double)step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
   char *path = ms_out_path(ctx, name);
   if (ptl_write_snapshot(path, &snap) != MS_OK)
@@ -299,13 +312,20 @@ static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
   return MS_OK;
 }
 
+/* The time loop. Before every step it copies the fields of the snapshots (11 doubles = 88 B
+ * per particle), since a step that fails (dm_fin_step) changes them before it can fail: the
+ * last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
+ * discrete_model problem does (dm_fin_output.c). */
 static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat) {
   dm_impact *p = r->p;
   dm_fin *f = r->f;
   ms_status st = MS_OK;
   size_t next_out = 0;
   double wall_time = 0;
+  double *live[NFIELD], *good[NFIELD], *buf = ms_calloc(FIELD_DOUBLES * f->n + 1, sizeof(double));
+  copy_fields(buf, f->n, good);
   for (long step = 0;; ++step) {
+    live_fields(f, live);
     const int last = r->t >= p->t_end * (1 - 1e-12);
     if (step % p->energy_every == 0 || last) record(r);
     /* particles_NNNN.h5 at output.particle_times, and the final state always the last one */
@@ -314,38 +334,50 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
     while (next_out < p->nparticle_times &&
            (r->t >= p->particle_times[next_out] * (1 - 1e-12) || last)) {
       ptl_snapshot_name(name, sizeof name, (long)next_out);
-      write_particles(ctx, p, name, f, r->X0, imat, r->t);
+      write_particles(ctx, p, name, f, live, r->X0, imat, r->t, f->step);
       ++next_out;
     }
     if (last && next_out == first_now) {
       ptl_snapshot_name(name, sizeof name, (long)next_out);
-      write_particles(ctx, p, name, f, r->X0, imat, r->t);
+      write_particles(ctx, p, name, f, live, r->X0, imat, r->t, f->step);
     }
     if (last) break;
     if (r->t + f->dt_next > p->t_end) f->dt_next = p->t_end - r->t;
+    const double t_good = r->t;
+    const long step_good = f->step;
+    for (int k = 0; k < NFIELD; ++k)
+      memcpy(good[k], live[k], (k < 2 ? 3 : 1) * f->n * sizeof(double));
     const double dt = f->dt_next, w0 = ms_wall_time();
     st = dm_fin_step(f);
+    const bool step_failed = st != MS_OK;
     if (st == MS_OK) st = maybe_update(r, ctx);
     wall_time += ms_wall_time() - w0;
     r->t += dt;
     if (st != MS_OK) {
-      if (f->bad_what) {
+      if (step_failed && f->bad_what) {
         const double *X = &f->m->s->X[3 * f->bad];
         ms_log(ctx, MS_LOG_ERROR,
-               "impact: step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = %g; the run stops "
-               "(no output of this state)",
-               f->step, r->t, f->bad, X[0], X[1], X[2], f->bad_what, f->bad_value);
+               "impact: step %ld, t = %.9g %s: particle %zu (X = %g %g %g): %s = %g; the run "
+               "stops, the last good state (step %ld, t = %.9g %s) is in " PTL_SNAPSHOT_UNSTABLE,
+               f->step, ms_out_time(r->t), ms_out_time_label(), f->bad, X[0], X[1], X[2],
+               f->bad_what, f->bad_value, step_good, ms_out_time(t_good), ms_out_time_label());
+        write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, good, r->X0, imat, t_good, step_good);
       }
       break;
     }
     const long out = outside_box(p, f->m->s);
-    if (out >= 0) {
-      ms_log(ctx, MS_LOG_ERROR, "impact: step %ld, t = %.9g: particle %ld left the domain", f->step,
-             r->t, out);
+    if (out >= 0) { /* a finite state: the one that left the domain */
+      ms_log(ctx, MS_LOG_ERROR,
+             "impact: step %ld, t = %.9g %s: particle %ld left the domain; its state is "
+             "in " PTL_SNAPSHOT_UNSTABLE,
+             f->step, ms_out_time(r->t), ms_out_time_label(), out);
+      live_fields(f, live);
+      write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, live, r->X0, imat, r->t, f->step);
       st = MS_ERR_UNSTABLE;
       break;
     }
   }
+  free(buf);
   p->sum.wall_s = wall_time;
   return st;
 }

@@ -17,9 +17,10 @@ response: eos and the impact problem:
   - `mscale export --format extxyz` of the last snapshot read by ASE gives the positions and
     velocities of the HDF5 file, equal (17 significant digits round-trip every double), and the
     species of the material names.
-And a run that goes unstable (tests/reliability/unstable/cd_piston_too_fast.yaml, with
-snapshots) writes particles_unstable.h5 in the same layout and leaves particles.xmf listing the
-numbered snapshots (it used to rewrite it empty: the digit of ".h5" was taken for an index).
+And a run that goes unstable (tests/reliability/unstable/cd_piston_too_fast.yaml with
+snapshots; an impact rod leaving its domain) writes particles_unstable.h5 in the same layout and
+leaves particles.xmf listing the numbered snapshots (it used to rewrite it empty: the digit of
+".h5" was taken for an index).
 """
 import glob
 import os
@@ -161,15 +162,26 @@ for name, (deck, names, first, fragments) in PROBLEMS.items():
     print(f"{name}: {len(snaps)} snapshots {snaps[0]}..{snaps[-1]}, {n} particles, materials "
           f"{table}: layout, series, Run.snapshots and ASE as expected")
 
-# a run that goes unstable: particles_unstable.h5, and particles.xmf keeps the numbered ones only
-# (with a snapshot every few steps, so the series holds some before the failure at step 10)
+def check_unstable(name, deck_text, names):
+    """A run that goes unstable: exit 1, particles_unstable.h5 in the shared layout, and
+    particles.xmf listing exactly the numbered snapshots written before."""
+    out = run(name, deck_text, 1)
+    check_layout(os.path.join(out, "particles_unstable.h5"), names, False)
+    numbered = sorted(os.path.basename(p)[:-3] + ".xmf"
+                      for p in glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
+    assert numbered, f"{name}: no numbered snapshot before the failure"
+    hrefs = re.findall(r'href="([^"]+)"', open(os.path.join(out, "particles.xmf")).read())
+    assert hrefs == numbered, (f"{name}: particles.xmf after the unstable snapshot", hrefs, numbered)
+    assert mscale.Run(out).unstable_snapshot is not None, name
+    print(f"{name}: particles_unstable.h5 in the shared layout; particles.xmf lists "
+          f"{len(hrefs)} numbered snapshots")
+
+
+# cluster dynamics: a piston too fast (a snapshot every few steps, so the series holds some
+# before the failure at step 10)
 deck = open(os.path.join(src, "tests/reliability/unstable/cd_piston_too_fast.yaml")).read()
-out = run("unstable", deck + "  output: {snapshots: 1000}\n", 1)
-check_layout(os.path.join(out, "particles_unstable.h5"), ["al"], False)
-numbered = sorted(os.path.basename(p)[:-3] + ".xmf"
-                  for p in glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
-assert numbered, "the unstable run wrote no numbered snapshot before it failed"
-hrefs = re.findall(r'href="([^"]+)"', open(os.path.join(out, "particles.xmf")).read())
-assert hrefs == numbered, ("particles.xmf after the unstable snapshot", hrefs, numbered)
-assert mscale.Run(out).unstable_snapshot is not None
-print(f"unstable: particles_unstable.h5 in the shared layout; particles.xmf lists {hrefs}")
+check_unstable("unstable_cd", deck + "  output: {snapshots: 1000}\n", ["al"])
+# impact: the rod flies away from the wall out of a short domain (its state, finite, is kept)
+check_unstable("unstable_impact", IMPACT.replace("velocity: [0, 0, -0.3]", "velocity: [0, 0, 0.5]")
+               .replace("t_end: 0.05", "t_end: 1.0").replace("hi: [1, 1, 1.5]", "hi: [1, 1, 1.0]"),
+               ["cu"])
