@@ -185,12 +185,13 @@ ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long in
 
 /* A particle step failed: the guard's finding (step, time on the particles' clock, particle,
  * quantity) and the state it found, particles_unstable.h5 (docs/reliability.md §5). */
-void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start) {
+void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start,
+                            const char *material) {
   ms_log(ctx, MS_LOG_ERROR, "coupled: particles (clock started at t = %g %s): %s",
          ms_out_time(t_start), ms_out_time_label(),
          st == MS_ERR_UNSTABLE ? ptl_region_error(r) : ms_status_str(st));
   char *path = ms_out_path(ctx, PTL_SNAPSHOT_UNSTABLE);
-  if (ptl_region_write_snapshot(r, path) == MS_OK)
+  if (ptl_region_write_snapshot(r, path, material) == MS_OK)
     ms_log(ctx, MS_LOG_ERROR, "coupled: final state written to " PTL_SNAPSHOT_UNSTABLE);
   free(path);
 }

@@ -114,7 +114,8 @@ ms_status cpl_transport_phase(ms_ctx *ctx, cpl_problem *p, const cpl_fragments *
                               double rho0);
 ms_status cpl_write_particles(const ms_ctx *ctx, cpl_particle_phase *ph, long index, double t,
                               const cpl_particles *view);
-void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start);
+void cpl_particles_unstable(const ms_ctx *ctx, ptl_region *r, ms_status st, double t_start,
+                            const char *material);
 long cpl_checkpoint_steps(const cpl_problem *p, double dt);
 /* SIGINT/SIGTERM on any rank, or the wall-time limit passed on rank 0 (docs/reliability.md
  * §5b). Collective: every rank calls it at the same point of the loop. */

@@ -291,7 +291,7 @@ static ms_status particle_loop(one_way *w) {
     }
     st = particle_step(w);
     if (st != MS_OK) {
-      cpl_particles_unstable(ctx, r, st, w->t_start);
+      cpl_particles_unstable(ctx, r, st, w->t_start, w->ph.material);
       break;
     }
     bool out_now = step * p->n_out >= w->next_out * w->nsteps;

@@ -142,7 +142,7 @@ static ms_status sub_cycle(two_way *w, double dtg, double ubar) {
     w->f_prev = f;
   }
   if (st != MS_OK) {
-    cpl_particles_unstable(w->ctx, r, st, 0.0);
+    cpl_particles_unstable(w->ctx, r, st, 0.0, w->ph.material);
     return st;
   }
   /* MPI: each rank holds the impulse on its own driven particles (linear in their forces, so the

@@ -62,8 +62,8 @@ void ptl_region_refresh_ghosts(ptl_region *r) { r->model->refresh_ghosts(r); }
 void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner) {
   r->model->ghost_owners(r, owner);
 }
-ms_status ptl_region_write_snapshot(ptl_region *r, const char *path) {
-  return r->model->write_snapshot(r, path);
+ms_status ptl_region_write_snapshot(ptl_region *r, const char *path, const char *material) {
+  return r->model->write_snapshot(r, path, material);
 }
 bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr) {
   if (r->model->links) return r->model->links(r, start, nbr);

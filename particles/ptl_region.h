@@ -114,8 +114,10 @@ void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner);
  * |r_i − r_k| ≤ b·a (cluster dynamics). The discrete model links the unbroken bonds. */
 bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr);
 
-/* The model's own HDF5 snapshot of its state (a run that went unstable). */
-ms_status ptl_region_write_snapshot(ptl_region *r, const char *path);
+/* The model's own HDF5 snapshot of its state (a run that went unstable), in the layout of every
+ * particle snapshot (ptl.h); `material` names the sample's material (material 0) for the
+ * snapshot's material_names (NULL: none). */
+ms_status ptl_region_write_snapshot(ptl_region *r, const char *path, const char *material);
 /* Checkpoint: bring the state to what a restore reproduces (before writing), write it into the
  * open checkpoint h, and restore from one (replacing the particles; *step: the region's step). */
 ms_status ptl_region_refresh(ptl_region *r);

@@ -44,7 +44,7 @@ struct ptl_region_model {
   void (*ghost_owners)(const ptl_region *r, int32_t *owner);
   /* optional (NULL: the coupling's distance criterion): ptl_region_links */
   bool (*links)(ptl_region *r, const size_t **start, const int32_t **nbr);
-  ms_status (*write_snapshot)(ptl_region *r, const char *path);
+  ms_status (*write_snapshot)(ptl_region *r, const char *path, const char *material);
   ms_status (*refresh)(ptl_region *r);
   ms_status (*checkpoint_write)(const ptl_region *r, ms_h5 *h, const ms_ctx *ctx);
   ms_status (*restore)(ptl_region *r, ms_h5r *h, const ms_ctx *ctx, long *step, dk_errors *e);

@@ -215,7 +215,7 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
               eta[k], v_sp, u_fs[k], x_va);
   }
   r->steps = n;
-  if (c->snapshot && ptl_region_write_snapshot(reg, c->snapshot) != MS_OK)
+  if (c->snapshot && ptl_region_write_snapshot(reg, c->snapshot, NULL) != MS_OK)
     fprintf(stderr, "jets: could not write %s\n", c->snapshot);
   r->t_end = n ? tt[n - 1] : 0;
   /* the fit window and the breakout amplitude */

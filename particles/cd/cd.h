@@ -368,6 +368,8 @@ double cd_front_position(const double *profile, int nbin, int axis, double u_ref
 /* HDF5 particle snapshot (positions, velocities, material, gid, per-particle σ_u and
  * pressure) plus an XDMF sidecar "<path without .h5>.xmf". */
 ms_status cd_write_snapshot(cd_sim *s, const char *path);
+/* Replaces the material table of the snapshots ("al,pb"; NULL: none). */
+void cd_sim_set_material_names(cd_sim *s, const char *names);
 /* The SIMD kernels this CPU runs: "avx512", "avx2" or "scalar" (cd_kernel.c; for --version and
  * run_info.yaml). */
 const char *cd_kernel_name(void);

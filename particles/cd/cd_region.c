@@ -383,7 +383,8 @@ static void region_refresh_ghosts(ptl_region *r) { cd_sim_refresh_ghosts(sim_of(
 static void region_ghost_owners(const ptl_region *r, int32_t *owner) {
   cd_sim_ghost_owners(sim_of(r), owner);
 }
-static ms_status region_write_snapshot(ptl_region *r, const char *path) {
+static ms_status region_write_snapshot(ptl_region *r, const char *path, const char *material) {
+  if (material) cd_sim_set_material_names(sim_of(r), material);
   return cd_write_snapshot(sim_of(r), path);
 }
 static ms_status region_refresh(ptl_region *r) { return cd_sim_refresh(sim_of(r)); }

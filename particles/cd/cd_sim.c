@@ -145,6 +145,11 @@ void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]) {
   for (int a = 0; a < 3; a++) s->piston_dir[a] = nrm > 0 ? dir[a] / nrm : 0.0;
 }
 
+void cd_sim_set_material_names(cd_sim *s, const char *names) {
+  free(s->material_names);
+  s->material_names = names ? ms_strdup(names) : NULL;
+}
+
 static void cd_sim_free(cd_sim *s) {
   if (!s) return;
   free(s->material_names);

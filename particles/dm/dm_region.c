@@ -622,17 +622,20 @@ static void region_ghost_owners(const ptl_region *r, int32_t *owner) {
   (void)owner;
 }
 
-static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
+static ms_status region_write_snapshot(ptl_region *rr, const char *path, const char *material) {
   dm_region *r = dmr(rr);
   if (r->rank > 0) return MS_OK; /* replicated: the owner writes */
   const ptl_state *ps = r->ps;
   const dm_fin *f = r->f;
-  const ptl_snapshot_data data[] = {{"particles/pressure", f->p, NULL, 1, "GPa"},
+  int64_t *mat = ms_calloc(r->s.n + 1, sizeof *mat); /* one material: 0 */
+  const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
+                                    {"particles/pressure", f->p, NULL, 1, "GPa"},
                                     {"particles/density", f->rho, NULL, 1, "g/cm^3"},
                                     {"particles/energy", f->e, NULL, 1, "kJ/g"},
-                                    {"particles/J", f->J, NULL, 1, NULL},
+                                    {"particles/J", f->J, NULL, 1, "1"},
                                     {"particles/gid", NULL, ps->gid, 1, NULL}};
   ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
+  snap.material_names = material;
   ptl_snapshot_attr_add(&snap, "time", r->t);
   ptl_snapshot_attr_add(&snap, "step", (double)f->step);
   ptl_snapshot_attr_add(&snap, "r0", r->geo.spacing);
@@ -646,7 +649,9 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
   snap.data = data;
   snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
   snap.xdmf = xdmf;
-  return ptl_write_snapshot(path, &snap);
+  const ms_status st = ptl_write_snapshot(path, &snap);
+  free(mat);
+  return st;
 }
 
 static ms_status region_refresh(ptl_region *r) {

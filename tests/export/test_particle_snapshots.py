@@ -162,14 +162,19 @@ for name, (deck, names, first, fragments) in PROBLEMS.items():
     print(f"{name}: {len(snaps)} snapshots {snaps[0]}..{snaps[-1]}, {n} particles, materials "
           f"{table}: layout, series, Run.snapshots and ASE as expected")
 
-def check_unstable(name, deck_text, names):
+def check_unstable(name, deck_text, names, series=True):
     """A run that goes unstable: exit 1, particles_unstable.h5 in the shared layout, and
-    particles.xmf listing exactly the numbered snapshots written before."""
+    particles.xmf listing exactly the numbered snapshots written before (series), or no
+    particles.xmf when there were none."""
     out = run(name, deck_text, 1)
     check_layout(os.path.join(out, "particles_unstable.h5"), names, False)
     numbered = sorted(os.path.basename(p)[:-3] + ".xmf"
                       for p in glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
-    assert numbered, f"{name}: no numbered snapshot before the failure"
+    assert bool(numbered) == series, f"{name}: numbered snapshots before the failure: {numbered}"
+    if not series:
+        assert not os.path.exists(os.path.join(out, "particles.xmf")), f"{name}: an empty series"
+        print(f"{name}: particles_unstable.h5 in the shared layout; no series")
+        return
     hrefs = re.findall(r'href="([^"]+)"', open(os.path.join(out, "particles.xmf")).read())
     assert hrefs == numbered, (f"{name}: particles.xmf after the unstable snapshot", hrefs, numbered)
     assert mscale.Run(out).unstable_snapshot is not None, name
@@ -181,6 +186,10 @@ def check_unstable(name, deck_text, names):
 # before the failure at step 10)
 deck = open(os.path.join(src, "tests/reliability/unstable/cd_piston_too_fast.yaml")).read()
 check_unstable("unstable_cd", deck + "  output: {snapshots: 1000}\n", ["al"])
+# the coupled problem's particle region (cluster dynamics): the region's own snapshot
+check_unstable("unstable_coupled",
+               os.path.join(src, "tests/reliability/unstable/coupled_particles_too_fast.yaml"),
+               ["pb"], series=False)
 # impact: the rod flies away from the wall out of a short domain (its state, finite, is kept)
 check_unstable("unstable_impact", IMPACT.replace("velocity: [0, 0, -0.3]", "velocity: [0, 0, 0.5]")
                .replace("t_end: 0.05", "t_end: 1.0").replace("hi: [1, 1, 1.5]", "hi: [1, 1, 1.0]"),
