@@ -187,6 +187,10 @@ def plot_run(outdir, plotdir):
     for snap in sorted(glob.glob(os.path.join(outdir, "particles_*.h5"))):
         name = os.path.splitext(os.path.basename(snap))[0]
         try:
+            # the coupled problem's snapshots (with fragments): every particle problem names
+            # its snapshots particles_NNNN.h5, but the free-surface view is the coupled one's
+            if "fragment" not in mscale.read_snapshot(snap):
+                continue
             made.append(plot_snapshot(snap, os.path.join(plotdir, name + ".png")))
         except (OSError, KeyError) as exc:
             print(f"plot_coupled: {snap}: cannot read ({exc})", file=sys.stderr)
