@@ -67,11 +67,12 @@ static void test_taylor_cu_coarse(void **state) {
    * Footprint: not met by the model (docs/validation.md). The measured largest radius (8.40 mm)
    * is a lip at the impact face — the measured outline falls to 5.60 mm within 1.75 mm of the
    * face, less than three particle layers of h = 0.635 mm here — which the bond penalty (default
-   * c_s = 1) spreads up the rod. Measured −35.1 % at R0/6 and −27.1 % at R0/12. 40 % admits
-   * the coarse lattice's deficit with a margin for compiler and platform round-off in a run of
-   * 2800 steps, and still fails a rod whose foot spreads to D/D0 = 1.3 (−41 %). */
+   * c_s = 1) spreads up the rod. Measured −35.1 % at R0/6 and −27.1 % at R0/12. 37 % admits
+   * the coarse lattice's deficit with 2 points (0.3 mm, half a spacing) for compiler and
+   * platform round-off in a run of 2800 steps, and fails a stiffer penalty (c_s = 3: −38.2 %,
+   * shown failing). */
 #define CI_LENGTH_TOL    0.05
-#define CI_FOOTPRINT_TOL 0.40
+#define CI_FOOTPRINT_TOL 0.37
   assert_true(fabs(L / exp_length - 1) < CI_LENGTH_TOL);
   assert_true(fabs(D / exp_footprint - 1) < CI_FOOTPRINT_TOL);
   /* Profile above the foot (0.2, 0.5, 2/3 of L_f): the model's surface radius there is known
