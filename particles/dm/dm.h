@@ -433,6 +433,10 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *section, const eos
                                   dk_errors *e);
 ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p);
 void dm_impact_problem_destroy(dm_impact **p); /* null-safe; sets *p = NULL */
+/* heights, as fractions of the final length, of the Taylor profile in dm_impact_summary */
+#define DM_TAYLOR_PROFILE_N 3
+#define DM_TAYLOR_PROFILE_F                                                                        \
+  { 0.2, 0.5, 2.0 / 3.0 }
 typedef struct dm_impact_summary {
   size_t particles, bonds;
   long steps, ref_updates;
@@ -450,6 +454,8 @@ typedef struct dm_impact_summary {
   double length0, length;       /* body 0, a cylinder along the wall normal: axial extent (cm) */
   double footprint0, footprint; /* and the largest diameter of its outer particles (cm); NaN
                                    when body 0 is not such a cylinder */
+  double radius_at[DM_TAYLOR_PROFILE_N]; /* its surface radius (cm) at DM_TAYLOR_PROFILE_F of
+                                            the final length from the face (dm_impact.c) */
 } dm_impact_summary;
 const dm_impact_summary *dm_impact_get_summary(const dm_impact *p);
 

@@ -105,6 +105,38 @@ static void taylor_measures(const dm_impact *p, const dm_state *s, const double 
   *length = zmax - zmin + p->h, *footprint = D;
 }
 
+/* Body 0's profile (as taylor_measures): the surface radius R0 max r/r0 of its outer particles
+ * in the slice of one spacing that contains the height f L_f above the impact face (the face at
+ * half a spacing beyond the last layer), for f = DM_TAYLOR_PROFILE_F (tools/taylor_profile.py
+ * plots the same slices). NaN where the slice holds no outer particle or body 0 is not a rod. */
+static void taylor_profile(const dm_impact *p, const dm_state *s, const double *X0, double length,
+                           double *radius) {
+  static const double frac[DM_TAYLOR_PROFILE_N] = DM_TAYLOR_PROFILE_F;
+  const dmi_body *b = &p->bodies[0];
+  for (int k = 0; k < DM_TAYLOR_PROFILE_N; ++k) radius[k] = NAN;
+  if (b->shape != DMI_CYLINDER || !p->has_wall || b->axis != p->wall_axis || !(length > 0)) return;
+  const int a = b->axis, q1 = (a + 1) % 3, q2 = (a + 2) % 3, side = p->wall_side;
+  double zface = INFINITY, r0max = 0; /* zface: the face layer's distance from the wall plane */
+  for (size_t i = b->first; i < b->first + b->count; ++i) {
+    zface = fmin(zface, side * (s->X[3 * i + a] + s->w[3 * i + a] - p->wall_pos));
+    r0max = fmax(r0max, hypot(X0[3 * i + q1] - b->center[q1], X0[3 * i + q2] - b->center[q2]));
+  }
+  for (size_t i = b->first; i < b->first + b->count; ++i) {
+    const double r0 = hypot(X0[3 * i + q1] - b->center[q1], X0[3 * i + q2] - b->center[q2]);
+    if (r0 < r0max - 0.5 * p->h) continue;
+    const double hgt = side * (s->X[3 * i + a] + s->w[3 * i + a] - p->wall_pos) - zface;
+    const double x1 = s->X[3 * i + q1] + s->w[3 * i + q1] - b->center[q1];
+    const double x2 = s->X[3 * i + q2] + s->w[3 * i + q2] - b->center[q2];
+    for (int k = 0; k < DM_TAYLOR_PROFILE_N; ++k) { /* slice [j h, (j+1) h) from the face */
+      const double at = frac[k] * length, j = floor(at / p->h);
+      if (hgt + 0.5 * p->h >= j * p->h && hgt + 0.5 * p->h < (j + 1) * p->h) {
+        const double r = b->radius * hypot(x1, x2) / r0;
+        radius[k] = isnan(radius[k]) ? r : fmax(radius[k], r);
+      }
+    }
+  }
+}
+
 /* The per-particle fields a snapshot shows: w, u ([n][3]), e, ρ, p, J, ε_p ([n]), of the live
  * model or of the copy taken at the start of a step (the last good state when it fails). */
 enum { NFIELD = 7, FIELD_DOUBLES = 2 * 3 + 5 }; /* per particle */
@@ -438,6 +470,7 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     dm_fin_energies(f, &K1, &U1, &H1);
     p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
     taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
+    taylor_profile(p, f->m->s, X0, p->sum.length, p->sum.radius_at);
     ms_log(ctx, MS_LOG_INFO,
            "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "
            "E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = %.3g; transverse "
