@@ -450,6 +450,8 @@ typedef struct dm_impact_summary {
   double length0, length;       /* body 0, a cylinder along the wall normal: axial extent (cm) */
   double footprint0, footprint; /* and the largest diameter of its outer particles (cm); NaN
                                    when body 0 is not such a cylinder */
+  double broken; /* energy booked as broken at failures (dm_fracture.c) at the end (kJ) */
+  size_t failed; /* failed particles at the end */
 } dm_impact_summary;
 const dm_impact_summary *dm_impact_get_summary(const dm_impact *p);
 

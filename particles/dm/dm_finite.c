@@ -157,11 +157,16 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
    * particle (no deviator; an open one's density may be beyond the cold curve) */
   if (mt->yield >= DM_YIELD_STEINBERG_GUINAN && !dm_frac_failed(f, i)) {
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
-    if (!isfinite(T)) {
+    if (!isfinite(T) && mt->frac.model != DM_FRACTURE_NONE && rho < eos_rho0(mt->eos)) {
+      Y = 0.0; /* stretched beyond the cold curve (below ~0.63 ρ0 for Al): far beyond the spall
+                * strength, it fails in this pass (dm_frac_stress); no strength meanwhile */
+    } else if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
       return -1.0;
     }
-    if (mt->yield == DM_YIELD_JOHNSON_COOK) { /* rate: √(2/3 D′:D′) of this step's L */
+    if (!isfinite(T)) {
+      /* Y = 0 above */
+    } else if (mt->yield == DM_YIELD_JOHNSON_COOK) { /* rate: √(2/3 D′:D′) of this step's L */
       double dd = 0;
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) dd += 0.25 * pow(L[3 * a + b] + L[3 * b + a], 2);
