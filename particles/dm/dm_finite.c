@@ -128,26 +128,37 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
   const double J = dm_det3(F);
   f->J[i] = J;
-  if (!(J > 0) || !isfinite(J)) {
+  const dm_fin_material *mt = &f->mat[f->imat[i]];
+  const double rho0 = st->mass[i] / st->vol[i];
+  /* a failed particle whose family's fit has inverted (J ≤ 0) or left the EOS's range is a
+   * loose grain of debris: its scattered neighbours say nothing about its volume (in the
+   * Piekutowski perforation, docs/validation.md, a failed projectile particle's J went from
+   * 1.07 to 0.21 in one step, beyond the EOS's range). It carries no stress (an open crack);
+   * its density is shown as ρ0. An intact particle there stops the run. */
+  bool grain = dm_frac_failed(f, i) && isfinite(J) && !(J > 0);
+  if (!grain && (!(J > 0) || !isfinite(J))) {
     *what = "J = det F", *val = J;
     return -1.0;
   }
-  double Fi[9], L[9];
-  inv3(F, J, Fi);
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c)
-      L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
+  double Fi[9] = {0}, L[9] = {0};
+  if (!grain) {
+    inv3(F, J, Fi);
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
+  }
   const double trD = L[0] + L[4] + L[8];
-  const dm_fin_material *mt = &f->mat[f->imat[i]];
-  const double rho0 = st->mass[i] / st->vol[i], rho = rho0 / J;
-  const bool open = dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
-  const double p = open ? 0.0 : eos_pressure(mt->eos, rho, f->e[i]);
-  const double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho, f->e[i]);
+  bool open = grain || dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
+  double p = open ? 0.0 : eos_pressure(mt->eos, rho0 / J, f->e[i]);
+  double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
+  if ((!isfinite(p) || !isfinite(c)) && dm_frac_failed(f, i))
+    grain = open = true, p = 0.0, c = eos_c0(mt->eos);
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
   }
-  const double ell = f->par.ell * pow(J, 1.0 / f->dim);
+  const double rho = grain ? rho0 : rho0 / J;
+  const double ell = grain ? f->par.ell : f->par.ell * pow(J, 1.0 / f->dim);
   const double q =
       trD < 0 && !open ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];

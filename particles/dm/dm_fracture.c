@@ -71,6 +71,30 @@ void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, do
   sig[0] = sig[4] = sig[8] = -fmax(pq, 0.0);
 }
 
+/* A failed particle whose family has dispersed (a bond stretched beyond DM_FRAC_DISPERSED)
+ * is a loose grain of debris: the least-squares F of its scattered neighbours can show any
+ * J < 1, and a pressure from it turns internal energy into the kinetic energy of grains
+ * without bound (docs/validation.md, "Piekutowski perforation": the projectile's internal
+ * energy went negative, −2 kJ of 27, before the run failed). Its crack counts as open (p = 0)
+ * whatever J says. A stretch of 2 puts a neighbour a whole spacing or more from where a
+ * continuum would keep it. */
+bool dm_frac_dispersed(const dm_fin *f, size_t i) {
+  const dm_model *m = f->m;
+  const double *w = m->s->w;
+  const double l2 = DM_FRAC_DISPERSED * DM_FRAC_DISPERSED;
+  for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+    const size_t k = m->nbr[b];
+    double xi[3], r0 = 0, r1 = 0;
+    dm_bond_vector(m, i, b, xi);
+    for (int a = 0; a < 3; ++a) {
+      const double d = xi[a] + w[3 * k + a] - w[3 * i + a];
+      r0 += xi[a] * xi[a], r1 += d * d;
+    }
+    if (r1 > l2 * r0) return true;
+  }
+  return false;
+}
+
 double dm_fin_broken_energy(const dm_fin *f) {
   double b = 0.0;
   if (f->broken)

@@ -41,10 +41,10 @@ struct dm_impact {
 typedef struct dmi_contact {
   int on;
   double h, courant, cell, lo[3];
-  long nc[3];
-  size_t ncell, n;
+  size_t ncell, n;     /* hash buckets (2n + 1), particles */
   const uint8_t *imat; /* [n] body of each particle (not owned) */
-  long *head, *next;   /* the cell list */
+  long *head, *next;   /* the cell list: buckets, and the next particle of a bucket */
+  long *cidx;          /* [n][3] each particle's cell */
   double *k;           /* [n] c_c h M_i */
   double dt_k;         /* 2 courant / max ω of a pair */
   double stored;       /* Σ k d²/2 at the last evaluation (kJ) */
