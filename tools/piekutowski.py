@@ -120,7 +120,8 @@ def measure(outdir, name="impact_particles_final.csv"):
     # hole
     speed = np.linalg.norm(u, axis=1)
     inplate = (body == 1) & (np.abs(x[:, 2] - g["zc"]) <= g["t"]) & (speed < 0.1 * g["v"])
-    r_h = r[inplate].min() - 0.5 * g["h"]
+    r_h = r[inplate & ~failed].min() - 0.5 * g["h"]  # the wall of unbroken plate
+    r_h_all = r[inplate].min() - 0.5 * g["h"]  # failed grains still in the plate's slab too
     # back-spray
     back = x[:, 2] < g["zf"] - g["h"]
     ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])
@@ -142,7 +143,7 @@ def measure(outdir, name="impact_particles_final.csv"):
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
     fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
-    return dict(g=g, t=t_now, hole=2 * r_h, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+    return dict(g=g, t=t_now, hole=2 * r_h, hole_all=2 * r_h_all, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
                 v_edge=v_edge, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho)
@@ -165,7 +166,8 @@ def main(argv=None):
         big = np.sort(m["frag_mass"])[::-1]
         print(f"{d}: t {10 * m['t']:.3f} us, h {10 * g['h']:.4g} mm, {m['n']} particles "
               f"({m['nfailed']} failed): hole {10 * m['hole']:.3f} mm "
-              f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}); "
+              f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
+              f"with failed grains {10 * m['hole_all']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
               f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg; back-spray mass "
               f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "

@@ -126,16 +126,13 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = dm_det3(F);
+  const double J = dm_det3(F), Jprev = f->J[i];
   f->J[i] = J;
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = st->mass[i] / st->vol[i];
-  /* a failed particle whose family's fit has inverted (J ≤ 0) or left the EOS's range is a
-   * loose grain of debris: its scattered neighbours say nothing about its volume (in the
-   * Piekutowski perforation, docs/validation.md, a failed projectile particle's J went from
-   * 1.07 to 0.21 in one step, beyond the EOS's range). It carries no stress (an open crack);
-   * its density is shown as ρ0. An intact particle there stops the run. */
-  bool grain = dm_frac_failed(f, i) && isfinite(J) && !(J > 0);
+  /* a failed particle whose family no longer measures its volume is a loose grain (no stress,
+   * density shown as ρ0: dm_fracture.c, dm_frac_grain); an intact one with J ≤ 0 stops the run */
+  bool grain = isfinite(J) && dm_frac_grain(f, i, J, Jprev);
   if (!grain && (!(J > 0) || !isfinite(J))) {
     *what = "J = det F", *val = J;
     return -1.0;
@@ -151,8 +148,10 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   bool open = grain || dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
   double p = open ? 0.0 : eos_pressure(mt->eos, rho0 / J, f->e[i]);
   double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
-  if ((!isfinite(p) || !isfinite(c)) && dm_frac_failed(f, i))
+  if ((!isfinite(p) || !isfinite(c)) && dm_frac_failed(f, i)) { /* beyond the EOS: a grain */
+    f->failed[i] = 2;
     grain = open = true, p = 0.0, c = eos_c0(mt->eos);
+  }
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;

@@ -74,19 +74,24 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
 /* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
  * dm_frac_alloc: failed[] and broken[] when a material of f has a fracture model (else NULL);
  * dm_frac_free releases them. dm_frac_open: particle i has failed and its family is stretched
- * (J > 1) or dispersed: the crack is open, no EOS pressure (p = 0). dm_frac_stress, called by the stress
+ * (J > 1): the crack is open, no EOS pressure (p = 0). dm_frac_stress, called by the stress
  * pass after σ = s − (p + q) I: the failure test of an intact particle (books its bond-penalty
  * energy as broken and switches its penalty off), and for a failed one s = 0,
  * σ = −max(p + q, 0) I. Touches particle i's entries only (safe in the parallel pass). */
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
 static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
-/* A failed particle's family is dispersed when one of its bonds has stretched by more than
- * DM_FRAC_DISPERSED (dm_fracture.c). */
+/* A failed particle becomes a loose grain of debris for good (failed[i] = 2: no stress, no
+ * EOS, density shown as ρ0) when its family no longer measures its volume: J ≤ 0, a bond
+ * stretched beyond DM_FRAC_DISPERSED (its neighbours no longer surround it), or J changing by
+ * more than DM_FRAC_JUMP of itself in one stress pass (the fit of a scattered family jumping,
+ * not a flow: docs/particles-dm.md "Fracture"). Checks and marks particle i (dm_fracture.c);
+ * Jprev ≤ 0: no previous J. */
 #define DM_FRAC_DISPERSED 2.0
-bool dm_frac_dispersed(const dm_fin *f, size_t i);
+#define DM_FRAC_JUMP      0.3
+bool dm_frac_grain(dm_fin *f, size_t i, double J, double Jprev);
 static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
-  return dm_frac_failed(f, i) && (J > 1.0 || dm_frac_dispersed(f, i));
+  return dm_frac_failed(f, i) && J > 1.0;
 }
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
