@@ -139,6 +139,13 @@ def measure(outdir, name="impact_particles_final.csv"):
     # leading edge
     zmax = x[:, 2].max()
     v_edge = (zmax - g["zf"]) / (t_now - g["t_contact"]) if np.isfinite(t_now) else np.nan
+    hist = run.table("impact_history")  # energies at the history row nearest to t (its t: µs)
+    th = np.asarray(hist["t"], float)
+    k = int(np.argmin(np.abs(th - 10 * t_now))) if np.isfinite(t_now) else len(th) - 1  # µs
+    energy = {c: float(np.asarray(hist[c], float)[k]) for c in
+              ("kinetic", "internal", "bond_penalty", "broken", "wall_work", "wall_energy",
+               "balance")}
+    energy["E0"] = float(np.asarray(hist["kinetic"], float)[0])
     lab = fragments(X0, body, failed, g["h"], g["delta"])
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
@@ -146,7 +153,7 @@ def measure(outdir, name="impact_particles_final.csv"):
     return dict(g=g, t=t_now, hole=2 * r_h, hole_all=2 * r_h_all, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
                 v_edge=v_edge, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
-                nfailed=int(failed.sum()), rho=rho)
+                nfailed=int(failed.sum()), rho=rho, energy=energy)
 
 
 def main(argv=None):
@@ -174,6 +181,12 @@ def main(argv=None):
               f"beyond the face, {m['v_edge']:.3f} km/s (max u_z {m['uz_max']:.3f} km/s); "
               f"{len(big)} fragments, largest {1e3 * big[0]:.1f} mg"
               + (f", next {1e3 * big[1]:.2f} mg" if len(big) > 1 else ""))
+        en = m["energy"]
+        print("  energy / E0 = {:.4g} kJ: kinetic {:.4f}, internal {:.4f}, bond penalty {:.4f}, "
+              "broken {:.4f}, contact stored {:.2e}, contact work {:.2e}, balance {:.1e}".format(
+                  en["E0"], *(en[c] / en["E0"] for c in ("kinetic", "internal", "bond_penalty",
+                                                        "broken", "wall_energy", "wall_work",
+                                                        "balance"))))
     if not args.output:
         return 0
     import matplotlib
@@ -182,11 +195,11 @@ def main(argv=None):
     fig, axs = plt.subplots(1, 3, figsize=(14, 4.8))
     d, m = res[-1]
     g = m["g"]
-    sl = np.abs(m["x"][:, 1] - g["axis"][1]) < 0.5 * g["h"]
+    sl = np.abs(m["x"][:, 1] - g["axis"][1]) < 0.75 * g["h"]  # one or two lattice rows
     for bd, c, lab in ((1, "tab:blue", "plate"), (0, "tab:red", "sphere")):
         s = sl & (m["body"] == bd)
         axs[0].scatter(10 * m["x"][s, 0], 10 * (m["x"][s, 2] - g["zf"]), s=2, c=c, label=lab)
-    rh = 5 * args.exp_hole
+    rh = 0.5 * args.exp_hole  # mm
     axs[0].plot([-rh, -rh], [0, 10 * g["t"]], "k-", lw=2)
     axs[0].plot([rh, rh], [0, 10 * g["t"]], "k-", lw=2, label=f"experiment: hole {args.exp_hole} mm")
     L = 25.0
@@ -198,12 +211,14 @@ def main(argv=None):
     axs[0].set_ylabel("z − z_face (mm)")
     axs[0].set_aspect("equal")
     axs[0].legend(fontsize=7)
-    axs[0].set_title(f"slice |y| < h/2 at t = {10 * m['t']:.2f} µs")
+    axs[0].plot([-5 * m["hole"], 5 * m["hole"]], [-0.5, -0.5], "g-", lw=3,
+                label=f"DM hole {10 * m['hole']:.1f} mm")
+    axs[0].set_xlim(-30, 30)
+    axs[0].set_title(f"slice |y| < 0.75 h at t = {10 * m['t']:.2f} µs")
     for d, m in res:
         fm = np.sort(m["frag_mass"])[::-1] * 1e3
         axs[1].loglog(fm, np.arange(1, len(fm) + 1), drawstyle="steps-post",
                       label=f"h = {10 * m['g']['h']:.3g} mm")
-        o = np.argsort(m["frag_vz"])
         axs[2].hist(m["frag_vz"], bins=40, weights=m["frag_mass"] * 1e3, histtype="step",
                     label=f"h = {10 * m['g']['h']:.3g} mm")
     axs[1].set_xlabel("fragment mass m (mg)")
