@@ -138,12 +138,23 @@ static void write_particles(const ms_ctx *ctx, const char *name, const dm_fin *f
 
 enum { NHIST = 16 }; /* columns of impact_history.csv */
 
+/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest). */
+static double body0_momentum(const dm_impact *p, const dm_state *s) {
+  const dmi_body *b = &p->bodies[0];
+  const double v = hypot(hypot(b->velocity[0], b->velocity[1]), b->velocity[2]);
+  double P = 0;
+  for (size_t i = b->first; v > 0 && i < b->first + b->count; ++i)
+    for (int a = 0; a < 3; ++a) P += s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
+  return P;
+}
+
 typedef struct run_state {
   dm_impact *p;
   dm_fin *f;
   wall *wl;
   const double *X0;
   double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
+  double Pabs0;             /* Σ m |u(0)| */
   double *hist;             /* [nhmax][NHIST] */
   size_t nh, nhmax;
 } run_state;
@@ -163,6 +174,10 @@ static void record(run_state *r) {
   for (size_t i = 0; i < f->n; ++i)
     sum->J_min = fmin(sum->J_min, f->J[i]), sum->J_max = fmax(sum->J_max, f->J[i]);
   sum->energy_err = fmax(sum->energy_err, fabs(bal) / r->E0);
+  if (r->Pabs0 > 0)
+    sum->p_total =
+        fmax(sum->p_total,
+             hypot(hypot(P[0] - r->Pv0[0], P[1] - r->Pv0[1]), P[2] - r->Pv0[2]) / r->Pabs0);
   sum->wall_err = fmax(sum->wall_err, fabs(f->ext_work + r->wl->stored) / r->E0);
   if (r->p->has_wall && r->P0 > 0) {
     const int a = r->p->wall_axis;
@@ -312,6 +327,12 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
       }
       break;
     }
+    if (ms_interrupt_agreed(ctx)) { /* SIGINT/SIGTERM (docs/reliability.md): no checkpoints
+                                       here, so stop with the outputs so far */
+      ms_log(ctx, MS_LOG_ERROR, "impact: interrupted at step %ld, t = %.9g", f->step, r->t);
+      st = MS_INTERRUPTED;
+      break;
+    }
     const long out = outside_box(p, f->m->s);
     if (out >= 0) {
       ms_log(ctx, MS_LOG_ERROR, "impact: step %ld, t = %.9g: particle %ld left the domain", f->step,
@@ -376,6 +397,9 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     for (size_t i = 0; i < s.n; ++i)
       for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
     r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+    for (size_t i = 0; i < s.n; ++i)
+      r.Pabs0 += s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
+    p->sum.p0_body0 = body0_momentum(p, &s);
     for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
     r.hist = ms_calloc(NHIST * r.nhmax, sizeof(double));
     p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
@@ -390,6 +414,7 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     dm_fin_energies(f, &K1, &U1, &H1);
     p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
     p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
+    p->sum.p_body0 = body0_momentum(p, f->m->s);
     taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
     ms_log(ctx, MS_LOG_INFO,
            "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "

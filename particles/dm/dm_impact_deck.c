@@ -2,8 +2,9 @@
 /* dm_impact_deck.c — the deck reader of the problem type `impact` (docs/input-impact.md): every
  * key checked and located (FILE:LINE:COL) before anything runs, including the set-up errors a
  * run could only find later: a body outside the box, bodies that overlap or come within the
- * horizon of each other (they would be bonded), a body across the wall, and an initial
- * velocity whose approach to the wall violates the first step's time-step limit. */
+ * horizon of each other (they would be bonded), a body across the wall, an initial velocity
+ * whose approach to the wall violates the first step's time-step limit, and an impact between
+ * bodies that the contact's penalty cannot hold. */
 #include "dm_impact_impl.h"
 
 #include <limits.h>
@@ -263,7 +264,7 @@ static void check_body_pairs(const dm_impact *p, dk_doc *doc, const dk_node *L, 
       }
       if (overlap)
         dk_error(e, doc, dk_seq_at(L, j), "impact.bodies[%zu]: overlaps bodies[%zu]", j, i);
-      else if (M_c > 0 && p_ac > 0.25 * p->contact_stiffness * M_c)
+      if (!overlap && M_c > 0 && p_ac > 0.25 * p->contact_stiffness * M_c)
         dk_error(e, doc,
                  dk_get(dk_seq_at(L, j), "velocity") ? dk_get(dk_seq_at(L, j), "velocity")
                                                      : dk_seq_at(L, j),
@@ -271,10 +272,10 @@ static void check_body_pairs(const dm_impact *p, dk_doc *doc, const dk_node *L, 
                  "GPa) would press the contact %.3g spacings deep, more than 0.25: give a larger "
                  "impact.contact.stiffness (now %g)",
                  j, i, p_ac, p_ac / (p->contact_stiffness * M_c), p->contact_stiffness);
-      else if (close)
+      if (!overlap && close)
         dk_error(e, doc, dk_seq_at(L, j),
                  "impact.bodies[%zu]: comes within the horizon (%g cm) of bodies[%zu]: the two "
-                 "would be bonded (no contact between bodies yet); leave a gap",
+                 "would be bonded (the contact acts between unbonded bodies only); leave a gap",
                  j, delta, i);
       free(Xi);
     }
