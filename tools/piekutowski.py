@@ -11,9 +11,11 @@ impact_particles_final.csv (or --csv NAME, a snapshot impact_particles_NNN.csv):
 * hole diameter D_h: the plate particles still in the plate (|z − z_c| ≤ t, z_c the plate's
   centre, t its thickness: the lip may bulge by up to t/2 on either side; and slower than a
   tenth of the impact speed: a grain of debris crossing the plate's slab on its way out is not
-  part of the hole's wall) define the hole as
-  the largest circle about the impact axis free of them: D_h = 2 (min r − h/2) (the hole's wall
-  is half a spacing inside the innermost particle's centre). This is the diameter of the hole
+  part of the hole's wall), failed or not, define the hole as the largest circle about the
+  impact axis free of them: D_h = 2 (min r − h/2) (the hole's wall is half a spacing inside the
+  innermost particle's centre). Failed particles count: they are material still in place (a
+  recovered plate keeps its damaged lip); the same circle over the unbroken particles only is
+  printed beside it (it grows as long as the failure spreads outwards through the plate). This is the diameter of the hole
   through the plate, what [Piekutowski1993] reports (the recovered bumper's hole; the finer
   points of his measurement could not be read here: docs/validation.md).
 * back-spray angle θ: the material thrown back out of the impact face (z < z_f − h, z_f the
@@ -23,7 +25,8 @@ impact_particles_final.csv (or --csv NAME, a snapshot impact_particles_NNN.csv):
   median of atan2(z_f − z, r − r_h) over the 10 % of back-spray particles farthest from the
   rim. Both are printed; θ_v is the one compared.
 * debris-cloud leading edge: the largest z of any particle, and its speed (z_max − z_f)/(t − t_c)
-  with t_c = the time of first contact (the sphere's gap over its speed), and the largest u_z.
+  with t_c = the time of first contact (the sphere's gap over its speed); the same for the front
+  of the first 1 % of the total mass (a few fast grains aside), and the largest u_z.
 * fragments: connected components of the bond graph: particles i, k of one body are bonded when
   their lattice sites are closer than the horizon δ (the families of dm_family.c, built once),
   and a bond is broken when both particles have failed (dm_fracture.c). Fragment mass spectrum
@@ -120,8 +123,8 @@ def measure(outdir, name="impact_particles_final.csv"):
     # hole
     speed = np.linalg.norm(u, axis=1)
     inplate = (body == 1) & (np.abs(x[:, 2] - g["zc"]) <= g["t"]) & (speed < 0.1 * g["v"])
-    r_h = r[inplate & ~failed].min() - 0.5 * g["h"]  # the wall of unbroken plate
-    r_h_all = r[inplate].min() - 0.5 * g["h"]  # failed grains still in the plate's slab too
+    r_h = r[inplate].min() - 0.5 * g["h"]  # every particle still in the plate, failed or not
+    r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
     # back-spray
     back = x[:, 2] < g["zf"] - g["h"]
     ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])
@@ -138,7 +141,10 @@ def measure(outdir, name="impact_particles_final.csv"):
         theta_e = float(np.median(np.degrees(np.arctan2(dz[sel], dr[sel]))))
     # leading edge
     zmax = x[:, 2].max()
+    oz = np.argsort(x[:, 2])[::-1]  # the front of the cloud's first 1 % of the mass
+    z01 = x[oz, 2][np.searchsorted(np.cumsum(mass[oz]), 0.01 * mass.sum())]
     v_edge = (zmax - g["zf"]) / (t_now - g["t_contact"]) if np.isfinite(t_now) else np.nan
+    v_edge01 = (z01 - g["zf"]) / (t_now - g["t_contact"]) if np.isfinite(t_now) else np.nan
     hist = run.table("impact_history")  # energies at the history row nearest to t (its t: µs)
     th = np.asarray(hist["t"], float)
     k = int(np.argmin(np.abs(th - 10 * t_now))) if np.isfinite(t_now) else len(th) - 1  # µs
@@ -150,8 +156,8 @@ def measure(outdir, name="impact_particles_final.csv"):
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
     fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
-    return dict(g=g, t=t_now, hole=2 * r_h, hole_all=2 * r_h_all, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
-                v_edge=v_edge, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
+    return dict(g=g, t=t_now, hole=2 * r_h, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+                v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
 
@@ -174,11 +180,12 @@ def main(argv=None):
         print(f"{d}: t {10 * m['t']:.3f} us, h {10 * g['h']:.4g} mm, {m['n']} particles "
               f"({m['nfailed']} failed): hole {10 * m['hole']:.3f} mm "
               f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
-              f"with failed grains {10 * m['hole_all']:.3f} mm); "
+              f"unbroken plate {10 * m['hole_unbroken']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
               f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg; back-spray mass "
               f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "
-              f"beyond the face, {m['v_edge']:.3f} km/s (max u_z {m['uz_max']:.3f} km/s); "
+              f"beyond the face, {m['v_edge']:.3f} km/s (the front of 1 % of the mass "
+              f"{m['v_edge01']:.3f} km/s, max u_z {m['uz_max']:.3f} km/s); "
               f"{len(big)} fragments, largest {1e3 * big[0]:.1f} mg"
               + (f", next {1e3 * big[1]:.2f} mg" if len(big) > 1 else ""))
         en = m["energy"]

@@ -39,29 +39,31 @@ hole = 10 * m["hole"]
 if os.environ.get("PIEK_PRINT"):
     print(f"energy_err {float(s['energy_err'][0]):.3g}, contact |W + E|/E0 "
           f"{float(s['wall_err'][0]):.3g}, |dP|/|P0| {dP:.3g}, failed {int(s['failed'][0])}, "
-          f"broken {float(s['broken'][0]):.4g} kJ; hole {hole:.3f} mm (with failed grains "
-          f"{10 * m['hole_all']:.3f}), theta_v {m['theta_v']:.2f} deg, leading edge "
+          f"broken {float(s['broken'][0]):.4g} kJ; hole {hole:.3f} mm (unbroken plate "
+          f"{10 * m['hole_unbroken']:.3f}), theta_v {m['theta_v']:.2f} deg, leading edge "
           f"{m['v_edge']:.3f} km/s")
 checks = [
     # K + U + E_hg + broken − W_contact = E0 per half kick (dm_finite.c, dm_fracture.c):
     # round-off over ~500 steps
     (float(s["energy_err"][0]) < 1e-11, "energy balance to round-off"),
     # the contact's stored energy against its work: the penalty's time discretisation, measured
-    # 2.0e-3 E0 (the first contact at 6.7 km/s); 1e-2 fails a contact that leaks energy
+    # 8.2e-4 E0 (the first contact at 6.7 km/s); 1e-2 fails a contact that leaks energy
     (float(s["wall_err"][0]) < 1e-2, "contact work = -stored energy"),
     # pairwise central contact forces and the model's internal forces: momentum is conserved
     (dP < 1e-12, "momentum conserved"),
-    # LOOSE BOUND. The hole (the wall of unbroken plate, tools/piekutowski.py) at h = t/3
-    # = 0.74 mm: one spacing is 1.47 mm of diameter, 8.5 % of 17.3 mm, and the hole's wall is
-    # found to within a spacing on either side; failed grains still in the plate's slab give a
-    # smaller hole (both are in docs/validation.md: measured here 20.6 mm, +19 %, and 16.5 mm).
-    # 30 % (three spacings) admits the coarse lattice and still fails a plate that is not
-    # perforated (no hole: min r = 0) or a hole twice the experiment's.
-    (abs(hole / EXP_HOLE - 1) < 0.30, f"hole {hole:.2f} mm within 30 % of {EXP_HOLE}"),
-    # the debris cloud's front: the projectile's rear loses little speed through a plate of
-    # t/D = 0.23 (measured 7.02 km/s = 1.05 v: the front is the plate's and sphere's fastest
-    # debris); a cloud slower than 0.85 v or faster than 1.15 v is wrong
-    (0.85 < m["v_edge"] / 6.7 < 1.15, f"leading edge {m['v_edge']:.3f} km/s"),
+    # LOOSE BOUND (issue 25's criterion for the full size is 5 %). The hole (every particle
+    # still in the plate, failed or not: tools/piekutowski.py) at h = t/3 = 0.74 mm: one spacing
+    # on the radius is 1.47 mm of diameter, 8.5 % of 17.3 mm, and the hole's wall is found to
+    # within a spacing (measured −2.8 % here, −0.9 % at t/4; docs/validation.md). 17 % (two
+    # spacings) admits the coarse lattice with a margin for round-off in ~400 steps of a
+    # fracturing run, and fails a plate that is not perforated (no hole: min r = 0), the
+    # unbroken plate's hole (20.2 mm, +17 %) or a plate that fails a spacing further out.
+    (abs(hole / EXP_HOLE - 1) < 0.17, f"hole {hole:.2f} mm within 17 % of {EXP_HOLE}"),
+    # the debris cloud's front (its fastest particle): the projectile's rear loses little speed
+    # through a plate of t/D = 0.23 (measured 6.63 km/s = 0.99 v here, 7.9 km/s = 1.18 v at
+    # t/4 and 8 µs: a few grains run ahead); a front slower than 0.85 v or faster than 1.25 v
+    # is wrong
+    (0.85 < m["v_edge"] / 6.7 < 1.25, f"leading edge {m['v_edge']:.3f} km/s"),
     # a back-spray exists and is a cone between the plate and the axis
     (m["back_mass"] > 0 and 10 < m["theta_v"] < 80, f"back-spray angle {m['theta_v']:.1f}"),
 ]
