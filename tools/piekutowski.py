@@ -11,11 +11,14 @@ impact_particles_final.csv (or --csv NAME, a snapshot impact_particles_NNN.csv):
 * hole diameter D_h: the plate particles still in the plate (|z − z_c| ≤ t, z_c the plate's
   centre, t its thickness: the lip may bulge by up to t/2 on either side; and slower than a
   tenth of the impact speed: a grain of debris crossing the plate's slab on its way out is not
-  part of the hole's wall), failed or not, define the hole as the largest circle about the
-  impact axis free of them: D_h = 2 (min r − h/2) (the hole's wall is half a spacing inside the
-  innermost particle's centre). Failed particles count: they are material still in place (a
-  recovered plate keeps its damaged lip); the same circle over the unbroken particles only is
-  printed beside it (it grows as long as the failure spreads outwards through the plate). This is the diameter of the hole
+  part of the hole's wall), failed or not, give the plate's areal mass in rings of width h
+  about the impact axis; the hole's radius is where it first reaches half of the intact
+  plate's ρ0 t (a radiograph's or a recovered plate's edge: a few stray grains do not close a
+  hole). Failed particles count: they are material still in place (a recovered plate keeps its
+  damaged lip). Printed beside it: 2 (min r − h/2) of the innermost particle still in the plate
+  (the hole's wall is half a spacing inside it; one stray grain moves it) and the same for the
+  unbroken particles only (it grows as long as the failure spreads outwards through the
+  plate). This is the diameter of the hole
   through the plate, what [Piekutowski1993] reports (the recovered bumper's hole; the finer
   points of his measurement could not be read here: docs/validation.md).
 * back-spray angle θ: the material thrown back out of the impact face (z < z_f − h, z_f the
@@ -59,6 +62,19 @@ def geometry(run):
     gap = zf - (c0[2] + float(b0["radius"]))
     return dict(h=h, delta=delta, axis=c1[:2], zc=c1[2], t=t, zf=zf, v=v, t_contact=gap / v,
                 D=2 * float(b0["radius"]))
+
+
+def hole_radius(r, m, h, areal0):
+    """The radius where the plate's areal mass, in rings of width h about the axis, first
+    reaches half its initial value areal0 = ρ0 t (linear between ring centres)."""
+    edges = np.arange(0.0, r.max() + h, h)
+    ring = np.histogram(r, bins=edges, weights=m)[0] / (np.pi * (edges[1:] ** 2 - edges[:-1] ** 2))
+    cov = ring / areal0
+    rc = 0.5 * (edges[1:] + edges[:-1])
+    k = int(np.argmax(cov >= 0.5))
+    if k == 0:
+        return rc[0] if cov[0] >= 0.5 else np.nan
+    return rc[k - 1] + (0.5 - cov[k - 1]) / (cov[k] - cov[k - 1]) * (rc[k] - rc[k - 1])
 
 
 def fragments(X0, body, failed, h, delta):
@@ -123,7 +139,8 @@ def measure(outdir, name="impact_particles_final.csv"):
     # hole
     speed = np.linalg.norm(u, axis=1)
     inplate = (body == 1) & (np.abs(x[:, 2] - g["zc"]) <= g["t"]) & (speed < 0.1 * g["v"])
-    r_h = r[inplate].min() - 0.5 * g["h"]  # every particle still in the plate, failed or not
+    r_h = hole_radius(r[inplate], mass[inplate], g["h"], g["t"] * rho0[1])
+    r_min = r[inplate].min() - 0.5 * g["h"]  # the innermost particle still in the plate
     r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
     # back-spray
     back = x[:, 2] < g["zf"] - g["h"]
@@ -156,7 +173,7 @@ def measure(outdir, name="impact_particles_final.csv"):
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
     fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
-    return dict(g=g, t=t_now, hole=2 * r_h, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+    return dict(g=g, t=t_now, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
                 v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
@@ -180,7 +197,8 @@ def main(argv=None):
         print(f"{d}: t {10 * m['t']:.3f} us, h {10 * g['h']:.4g} mm, {m['n']} particles "
               f"({m['nfailed']} failed): hole {10 * m['hole']:.3f} mm "
               f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
-              f"unbroken plate {10 * m['hole_unbroken']:.3f} mm); "
+              f"innermost particle {10 * m['hole_min']:.3f} mm, unbroken plate "
+              f"{10 * m['hole_unbroken']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
               f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg; back-spray mass "
               f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "

@@ -39,8 +39,8 @@ hole = 10 * m["hole"]
 if os.environ.get("PIEK_PRINT"):
     print(f"energy_err {float(s['energy_err'][0]):.3g}, contact |W + E|/E0 "
           f"{float(s['wall_err'][0]):.3g}, |dP|/|P0| {dP:.3g}, failed {int(s['failed'][0])}, "
-          f"broken {float(s['broken'][0]):.4g} kJ; hole {hole:.3f} mm (unbroken plate "
-          f"{10 * m['hole_unbroken']:.3f}), theta_v {m['theta_v']:.2f} deg, leading edge "
+          f"broken {float(s['broken'][0]):.4g} kJ; hole {hole:.3f} mm (innermost particle "
+          f"{10 * m['hole_min']:.3f}, unbroken plate {10 * m['hole_unbroken']:.3f}), theta_v {m['theta_v']:.2f} deg, leading edge "
           f"{m['v_edge']:.3f} km/s")
 checks = [
     # K + U + E_hg + broken − W_contact = E0 per half kick (dm_finite.c, dm_fracture.c):
@@ -51,13 +51,14 @@ checks = [
     (float(s["wall_err"][0]) < 1e-2, "contact work = -stored energy"),
     # pairwise central contact forces and the model's internal forces: momentum is conserved
     (dP < 1e-12, "momentum conserved"),
-    # LOOSE BOUND (issue 25's criterion for the full size is 5 %). The hole (every particle
-    # still in the plate, failed or not: tools/piekutowski.py) at h = t/3 = 0.74 mm: one spacing
-    # on the radius is 1.47 mm of diameter, 8.5 % of 17.3 mm, and the hole's wall is found to
-    # within a spacing (measured −2.8 % here, −0.9 % at t/4; docs/validation.md). 17 % (two
-    # spacings) admits the coarse lattice with a margin for round-off in ~400 steps of a
-    # fracturing run, and fails a plate that is not perforated (no hole: min r = 0), the
-    # unbroken plate's hole (20.2 mm, +17 %) or a plate that fails a spacing further out.
+    # LOOSE BOUND (issue 25's criterion for the full size is 5 %). The hole (where the areal
+    # mass of the plate's particles, failed or not, reaches half the intact plate's:
+    # tools/piekutowski.py) at h = t/3 = 0.74 mm: one ring of width h on the radius is 1.47 mm
+    # of diameter, 8.5 % of 17.3 mm. Measured +7.4 % here at 4 µs, and +9.9 %, +9.1 % at t/4,
+    # t/5 (docs/validation.md: the model's hole, ~19 mm, is itself 10 % above the experiment).
+    # 17 % (two rings) admits the coarse lattice with a margin for round-off in ~400 steps of a
+    # fracturing run, and fails a plate that is not perforated (no hole), or a hole a ring
+    # larger than the model's converged one.
     (abs(hole / EXP_HOLE - 1) < 0.17, f"hole {hole:.2f} mm within 17 % of {EXP_HOLE}"),
     # the debris cloud's front (its fastest particle): the projectile's rear loses little speed
     # through a plate of t/D = 0.23 (measured 6.63 km/s = 0.99 v here, 7.9 km/s = 1.18 v at
