@@ -200,7 +200,8 @@ def main(argv=None):
               f"innermost particle {10 * m['hole_min']:.3f} mm, unbroken plate "
               f"{10 * m['hole_unbroken']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
-              f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg; back-spray mass "
+              f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg (from the face; from the axis "
+              f"{90 - m['theta_v']:.2f}, {90 - m['theta_e']:.2f}); back-spray mass "
               f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "
               f"beyond the face, {m['v_edge']:.3f} km/s (the front of 1 % of the mass "
               f"{m['v_edge01']:.3f} km/s, max u_z {m['uz_max']:.3f} km/s); "
@@ -232,6 +233,8 @@ def main(argv=None):
     for sgn in (-1, 1):
         axs[0].plot([sgn * rh, sgn * (rh + L * np.cos(th))], [0, -L * np.sin(th)], "k--", lw=1,
                     label=f"experiment: θ = {args.exp_theta}° from the face" if sgn > 0 else None)
+        axs[0].plot([sgn * rh, sgn * (rh + L * np.sin(th))], [0, -L * np.cos(th)], "k:", lw=1,
+                    label=f"or {args.exp_theta}° from the axis" if sgn > 0 else None)
     axs[0].set_xlabel("x (mm)")
     axs[0].set_ylabel("z − z_face (mm)")
     axs[0].set_aspect("equal")
