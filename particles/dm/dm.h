@@ -456,6 +456,12 @@ typedef struct dm_impact_summary {
                                    when body 0 is not such a cylinder */
   double radius_at[DM_TAYLOR_PROFILE_N]; /* its surface radius (cm) at DM_TAYLOR_PROFILE_F of
                                             the final length from the face (dm_impact.c) */
+  double broken;  /* energy booked as broken at failures (dm_fracture.c) at the end (kJ) */
+  size_t failed;  /* failed particles at the end */
+  double p_total; /* max_t |Σ m u − Σ m u(0)| / Σ m |u(0)|: with no wall every force is
+                     pairwise, so round-off */
+  double p0_body0, p_body0; /* body 0's momentum along its initial velocity, at 0 and at the
+                               end (g·km/s) */
 } dm_impact_summary;
 const dm_impact_summary *dm_impact_get_summary(const dm_impact *p);
 

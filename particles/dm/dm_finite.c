@@ -126,28 +126,38 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = dm_det3(F);
+  const double J = dm_det3(F), Jprev = f->J[i];
   f->J[i] = J;
-  if (!(J > 0) || !isfinite(J)) {
+  const dm_fin_material *mt = &f->mat[f->imat[i]];
+  const double rho0 = st->mass[i] / st->vol[i];
+  /* a failed particle whose family no longer measures its volume is a loose grain (no stress,
+   * density shown as ρ0: dm_fracture.c, dm_frac_grain); an intact one with J ≤ 0 stops the run */
+  bool grain = isfinite(J) && dm_frac_grain(f, i, J, Jprev);
+  if (!grain && (!(J > 0) || !isfinite(J))) {
     *what = "J = det F", *val = J;
     return -1.0;
   }
-  double Fi[9], L[9];
-  inv3(F, J, Fi);
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c)
-      L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
+  double Fi[9] = {0}, L[9] = {0};
+  if (!grain) {
+    inv3(F, J, Fi);
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
+  }
   const double trD = L[0] + L[4] + L[8];
-  const dm_fin_material *mt = &f->mat[f->imat[i]];
-  const double rho0 = st->mass[i] / st->vol[i], rho = rho0 / J;
-  const bool open = dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
-  const double p = open ? 0.0 : eos_pressure(mt->eos, rho, f->e[i]);
-  const double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho, f->e[i]);
+  bool open = grain || dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
+  double p = open ? 0.0 : eos_pressure(mt->eos, rho0 / J, f->e[i]);
+  double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
+  if ((!isfinite(p) || !isfinite(c)) && dm_frac_failed(f, i)) { /* beyond the EOS: a grain */
+    f->failed[i] = 2;
+    grain = open = true, p = 0.0, c = eos_c0(mt->eos);
+  }
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
   }
-  const double ell = f->par.ell * pow(J, 1.0 / f->dim);
+  const double rho = grain ? rho0 : rho0 / J;
+  const double ell = grain ? f->par.ell : f->par.ell * pow(J, 1.0 / f->dim);
   const double q =
       trD < 0 && !open ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
@@ -157,11 +167,16 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
    * particle (no deviator; an open one's density may be beyond the cold curve) */
   if (mt->yield >= DM_YIELD_STEINBERG_GUINAN && !dm_frac_failed(f, i)) {
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
-    if (!isfinite(T)) {
+    if (!isfinite(T) && mt->frac.model != DM_FRACTURE_NONE && rho < eos_rho0(mt->eos)) {
+      Y = 0.0; /* stretched beyond the cold curve (below ~0.63 ρ0 for Al): far beyond the spall
+                * strength, it fails in this pass (dm_frac_stress); no strength meanwhile */
+    } else if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
       return -1.0;
     }
-    if (mt->yield == DM_YIELD_JOHNSON_COOK) { /* rate: √(2/3 D′:D′) of this step's L */
+    if (!isfinite(T)) {
+      /* Y = 0 above */
+    } else if (mt->yield == DM_YIELD_JOHNSON_COOK) { /* rate: √(2/3 D′:D′) of this step's L */
       double dd = 0;
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) dd += 0.25 * pow(L[3 * a + b] + L[3 * b + a], 2);

@@ -78,7 +78,7 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
   if (f->failed) {
     res->failed_layer = ms_calloc((size_t)nx, sizeof(double));
     for (size_t i = 0; i < n; ++i)
-      res->failed_layer[i % (size_t)nx] += f->failed[i] / (double)(ny * nz);
+      res->failed_layer[i % (size_t)nx] += (f->failed[i] != 0) / (double)(ny * nz);
   }
   res->steps = f->step;
   res->hist = fs.rows, res->nhist = fs.n;

@@ -27,8 +27,10 @@ typedef struct wall {
   double *k;       /* [n] penalty stiffness */
   double dt_k;     /* courant·2/max ω_w */
   double courant;  /* for the approach limit */
-  double stored;   /* Σ k d²/2 at the last evaluation (kJ) */
+  double stored;   /* Σ k d²/2 at the last evaluation (kJ): wall and contact */
   long in_contact; /* particles beyond the contact plane */
+  int on;          /* a wall in the deck */
+  dmi_contact *ct; /* contact between bodies (dm_impact_contact.c) */
 } wall;
 
 static double wall_force(void *user, const dm_fin *f, double *fext) {
@@ -38,7 +40,7 @@ static double wall_force(void *user, const dm_fin *f, double *fext) {
   double E = 0, vmax = 0;
   long nc = 0;
   memset(fext, 0, 3 * f->n * sizeof(double));
-  for (size_t i = 0; i < f->n; ++i) {
+  for (size_t i = 0; w->on && i < f->n; ++i) {
     const double x = s->X[3 * i + a] + s->w[3 * i + a];
     const double d = w->side * (w->contact - x); /* > 0: beyond the contact plane */
     if (d > 0) {
@@ -48,9 +50,10 @@ static double wall_force(void *user, const dm_fin *f, double *fext) {
     }
     vmax = fmax(vmax, -w->side * s->u[3 * i + a]); /* approach speed */
   }
-  w->stored = E, w->in_contact = nc;
+  const double dt_c = dmi_contact_force(w->ct, f, fext);
+  w->stored = E + w->ct->stored, w->in_contact = nc;
   const double dt_v = vmax > 0 ? 0.1 * w->h / vmax : INFINITY;
-  return fmin(w->dt_k, dt_v);
+  return fmin(fmin(w->dt_k, dt_v), dt_c);
 }
 
 /* The particles of every body, lattice sites in body order; X0 keeps the first reference. */
@@ -152,7 +155,8 @@ static void copy_fields(double *buf, size_t n, double *fld[NFIELD]) {
  * (docs/output.md, "Particle snapshots"; ptl_write_snapshot with the particles.xmf series):
  * current x = X + w, velocity u, mass, material (index into material_names: the bodies'
  * materials, each name once), then the model's fields: body, first reference X0, ρ, p, e,
- * ε_p, J (fld: live_fields' order); attributes time, step, r0 = h. */
+ * ε_p, J (fld: live_fields' order), failed (0 intact, 1 failed, 2 a grain: dm_fracture.c);
+ * attributes time, step, r0 = h. */
 static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *name,
                             const dm_fin *f, double *const fld[NFIELD], const double *X0,
                             const uint8_t *imat, double t, long step) {
@@ -161,7 +165,8 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   const double *w = fld[0], *u = fld[1];
   const size_t n = f->n;
   double *xv = ms_calloc(6 * n + 1, sizeof(double));
-  int64_t *ids = ms_calloc(2 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n;
+  int64_t *ids = ms_calloc(3 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n,
+          *failed = ids + 2 * n;
   /* the table: every body's material once, in body order; bmat[b] its index */
   char names[4096] = "";
   int64_t *bmat = ms_calloc(p->nbodies + 1, sizeof *bmat);
@@ -173,7 +178,7 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
     if (bmat[b] == (int64_t)nm) ++nm;
   }
   for (size_t i = 0; i < n; ++i) {
-    body[i] = imat[i], mat[i] = bmat[imat[i]];
+    body[i] = imat[i], mat[i] = bmat[imat[i]], failed[i] = f->failed ? f->failed[i] : 0;
     for (int a = 0; a < 3; ++a) {
       xv[a * n + i] = s->X[3 * i + a] + w[3 * i + a];
       xv[(3 + a) * n + i] = u[3 * i + a];
@@ -186,7 +191,8 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
                                     {"particles/pressure", fld[4], NULL, 1, "GPa"},
                                     {"particles/energy", fld[2], NULL, 1, "kJ/g"},
                                     {"particles/eps_p", fld[6], NULL, 1, "1"},
-                                    {"particles/J", fld[5], NULL, 1, "1"}};
+                                    {"particles/J", fld[5], NULL, 1, "1"},
+                                    {"particles/failed", NULL, failed, 1, NULL}};
   const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
                                {"mass", "particles/mass", 1, false},
                                {"density", "particles/density", 1, false},
@@ -211,13 +217,26 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   free(path), free(xv), free(ids), free(bmat);
 }
 
+enum { NHIST = 16 }; /* columns of impact_history.csv */
+
+/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest). */
+static double body0_momentum(const dm_impact *p, const dm_state *s) {
+  const dmi_body *b = &p->bodies[0];
+  const double v = hypot(hypot(b->velocity[0], b->velocity[1]), b->velocity[2]);
+  double P = 0;
+  for (size_t i = b->first; v > 0 && i < b->first + b->count; ++i)
+    for (int a = 0; a < 3; ++a) P += s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
+  return P;
+}
+
 typedef struct run_state {
   dm_impact *p;
   dm_fin *f;
   wall *wl;
   const double *X0;
   double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
-  double *hist;             /* [nhmax][13] */
+  double Pabs0;             /* Σ m |u(0)| */
+  double *hist;             /* [nhmax][NHIST] */
   size_t nh, nhmax;
 } run_state;
 
@@ -230,11 +249,16 @@ static void record(run_state *r) {
     for (int a = 0; a < 3; ++a) P[a] += s->mass[i] * s->u[3 * i + a];
   taylor_measures(r->p, s, r->X0, &L, &D);
   dm_impact_summary *sum = &r->p->sum;
-  const double bal = K + U + H - f->ext_work - r->E0;
+  const double B = dm_fin_broken_energy(f); /* booked out of E_hg at failures (dm_fracture.c) */
+  const double bal = K + U + H + B - f->ext_work - r->E0;
   sum->stretch_max = fmax(sum->stretch_max, dm_fin_max_stretch(f, NULL));
   for (size_t i = 0; i < f->n; ++i)
     sum->J_min = fmin(sum->J_min, f->J[i]), sum->J_max = fmax(sum->J_max, f->J[i]);
   sum->energy_err = fmax(sum->energy_err, fabs(bal) / r->E0);
+  if (r->Pabs0 > 0)
+    sum->p_total =
+        fmax(sum->p_total,
+             hypot(hypot(P[0] - r->Pv0[0], P[1] - r->Pv0[1]), P[2] - r->Pv0[2]) / r->Pabs0);
   sum->wall_err = fmax(sum->wall_err, fabs(f->ext_work + r->wl->stored) / r->E0);
   if (r->p->has_wall && r->P0 > 0) {
     const int a = r->p->wall_axis;
@@ -245,35 +269,39 @@ static void record(run_state *r) {
   }
   if (r->nh == r->nhmax) { /* thin: keep every other row */
     for (size_t j = 0; j < r->nh / 2; ++j)
-      memmove(&r->hist[13 * j], &r->hist[13 * 2 * j], 13 * sizeof(double));
+      memmove(&r->hist[NHIST * j], &r->hist[NHIST * 2 * j], NHIST * sizeof(double));
     r->nh /= 2, r->p->energy_every *= 2;
   }
-  const double row[13] = {r->t,
-                          K,
-                          U,
-                          H,
-                          f->ext_work,
-                          r->wl->stored,
-                          bal,
-                          P[0],
-                          P[1],
-                          P[2],
-                          L,
-                          D,
-                          (double)r->wl->in_contact};
-  memcpy(&r->hist[13 * r->nh++], row, sizeof row);
+  const double row[NHIST] = {r->t,
+                             K,
+                             U,
+                             H,
+                             f->ext_work,
+                             r->wl->stored,
+                             bal,
+                             P[0],
+                             P[1],
+                             P[2],
+                             L,
+                             D,
+                             (double)r->wl->in_contact,
+                             B,
+                             (double)dm_fin_failed_count(f),
+                             (double)r->wl->ct->in_contact};
+  memcpy(&r->hist[NHIST * r->nh++], row, sizeof row);
 }
 
 static void write_outputs(const ms_ctx *ctx, const run_state *r) {
-  const char *nm[] = {"t",           "kinetic",   "internal", "bond_penalty", "wall_work",
-                      "wall_energy", "balance",   "p_x",      "p_y",          "p_z",
-                      "length",      "footprint", "contacts"};
-  const char *un[] = {"10 us",  "kJ",     "kJ",     "kJ", "kJ", "kJ", "kJ",
-                      "g*km/s", "g*km/s", "g*km/s", "cm", "cm", "1"};
+  const char *nm[] = {"t",        "kinetic", "internal", "bond_penalty", "wall_work", "wall_energy",
+                      "balance",  "p_x",     "p_y",      "p_z",          "length",    "footprint",
+                      "contacts", "broken",  "failed",   "body_contacts"};
+  const char *un[] = {"10 us",  "kJ",     "kJ", "kJ", "kJ", "kJ", "kJ", "g*km/s",
+                      "g*km/s", "g*km/s", "cm", "cm", "1",  "kJ", "1",  "1"};
   dmp_write_series(ctx, "impact_history.csv",
-                   "impact history: balance = kinetic + internal + bond_penalty - wall_work - E0; "
+                   "impact history: balance = kinetic + internal + bond_penalty + broken - "
+                   "wall_work - E0 (wall_work, wall_energy: the wall's and the contact's); "
                    "length, footprint of body 0 (a cylinder on the wall)",
-                   13, nm, un, r->hist, r->nh);
+                   NHIST, nm, un, r->hist, r->nh);
   const dm_impact_summary *s = &r->p->sum;
   const double row[] = {(double)s->particles,
                         (double)s->bonds,
@@ -294,14 +322,17 @@ static void write_outputs(const ms_ctx *ctx, const run_state *r) {
                         s->length0,
                         s->length,
                         s->footprint0,
-                        s->footprint};
+                        s->footprint,
+                        s->broken,
+                        (double)s->failed};
   const char *sn[] = {"particles",   "bonds",        "steps",    "t_end",      "wall_time",
                       "E0",          "energy_err",   "wall_err", "hg_ratio",   "ref_updates",
                       "released",    "p_transverse", "p_normal", "J_min",      "J_max",
-                      "stretch_max", "length0",      "length",   "footprint0", "footprint"};
-  const char *su[] = {"1",  "1", "1", "10 us", "s", "kJ", "1",  "1",  "1",  "1",
-                      "kJ", "1", "1", "1",     "1", "1",  "cm", "cm", "cm", "cm"};
-  dmp_write_series(ctx, "impact_summary.csv", "impact summary (docs/input-impact.md)", 20, sn, su,
+                      "stretch_max", "length0",      "length",   "footprint0", "footprint",
+                      "broken",      "failed"};
+  const char *su[] = {"1", "1", "1", "10 us", "s", "kJ", "1",  "1",  "1",  "1",  "kJ",
+                      "1", "1", "1", "1",     "1", "cm", "cm", "cm", "cm", "kJ", "1"};
+  dmp_write_series(ctx, "impact_summary.csv", "impact summary (docs/input-impact.md)", 22, sn, su,
                    row, 1);
 }
 
@@ -397,6 +428,12 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
       }
       break;
     }
+    if (ms_interrupt_agreed(ctx)) { /* SIGINT/SIGTERM (docs/reliability.md): no checkpoints
+                                       here, so stop with the outputs so far */
+      ms_log(ctx, MS_LOG_ERROR, "impact: interrupted at step %ld, t = %.9g", f->step, r->t);
+      st = MS_INTERRUPTED;
+      break;
+    }
     const long out = outside_box(p, f->m->s);
     if (out >= 0) { /* a finite state: the one that left the domain */
       ms_log(ctx, MS_LOG_ERROR,
@@ -437,17 +474,27 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
       .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
   if (st == MS_OK)
     st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
-  wall wl = {.axis = p->wall_axis, .side = p->wall_side, .h = p->h, .courant = p->courant};
+  dmi_contact ct;
+  wall wl = {.axis = p->wall_axis,
+             .side = p->wall_side,
+             .h = p->h,
+             .courant = p->courant,
+             .on = p->has_wall,
+             .ct = &ct};
   wl.contact = p->wall_pos + p->wall_side * 0.5 * p->h;
   wl.k = ms_calloc(s.n, sizeof(double));
   wl.dt_k = INFINITY;
-  for (size_t i = 0; p->has_wall && i < s.n; ++i) {
+  double *M = ms_calloc(s.n ? s.n : 1, sizeof(double)); /* P-wave modulus ρ0 c_L² */
+  for (size_t i = 0; i < s.n; ++i) {
     double cL, c;
     dmi_body_speeds(&p->bodies[imat[i]], &cL, &c);
-    wl.k[i] = p->wall_stiffness * s.mass[i] / s.vol[i] * cL * cL * p->h;
-    wl.dt_k = fmin(wl.dt_k, 2.0 * p->courant / sqrt(wl.k[i] / s.mass[i]));
+    M[i] = s.mass[i] / s.vol[i] * cL * cL;
+    wl.k[i] = p->wall_stiffness * M[i] * p->h;
+    if (p->has_wall) wl.dt_k = fmin(wl.dt_k, 2.0 * p->courant / sqrt(wl.k[i] / s.mass[i]));
   }
-  if (st == MS_OK && p->has_wall) st = dm_fin_set_external(f, wall_force, &wl);
+  dmi_contact_init(&ct, p, s.n, imat, M);
+  free(M);
+  if (st == MS_OK && (p->has_wall || ct.on)) st = dm_fin_set_external(f, wall_force, &wl);
   run_state r = {.p = p, .f = f, .wl = &wl, .X0 = X0, .nhmax = 4096};
   if (st == MS_OK) {
     double K, U, H, P[3] = {0, 0, 0};
@@ -456,37 +503,44 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     for (size_t i = 0; i < s.n; ++i)
       for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
     r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
+    for (size_t i = 0; i < s.n; ++i)
+      r.Pabs0 += s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
+    p->sum.p0_body0 = body0_momentum(p, &s);
     for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
-    r.hist = ms_calloc(13 * r.nhmax, sizeof(double));
+    r.hist = ms_calloc(NHIST * r.nhmax, sizeof(double));
     p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
     taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
     ms_log(ctx, MS_LOG_INFO,
            "impact: %zu particles in %zu bodies, %zu bonds, h %g cm, first dt %.6g, E0 %.6g kJ, "
-           "wall %s; body 0: length %.5g cm, footprint %.5g cm",
+           "wall %s, contact between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
            s.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0, p->has_wall ? "on" : "off",
-           p->sum.length0, p->sum.footprint0);
+           ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
     st = time_loop(&r, ctx, imat);
     double K1, U1, H1;
     dm_fin_energies(f, &K1, &U1, &H1);
     p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
+    p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
+    p->sum.p_body0 = body0_momentum(p, f->m->s);
     taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
     taylor_profile(p, f->m->s, X0, p->sum.length, p->sum.radius_at);
     ms_log(ctx, MS_LOG_INFO,
            "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "
            "E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = %.3g; transverse "
            "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
-           "%.4g; %ld reference updates; body 0: length "
+           "%.4g; %ld reference updates; %zu failed particles, broken energy %.4g kJ; body 0: "
+           "length "
            "%.5g cm (L/L0 %.4f), "
            "footprint %.5g cm (D/D0 %.4f)",
            f->step, r.t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
            p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
-           p->sum.ref_updates, p->sum.length, p->sum.length / p->sum.length0, p->sum.footprint,
-           p->sum.footprint / p->sum.footprint0);
+           p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
+           p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
     write_outputs(ctx, &r);
   } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
   p->energy_every = energy_every;
   if (f) m = f->m; /* a reference update replaces the model */
   free(r.hist), free(wl.k), free(mat), free(imat), free(X0);
+  dmi_contact_free(&ct);
   dm_fin_destroy(&f);
   dm_model_destroy(&m);
   dm_state_free(&s);

@@ -2,8 +2,9 @@
 /* dm_impact_deck.c — the deck reader of the problem type `impact` (docs/input-impact.md): every
  * key checked and located (FILE:LINE:COL) before anything runs, including the set-up errors a
  * run could only find later: a body outside the box, bodies that overlap or come within the
- * horizon of each other (they would be bonded), a body across the wall, and an initial
- * velocity whose approach to the wall violates the first step's time-step limit. */
+ * horizon of each other (they would be bonded), a body across the wall, an initial velocity
+ * whose approach to the wall violates the first step's time-step limit, and an impact between
+ * bodies that the contact's penalty cannot hold. */
 #include "dm_impact_impl.h"
 
 #include <limits.h>
@@ -110,6 +111,7 @@ static void read_body_material(dmi_body *b, dk_doc *doc, const dk_node *it,
   } else if (dk_get(it, "yield_stress"))
     dk_error(e, doc, dk_get(it, "yield_stress"),
              "impact.bodies: 'yield_stress' needs yield: elastic_plastic");
+  dm_frac_read(e, doc, it, "impact.bodies[]", &b->mat.frac);
   if (eos && b->mat.yield != DM_YIELD_NONE && eos_get_kind(eos) == EOS_IDEAL_GAS)
     dk_error(e, doc, it, "impact.bodies: a yield model on an ideal gas has no meaning");
 }
@@ -242,12 +244,38 @@ static void check_body_pairs(const dm_impact *p, dk_doc *doc, const dk_node *L, 
           for (int c = 0; c < 3; ++c) d2 += pow(Xj[3 * a + c] - Xi[3 * b + c], 2);
           close = d2 < delta * delta;
         }
+      /* the contact's penalty must hold the impact (dm_impact_contact.c): the acoustic
+       * impact pressure Z_i Z_j/(Z_i + Z_j) |Δv| (Z = ρ0 c0; a lower bound of the shock's, about
+       * half of it for Al on Al at 6.7 km/s) may press the surfaces into each other by at most
+       * 0.25 h, d/h = p / (c_c M) with M the harmonic mean of the P-wave moduli. (The time step
+       * needs no check: the contact's own limit adapts it, docs/input-impact.md.) */
+      double dv2 = 0, p_ac = 0, M_c = 0;
+      for (int c = 0; c < 3; ++c)
+        dv2 += pow(p->bodies[j].velocity[c] - p->bodies[i].velocity[c], 2);
+      if (p->contact_stiffness > 0 && p->bodies[i].mat.eos && p->bodies[j].mat.eos) {
+        double cL[2], c0[2], Z[2], Mb[2];
+        const dmi_body *bb[2] = {&p->bodies[i], &p->bodies[j]};
+        for (int q = 0; q < 2; ++q) {
+          dmi_body_speeds(bb[q], &cL[q], &c0[q]);
+          Z[q] = eos_rho0(bb[q]->mat.eos) * c0[q], Mb[q] = eos_rho0(bb[q]->mat.eos) * cL[q] * cL[q];
+        }
+        p_ac = Z[0] * Z[1] / (Z[0] + Z[1]) * sqrt(dv2);
+        M_c = 2.0 * Mb[0] * Mb[1] / (Mb[0] + Mb[1]);
+      }
       if (overlap)
         dk_error(e, doc, dk_seq_at(L, j), "impact.bodies[%zu]: overlaps bodies[%zu]", j, i);
-      else if (close)
+      if (!overlap && M_c > 0 && p_ac > 0.25 * p->contact_stiffness * M_c)
+        dk_error(e, doc,
+                 dk_get(dk_seq_at(L, j), "velocity") ? dk_get(dk_seq_at(L, j), "velocity")
+                                                     : dk_seq_at(L, j),
+                 "impact.bodies[%zu].velocity: the impact on bodies[%zu] (acoustic pressure %g "
+                 "GPa) would press the contact %.3g spacings deep, more than 0.25: give a larger "
+                 "impact.contact.stiffness (now %g)",
+                 j, i, p_ac, p_ac / (p->contact_stiffness * M_c), p->contact_stiffness);
+      if (!overlap && close)
         dk_error(e, doc, dk_seq_at(L, j),
                  "impact.bodies[%zu]: comes within the horizon (%g cm) of bodies[%zu]: the two "
-                 "would be bonded (no contact between bodies yet); leave a gap",
+                 "would be bonded (the contact acts between unbonded bodies only); leave a gap",
                  j, delta, i);
       free(Xi);
     }
@@ -267,6 +295,11 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
     dk_read_double(e, doc, vis, "quadratic", MS_DIM_NONE, false, 2.0, 0.0, 100.0, &p->cq);
     dk_read_double(e, doc, vis, "linear", MS_DIM_NONE, false, 0.5, 0.0, 100.0, &p->cl);
   }
+  p->contact_stiffness = 10.0; /* c_c: penetration < 0.1 h up to a contact stress M */
+  const dk_node *ct = dk_get(sec, "contact");
+  if (ct && dk_expect_map(e, doc, ct, "impact.contact"))
+    dk_read_double(e, doc, ct, "stiffness", MS_DIM_NONE, false, 10.0, 0.0, 1000.0,
+                   &p->contact_stiffness);
   const dk_node *ru = dk_get(sec, "reference_update");
   if (ru && dk_expect_map(e, doc, ru, "impact.reference_update"))
     dk_read_double(e, doc, ru, "threshold", MS_DIM_NONE, true, 0, 1e-3, 10.0, &p->ref_threshold);

@@ -28,12 +28,36 @@ struct dm_impact {
   int has_wall, wall_axis, wall_side; /* side +1: bodies on the + side of the plane */
   double wall_pos, wall_stiffness;    /* plane x_axis = pos; penalty coefficient c_w */
   double t_end, courant, cq, cl, hourglass, cond_max;
-  double ref_threshold; /* reference update when a bond stretch exceeds 1 + this (0: off) */
+  double ref_threshold;     /* reference update when a bond stretch exceeds 1 + this (0: off) */
+  double contact_stiffness; /* c_c of the body–body contact (dm_impact_contact.c; 0: off) */
   long energy_every;
   double *particle_times;
   size_t nparticle_times;
   dm_impact_summary sum;
 };
+
+/* Contact between bodies (dm_impact_contact.c): a pairwise penalty between particles of
+ * different bodies closer than h; a cell list over the domain allocated once. */
+typedef struct dmi_contact {
+  int on;
+  double h, courant, cell, lo[3];
+  size_t ncell, n;     /* hash buckets (2n + 1), particles */
+  const uint8_t *imat; /* [n] body of each particle (not owned) */
+  long *head, *next;   /* the cell list: buckets, and the next particle of a bucket */
+  long *cidx;          /* [n][3] each particle's cell */
+  double *k;           /* [n] c_c h M_i */
+  double dt_k;         /* 2 courant / max ω of a pair */
+  double stored;       /* Σ k d²/2 at the last evaluation (kJ) */
+  long in_contact;     /* particles touching another body */
+} dmi_contact;
+/* M[i]: the P-wave modulus ρ0 c_L² of particle i's material (GPa). Off (no arrays) with one
+ * body or c_c = 0. */
+void dmi_contact_init(dmi_contact *c, const dm_impact *p, size_t n, const uint8_t *imat,
+                      const double *M);
+void dmi_contact_free(dmi_contact *c);
+/* Adds the contact forces to fext (not zeroed here) at the current configuration of f; returns
+ * the contact's stable time step. */
+double dmi_contact_force(dmi_contact *c, const struct dm_fin *f, double *fext);
 
 /* Is x inside body b (strictly)? */
 bool dmi_inside(const dmi_body *b, const double x[3]);

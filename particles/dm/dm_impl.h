@@ -81,6 +81,15 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
 static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
+/* A failed particle becomes a loose grain of debris for good (failed[i] = 2: no stress, no
+ * EOS, density shown as ρ0) when its family no longer measures its volume: J ≤ 0, a bond
+ * stretched beyond DM_FRAC_DISPERSED (its neighbours no longer surround it), or J changing by
+ * more than DM_FRAC_JUMP of itself in one stress pass (the fit of a scattered family jumping,
+ * not a flow: docs/particles-dm.md "Fracture"). Checks and marks particle i (dm_fracture.c);
+ * Jprev ≤ 0: no previous J. */
+#define DM_FRAC_DISPERSED 2.0
+#define DM_FRAC_JUMP      0.3
+bool dm_frac_grain(dm_fin *f, size_t i, double J, double Jprev);
 static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
   return dm_frac_failed(f, i) && J > 1.0;
 }

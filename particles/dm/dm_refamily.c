@@ -111,5 +111,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_model_destroy(&old);
   dm_fin_bond_penalty(f);
   rep->bonds = m->nbonds;
+  for (size_t i = 0; i < n; ++i)
+    f->J[i] = 1.0; /* J is now relative to the new reference (the
+                                                  grain test of dm_fracture.c compares with it) */
   return dm_fin_refresh(f);
 }

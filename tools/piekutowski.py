@@ -1,0 +1,270 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: MIT
+"""Hole, back-spray angle, debris-cloud leading edge and fragments of a sphere-on-plate `impact`
+run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md).
+
+  piekutowski.py OUTDIR [--snapshot K] [-o plot.png] [--exp-hole MM --exp-theta DEG]
+
+Body 0 is the projectile (a sphere moving along +z), body 1 the plate (a box normal to z). From
+the run's last particle snapshot (particles_NNNN.h5, the final state; or --snapshot K, an
+index into them; read through python/mscale):
+
+* hole diameter D_h: the plate particles still in the plate (|z − z_c| ≤ t, z_c the plate's
+  centre, t its thickness: the lip may bulge by up to t/2 on either side; and slower than a
+  tenth of the impact speed: a grain of debris crossing the plate's slab on its way out is not
+  part of the hole's wall), failed or not, give the plate's areal mass in rings of width h
+  about the impact axis; the hole's radius is where it first reaches half of the intact
+  plate's ρ0 t (a radiograph's or a recovered plate's edge: a few stray grains do not close a
+  hole). Failed particles count: they are material still in place (a recovered plate keeps its
+  damaged lip). Printed beside it: 2 (min r − h/2) of the innermost particle still in the plate
+  (the hole's wall is half a spacing inside it; one stray grain moves it) and the same for the
+  unbroken particles only (it grows as long as the failure spreads outwards through the
+  plate). This is the diameter of the hole
+  through the plate, what [Piekutowski1993] reports (the recovered bumper's hole; the finer
+  points of his measurement could not be read here: docs/validation.md).
+* back-spray angle θ: the material thrown back out of the impact face (z < z_f − h, z_f the
+  face the sphere struck). θ is measured from the plate's face (90° is straight back along the
+  axis): θ_v = the mass-weighted median of atan2(−u_z, u_r) over the back-spray particles (the
+  direction they fly), and θ_e = the angle of the veil's envelope seen from the hole's rim, the
+  median of atan2(z_f − z, r − r_h) over the 10 % of back-spray particles farthest from the
+  rim. Both are printed; θ_v is the one compared.
+* debris-cloud leading edge: the largest z of any particle, and its speed (z_max − z_f)/(t − t_c)
+  with t_c = the time of first contact (the sphere's gap over its speed); the same for the front
+  of the first 1 % of the total mass (a few fast grains aside), and the largest u_z.
+* fragments: connected components of the bond graph: particles i, k of one body are bonded when
+  their lattice sites are closer than the horizon δ (the families of dm_family.c, built once),
+  and a bond is broken when both particles have failed (dm_fracture.c). Fragment mass spectrum
+  (cumulative number N(> m)) and mass-weighted axial velocity distribution.
+
+Units: cm, km/s and 10 µs in the files; mm, km/s and µs in the printout and plot. Run with
+Debian's python (/usr/bin/python3: numpy, matplotlib, yaml).
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+
+
+def geometry(run):
+    sec = run.deck["impact"]
+    b0, b1 = sec["bodies"][0], sec["bodies"][1]
+    if b0.get("shape") != "sphere" or b1.get("shape") != "box":
+        raise SystemExit(f"{run.path}: bodies 0, 1 must be a sphere and a box (the plate)")
+    h = float(sec["spacing"])
+    delta = float(sec.get("horizon", 1.5)) * h
+    c0, c1 = np.array(b0["center"], float), np.array(b1["center"], float)
+    t = float(b1["size"][2])
+    v = float(b0["velocity"][2])
+    zf = c1[2] - 0.5 * t  # the face the sphere strikes
+    gap = zf - (c0[2] + float(b0["radius"]))
+    return dict(h=h, delta=delta, axis=c1[:2], zc=c1[2], t=t, zf=zf, v=v, t_contact=gap / v,
+                D=2 * float(b0["radius"]))
+
+
+def hole_radius(r, m, h, areal0):
+    """The radius where the plate's areal mass, in rings of width h about the axis, first
+    reaches half its initial value areal0 = ρ0 t (linear between ring centres)."""
+    edges = np.arange(0.0, r.max() + h, h)
+    ring = np.histogram(r, bins=edges, weights=m)[0] / (np.pi * (edges[1:] ** 2 - edges[:-1] ** 2))
+    cov = ring / areal0
+    rc = 0.5 * (edges[1:] + edges[:-1])
+    k = int(np.argmax(cov >= 0.5))
+    if k == 0:
+        return rc[0] if cov[0] >= 0.5 else np.nan
+    return rc[k - 1] + (0.5 - cov[k - 1]) / (cov[k] - cov[k - 1]) * (rc[k] - rc[k - 1])
+
+
+def fragments(X0, body, failed, h, delta):
+    """Fragment label of every particle: components of the unbroken bonds (|X0_i − X0_k| < δ,
+    the same body, not both failed)."""
+    n = len(body)
+    label = np.arange(n)
+    ii, kk = [], []
+    reach = int(np.ceil(delta / h))
+    offs = [(a, b, c) for a in range(-reach, reach + 1) for b in range(-reach, reach + 1)
+            for c in range(-reach, reach + 1)
+            if 0 < (a * a + b * b + c * c) * h * h < delta * delta * (1 - 1e-9)]
+    for bd in np.unique(body):
+        idx = np.nonzero(body == bd)[0]
+        lo = X0[idx].min(axis=0)
+        g = np.rint((X0[idx] - lo) / h).astype(np.int64) + reach
+        M = int(g.max()) + 2 * reach + 1
+        key = (g[:, 2] * M + g[:, 1]) * M + g[:, 0]
+        order = np.argsort(key)
+        skey = key[order]
+        for a, b, c in offs:
+            if (a, b, c) < (0, 0, 0):
+                continue  # each bond once
+            nk = ((g[:, 2] + c) * M + (g[:, 1] + b)) * M + (g[:, 0] + a)
+            pos = np.searchsorted(skey, nk)
+            pos[pos >= len(skey)] = 0
+            hit = skey[pos] == nk
+            i, k = idx[hit], idx[order[pos[hit]]]
+            ok = ~(failed[i] & failed[k])
+            ii.append(i[ok]), kk.append(k[ok])
+    ii, kk = np.concatenate(ii), np.concatenate(kk)
+    while True:  # min-label propagation with pointer jumping
+        lo = np.minimum(label[ii], label[kk])
+        new = label.copy()
+        np.minimum.at(new, ii, lo)
+        np.minimum.at(new, kk, lo)
+        new = new[new]
+        if np.array_equal(new, label):
+            return label
+        label = new
+
+
+def measure(outdir, snapshot=-1):
+    run = mscale.Run(outdir)
+    g = geometry(run)
+    if not run.snapshots:
+        raise SystemExit(f"{run.path}: no particle snapshots (particles_NNNN.h5)")
+    snap = run.snapshots[snapshot]
+    body = np.asarray(snap["body"]).astype(int)
+    x = np.asarray(snap["x"], float)
+    X0 = np.asarray(snap["X0"], float)
+    u = np.asarray(snap["v"], float)
+    failed = np.asarray(snap["failed"]) > 0 if "failed" in snap else np.zeros(len(body), bool)
+    rho = np.asarray(snap["density"], float)
+    rho0 = {}
+    for bd in (0, 1):
+        mats = {m["name"]: m for m in run.deck["materials"]}
+        rho0[bd] = float(mats[run.deck["impact"]["bodies"][bd]["material"]]["eos"]["rho0"])
+    mass = np.array([rho0[b] for b in body]) * g["h"] ** 3  # g
+    t_now = snap.time / (10.0 if snap.time_unit == "us" else 1.0)  # 10 µs, as the deck
+    r = np.hypot(x[:, 0] - g["axis"][0], x[:, 1] - g["axis"][1])
+    # hole
+    speed = np.linalg.norm(u, axis=1)
+    inplate = (body == 1) & (np.abs(x[:, 2] - g["zc"]) <= g["t"]) & (speed < 0.1 * g["v"])
+    r_h = hole_radius(r[inplate], mass[inplate], g["h"], g["t"] * rho0[1])
+    r_min = r[inplate].min() - 0.5 * g["h"]  # the innermost particle still in the plate
+    r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
+    # back-spray
+    back = x[:, 2] < g["zf"] - g["h"]
+    ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])
+                  / np.maximum(r, 1e-300), 0.0)
+    theta_v = theta_e = np.nan
+    if back.sum() >= 5:
+        ang = np.degrees(np.arctan2(-u[back, 2], ur[back]))
+        o = np.argsort(ang)
+        cm = np.cumsum(mass[back][o])
+        theta_v = float(ang[o][np.searchsorted(cm, 0.5 * cm[-1])])
+        dz, dr = g["zf"] - x[back, 2], r[back] - r_h
+        far = np.hypot(dz, dr)
+        sel = far >= np.quantile(far, 0.9)
+        theta_e = float(np.median(np.degrees(np.arctan2(dz[sel], dr[sel]))))
+    # leading edge
+    zmax = x[:, 2].max()
+    oz = np.argsort(x[:, 2])[::-1]  # the front of the cloud's first 1 % of the mass
+    z01 = x[oz, 2][np.searchsorted(np.cumsum(mass[oz]), 0.01 * mass.sum())]
+    v_edge = (zmax - g["zf"]) / (t_now - g["t_contact"]) if np.isfinite(t_now) else np.nan
+    v_edge01 = (z01 - g["zf"]) / (t_now - g["t_contact"]) if np.isfinite(t_now) else np.nan
+    hist = run.table("impact_history")  # energies at the history row nearest to t (its t: µs)
+    th = np.asarray(hist["t"], float)
+    k = int(np.argmin(np.abs(th - 10 * t_now))) if np.isfinite(t_now) else len(th) - 1  # µs
+    energy = {c: float(np.asarray(hist[c], float)[k]) for c in
+              ("kinetic", "internal", "bond_penalty", "broken", "wall_work", "wall_energy",
+               "balance")}
+    energy["E0"] = float(np.asarray(hist["kinetic"], float)[0])
+    lab = fragments(X0, body, failed, g["h"], g["delta"])
+    _, inv = np.unique(lab, return_inverse=True)
+    fm = np.bincount(inv, weights=mass)
+    fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
+    return dict(g=g, t=t_now, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+                v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
+                frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
+                nfailed=int(failed.sum()), rho=rho, energy=energy)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("dirs", nargs="+", help="output directories of impact runs")
+    ap.add_argument("--snapshot", type=int, default=-1,
+                    help="index into the run's particle snapshots (-1: the final state)")
+    ap.add_argument("-o", "--output", help="plot file (PNG); none: print only")
+    ap.add_argument("--exp-hole", type=float, default=17.3, help="experimental hole (mm)")
+    ap.add_argument("--exp-theta", type=float, default=20.67, help="experimental θ (deg)")
+    ap.add_argument("--title", default="Piekutowski perforation, Al on Al", help="plot title")
+    args = ap.parse_args(argv)
+    res = []
+    for d in args.dirs:
+        m = measure(d, args.snapshot)
+        res.append((d, m))
+        g = m["g"]
+        big = np.sort(m["frag_mass"])[::-1]
+        print(f"{d}: t {10 * m['t']:.3f} us, h {10 * g['h']:.4g} mm, {m['n']} particles "
+              f"({m['nfailed']} failed): hole {10 * m['hole']:.3f} mm "
+              f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
+              f"innermost particle {10 * m['hole_min']:.3f} mm, unbroken plate "
+              f"{10 * m['hole_unbroken']:.3f} mm); "
+              f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
+              f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg (from the face; from the axis "
+              f"{90 - m['theta_v']:.2f}, {90 - m['theta_e']:.2f}); back-spray mass "
+              f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "
+              f"beyond the face, {m['v_edge']:.3f} km/s (the front of 1 % of the mass "
+              f"{m['v_edge01']:.3f} km/s, max u_z {m['uz_max']:.3f} km/s); "
+              f"{len(big)} fragments, largest {1e3 * big[0]:.1f} mg"
+              + (f", next {1e3 * big[1]:.2f} mg" if len(big) > 1 else ""))
+        en = m["energy"]
+        print("  energy / E0 = {:.4g} kJ: kinetic {:.4f}, internal {:.4f}, bond penalty {:.4f}, "
+              "broken {:.4f}, contact stored {:.2e}, contact work {:.2e}, balance {:.1e}".format(
+                  en["E0"], *(en[c] / en["E0"] for c in ("kinetic", "internal", "bond_penalty",
+                                                        "broken", "wall_energy", "wall_work",
+                                                        "balance"))))
+    if not args.output:
+        return 0
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axs = plt.subplots(1, 3, figsize=(14, 4.8))
+    d, m = res[-1]
+    g = m["g"]
+    sl = np.abs(m["x"][:, 1] - g["axis"][1]) < 0.75 * g["h"]  # one or two lattice rows
+    for bd, c, lab in ((1, "tab:blue", "plate"), (0, "tab:red", "sphere")):
+        s = sl & (m["body"] == bd)
+        axs[0].scatter(10 * m["x"][s, 0], 10 * (m["x"][s, 2] - g["zf"]), s=2, c=c, label=lab)
+    rh = 0.5 * args.exp_hole  # mm
+    axs[0].plot([-rh, -rh], [0, 10 * g["t"]], "k-", lw=2)
+    axs[0].plot([rh, rh], [0, 10 * g["t"]], "k-", lw=2, label=f"experiment: hole {args.exp_hole} mm")
+    L = 25.0
+    th = np.radians(args.exp_theta)
+    for sgn in (-1, 1):
+        axs[0].plot([sgn * rh, sgn * (rh + L * np.cos(th))], [0, -L * np.sin(th)], "k--", lw=1,
+                    label=f"experiment: θ = {args.exp_theta}° from the face" if sgn > 0 else None)
+        axs[0].plot([sgn * rh, sgn * (rh + L * np.sin(th))], [0, -L * np.cos(th)], "k:", lw=1,
+                    label=f"or {args.exp_theta}° from the axis" if sgn > 0 else None)
+    axs[0].set_xlabel("x (mm)")
+    axs[0].set_ylabel("z − z_face (mm)")
+    axs[0].set_aspect("equal")
+    axs[0].legend(fontsize=7)
+    axs[0].plot([-5 * m["hole"], 5 * m["hole"]], [-0.5, -0.5], "g-", lw=3,
+                label=f"DM hole {10 * m['hole']:.1f} mm")
+    axs[0].set_xlim(-30, 30)
+    axs[0].set_title(f"slice |y| < 0.75 h at t = {10 * m['t']:.2f} µs")
+    for d, m in res:
+        fm = np.sort(m["frag_mass"])[::-1] * 1e3
+        axs[1].loglog(fm, np.arange(1, len(fm) + 1), drawstyle="steps-post",
+                      label=f"h = {10 * m['g']['h']:.3g} mm")
+        axs[2].hist(m["frag_vz"], bins=40, weights=m["frag_mass"] * 1e3, histtype="step",
+                    label=f"h = {10 * m['g']['h']:.3g} mm")
+    axs[1].set_xlabel("fragment mass m (mg)")
+    axs[1].set_ylabel("N(≥ m)")
+    axs[1].legend(fontsize=7)
+    axs[1].set_title("fragment spectrum")
+    axs[2].set_xlabel("fragment axial velocity u_z (km/s)")
+    axs[2].set_ylabel("mass (mg)")
+    axs[2].legend(fontsize=7)
+    axs[2].set_title("velocity distribution (mass-weighted)")
+    fig.suptitle(args.title)
+    fig.tight_layout()
+    fig.savefig(args.output, dpi=120)
+    print(f"wrote {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
