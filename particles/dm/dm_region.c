@@ -579,8 +579,9 @@ static double region_free_surface_velocity(const ptl_region *rr) {
   return cnt ? sum / (double)cnt : 0.0;
 }
 
-/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy, broken (the
- * penalty energy of failed particles, dm_fracture.c), piston work W; total = K + U + broken − W,
+/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy + the contact
+ * energy of failed particles, broken (the penalty energy of failed particles, dm_fracture.c),
+ * piston work W; total = K + potential + broken − W,
  * conserved to round-off by dm_fin (docs/particles-dm.md "Energy identity") except for what the
  * coupling's kicks add. */
 static void region_energy(ptl_region *rr, ptl_region_energy *out) {
@@ -589,10 +590,10 @@ static void region_energy(ptl_region *rr, ptl_region_energy *out) {
   dm_fin_energies(r->f, &K, &U, &H);
   memset(out, 0, sizeof *out);
   out->kinetic = K;
-  out->potential = U + H;
+  out->potential = U + H + dm_fin_contact_energy(r->f); /* contact: failed particles' springs */
   out->piston_work = r->f->work;
   out->broken = dm_fin_broken_energy(r->f);
-  out->total = K + U + H + out->broken - r->f->work;
+  out->total = K + U + H + dm_fin_contact_energy(r->f) + out->broken - r->f->work;
   for (size_t i = 0; i < r->s.n; i++)
     if (r->s.bc[i] == DM_FREE)
       for (int a = 0; a < 3; a++) out->momentum[a] += r->s.mass[i] * r->s.u[3 * i + a];

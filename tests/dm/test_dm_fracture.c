@@ -105,7 +105,7 @@ static void bar_free(bar *b) {
 static double bar_energy(const bar *b) {
   double K, U, H;
   dm_fin_energies(b->f, &K, &U, &H);
-  return K + U + H + dm_fin_broken_energy(b->f) - b->f->work;
+  return K + U + H + dm_fin_broken_energy(b->f) + dm_fin_contact_energy(b->f) - b->f->work;
 }
 
 /* Components of the unbroken bonds (union–find), labels in lab[]. */
@@ -207,33 +207,48 @@ static void test_pull_apart_sg(void **state) {
   pull_apart(1, 1, DM_YIELD_STEINBERG_GUINAN, 12000);
 }
 
-/* c. A piston (1 km/s) into a 1D chain with every particle failed from the start and into the
- * intact chain (no bond penalty in either: a failed particle has none): the same layers, to
- * round-off, while the shock is in the chain (behind it p + q > 0, ahead of it J = 1). */
+/* c. A piston (0.1 km/s) into a 1D chain with every particle failed from the start and into
+ * the intact chain (no bond penalty in either): the failed chain resists compression through
+ * its contact springs (p of a failed particle: the virial pressure of its pair forces), at the
+ * acoustic impedance ρ0 c0 of the springs' K = ρ0 c0² (dm_fracture.c). */
 static void test_failed_compression(void **state) {
   (void)state;
   dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
   bar a, b;
-  bar_build(&a, 1, 200, 1, 0.001, 0.0, 0.1, 3, &mat, 0.0);
-  bar_build(&b, 1, 200, 1, 0.001, 0.0, 0.1, 3, &mat, 0.0);
-  for (size_t i = 0; i < b.f->n; ++i) b.f->failed[i] = 1;
+  const double up = 0.1;
+  bar_build(&a, 1, 200, 1, 0.001, 0.0, up, 3, &mat, 0.0);
+  bar_build(&b, 1, 200, 1, 0.001, 0.0, up, 3, &mat, 0.0);
+  for (size_t i = 0; i < b.f->n; ++i) b.f->failed[i] = 1, b.m->kappa[i] = 0.0;
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK);
+  const double E0 = bar_energy(&b);
+  double dE = 0;
   for (long step = 0; step < 600; ++step) {
     assert_int_equal(dm_fin_step(a.f), MS_OK);
     b.f->dt_next = a.f->dt_next;
     assert_int_equal(dm_fin_step(b.f), MS_OK);
+    dE = fmax(dE, fabs(bar_energy(&b) - E0));
   }
-  double pmax = 0, dmax = 0;
-  for (size_t i = 0; i < a.f->n; ++i) {
-    pmax = fmax(pmax, a.f->p[i]);
-    dmax = fmax(dmax, fabs(a.f->sig[9 * i] - b.f->sig[9 * i]));
-  }
-  assert_true(pmax > 1.0); /* a shock of ≈ 1.5 GPa is in the chain */
-  /* −max(p + q, 0) = −(p + q) wherever the chain is compressed; the two differ only where the
-   * intact chain carries the small tensions of the shock's ringing (measured 5.5e-4 GPa, 3.7e-4
-   * of p), which the failed chain cuts off */
+  /* the front: the last particle moving at ≥ up/2; the mean p over the middle half behind it */
+  long front = 0;
+  for (long i = 0; i < 200; ++i)
+    if (b.s.u[3 * i] >= 0.5 * up) front = i;
+  double pa = 0, pb = 0, c = 0;
+  for (long i = 3 + (front - 3) / 4; i < 3 + 3 * (front - 3) / 4; ++i)
+    pa += a.f->p[i] + a.f->q[i], pb += b.f->p[i], c += 1;
+  pa /= c, pb /= c;
+  const double zc = 2.703 * 5.35 * up; /* ρ0 c0 u_p: the springs are linear (acoustic) */
   if (getenv("DM_FRACTURE_PRINT"))
-    printf("failed chain in compression: max p %.4f GPa, max |Δσ_xx| %.3e\n", pmax, dmax);
-  assert_true(dmax < 1e-3 * pmax);
+    printf("failed chain in compression: front at %ld, mean p %.4f GPa (intact %.4f, rho0 c0 up "
+           "%.4f), balance %.1e of the work\n",
+           front, pb, pa, zc, dE / b.f->work);
+  assert_true(front > 50);
+  /* the springs carry the acoustic pressure: the mean over the shocked chain within 1 % (the
+   * chain's dispersive ringing behind an undamped front averages out over ~40 particles;
+   * measured 0.06 %); the intact chain its Hugoniot ρ0 (c0 + s u_p) u_p, 2.5 % above: the two
+   * bounds exclude each other */
+  assert_true(fabs(pb - zc) < 0.01 * zc);
+  assert_true(fabs(pa - 2.703 * (5.35 + 1.34 * up) * up) < 0.01 * zc);
+  assert_true(dE < 1e-12 * b.f->work); /* round-off, ~1e-15 per step */
   bar_free(&a);
   bar_free(&b);
 }
