@@ -628,11 +628,16 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
   if (r->rank > 0) return MS_OK; /* replicated: the owner writes */
   const ptl_state *ps = r->ps;
   const dm_fin *f = r->f;
+  /* fracture: the failed flags (1: failed; its p is the contact pressure, ρ and J held from the
+   * failure, dm_fracture.c) */
+  int64_t *failed = f->failed ? ms_calloc(r->s.n + 1, sizeof *failed) : NULL;
+  for (size_t i = 0; failed && i < r->s.n; i++) failed[i] = f->failed[i];
   const ptl_snapshot_data data[] = {{"particles/pressure", f->p, NULL, 1, "GPa"},
                                     {"particles/density", f->rho, NULL, 1, "g/cm^3"},
                                     {"particles/energy", f->e, NULL, 1, "kJ/g"},
                                     {"particles/J", f->J, NULL, 1, NULL},
-                                    {"particles/gid", NULL, ps->gid, 1, NULL}};
+                                    {"particles/gid", NULL, ps->gid, 1, NULL},
+                                    {"particles/failed", NULL, failed, 1, NULL}};
   ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
   ptl_snapshot_attr_add(&snap, "time", r->t);
   ptl_snapshot_attr_add(&snap, "step", (double)f->step);
@@ -643,11 +648,13 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path) {
                                {"pressure", "particles/pressure", 1, false},
                                {"density", "particles/density", 1, false},
                                {"mass", "particles/mass", 1, false}};
-  snap.ndata = sizeof data / sizeof data[0];
+  snap.ndata = sizeof data / sizeof data[0] - (failed ? 0 : 1);
   snap.data = data;
   snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
   snap.xdmf = xdmf;
-  return ptl_write_snapshot(path, &snap);
+  const ms_status st = ptl_write_snapshot(path, &snap);
+  free(failed);
+  return st;
 }
 
 static ms_status region_refresh(ptl_region *r) {
