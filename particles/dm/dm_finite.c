@@ -303,7 +303,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   }
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
-  if (f->failed && dm_frac_contact(f) != MS_OK) return MS_ERR_UNSTABLE; /* broken bonds */
+  if (f->failed && dm_frac_contact(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
     const double dext = f->ext(f->ext_user, f, f->fext);
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];

@@ -75,15 +75,16 @@ void dm_frac_alloc(dm_fin *f) {
   f->nlcon = f->m->nbonds;
   f->lcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
   f->gcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
+  f->dtclose = ms_calloc(n1, sizeof(double));
   for (size_t b = 0; b < f->nlcon; ++b) f->lcon[b] = -1.0; /* not broken yet */
   contact_stiffness(f);
 }
 
 void dm_frac_free(dm_fin *f) {
   free(f->failed), free(f->broken), free(f->kcon), free(f->dtcon), free(f->fcon), free(f->econ);
-  free(f->lcon), free(f->gcon);
+  free(f->lcon), free(f->gcon), free(f->dtclose);
   f->failed = NULL, f->broken = NULL;
-  f->kcon = f->dtcon = f->fcon = f->econ = f->lcon = f->gcon = NULL;
+  f->kcon = f->dtcon = f->fcon = f->econ = f->lcon = f->gcon = f->dtclose = NULL;
 }
 
 /* Largest eigenvalue of the symmetric a: the trigonometric form of the cubic's roots
@@ -150,12 +151,14 @@ static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b,
  * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
  * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
  * particles, over the current volume, λ̄ the mean |y|/L of its bonds in contact: K tr ε/(1 +
- * tr ε) under a uniform compression). Returns the smallest |y|/L (1 if none). Writes particle
- * i's entries and its bonds' only. */
+ * tr ε) under a uniform compression). Its closing-speed step dtclose_i = courant · min L/(−ṙ)
+ * over its approaching broken bonds (no pair closes by more than courant · L in a step, so none
+ * jumps past the spring). Returns the smallest |y|/L (1 if none). Writes particle i's entries
+ * and its bonds' only. */
 static double contact_one(dm_fin *f, size_t i, double ft[3]) {
   const dm_model *m = f->m;
   const double *w = m->s->w, *u = m->s->u, *mass = m->s->mass;
-  double fc[3] = {0, 0, 0}, vir = 0.0, lmin = 1.0, lsum = 0.0, nc = 0.0;
+  double fc[3] = {0, 0, 0}, vir = 0.0, lmin = 1.0, lsum = 0.0, nc = 0.0, closing = 0.0;
   for (int a = 0; a < 3; ++a) ft[a] = 0.0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
@@ -167,16 +170,18 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
     if (f->lcon[b] < 0) /* the bond has just broken: its rest length (both sides, same bits) */
       f->lcon[b] = fmin(sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]), r);
     const double L = f->lcon[b];
-    if (!(r < L) || !(r > 0)) {
-      if (!(r > 0)) lmin = 0.0;
+    if (!(r > 0)) {
+      lmin = 0.0;
       continue;
     }
-    const double kap = f->kcon[i] + f->kcon[k];
     /* ṙ = (u_k − u_i)·y/r; the dashpot only while approaching, so the pair force stays
      * compressive (as q acts only in compression) */
     const double rdot = ((u[3 * k] - u[3 * i]) * y[0] + (u[3 * k + 1] - u[3 * i + 1]) * y[1] +
                          (u[3 * k + 2] - u[3 * i + 2]) * y[2]) /
                         r;
+    if (rdot < 0) closing = fmax(closing, -rdot / L);
+    if (!(r < L)) continue;
+    const double kap = f->kcon[i] + f->kcon[k];
     const double eta = f->par.cl * sqrt(kap * sqrt(mass[i] * mass[k]));
     const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * (L - r);
     f->gcon[b] = g;
@@ -185,11 +190,12 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
     vir += (spring - g) * r;
   }
   for (int a = 0; a < 3; ++a) f->fcon[3 * i + a] = fc[a];
+  f->dtclose[i] = closing > 0 ? f->par.courant / closing : INFINITY;
   f->p[i] = nc > 0 ? vir / (2.0 * f->dim * m->s->vol[i] * pow(lsum / nc, f->dim)) : 0.0;
   return lmin;
 }
 
-ms_status dm_frac_contact(dm_fin *f) {
+ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin) {
   const long n = (long)f->n;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
@@ -207,6 +213,9 @@ ms_status dm_frac_contact(dm_fin *f) {
     f->bad_what = "contact: a broken bond's length over its rest length (< 0.5)";
     return MS_ERR_UNSTABLE;
   }
+  for (long i = 0; i < n; ++i) /* the smallest index of ties, as the stress pass */
+    if (f->failed[i] && (f->dtclose[i] < *dtmin || (f->dtclose[i] == *dtmin && i < *imin)))
+      *dtmin = f->dtclose[i], *imin = i;
   return MS_OK;
 }
 

@@ -81,9 +81,9 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
  * stress pass's whole work for a failed particle (Q = V P A⁻¹ = σ = s = 0, q = 0), returns its
  * stable step. Both touch particle i's entries only (safe in the parallel pass).
  * dm_frac_contact, after the gather: the compression-only pair forces across broken bonds into
- * frc (and fcon; p of a failed particle = its contact virial pressure); MS_ERR_UNSTABLE (f->bad,
- * bad_what, bad_value) when a broken bond is compressed below DM_CONTACT_MIN_RATIO of its
- * reference length. dm_frac_contact_work, after each half kick of length h: econ −= h fcon·v̄. */
+ * frc (and fcon; p of a failed particle = its contact virial pressure), the closing-speed step
+ * into *dtmin (its particle in *imin); MS_ERR_UNSTABLE (f->bad, bad_what, bad_value) when a
+ * broken bond is compressed below DM_CONTACT_MIN_RATIO of its rest length. dm_frac_contact_work, after each half kick of length h: econ −= h fcon·v̄. */
 #define DM_CONTACT_MIN_RATIO 0.5
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
@@ -94,7 +94,7 @@ static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
 double dm_frac_failed_step(dm_fin *f, size_t i);
-ms_status dm_frac_contact(dm_fin *f);
+ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin);
 void dm_frac_contact_work(dm_fin *f, double h);
 /* The deck's `fracture: {model: mean_stress|principal_stress|none, spall_strength, failure_strain}`
  * of `section` (absent: no fracture); located errors (no or non-positive spall_strength) in e;

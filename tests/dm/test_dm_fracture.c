@@ -8,8 +8,13 @@
  *     round-off; once broken, the pieces (the components of the unbroken bonds) keep their
  *     momenta to round-off (nothing acts across a broken bond);
  *  c. failed particles still resist compression: a piston into a chain whose particles have
- *     all failed gives the same shocked state as the intact chain;
- *  d. the failure test: a particle fails at σ_s, not below. */
+ *     all failed carries the acoustic pressure of the contact springs;
+ *  d. the failure test: a particle fails at σ_s, not below;
+ *  e. the contact across a broken bond: two failed particles rebound head-on (energy to the
+ *     integrator's order, the exact largest compression), and a pair too fast for the spring
+ *     stops the step with a diagnostic;
+ *  f. a compressed block of failed particles with disordered velocities bounces off itself
+ *     (before the contact it tangled: J ≤ 0). */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -299,8 +304,8 @@ static double rebound(double courant, double cl, double *dmin) {
   if (getenv("DM_FRACTURE_PRINT"))
     printf("rebound courant %.3f C_l %.2f: omega dt %.3f, compression %.4f h (exact %.4f h), "
            "K1/K0 %.6f, error %.2e, balance %.1e of K0\n",
-           courant, cl, omega * courant * h / 5.35, (h - rmin) / h, xmax / h, K1 / K0, err,
-           dE / K0);
+           courant, cl, omega * courant * h / 5.35, (h - rmin) / h, xmax * e_exact / h, K1 / K0,
+           err, dE / K0);
   bar_free(&b);
   return err;
 }
@@ -319,6 +324,28 @@ static void test_contact_rebound(void **state) {
    * (the dashpot reads the half-step velocity) */
   const double r1 = rebound(0.1, 0.5, &d1), r2 = rebound(0.05, 0.5, &d2);
   assert_true(fabs(r2) < fabs(r1) / 1.6 && fabs(r2) < 0.05);
+}
+
+/* The pair at 6 km/s each, beyond what the spring holds (the exact largest compression with the
+ * dashpot: 2v e/ω = 0.71 h): the step stops, naming a particle of the pair and the quantity, the
+ * bond's length still above 0.25 of its rest length (the closing-speed step lets a pair close by
+ * at most courant · L = 0.4 L in a step). */
+static void test_contact_limit(void **state) {
+  (void)state;
+  dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
+  bar b;
+  const double h = 0.001, v = 6.0;
+  bar_build(&b, 1, 2, 1, h, -2.0 * v / h, 0.0, 0, &mat, 0.0);
+  for (size_t i = 0; i < 2; ++i) b.f->failed[i] = 1, b.m->kappa[i] = 0.0;
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK);
+  ms_status st = MS_OK;
+  for (long step = 0; step < 1000 && st == MS_OK; ++step) st = dm_fin_step(b.f);
+  assert_int_equal(st, MS_ERR_UNSTABLE);
+  assert_true(b.f->bad < 2 && strstr(b.f->bad_what, "contact") != NULL);
+  if (getenv("DM_FRACTURE_PRINT"))
+    printf("contact limit: stopped at |y|/L = %.3f\n", b.f->bad_value);
+  assert_true(b.f->bad_value < DM_CONTACT_MIN_RATIO && b.f->bad_value > 0.25);
+  bar_free(&b);
 }
 
 /* f. A 2D block (12 × 12, periodic in y) whose particles have all failed, thrown together by
@@ -423,6 +450,7 @@ int main(void) {
       cmocka_unit_test(test_max_principal),      cmocka_unit_test(test_pull_apart_1d),
       cmocka_unit_test(test_pull_apart_2d),      cmocka_unit_test(test_pull_apart_sg),
       cmocka_unit_test(test_failed_compression), cmocka_unit_test(test_threshold),
-      cmocka_unit_test(test_contact_rebound),    cmocka_unit_test(test_failed_cluster)};
+      cmocka_unit_test(test_contact_rebound),    cmocka_unit_test(test_contact_limit),
+      cmocka_unit_test(test_failed_cluster)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
