@@ -8,25 +8,30 @@
  * stress of its own: no F over its family (whose members may have scattered), no EOS, no
  * deviator, no bond penalty (Q_i = 0, κ_i = 0; the penalty energy it held is booked as broken).
  * A bond is broken when both of its particles have failed. Across a broken bond acts only a
- * compression-only central pair force, the short-range contact of bond-based peridynamics
- * ([SillingAskari2005] §3 (the pairwise force), [Parks2008] (Peridigm's short-range forces)):
+ * compression-only central pair force, after the short-range contact forces of bond-based
+ * peridynamics ([SillingAskari2005]; LAMMPS PERI, [Parks2008]), here across the broken bonds of
+ * the families only (they act between any two nodes closer than a contact distance there):
  *   f_i = −κ_ik (L_ik − |y_ik|) y_ik/|y_ik|  while |y_ik| < L_ik, else 0,
  * y_ik = x_k − x_i, L_ik = min(|ξ_ik|, |y_ik| when the bond broke) (so the spring holds no
  * energy at the break: the elastic energy there is the particles' heat already),
  * κ_ik = κc_i + κc_k, κc_i = K d² V_i / Σ_k |ξ_ik|² (K = ρ0 c0² of the
- * particle's material, d the dimension): the lattice form of the micromodulus c = 18K/(π δ⁴)
- * of [SillingAskari2005] eq. 24, calibrated on the particle's own family so that a uniform
- * compression of a failed lattice stores K (tr ε)²/2 per volume. A bond between a failed and an
+ * particle's material, d the dimension): the lattice form of the bond-based micromodulus
+ * c = 18K/(π δ⁴) of [SillingAskari2005], calibrated on the particle's own family so that a
+ * uniform compression of a failed lattice stores K (tr ε)²/2 per volume. A dashpot
+ * η_ik ṙ along the pair while it approaches in contact (η_ik = C_l √(κ_ik √(m_i m_k)), the
+ * linear viscosity's coefficient: in a 1D chain η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
+ * particle) damps the collisions; its work is the particles' heat. A bond between a failed and an
  * intact particle is not broken: the intact particle's correspondence stress (tension
  * included) and its penalty still act through it, so a crack needs two failed layers and the
  * fragments (dm_region.c: components of the unbroken bonds) are unchanged by the contact.
  *
- * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept), and
- * derive from the potential Σ κ (|ξ| − |y|)²/2; the contact energy econ is booked as their work
- * with each half kick's time-centred velocity, −h Σ_i fcon_i·ū_i, so K + U + E_hg + broken +
- * contact − W = const to round-off (the potential equals the booked energy up to velocity
- * Verlet's O(dt²)). The internal energy of a failed particle (its share of the elastic energy at
- * the break included) stays in U as heat and no longer changes. */
+ * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept); the
+ * springs derive from the potential Σ_pairs κ (L − |y|)²/2. The contact energy econ is booked as
+ * the springs' work with each half kick's time-centred velocity, −h Σ_i fcon_i·ū_i, the dashpot's
+ * as heat in e (half of each pair's to each particle), so K + U + E_hg + broken + contact − W =
+ * const to round-off (the potential equals the booked energy up to velocity Verlet's O(dt²)).
+ * The internal energy of a failed particle (its share of the elastic energy at the break
+ * included) stays in U as heat; only the dashpot adds to it. */
 #include "dm_impl.h"
 
 #include <math.h>
