@@ -340,7 +340,8 @@ void dm_fin_bond_penalty(dm_fin *f);
  * families and A⁻¹ rebuilt on the current configuration (deviator, ε_p, e, u kept). f->m is
  * replaced by the new model (the old one is destroyed: the caller destroys f->m at the end).
  * A degenerate new family (cond A > cond_max) refuses the update: the old state is restored,
- * rep->bad names the particle and MS_ERR_UNSTABLE is returned. */
+ * rep->bad names the particle and MS_ERR_UNSTABLE is returned. Not with fracture (f->failed:
+ * the contact's per-bond state belongs to the old families): MS_ERR_INTERNAL, nothing changed. */
 typedef struct dm_refamily_report {
   double released;   /* the bond penalty's stored energy Σ κ|z|²/2 given up (kJ) */
   double jmin, jmax; /* range of J = V_new/V_old */
