@@ -11,22 +11,26 @@
  * compression-only central pair force, after the short-range contact forces of bond-based
  * peridynamics ([SillingAskari2005]; LAMMPS PERI, [Parks2008]), here across the broken bonds of
  * the families only (they act between any two nodes closer than a contact distance there):
- *   f_i = −κ_ik (L_ik − |y_ik|) y_ik/|y_ik|  while |y_ik| < L_ik, else 0,
+ *   f_i = −κ_ik L_ik g(λ) y_ik/|y_ik|  while λ = |y_ik|/L_ik < 1, else 0,
  * y_ik = x_k − x_i, L_ik = min(|ξ_ik|, |y_ik| when the bond broke) (so the spring holds no
  * energy at the break: the elastic energy there is the particles' heat already),
- * κ_ik = κc_i + κc_k, κc_i = K d² V_i / Σ_k |ξ_ik|² (K = ρ0 c0² of the
- * particle's material, d the dimension): the lattice form of the bond-based micromodulus
- * c = 18K/(π δ⁴) of [SillingAskari2005], calibrated on the particle's own family so that a
- * uniform compression of a failed lattice stores K (tr ε)²/2 per volume. A dashpot
- * η_ik ṙ along the pair while it approaches in contact (η_ik = C_l √(κ_ik √(m_i m_k)), the
- * linear viscosity's coefficient: in a 1D chain η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
+ * κ_ik = κc_i + κc_k, κc_i = K d² V_i / Σ_k |ξ_ik|² (K = ρ0 c0² of the particle's material, d the
+ * dimension): the lattice form of the bond-based micromodulus c = 18K/(π δ⁴) of
+ * [SillingAskari2005], calibrated on the particle's own family so that a uniform compression of
+ * a failed lattice stores K (tr ε)²/2 per volume at small strain; g(λ) (pair_law) follows the
+ * material's EOS along e = e0, g = [p(ρ0 λ^−d) − p(ρ0)] λ^(d−1)/(K d) → 1 − λ, so that a
+ * uniformly compressed failed lattice carries its EOS pressure (the linear spring alone lets a
+ * failed region near a drive be crushed to half its spacing at 15–20 GPa). A dashpot η_ik ṙ
+ * along the pair while it approaches in contact (η_ik = C_l √(κ_ik s √(m_i m_k)), s the spring's
+ * current stiffness over κ, C_l the linear viscosity's coefficient: in a 1D chain at rest
+ * η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
  * particle) damps the collisions; its work is the particles' heat. A bond between a failed and an
  * intact particle is not broken: the intact particle's correspondence stress (tension
  * included) and its penalty still act through it, so a crack needs two failed layers and the
  * fragments (dm_region.c: components of the unbroken bonds) are unchanged by the contact.
  *
  * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept); the
- * springs derive from the potential Σ_pairs κ (L − |y|)²/2. The contact energy econ is booked as
+ * springs derive from the potential Σ_pairs κ L² ∫_λ^1 g. The contact energy econ is booked as
  * the springs' work with each half kick's time-centred velocity, −h Σ_i fcon_i·ū_i, the dashpot's
  * as heat in e (half of each pair's to each particle), so K + U + E_hg + broken + contact − W =
  * const to round-off (the potential equals the booked energy up to velocity Verlet's O(dt²)).
@@ -152,6 +156,21 @@ static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b,
   }
 }
 
+/* The pair law of particle i's material at λ = |y|/L ≤ 1: the spring force is κ_ik L g, with
+ * g = [p(ρ0 λ^−d, e0) − p(ρ0, e0)] λ^(d−1)/(K d) — the EOS pressure of a uniform compression λ
+ * over the bond's share of the face it acts on, so that the virial of a uniformly compressed
+ * failed lattice is the EOS pressure, and g → 1 − λ for small strain (the linear spring of κ)
+ * — and s ≥ |dg/dλ|, the stiffness over κ: ρ0 c(ρ, e0)²/(K λ²) + (d − 1) p λ^(d−2)/(K d). */
+static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s) {
+  const eos_t *eos = f->mat[f->imat[i]].eos;
+  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), c0 = eos_sound_speed(eos, rho0, e0);
+  const double K = rho0 * c0 * c0, d = f->dim, rho = rho0 * pow(lam, -d);
+  const double p = eos_pressure(eos, rho, e0) - eos_pressure(eos, rho0, e0);
+  const double c = eos_sound_speed(eos, rho, e0);
+  *g = p * pow(lam, d - 1.0) / (K * d);
+  *s = rho0 * c * c / (K * lam * lam) + (d - 1.0) * fabs(p) * pow(lam, d - 2.0) / (K * d);
+}
+
 /* The contact force on failed particle i from its broken, compressed bonds: the spring into
  * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
  * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
@@ -163,7 +182,7 @@ static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b,
 static double contact_one(dm_fin *f, size_t i, double ft[3]) {
   const dm_model *m = f->m;
   const double *w = m->s->w, *u = m->s->u, *mass = m->s->mass;
-  double fc[3] = {0, 0, 0}, vir = 0.0, lmin = 1.0, lsum = 0.0, nc = 0.0, closing = 0.0;
+  double fc[3] = {0, 0, 0}, vir = 0.0, lmin = 1.0, lsum = 0.0, nc = 0.0, closing = 0.0, smax = 1;
   for (int a = 0; a < 3; ++a) ft[a] = 0.0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
@@ -186,16 +205,25 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
                         r;
     if (rdot < 0) closing = fmax(closing, -rdot / L);
     if (!(r < L)) continue;
-    const double kap = f->kcon[i] + f->kcon[k];
-    const double eta = f->par.cl * sqrt(kap * sqrt(mass[i] * mass[k]));
-    const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * (L - r);
+    double gi, si, gk, sk;
+    pair_law(f, i, r / L, &gi, &si);
+    pair_law(f, k, r / L, &gk, &sk);
+    const double kap = f->kcon[i] + f->kcon[k], gl = 0.5 * (gi + gk), sl = 0.5 * (si + sk);
+    if (!isfinite(gl) || !isfinite(sl)) {
+      lmin = 0.0;
+      continue;
+    }
+    smax = fmax(smax, sl);
+    const double eta = f->par.cl * sqrt(kap * sl * sqrt(mass[i] * mass[k]));
+    const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * L * gl;
     f->gcon[b] = g;
     lmin = fmin(lmin, r / L), lsum += r / L, nc += 1.0;
     for (int a = 0; a < 3; ++a) fc[a] -= spring * y[a] / r, ft[a] += (g - spring) * y[a] / r;
     vir += (spring - g) * r;
   }
   for (int a = 0; a < 3; ++a) f->fcon[3 * i + a] = fc[a];
-  f->dtclose[i] = closing > 0 ? f->par.courant / closing : INFINITY;
+  f->dtclose[i] = fmin(closing > 0 ? f->par.courant / closing : INFINITY,
+                       f->dtcon[i] / sqrt(smax)); /* the springs stiffen with the EOS */
   f->p[i] = nc > 0 ? vir / (2.0 * f->dim * m->s->vol[i] * pow(lsum / nc, f->dim)) : 0.0;
   return lmin;
 }
@@ -283,7 +311,18 @@ double dm_fin_contact_potential(const dm_fin *f) {
           L2 += xi * xi, r2 += y * y;
         }
         const double r = sqrt(r2), L = f->lcon[b] < 0 ? fmin(sqrt(L2), r) : f->lcon[b];
-        if (r < L) U += 0.25 * (f->kcon[i] + f->kcon[k]) * (L - r) * (L - r); /* ½ per side */
+        if (!(r < L)) continue;
+        /* κ L² ∫_λ^1 g dλ' (Simpson, 32 intervals), ½ per side */
+        const int nsimp = 32;
+        const double lam = r / L, hs = (1.0 - lam) / nsimp;
+        double integral = 0.0;
+        for (int q = 0; q <= nsimp; ++q) {
+          double gi, si, gk, sk;
+          pair_law(f, i, lam + q * hs, &gi, &si);
+          pair_law(f, k, lam + q * hs, &gk, &sk);
+          integral += (q == 0 || q == nsimp ? 1.0 : q % 2 ? 4.0 : 2.0) * 0.5 * (gi + gk);
+        }
+        U += 0.5 * (f->kcon[i] + f->kcon[k]) * L * L * integral * hs / 3.0;
       }
   return U;
 }

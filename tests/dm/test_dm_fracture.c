@@ -214,8 +214,9 @@ static void test_pull_apart_sg(void **state) {
 
 /* c. A piston (0.1 km/s) into a 1D chain with every particle failed from the start and into
  * the intact chain (no bond penalty in either): the failed chain resists compression through
- * its contact springs (p of a failed particle: the virial pressure of its pair forces), at the
- * acoustic impedance ρ0 c0 of the springs' K = ρ0 c0² (dm_fracture.c). */
+ * its contact springs (p of a failed particle: the virial pressure of its pair forces), which
+ * follow the EOS (dm_fracture.c, pair_law): its shocked state is the intact chain's, not the
+ * acoustic ρ0 c0 u_p of a linear spring. */
 static void test_failed_compression(void **state) {
   (void)state;
   dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
@@ -241,30 +242,45 @@ static void test_failed_compression(void **state) {
   for (long i = 3 + (front - 3) / 4; i < 3 + 3 * (front - 3) / 4; ++i)
     pa += a.f->p[i] + a.f->q[i], pb += b.f->p[i], c += 1;
   pa /= c, pb /= c;
-  const double zc = 2.703 * 5.35 * up; /* ρ0 c0 u_p: the springs are linear (acoustic) */
+  const double zc = 2.703 * 5.35 * up; /* ρ0 c0 u_p: what linear springs would carry */
   if (getenv("DM_FRACTURE_PRINT"))
     printf("failed chain in compression: front at %ld, mean p %.4f GPa (intact %.4f, rho0 c0 up "
            "%.4f), balance %.1e of the work\n",
            front, pb, pa, zc, dE / b.f->work);
   assert_true(front > 50);
-  /* the springs carry the acoustic pressure: the mean over the shocked chain within 1 % (the
-   * chain's dispersive ringing behind an undamped front averages out over ~40 particles;
-   * measured 0.06 %); the intact chain its Hugoniot ρ0 (c0 + s u_p) u_p, 2.5 % above: the two
-   * bounds exclude each other */
-  assert_true(fabs(pb - zc) < 0.01 * zc);
+  /* the intact chain: its Hugoniot ρ0 (c0 + s u_p) u_p to 1 % (measured 0.03 %); the failed
+   * chain: the intact chain's pressure within 1.5 % (measured −0.9 %: its dashpot is the linear
+   * viscosity alone, so the front and its ringing differ) and above the acoustic value by more
+   * than half the Hugoniot's 2.5 % (measured +1.6 %: the springs stiffen with the EOS) */
   assert_true(fabs(pa - 2.703 * (5.35 + 1.34 * up) * up) < 0.01 * zc);
+  assert_true(fabs(pb - pa) < 0.015 * pa);
+  assert_true(pb > zc * (1.0 + 0.5 * 1.34 * up / 5.35));
   assert_true(dE < 1e-12 * b.f->work); /* round-off, ~1e-15 per step */
   bar_free(&a);
   bar_free(&b);
 }
 
 /* e. Two failed particles (a 1D pair, spacing h) approaching head-on at ±v: across their broken
- * bond only the contact acts. Reference: the pair's relative coordinate is a harmonic oscillator
- * while compressed, ω = √(κ_ik/μ), μ = m/2, κ_ik = 2 κc = 2 K V/h² (dm_fracture.c with d = 1,
- * Σ|ξ|² = h²): largest compression 2v/ω; without the dashpot (C_l = 0) an elastic rebound, with
- * it (acting while approaching) the restitution e = ω x_max/(2v) = exp(−ζ φ/√(1 − ζ²)),
- * φ = atan(√(1 − ζ²)/ζ), ζ = C_l/√2. Returns |K_after/K_before − 1| (elastic) or
- * e/e_exact − 1 (damped), and the smallest |y|/h relative to the exact one in *dmin. */
+ * bond only the contact acts, F = κ h g(λ), κ = 2 K V/h² (dm_fracture.c with d = 1, Σ|ξ|² = h²),
+ * g = [p(ρ0/λ) − p(ρ0)]/K (the Al EOS along e0). Reference without the dashpot (C_l = 0): an
+ * elastic rebound whose largest compression δ solves μ (2v)²/2 = κ h² ∫_{1−δ/h}^1 g dλ (μ = m/2;
+ * g evaluated here from the EOS, Simpson); with it (acting while approaching) the restitution
+ * of the linearised pair, e = exp(−ζ φ/√(1 − ζ²)), φ = atan(√(1 − ζ²)/ζ), ζ = C_l/√2 (the spring
+ * stiffens by ~2 s δ/h ≈ 10 % over the compression, so e is the linear limit's to a few %).
+ * Returns K_after/K_before − 1 (elastic) or e/e_exact − 1 (damped), and the largest compression
+ * relative to the exact one − 1 in *dmin (elastic). */
+static double pair_potential(const eos_t *eos, double lam) { /* ∫_λ^1 g dλ', K = ρ0 c0² */
+  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), c0 = eos_sound_speed(eos, rho0, e0);
+  const int n = 200;
+  double sum = 0;
+  for (int q = 0; q <= n; ++q) {
+    const double l = lam + q * (1.0 - lam) / n;
+    const double g =
+        (eos_pressure(eos, rho0 / l, e0) - eos_pressure(eos, rho0, e0)) / (rho0 * c0 * c0);
+    sum += (q == 0 || q == n ? 1.0 : q % 2 ? 4.0 : 2.0) * g;
+  }
+  return sum * (1.0 - lam) / n / 3.0;
+}
 static double rebound(double courant, double cl, double *dmin) {
   dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
   bar b;
@@ -280,6 +296,13 @@ static double rebound(double courant, double cl, double *dmin) {
   dm_fin_energies(b.f, &K0, NULL, NULL);
   const double E0 = bar_energy(&b), m = b.s.mass[0], K = 2.703 * 5.35 * 5.35;
   const double omega = sqrt(2.0 * K * b.s.vol[0] / (h * h) / (0.5 * m)), xmax = 2.0 * v / omega;
+  double lo = 0.5, hi = 1.0; /* the elastic turning point: κ h² ∫ g = μ (2v)²/2 */
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (2.0 * K * b.s.vol[0] * pair_potential(b.eos, mid) > 0.5 * (0.5 * m) * 4.0 * v * v) lo = mid;
+    else hi = mid;
+  }
+  const double delta = h * (1.0 - 0.5 * (lo + hi));
   double rmin = h, dE = 0, p = 0;
   for (long step = 0; step < 100000; ++step) {
     assert_int_equal(dm_fin_step(b.f), MS_OK);
@@ -297,15 +320,13 @@ static double rebound(double courant, double cl, double *dmin) {
   assert_true(b.s.u[0] < 0 && b.s.u[3] > 0); /* rebounded */
   const double zeta = cl / sqrt(2.0), phi = atan(sqrt(1 - zeta * zeta) / zeta);
   const double e_exact = cl > 0 ? exp(-zeta * phi / sqrt(1 - zeta * zeta)) : 1.0;
-  *dmin = (h - rmin) / (cl > 0 ? xmax * exp(-zeta * (phi / (omega * sqrt(1 - zeta * zeta))) * omega)
-                               : xmax) -
-          1.0;
+  *dmin = (h - rmin) / (cl > 0 ? xmax * e_exact : delta) - 1.0;
   const double err = cl > 0 ? sqrt(K1 / K0) / e_exact - 1.0 : K1 / K0 - 1.0;
   if (getenv("DM_FRACTURE_PRINT"))
     printf("rebound courant %.3f C_l %.2f: omega dt %.3f, compression %.4f h (exact %.4f h), "
            "K1/K0 %.6f, error %.2e, balance %.1e of K0\n",
-           courant, cl, omega * courant * h / 5.35, (h - rmin) / h, xmax * e_exact / h, K1 / K0,
-           err, dE / K0);
+           courant, cl, omega * courant * h / 5.35, (h - rmin) / h,
+           (cl > 0 ? xmax * e_exact : delta) / h, K1 / K0, err, dE / K0);
   bar_free(&b);
   return err;
 }
@@ -319,7 +340,7 @@ static void test_contact_rebound(void **state) {
    * is continuous where it switches on); ratio 4 expected, 2.5 accepted; and ≤ (ω dt)² */
   assert_true(fabs(e2) < fabs(e1) / 2.5);
   assert_true(fabs(e1) < 0.2 * 0.2);
-  assert_true(fabs(d2) < 0.01); /* the largest compression 2v/ω to 1 % */
+  assert_true(fabs(d2) < 0.01); /* the largest compression to 1 % */
   /* with the dashpot (C_l = 0.5): the restitution converges to the exact e at first order
    * (the dashpot reads the half-step velocity) */
   const double r1 = rebound(0.1, 0.5, &d1), r2 = rebound(0.05, 0.5, &d2);
@@ -334,7 +355,7 @@ static void test_contact_limit(void **state) {
   (void)state;
   dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
   bar b;
-  const double h = 0.001, v = 6.0;
+  const double h = 0.001, v = 15.0;
   bar_build(&b, 1, 2, 1, h, -2.0 * v / h, 0.0, 0, &mat, 0.0);
   for (size_t i = 0; i < 2; ++i) b.f->failed[i] = 1, b.m->kappa[i] = 0.0;
   assert_int_equal(dm_fin_refresh(b.f), MS_OK);
