@@ -297,7 +297,7 @@ static void report(dmf_run *r) {
   sum->restart_step = r->step0;
   ms_log(r->ctx, MS_LOG_INFO,
          "discrete model (response eos): %ld steps to t = %.6g in %.3f s (%.4g particle-steps/s); "
-         "energy balance max |K + U + E_hg - W - E0| = %.3g of %s %.6g kJ; "
+         "energy balance max |K + U + E_hg (+ broken + contact) - W - E0| = %.3g of %s %.6g kJ; "
          "bond-penalty energy / that = %.3g",
          steps, r->t, r->wall, sum->particle_steps_per_s, sum->energy_err_max,
          f->work != 0 ? "the piston work" : "the initial energy E0", f->work != 0 ? f->work : r->E0,
