@@ -167,8 +167,8 @@ def measure(outdir, snapshot=-1):
     th = np.asarray(hist["t"], float)
     k = int(np.argmin(np.abs(th - 10 * t_now))) if np.isfinite(t_now) else len(th) - 1  # µs
     energy = {c: float(np.asarray(hist[c], float)[k]) for c in
-              ("kinetic", "internal", "bond_penalty", "broken", "wall_work", "wall_energy",
-               "balance")}
+              ("kinetic", "internal", "bond_penalty", "broken", "fracture_contact", "wall_work",
+               "wall_energy", "balance")}
     energy["E0"] = float(np.asarray(hist["kinetic"], float)[0])
     lab = fragments(X0, body, failed, g["h"], g["delta"])
     _, inv = np.unique(lab, return_inverse=True)
@@ -211,9 +211,11 @@ def main(argv=None):
               + (f", next {1e3 * big[1]:.2f} mg" if len(big) > 1 else ""))
         en = m["energy"]
         print("  energy / E0 = {:.4g} kJ: kinetic {:.4f}, internal {:.4f}, bond penalty {:.4f}, "
-              "broken {:.4f}, contact stored {:.2e}, contact work {:.2e}, balance {:.1e}".format(
+              "broken {:.4f}, fracture springs {:.2e}, contact stored {:.2e}, contact work {:.2e}, "
+              "balance {:.1e}".format(
                   en["E0"], *(en[c] / en["E0"] for c in ("kinetic", "internal", "bond_penalty",
-                                                        "broken", "wall_energy", "wall_work",
+                                                        "broken", "fracture_contact",
+                                                        "wall_energy", "wall_work",
                                                         "balance"))))
     if not args.output:
         return 0

@@ -242,8 +242,9 @@ typedef struct dm_sg dm_sg; /* Steinberg–Guinan parameters (dm_impl.h) */
 /* Fracture (dm_fracture.c, docs/particles-dm.md "Fracture"): a particle fails for good when its
  * tensile stress reaches the spall strength σ_s (criterion: the mean stress tr σ/3 or the
  * largest principal stress), or, with failure_strain > 0, when J − 1 reaches it. A failed
- * particle carries no deviator and no tension (σ = −max(p + q, 0) I, p = 0 while J > 1), its
- * bond penalty is switched off; a bond is broken when both its particles have failed. */
+ * particle carries no stress of its own (no F, no EOS) and no bond penalty; a bond is broken
+ * when both its particles have failed, and across a broken bond only a compression-only central
+ * pair force (contact) acts. */
 typedef enum dm_fracture_model {
   DM_FRACTURE_NONE = 0,
   DM_FRACTURE_MEAN_STRESS = 1,     /* tr σ/3 ≥ σ_s */
@@ -284,9 +285,17 @@ typedef struct dm_fin {
   double *frc, *vbar;                        /* [n][3] */
   double work; /* work done by driven (DM_PRESCRIBED/DM_FIXED) particles (kJ) */
   /* fracture (dm_fracture.c; NULL when no material has a fracture model): failed[i] = 1 once
-   * particle i failed; broken[i] the bond-penalty energy it held then (kJ), taken out of E_hg */
+   * particle i failed; broken[i] the bond-penalty energy it held then (kJ), taken out of E_hg;
+   * the contact of failed particles across their broken bonds: kcon[i] its share of a broken
+   * bond's contact stiffness, dtcon[i] its stable step, fcon [n][3] the contact force of the
+   * last evaluation, econ[i] the contact energy (kJ, the pair forces' work booked with each half
+   * kick's time-centred velocity), lcon [bonds] the contact's rest length of each broken bond
+   * (−1 while not broken; nlcon = the model's bond count), gcon [bonds] its dashpot force of the
+   * last evaluation, dtclose[i] its closing-speed step of the last evaluation */
   uint8_t *failed;
   double *broken;
+  double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose;
+  size_t nlcon;
   double dt_next;
   size_t dt_particle; /* the particle whose stable step is dt_next (smallest index of ties) */
   long step;
@@ -331,7 +340,8 @@ void dm_fin_bond_penalty(dm_fin *f);
  * families and A⁻¹ rebuilt on the current configuration (deviator, ε_p, e, u kept). f->m is
  * replaced by the new model (the old one is destroyed: the caller destroys f->m at the end).
  * A degenerate new family (cond A > cond_max) refuses the update: the old state is restored,
- * rep->bad names the particle and MS_ERR_UNSTABLE is returned. */
+ * rep->bad names the particle and MS_ERR_UNSTABLE is returned. Not with fracture (f->failed:
+ * the contact's per-bond state belongs to the old families): MS_ERR_INTERNAL, nothing changed. */
 typedef struct dm_refamily_report {
   double released;   /* the bond penalty's stored energy Σ κ|z|²/2 given up (kJ) */
   double jmin, jmax; /* range of J = V_new/V_old */
@@ -342,10 +352,15 @@ double dm_fin_max_stretch(const dm_fin *f, size_t *where);
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
 /* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
-/* Fracture (dm_fracture.c): the energy booked as broken (Σ broken[i], kJ), the number of failed
- * particles, and whether bond (i, k) is broken (both failed). K + U + E_hg + broken − W is
- * conserved. All 0/false without fracture. */
+/* Fracture (dm_fracture.c): the energy booked as broken (Σ broken[i], kJ), the contact energy
+ * of failed particles (Σ econ[i], kJ; the accumulated work of the pair forces) and the contact
+ * potential Σ_pairs κ (|ξ| − |y|)²/2 of the current configuration (kJ; equal to the contact
+ * energy up to the integrator's O(dt²)), the number of failed particles, and whether bond (i, k)
+ * is broken (both failed). K + U + E_hg + broken + contact − W is conserved to round-off. All
+ * 0/false without fracture. */
 double dm_fin_broken_energy(const dm_fin *f);
+double dm_fin_contact_energy(const dm_fin *f);
+double dm_fin_contact_potential(const dm_fin *f);
 size_t dm_fin_failed_count(const dm_fin *f);
 static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
   return f->failed && f->failed[i] && f->failed[k];

@@ -32,7 +32,11 @@ static size_t fin_arrays(const dm_fin *f, fin_array a[16]) {
   a[k++] = (fin_array){"sigma", "GPa", 9, f->sig};
   a[k++] = (fin_array){"force", "g cm/(10 us)^2", 3, f->frc};
   a[k++] = (fin_array){"vbar", "km/s", 3, f->vbar};
-  if (f->broken) a[k++] = (fin_array){"broken", "kJ", 1, f->broken}; /* fracture only */
+  if (f->broken) { /* fracture only */
+    a[k++] = (fin_array){"broken", "kJ", 1, f->broken};
+    a[k++] = (fin_array){"contact_energy", "kJ", 1, f->econ};
+    a[k++] = (fin_array){"contact_force", "g cm/(10 us)^2", 3, f->fcon};
+  }
   return k;
 }
 
@@ -61,6 +65,11 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
     path(name, sizeof name, group, "failed");
     st = ms_h5_write_doubles_dist(h, name, n, 1, fl, "1");
     free(fl);
+    const size_t nb = owner ? f->nlcon : 0; /* per bond: rest length (−1: not broken), dashpot */
+    path(name, sizeof name, group, "contact_length");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, name, nb, 1, f->lcon, "cm");
+    path(name, sizeof name, group, "contact_dashpot");
+    if (st == MS_OK) st = ms_h5_write_doubles_dist(h, name, nb, 1, f->gcon, "g cm/(10 us)^2");
   }
   /* the scalars as attributes of the group's e dataset: the step count exactly (< 2^53) */
   path(name, sizeof name, group, "e");
@@ -108,6 +117,10 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
       if (f->failed[i]) f->m->kappa[i] = 0.0;
     }
     free(fl);
+    path(name, sizeof name, group, "contact_length");
+    if (st == MS_OK) st = read_into(h, name, f->nlcon, 1, f->lcon, e);
+    path(name, sizeof name, group, "contact_dashpot");
+    if (st == MS_OK) st = read_into(h, name, f->nlcon, 1, f->gcon, e);
   }
   double step = 0;
   path(name, sizeof name, group, "e");

@@ -114,6 +114,7 @@ static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double 
  * stable time step, or −1 (bad state, recorded in *what). */
 static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, const char **what,
                          double *val) {
+  if (dm_frac_failed(f, i)) return dm_frac_failed_step(f, i); /* no F, no EOS (dm_fracture.c) */
   dm_model *m = f->m;
   const dm_state *st = m->s;
   const double *Ai = &m->Ainv[9 * i];
@@ -317,6 +318,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   }
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
+  if (f->failed && dm_frac_contact(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
     const double dext = f->ext(f->ext_user, f, f->fext);
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
@@ -377,9 +379,11 @@ static ms_status kick_energies(dm_fin *f, double h) {
 ms_status dm_fin_step(dm_fin *f) {
   const double dt = f->dt_next;
   kick_velocities(f, 0.5 * dt);
+  dm_frac_contact_work(f, 0.5 * dt);
   ms_status r = forces(f, dt, 0.5 * dt);
   if (r != MS_OK) return r;
   kick_velocities(f, 0.5 * dt);
+  dm_frac_contact_work(f, 0.5 * dt);
   r = kick_energies(f, 0.5 * dt);
   ++f->step;
   return r;

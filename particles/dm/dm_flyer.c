@@ -66,7 +66,7 @@ ms_status dm_flyer_run(const dm_flyer_spec *sp, const ms_ctx *ctx, dm_flyer_resu
     t += f->dt_next;
     st = dm_fin_step(f);
     dm_fin_energies(f, &K, &U, &H);
-    dEmax = fmax(dEmax, fabs(K + U + H + dm_fin_broken_energy(f) - E0));
+    dEmax = fmax(dEmax, fabs(K + U + H + dm_fin_broken_energy(f) + dm_fin_contact_energy(f) - E0));
     if (f->failed && isnan(res->t_fail) && dm_fin_failed_count(f) > 0) {
       double sx = 0, c = 0;
       for (size_t i = 0; i < n; ++i)

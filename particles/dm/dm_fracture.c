@@ -1,36 +1,99 @@
 /* SPDX-License-Identifier: MIT */
 /* dm_fracture.c — fracture of the finite-deformation discrete model (docs/particles-dm.md,
  * "Fracture"): an instantaneous tensile cut-off at the spall strength σ_s (the pmin / "spall"
- * model of hydrocodes: a cell whose tension reaches the threshold loses its deviator and
- * carries pressure in compression only [Kanel2010], [Grady1988]), per particle, for good.
+ * model of hydrocodes: a cell whose tension reaches the threshold loses its strength
+ * [Kanel2010], [Grady1988]), per particle, for good.
  *
- * A failed particle keeps its mass, momentum and family: σ = −max(p + q, 0) I, so it still
- * resists compression (a closed crack), and p = 0 while its family is stretched (J > 1: the
- * crack is open, the EOS is not asked about the void). Its bond penalty κ_i is set to 0 (the
- * penalty would otherwise carry the tension the break removed); the penalty energy it held is
- * booked as broken energy (it can no longer be returned). A bond is broken when both of its
- * particles have failed: then neither side's stress nor penalty acts through it in tension,
- * and the unbroken bonds define the fragments (dm_region.c). The internal energy of a failed
- * particle (its share of the elastic energy at the break included) stays in U as heat, so the
- * kick–drift–kick identity of dm_finite.c closes with the broken term:
- * K + U + E_hg + broken − W = const to round-off. */
+ * A failed particle keeps its mass, momentum, family and internal energy, but no longer has a
+ * stress of its own: no F over its family (whose members may have scattered), no EOS, no
+ * deviator, no bond penalty (Q_i = 0, κ_i = 0; the penalty energy it held is booked as broken).
+ * A bond is broken when both of its particles have failed. Across a broken bond acts only a
+ * compression-only central pair force, after the short-range contact forces of bond-based
+ * peridynamics ([SillingAskari2005]; LAMMPS PERI, [Parks2008]), here across the broken bonds of
+ * the families only (they act between any two nodes closer than a contact distance there):
+ *   f_i = −κ_ik L_ik g(λ) y_ik/|y_ik|  while λ = |y_ik|/L_ik < 1, else 0,
+ * y_ik = x_k − x_i, L_ik = min(|ξ_ik|, |y_ik| when the bond broke) (so the spring holds no
+ * energy at the break: the elastic energy there is the particles' heat already),
+ * κ_ik = κc_i + κc_k, κc_i = K d² V_i / Σ_k |ξ_ik|² (K = ρ0 c0² of the particle's material, d the
+ * dimension): the lattice form of the bond-based micromodulus c = 18K/(π δ⁴) of
+ * [SillingAskari2005], calibrated on the particle's own family so that a uniform compression of
+ * a failed lattice stores K (tr ε)²/2 per volume at small strain; g(λ) (pair_law) follows the
+ * material's EOS along e = e0, g = [p(ρ0 λ^−d) − p(ρ0)] λ^(d−1)/(K d) → 1 − λ, so that a
+ * uniformly compressed failed lattice carries its EOS pressure (the linear spring alone lets a
+ * failed region near a drive be crushed to half its spacing at 15–20 GPa). A dashpot η_ik ṙ
+ * along the pair while it approaches in contact (η_ik = C_l √(κ_ik s √(m_i m_k)), s the spring's
+ * current stiffness over κ, C_l the linear viscosity's coefficient: in a 1D chain at rest
+ * η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
+ * particle) damps the collisions; its work is the particles' heat. A bond between a failed and an
+ * intact particle is not broken: the intact particle's correspondence stress (tension
+ * included) and its penalty still act through it, so a crack needs two failed layers and the
+ * fragments (dm_region.c: components of the unbroken bonds) are unchanged by the contact.
+ *
+ * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept); the
+ * springs derive from the potential Σ_pairs κ L² ∫_λ^1 g. The contact energy econ is booked as
+ * the springs' work with each half kick's time-centred velocity, −h Σ_i fcon_i·ū_i, the dashpot's
+ * as heat in e (half of each pair's to each particle), so K + U + E_hg + broken + contact − W =
+ * const to round-off (the potential equals the booked energy up to velocity Verlet's O(dt²)).
+ * The internal energy of a failed particle (its share of the elastic energy at the break
+ * included) stays in U as heat; only the dashpot adds to it. */
 #include "dm_impl.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
+/* κc_i = K d² V_i / Σ_k |ξ_ik|² (see the head) and the contact's stable step
+ * dtcon_i = courant · 2/ω_i, ω_i² = 2 Σ_k (κc_i + κc_k)/m_i: Gershgorin's bound on the largest
+ * eigenvalue of M⁻¹K of the contact springs (all bonds of the family counted, so the bound holds
+ * whichever of them are broken and compressed); velocity Verlet is stable for ω dt < 2 (courant
+ * 1 is the 1D chain's exact limit). */
+static void contact_stiffness(dm_fin *f) {
+  const dm_model *m = f->m;
+  const dm_state *st = m->s;
+  const double d = f->dim;
+  for (size_t i = 0; i < f->n; ++i) {
+    const dm_fin_material *mt = &f->mat[f->imat[i]];
+    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
+    double trA = 0.0;
+    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+      double xi[3];
+      dm_bond_vector(m, i, b, xi);
+      trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    }
+    f->kcon[i] = trA > 0 ? rho0 * c0 * c0 * d * d * st->vol[i] / trA : 0.0;
+  }
+  /* the dashpot (η = C_l √(κ √(m_i m_k)), damping ratio ζ = C_l/√2 for equal masses) lowers
+   * the explicit limit to (2/ω)(√(1 + ζ²) − ζ) */
+  const double zeta = f->par.cl / sqrt(2.0), damped = sqrt(1.0 + zeta * zeta) - zeta;
+  for (size_t i = 0; i < f->n; ++i) {
+    double sk = 0.0;
+    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) sk += f->kcon[i] + f->kcon[m->nbr[b]];
+    f->dtcon[i] = sk > 0 ? f->par.courant * 2.0 * damped / sqrt(2.0 * sk / st->mass[i]) : INFINITY;
+  }
+}
+
 void dm_frac_alloc(dm_fin *f) {
   bool any = false;
   for (size_t i = 0; i < f->n && !any; ++i) any = f->mat[f->imat[i]].frac.model != DM_FRACTURE_NONE;
   if (!any) return;
-  f->failed = ms_calloc(f->n ? f->n : 1, 1);
-  f->broken = ms_calloc(f->n ? f->n : 1, sizeof(double));
+  const size_t n1 = f->n ? f->n : 1;
+  f->failed = ms_calloc(n1, 1);
+  f->broken = ms_calloc(n1, sizeof(double));
+  f->kcon = ms_calloc(n1, sizeof(double)), f->dtcon = ms_calloc(n1, sizeof(double));
+  f->fcon = ms_calloc(3 * n1, sizeof(double)), f->econ = ms_calloc(n1, sizeof(double));
+  f->nlcon = f->m->nbonds;
+  f->lcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
+  f->gcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
+  f->dtclose = ms_calloc(n1, sizeof(double));
+  for (size_t b = 0; b < f->nlcon; ++b) f->lcon[b] = -1.0; /* not broken yet */
+  contact_stiffness(f);
 }
 
 void dm_frac_free(dm_fin *f) {
-  free(f->failed), free(f->broken);
+  free(f->failed), free(f->broken), free(f->kcon), free(f->dtcon), free(f->fcon), free(f->econ);
+  free(f->lcon), free(f->gcon), free(f->dtclose);
   f->failed = NULL, f->broken = NULL;
+  f->kcon = f->dtcon = f->fcon = f->econ = f->lcon = f->gcon = f->dtclose = NULL;
 }
 
 /* Largest eigenvalue of the symmetric a: the trigonometric form of the cubic's roots
@@ -65,10 +128,155 @@ void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, do
     f->ehg[i] = 0.0;
     f->m->kappa[i] = 0.0;
   }
-  /* failed: no deviator, no tension; p + q = −tr σ/3 (s is traceless) */
-  const double pq = -(sig[0] + sig[4] + sig[8]) / 3.0;
+  /* failed: no stress of its own (from the next evaluation on dm_frac_failed_step) */
   for (int a = 0; a < 9; ++a) s[a] = 0.0, sig[a] = 0.0;
-  sig[0] = sig[4] = sig[8] = -fmax(pq, 0.0);
+}
+
+double dm_frac_failed_step(dm_fin *f, size_t i) {
+  double *Q = &f->m->Q[9 * i], *QP = &f->QP[9 * i], *sg = &f->sig[9 * i], *s = &f->s[9 * i];
+  for (int a = 0; a < 9; ++a) Q[a] = QP[a] = sg[a] = s[a] = 0.0;
+  f->q[i] = 0.0;
+  /* its intact neighbours' stress acts on it through the unbroken bonds: their speed of sound
+   * at rest (as c_L of the stress pass, without compression) bounds that part */
+  const dm_fin_material *mt = &f->mat[f->imat[i]];
+  const double rho0 = eos_rho0(mt->eos), c0 = eos_c0(mt->eos);
+  const double cL = sqrt(c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / (3.0 * rho0) : 0));
+  return fmin(f->par.courant * f->par.ell / cL, f->dtcon[i]);
+}
+
+/* The pair vectors of bond b of particle i (to k): ξ = (X_k − X_i) + shift and y = ξ + w_k − w_i
+ * (the pair's negation is exact: both ends see the same |y|, the same bits). */
+static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b, double xi[3],
+                         double y[3]) {
+  const double *X = m->s->X, *sh = m->shift[m->img[b]];
+  const size_t k = m->nbr[b];
+  for (int a = 0; a < 3; ++a) {
+    xi[a] = (X[3 * k + a] - X[3 * i + a]) + sh[a];
+    y[a] = xi[a] + (w[3 * k + a] - w[3 * i + a]);
+  }
+}
+
+/* The pair law of particle i's material at λ = |y|/L ≤ 1: the spring force is κ_ik L g, with
+ * g = [p(ρ0 λ^−d, e0) − p(ρ0, e0)] λ^(d−1)/(K d) — the EOS pressure of a uniform compression λ
+ * over the bond's share of the face it acts on, so that the virial of a uniformly compressed
+ * failed lattice is the EOS pressure, and g → 1 − λ for small strain (the linear spring of κ)
+ * — and s ≥ |dg/dλ|, the stiffness over κ: ρ0 c(ρ, e0)²/(K λ²) + (d − 1) p λ^(d−2)/(K d). */
+static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s) {
+  const eos_t *eos = f->mat[f->imat[i]].eos;
+  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), c0 = eos_sound_speed(eos, rho0, e0);
+  const double K = rho0 * c0 * c0, d = f->dim, rho = rho0 * pow(lam, -d);
+  const double p = eos_pressure(eos, rho, e0) - eos_pressure(eos, rho0, e0);
+  const double c = eos_sound_speed(eos, rho, e0);
+  *g = p * pow(lam, d - 1.0) / (K * d);
+  *s = rho0 * c * c / (K * lam * lam) + (d - 1.0) * fabs(p) * pow(lam, d - 2.0) / (K * d);
+}
+
+/* The contact force on failed particle i from its broken, compressed bonds: the spring into
+ * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
+ * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
+ * particles, over the current volume, λ̄ the mean |y|/L of its bonds in contact: K tr ε/(1 +
+ * tr ε) under a uniform compression). Its closing-speed step dtclose_i = courant · min L/(−ṙ)
+ * over its approaching broken bonds (no pair closes by more than courant · L in a step, so none
+ * jumps past the spring). Returns the smallest |y|/L (1 if none). Writes particle i's entries
+ * and its bonds' only. */
+static double contact_one(dm_fin *f, size_t i, double ft[3]) {
+  const dm_model *m = f->m;
+  const double *w = m->s->w, *u = m->s->u, *mass = m->s->mass;
+  double fc[3] = {0, 0, 0}, vir = 0.0, lmin = 1.0, lsum = 0.0, nc = 0.0, closing = 0.0, smax = 1;
+  for (int a = 0; a < 3; ++a) ft[a] = 0.0;
+  for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+    const size_t k = m->nbr[b];
+    f->gcon[b] = 0.0;
+    if (!f->failed[k]) continue;
+    double xi[3], y[3];
+    pair_vectors(m, w, i, b, xi, y);
+    const double r = sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+    if (f->lcon[b] < 0) /* the bond has just broken: its rest length (both sides, same bits) */
+      f->lcon[b] = fmin(sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]), r);
+    const double L = f->lcon[b];
+    if (!(r > 0)) {
+      lmin = 0.0;
+      continue;
+    }
+    /* ṙ = (u_k − u_i)·y/r; the dashpot only while approaching, so the pair force stays
+     * compressive (as q acts only in compression) */
+    const double rdot = ((u[3 * k] - u[3 * i]) * y[0] + (u[3 * k + 1] - u[3 * i + 1]) * y[1] +
+                         (u[3 * k + 2] - u[3 * i + 2]) * y[2]) /
+                        r;
+    if (rdot < 0) closing = fmax(closing, -rdot / L);
+    if (!(r < L)) continue;
+    double gi, si, gk, sk;
+    pair_law(f, i, r / L, &gi, &si);
+    pair_law(f, k, r / L, &gk, &sk);
+    const double kap = f->kcon[i] + f->kcon[k], gl = 0.5 * (gi + gk), sl = 0.5 * (si + sk);
+    if (!isfinite(gl) || !isfinite(sl)) {
+      lmin = 0.0;
+      continue;
+    }
+    smax = fmax(smax, sl);
+    const double eta = f->par.cl * sqrt(kap * sl * sqrt(mass[i] * mass[k]));
+    const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * L * gl;
+    f->gcon[b] = g;
+    lmin = fmin(lmin, r / L), lsum += r / L, nc += 1.0;
+    for (int a = 0; a < 3; ++a) fc[a] -= spring * y[a] / r, ft[a] += (g - spring) * y[a] / r;
+    vir += (spring - g) * r;
+  }
+  for (int a = 0; a < 3; ++a) f->fcon[3 * i + a] = fc[a];
+  f->dtclose[i] = fmin(closing > 0 ? f->par.courant / closing : INFINITY,
+                       f->dtcon[i] / sqrt(smax)); /* the springs stiffen with the EOS */
+  f->p[i] = nc > 0 ? vir / (2.0 * f->dim * m->s->vol[i] * pow(lsum / nc, f->dim)) : 0.0;
+  return lmin;
+}
+
+ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin) {
+  const long n = (long)f->n;
+  long bad = n;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
+  for (long i = 0; i < n; ++i)
+    if (f->failed[i]) {
+      double ft[3];
+      const double lmin = contact_one(f, (size_t)i, ft);
+      for (int a = 0; a < 3; ++a) f->frc[3 * i + a] += ft[a];
+      if (!(lmin >= DM_CONTACT_MIN_RATIO) && i < bad) bad = i;
+    }
+  if (bad < n) {
+    /* the limit of the linear spring: compressed this far, the pair is about to pass through */
+    double ft[3];
+    f->bad = (size_t)bad, f->bad_value = contact_one(f, (size_t)bad, ft);
+    f->bad_what = "contact: a broken bond's length over its rest length (< 0.5)";
+    return MS_ERR_UNSTABLE;
+  }
+  for (long i = 0; i < n; ++i) /* the smallest index of ties, as the stress pass */
+    if (f->failed[i] && (f->dtclose[i] < *dtmin || (f->dtclose[i] == *dtmin && i < *imin)))
+      *dtmin = f->dtclose[i], *imin = i;
+  return MS_OK;
+}
+
+/* The spring's work into econ, the dashpot's into heat: a pair's dissipation
+ * h g (ū_k − ū_i)·y/r, half to each particle (each end sees the same g, y and Δū negated). */
+void dm_frac_contact_work(dm_fin *f, double h) {
+  if (!f->failed) return;
+  const dm_model *m = f->m;
+  const double *vb = f->vbar, *w = m->s->w;
+  const long n = (long)f->n;
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (long i = 0; i < n; ++i)
+    if (f->failed[i]) {
+      const double *fc = &f->fcon[3 * i];
+      f->econ[i] -= h * (fc[0] * vb[3 * i] + fc[1] * vb[3 * i + 1] + fc[2] * vb[3 * i + 2]);
+      double heat = 0.0;
+      for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+        if (f->gcon[b] == 0.0) continue;
+        const size_t k = m->nbr[b];
+        double xi[3], y[3];
+        pair_vectors(m, w, (size_t)i, b, xi, y);
+        const double r = sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+        double dv = 0.0;
+        for (int a = 0; a < 3; ++a) dv += (vb[3 * k + a] - vb[3 * i + a]) * y[a];
+        heat += 0.5 * h * f->gcon[b] * dv / r;
+      }
+      f->e[i] += heat / m->s->mass[i];
+    }
 }
 
 /* The grain test of dm_impl.h. Why: the least-squares F of a failed particle's scattered
@@ -104,6 +312,47 @@ double dm_fin_broken_energy(const dm_fin *f) {
   if (f->broken)
     for (size_t i = 0; i < f->n; ++i) b += f->broken[i];
   return b;
+}
+
+double dm_fin_contact_energy(const dm_fin *f) {
+  double c = 0.0;
+  if (f->econ)
+    for (size_t i = 0; i < f->n; ++i) c += f->econ[i];
+  return c;
+}
+
+double dm_fin_contact_potential(const dm_fin *f) {
+  if (!f->failed) return 0.0;
+  const dm_model *m = f->m;
+  const double *X = m->s->X, *w = m->s->w;
+  double U = 0.0;
+  for (size_t i = 0; i < f->n; ++i)
+    if (f->failed[i])
+      for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+        const size_t k = m->nbr[b];
+        if (!f->failed[k]) continue;
+        const double *sh = m->shift[m->img[b]];
+        double L2 = 0, r2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double xi = (X[3 * k + a] - X[3 * i + a]) + sh[a];
+          const double y = xi + (w[3 * k + a] - w[3 * i + a]);
+          L2 += xi * xi, r2 += y * y;
+        }
+        const double r = sqrt(r2), L = f->lcon[b] < 0 ? fmin(sqrt(L2), r) : f->lcon[b];
+        if (!(r < L)) continue;
+        /* κ L² ∫_λ^1 g dλ' (Simpson, 32 intervals), ½ per side */
+        const int nsimp = 32;
+        const double lam = r / L, hs = (1.0 - lam) / nsimp;
+        double integral = 0.0;
+        for (int q = 0; q <= nsimp; ++q) {
+          double gi, si, gk, sk;
+          pair_law(f, i, lam + q * hs, &gi, &si);
+          pair_law(f, k, lam + q * hs, &gk, &sk);
+          integral += (q == 0 || q == nsimp ? 1.0 : q % 2 ? 4.0 : 2.0) * 0.5 * (gi + gk);
+        }
+        U += 0.5 * (f->kcon[i] + f->kcon[k]) * L * L * integral * hs / 3.0;
+      }
+  return U;
 }
 
 size_t dm_fin_failed_count(const dm_fin *f) {

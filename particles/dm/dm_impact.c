@@ -217,7 +217,7 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   free(path), free(xv), free(ids), free(bmat);
 }
 
-enum { NHIST = 16 }; /* columns of impact_history.csv */
+enum { NHIST = 17 }; /* columns of impact_history.csv */
 
 /* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest). */
 static double body0_momentum(const dm_impact *p, const dm_state *s) {
@@ -249,8 +249,9 @@ static void record(run_state *r) {
     for (int a = 0; a < 3; ++a) P[a] += s->mass[i] * s->u[3 * i + a];
   taylor_measures(r->p, s, r->X0, &L, &D);
   dm_impact_summary *sum = &r->p->sum;
-  const double B = dm_fin_broken_energy(f); /* booked out of E_hg at failures (dm_fracture.c) */
-  const double bal = K + U + H + B - f->ext_work - r->E0;
+  const double B = dm_fin_broken_energy(f);  /* booked out of E_hg at failures (dm_fracture.c) */
+  const double C = dm_fin_contact_energy(f); /* failed particles' springs (dm_fracture.c) */
+  const double bal = K + U + H + B + C - f->ext_work - r->E0;
   sum->stretch_max = fmax(sum->stretch_max, dm_fin_max_stretch(f, NULL));
   for (size_t i = 0; i < f->n; ++i)
     sum->J_min = fmin(sum->J_min, f->J[i]), sum->J_max = fmax(sum->J_max, f->J[i]);
@@ -287,18 +288,21 @@ static void record(run_state *r) {
                              (double)r->wl->in_contact,
                              B,
                              (double)dm_fin_failed_count(f),
-                             (double)r->wl->ct->in_contact};
+                             (double)r->wl->ct->in_contact,
+                             C};
   memcpy(&r->hist[NHIST * r->nh++], row, sizeof row);
 }
 
 static void write_outputs(const ms_ctx *ctx, const run_state *r) {
-  const char *nm[] = {"t",        "kinetic", "internal", "bond_penalty", "wall_work", "wall_energy",
-                      "balance",  "p_x",     "p_y",      "p_z",          "length",    "footprint",
-                      "contacts", "broken",  "failed",   "body_contacts"};
-  const char *un[] = {"10 us",  "kJ",     "kJ", "kJ", "kJ", "kJ", "kJ", "g*km/s",
-                      "g*km/s", "g*km/s", "cm", "cm", "1",  "kJ", "1",  "1"};
+  const char *nm[] = {
+      "t",        "kinetic", "internal", "bond_penalty",  "wall_work",       "wall_energy",
+      "balance",  "p_x",     "p_y",      "p_z",           "length",          "footprint",
+      "contacts", "broken",  "failed",   "body_contacts", "fracture_contact"};
+  const char *un[] = {"10 us",  "kJ", "kJ", "kJ", "kJ", "kJ", "kJ", "g*km/s", "g*km/s",
+                      "g*km/s", "cm", "cm", "1",  "kJ", "1",  "1",  "kJ"};
   dmp_write_series(ctx, "impact_history.csv",
-                   "impact history: balance = kinetic + internal + bond_penalty + broken - "
+                   "impact history: balance = kinetic + internal + bond_penalty + broken + "
+                   "fracture_contact - "
                    "wall_work - E0 (wall_work, wall_energy: the wall's and the contact's); "
                    "length, footprint of body 0 (a cylinder on the wall)",
                    NHIST, nm, un, r->hist, r->nh);

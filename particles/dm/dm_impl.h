@@ -72,12 +72,19 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
 }
 
 /* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
- * dm_frac_alloc: failed[] and broken[] when a material of f has a fracture model (else NULL);
- * dm_frac_free releases them. dm_frac_open: particle i has failed and its family is stretched
- * (J > 1): the crack is open, no EOS pressure (p = 0). dm_frac_stress, called by the stress
- * pass after σ = s − (p + q) I: the failure test of an intact particle (books its bond-penalty
- * energy as broken and switches its penalty off), and for a failed one s = 0,
- * σ = −max(p + q, 0) I. Touches particle i's entries only (safe in the parallel pass). */
+ * dm_frac_alloc: failed[], broken[] and the contact's arrays (kcon, dtcon, fcon, econ) when a
+ * material of f has a fracture model (else NULL); dm_frac_free releases them. dm_frac_open:
+ * kept for the stress pass's tests; false for every particle the pass reaches (a failed one
+ * leaves it through dm_frac_failed_step first). dm_frac_stress, called by the stress pass after
+ * σ = s − (p + q) I: the failure test of an intact particle (books its bond-penalty energy as
+ * broken and switches its penalty off); a failed one gets σ = s = 0. dm_frac_failed_step: the
+ * stress pass's whole work for a failed particle (Q = V P A⁻¹ = σ = s = 0, q = 0), returns its
+ * stable step. Both touch particle i's entries only (safe in the parallel pass).
+ * dm_frac_contact, after the gather: the compression-only pair forces across broken bonds into
+ * frc (and fcon; p of a failed particle = its contact virial pressure), the closing-speed step
+ * into *dtmin (its particle in *imin); MS_ERR_UNSTABLE (f->bad, bad_what, bad_value) when a
+ * broken bond is compressed below DM_CONTACT_MIN_RATIO of its rest length. dm_frac_contact_work, after each half kick of length h: econ −= h fcon·v̄. */
+#define DM_CONTACT_MIN_RATIO 0.5
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
 static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
@@ -95,6 +102,9 @@ static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
 }
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
+double dm_frac_failed_step(dm_fin *f, size_t i);
+ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin);
+void dm_frac_contact_work(dm_fin *f, double h);
 /* The deck's `fracture: {model: mean_stress|principal_stress|none, spall_strength, failure_strain}`
  * of `section` (absent: no fracture); located errors (no or non-positive spall_strength) in e;
  * `where` names the section in messages. */

@@ -223,8 +223,8 @@ static ms_status run_steps(dmf_run *r) {
              "discrete model (response eos): interrupt: stopping at the next checkpoint (step %ld)",
              (step / p->checkpoint_every + 1) * p->checkpoint_every);
     }
-    const double bal =
-        K + U + H + dm_fin_broken_energy(f) - f->work - r->E0; /* broken: 0 without fracture */
+    const double bal = K + U + H + dm_fin_broken_energy(f) + dm_fin_contact_energy(f) - f->work -
+                       r->E0; /* broken, contact: 0 without fracture */
     r->dEmax = fmax(r->dEmax, fabs(bal));
     if ((step % every == 0 || last) && r->ne < r->nemax) {
       const double row[6] = {r->t, K, U, H, f->work, bal};
@@ -281,9 +281,11 @@ static void report(dmf_run *r) {
   const long steps = r->steps;
   if (f->failed)
     ms_log(r->ctx, MS_LOG_INFO,
-           "discrete model (response eos): fracture: %zu particles failed, broken energy %.6g kJ "
-           "(in the balance: K + U + E_hg + broken - W - E0)",
-           dm_fin_failed_count(f), dm_fin_broken_energy(f));
+           "discrete model (response eos): fracture: %zu particles failed, broken energy %.6g kJ, "
+           "contact energy %.6g kJ (potential %.6g) (in the balance: K + U + E_hg + broken + "
+           "contact - W - E0)",
+           dm_fin_failed_count(f), dm_fin_broken_energy(f), dm_fin_contact_energy(f),
+           dm_fin_contact_potential(f));
   sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall;
   sum->particle_steps_per_s =
       r->wall > 0 ? (double)r->nreal * (double)(steps - r->step0) / r->wall : 0;
@@ -295,7 +297,7 @@ static void report(dmf_run *r) {
   sum->restart_step = r->step0;
   ms_log(r->ctx, MS_LOG_INFO,
          "discrete model (response eos): %ld steps to t = %.6g in %.3f s (%.4g particle-steps/s); "
-         "energy balance max |K + U + E_hg - W - E0| = %.3g of %s %.6g kJ; "
+         "energy balance max |K + U + E_hg (+ broken + contact) - W - E0| = %.3g of %s %.6g kJ; "
          "bond-penalty energy / that = %.3g",
          steps, r->t, r->wall, sum->particle_steps_per_s, sum->energy_err_max,
          f->work != 0 ? "the piston work" : "the initial energy E0", f->work != 0 ? f->work : r->E0,
@@ -304,7 +306,8 @@ static void report(dmf_run *r) {
   const char *un[] = {"10 us", "kJ", "kJ", "kJ", "kJ", "kJ"};
   dmp_write_series(&r->octx, "dm_fin_energy.csv",
                    f->failed ? "energy history: balance = kinetic + internal + bond_penalty + "
-                               "broken - piston_work - E0 (broken: fracture, in run.log)"
+                               "broken + contact - piston_work - E0 (broken, contact: fracture, "
+                               "in run.log)"
                              : "energy history: balance = kinetic + internal + bond_penalty - "
                                "piston_work - E0",
                    6, nm, un, r->eh, r->ne);

@@ -77,6 +77,9 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_state *s = old->s;
   const size_t n = f->n;
   memset(rep, 0, sizeof *rep);
+  /* fracture's per-bond contact state (dm_fracture.c: rest lengths, dashpot) is indexed by the
+   * old families' bonds: not carried over to new families (yet), so no update with fracture */
+  if (f->failed) return MS_ERR_INTERNAL;
   rep->released = penalty_stored(f);
   double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
   double jmin = INFINITY, jmax = 0;

@@ -579,8 +579,9 @@ static double region_free_surface_velocity(const ptl_region *rr) {
   return cnt ? sum / (double)cnt : 0.0;
 }
 
-/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy, broken (the
- * penalty energy of failed particles, dm_fracture.c), piston work W; total = K + U + broken − W,
+/* kinetic (free particles), potential = internal Σ m e + bond-penalty energy + the contact
+ * energy of failed particles, broken (the penalty energy of failed particles, dm_fracture.c),
+ * piston work W; total = K + potential + broken − W,
  * conserved to round-off by dm_fin (docs/particles-dm.md "Energy identity") except for what the
  * coupling's kicks add. */
 static void region_energy(ptl_region *rr, ptl_region_energy *out) {
@@ -589,10 +590,10 @@ static void region_energy(ptl_region *rr, ptl_region_energy *out) {
   dm_fin_energies(r->f, &K, &U, &H);
   memset(out, 0, sizeof *out);
   out->kinetic = K;
-  out->potential = U + H;
+  out->potential = U + H + dm_fin_contact_energy(r->f); /* contact: failed particles' springs */
   out->piston_work = r->f->work;
   out->broken = dm_fin_broken_energy(r->f);
-  out->total = K + U + H + out->broken - r->f->work;
+  out->total = K + U + H + dm_fin_contact_energy(r->f) + out->broken - r->f->work;
   for (size_t i = 0; i < r->s.n; i++)
     if (r->s.bc[i] == DM_FREE)
       for (int a = 0; a < 3; a++) out->momentum[a] += r->s.mass[i] * r->s.u[3 * i + a];
@@ -628,12 +629,17 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path, const c
   const ptl_state *ps = r->ps;
   const dm_fin *f = r->f;
   int64_t *mat = ms_calloc(r->s.n + 1, sizeof *mat); /* one material: 0 */
+  /* fracture: the failed flags (1: failed; its p is the contact pressure, ρ and J held from the
+   * failure, dm_fracture.c) */
+  int64_t *failed = f->failed ? ms_calloc(r->s.n + 1, sizeof *failed) : NULL;
+  for (size_t i = 0; failed && i < r->s.n; i++) failed[i] = f->failed[i];
   const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
                                     {"particles/pressure", f->p, NULL, 1, "GPa"},
                                     {"particles/density", f->rho, NULL, 1, "g/cm^3"},
                                     {"particles/energy", f->e, NULL, 1, "kJ/g"},
                                     {"particles/J", f->J, NULL, 1, "1"},
-                                    {"particles/gid", NULL, ps->gid, 1, NULL}};
+                                    {"particles/gid", NULL, ps->gid, 1, NULL},
+                                    {"particles/failed", NULL, failed, 1, NULL}};
   ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
   snap.material_names = material;
   ptl_snapshot_attr_add(&snap, "time", r->t);
@@ -645,12 +651,12 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path, const c
                                {"pressure", "particles/pressure", 1, false},
                                {"density", "particles/density", 1, false},
                                {"mass", "particles/mass", 1, false}};
-  snap.ndata = sizeof data / sizeof data[0];
+  snap.ndata = sizeof data / sizeof data[0] - (failed ? 0 : 1);
   snap.data = data;
   snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
   snap.xdmf = xdmf;
   const ms_status st = ptl_write_snapshot(path, &snap);
-  free(mat);
+  free(mat), free(failed);
   return st;
 }
 
