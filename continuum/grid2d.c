@@ -45,34 +45,47 @@ static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y
   }
 }
 
-/* The CSW98 ratio r = (g_nb · g_c)/|g_c|² of the velocity gradient g = Δu/length along the
- * neighbour node pair a → b to that of the compressive zone edge (Δu_c = (du, dv), length lc,
- * n2 = |Δu_c|²), formed as (Δu_nb · Δu_c) lc / (l_nb n2): one division (0 if a → b is
- * degenerate). */
-static inline double nb_ratio(const c2d_fstate *s, ptrdiff_t a, ptrdiff_t b, double du, double dv,
-                              double lc, double n2) {
-  double dx = s->x[b] - s->x[a], dy = s->y[b] - s->y[a], l = sqrt(dx * dx + dy * dy);
-  double d = l * n2;
-  if (!(d > 0.0)) return 0.0;
-  return ((s->u[b] - s->u[a]) * du + (s->v[b] - s->v[a]) * dv) * lc / d;
+/* Velocity gradients g = Δu/l of the edges a → a + st, a = a0 + i for i < n (positions and
+ * velocities of s), with ic = 1/|g|² (g and ic 0 on a degenerate or motionless edge). */
+static void edge_row(const c2d_fstate *s, size_t a0, size_t st, size_t n, c2d_erow *e) {
+  const double *restrict x = s->x + a0, *restrict y = s->y + a0, *restrict u = s->u + a0,
+                         *restrict v = s->v + a0;
+  for (size_t i = 0; i < n; ++i) {
+    double dx = x[i + st] - x[i], dy = y[i + st] - y[i], l = sqrt(dx * dx + dy * dy);
+    double il = l > 0.0 ? 1.0 / l : 0.0;
+    double gx = (u[i + st] - u[i]) * il, gy = (v[i + st] - v[i]) * il, n2 = gx * gx + gy * gy;
+    e->gx[i] = gx;
+    e->gy[i] = gy;
+    e->ic[i] = n2 > 0.0 ? 1.0 / n2 : 0.0;
+  }
 }
 
-/* CSW98 limiter ψ of the compressive zone edge a → b (nodes a, b; Δu = (du, dv), length lc > 0)
- * from the edges along the same logical line: l → a (l = a − st, present if hl) and b → r
- * (r = b + st, present if hr); a missing neighbour at the mesh boundary takes the other's
- * ratio. */
-static inline double edge_limiter(const c2d_fstate *s, ptrdiff_t a, ptrdiff_t b, ptrdiff_t st,
-                                  bool hl, bool hr, double du, double dv, double lc) {
-  if (!hl && !hr) return 0.0;
-  const double n2 = du * du + dv * dv;
-  double rl = hl ? nb_ratio(s, a - st, a, du, dv, lc, n2) : 0.0;
-  double rr = hr ? nb_ratio(s, b, b + st, du, dv, lc, n2) : 0.0;
-  if (!hl) rl = rr;
-  if (!hr) rr = rl;
+/* The edges along node row n, (i, n) → (i+1, n), i < ni. */
+void c2d_edge_hrow(const c2d_grid *g, const c2d_fstate *s, size_t n, c2d_erow *e) {
+  edge_row(s, (g->ni + 1) * n, 1, g->ni, e);
+}
+
+/* The edges across zone row j, (i, j) → (i, j+1), i ≤ ni. */
+void c2d_edge_vrow(const c2d_grid *g, const c2d_fstate *s, size_t j, c2d_erow *e) {
+  edge_row(s, (g->ni + 1) * j, g->ni + 1, g->ni + 1, e);
+}
+
+/* CSW98 limiter ψ of edge c of row ec from its neighbours along the same logical line, edge l of
+ * row el (present if hl) and edge r of row er (present if hr): the ratios
+ * r = (g_nb · g_c)/|g_c|² (the orientation of the line cancels); a missing neighbour at the mesh
+ * boundary takes the other's ratio (both missing: ψ = 0). Branch-free: an absent neighbour's
+ * index must still be valid. */
+static inline double edge_psi(const c2d_erow *ec, size_t c, const c2d_erow *el, size_t l, bool hl,
+                              const c2d_erow *er, size_t r, bool hr) {
+  const double gx = ec->gx[c], gy = ec->gy[c], ic = ec->ic[c];
+  double rl = hl ? (el->gx[l] * gx + el->gy[l] * gy) * ic : 0.0;
+  double rr = hr ? (er->gx[r] * gx + er->gy[r] * gy) * ic : 0.0;
+  rl = hl ? rl : rr;
+  rr = hr ? rr : rl;
   double psi = 0.5 * (rl + rr);
-  if (2.0 * rl < psi) psi = 2.0 * rl;
-  if (2.0 * rr < psi) psi = 2.0 * rr;
-  if (psi > 1.0) psi = 1.0;
+  psi = 2.0 * rl < psi ? 2.0 * rl : psi;
+  psi = 2.0 * rr < psi ? 2.0 * rr : psi;
+  psi = psi > 1.0 ? 1.0 : psi;
   return psi > 0.0 ? psi : 0.0;
 }
 
@@ -111,11 +124,11 @@ static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
 }
 
 /* The corner forces of zone (i0, j0) into f[8] (x, y per corner) and, in r–z, its corner area
- * masses ρ_z A_c into ma[4], from the state s. */
-static inline __attribute__((always_inline)) void zone_force(const c2d_grid *g, size_t i0,
-                                                             size_t j0, const c2d_fstate *s,
-                                                             double *restrict f,
-                                                             double *restrict ma) {
+ * masses ρ_z A_c into ma[4], from the state s (lim: the limiter's edge rows, NULL: no
+ * limiter). */
+static inline __attribute__((always_inline)) void
+zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c2d_elim *lim,
+           double *restrict f, double *restrict ma) {
   const size_t z = i0 + g->ni * j0;
   const double *px = s->x, *py = s->y, *rz = s->rho, *cz = s->c;
   size_t nd[4];
@@ -174,29 +187,34 @@ static inline __attribute__((always_inline)) void zone_force(const c2d_grid *g, 
         }
       }
     }
-    /* Edge viscosity, compression only. Edge k runs from node nd[k] to nd[k+1]; its logical
-     * line continues by st[k] nodes beyond either end (hl, hr: those neighbours exist). */
-    const ptrdiff_t w = (ptrdiff_t)g->ni + 1;
-    const ptrdiff_t st[4] = {1, w, -1, -w};
-    const bool hl[4] = {i0 > 0, j0 > 0, i0 + 2 <= g->ni, j0 + 2 <= g->nj};
-    const bool hr[4] = {i0 + 2 <= g->ni, j0 + 2 <= g->nj, i0 > 0, j0 > 0};
+    /* Edge viscosity, compression only; the four edges without branches (whether an edge
+     * compresses is data, not predictable). ψ from the edge rows (k = 0: along node row j0,
+     * 1: the right edge across zone row j0, 2: along node row j0 + 1, 3: the left edge). */
+    double psi[4] = {0, 0, 0, 0};
+    if (lim) {
+      const size_t il = i0 > 0 ? i0 - 1 : i0, ir = i0 + 1 < g->ni ? i0 + 1 : i0;
+      const bool hl = i0 > 0, hr = i0 + 1 < g->ni, hb = lim->vm != NULL, ht = lim->vp != NULL;
+      const c2d_erow *vm = hb ? lim->vm : lim->v0, *vp = ht ? lim->vp : lim->v0;
+      psi[0] = edge_psi(lim->hlo, i0, lim->hlo, il, hl, lim->hlo, ir, hr);
+      psi[1] = edge_psi(lim->v0, i0 + 1, vm, i0 + 1, hb, vp, i0 + 1, ht);
+      psi[2] = edge_psi(lim->hhi, i0, lim->hhi, il, hl, lim->hhi, ir, hr);
+      psi[3] = edge_psi(lim->v0, i0, vm, i0, hb, vp, i0, ht);
+    }
+    const double qq = g->q1 * g->q1 * cz[z] * cz[z], q2z = g->q2 * g->zeta;
     double vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int k = 0; k < 4; ++k) {
       int kn = (k + 1) & 3;
       double du = U[kn] - U[k], dv = V[kn] - V[k];
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k];
-      if (du * dx + dv * dy >= 0.0) continue;
       double adu = sqrt(du * du + dv * dv);
-      if (!(adu > 1e-150)) continue; /* |Δu|² underflows: no viscosity (and no 0/0 below) */
-      double psi = g->limiter ? edge_limiter(s, (ptrdiff_t)nd[k], (ptrdiff_t)nd[kn], st[k], hl[k],
-                                             hr[k], du, dv, sqrt(dx * dx + dy * dy))
-                              : 0.0;
-      double a = g->q2 * g->zeta * adu;
-      double q = rz[z] * (1.0 - psi) * adu * (a + sqrt(a * a + g->q1 * g->q1 * cz[z] * cz[z]));
+      /* compressive, and |Δu|² has not underflowed */
+      bool on = (du * dx + dv * dy < 0.0) & (adu > 1e-150);
+      double a = q2z * adu;
+      /* q/|Δu|: the |Δu| of q and of the direction Δu/|Δu| cancel */
+      double qa = rz[z] * (1.0 - psi[k]) * (a + sqrt(a * a + qq));
       double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
       /* the median's surface: length |S| (planar), |S| × the radius of its midpoint (r–z) */
-      double sa = sqrt(sx * sx + sy * sy);
-      double sq = q * sa / adu;
+      double sq = on ? qa * sqrt(sx * sx + sy * sy) : 0.0;
       vx[2 * k] += sq * du;
       vx[2 * k + 1] += sq * dv;
       vx[2 * kn] -= sq * du;
@@ -220,9 +238,9 @@ static inline __attribute__((always_inline)) void zone_force(const c2d_grid *g, 
 
 /* The corner forces of zone row j from the state s: fc[8 i + 2k (+1)] the x (y) force of zone
  * (i, j) on its corner k, ma[4 i + k] its r–z corner area masses. */
-void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, double *restrict fc,
-                   double *restrict ma) {
-  for (size_t i = 0; i < g->ni; ++i) zone_force(g, i, j, s, fc + 8 * i, ma + 4 * i);
+void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
+                   double *restrict fc, double *restrict ma) {
+  for (size_t i = 0; i < g->ni; ++i) zone_force(g, i, j, s, lim, fc + 8 * i, ma + 4 * i);
 }
 
 /* Outside pressure p(t) on the edges of C2D_BC_PRESSURE sides at positions (px, py): edge a → b

@@ -24,14 +24,21 @@ typedef struct c2d_run {
   const eos_t *eos;
 } c2d_run;
 
+/* Velocity gradients of a row of edges: g = Δu/l along the edge, ic = 1/|g|². */
+typedef struct c2d_erow {
+  double *gx, *gy, *ic;
+} c2d_erow;
+
 /* Per-thread scratch of the time step's sweeps (grid2d_step.c): corner forces and r–z corner
  * area masses of two zone rows (a ring) and of the band's last zone row (read by the next
  * band); ū, v̄ and r̃ of two node rows and of the band's first node row (read by the previous
- * band); the energies of one zone row for its EOS call. */
+ * band); the energies of one zone row for its EOS call; the limiter's edge rows. */
 typedef struct c2d_scratch {
   double *fc[2], *ma[2], *fcb, *mab;
   double *ub[2], *vb[2], *rf[2], *ubb, *vbb, *rfb;
   double *erow;
+  c2d_erow eh[2],
+      ev[3]; /* limiter edge rows: along node rows (n mod 2), across zone rows (mod 3) */
 } c2d_scratch;
 
 struct c2d_grid {
@@ -165,6 +172,12 @@ static inline double c2d_zone_dt(const c2d_grid *g, const double X[4], const dou
   return sig > 0.0 ? g->cfl * L / sig : INFINITY;
 }
 
+/* The edge rows the limiter of zone row j reads: along node rows j (hlo) and j + 1 (hhi), across
+ * zone rows j − 1 (vm; NULL at j = 0), j (v0) and j + 1 (vp; NULL at j = nj − 1). */
+typedef struct c2d_elim {
+  const c2d_erow *hlo, *hhi, *vm, *v0, *vp;
+} c2d_elim;
+
 /* ---- grid2d.c: the scheme's kernels (the time step and set-up call them) ---- */
 /* Bilinear shape-function integrals over a quad (2 × 2 Gauss points, exact here):
  * mr[k] = ∫ N_k r dA and ma[k] = ∫ N_k dA (r = X). */
@@ -172,8 +185,12 @@ void c2d_fe_lumped(const double X[4], const double Y[4], double mr[4], double ma
 /* The corner forces of zone row j from the state s: fc[8 i + 2k (+1)] the x (y) force of zone
  * (i, j) on its corner k (pressure, sub-zonal pressure, edge viscosity), ma[4 i + k] its r–z
  * corner area masses ρ_z A_c. */
-void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, double *restrict fc,
-                   double *restrict ma);
+void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
+                   double *restrict fc, double *restrict ma);
+/* Edge rows of the limiter (c2d_elim) at the state s: along node row n (ni edges), across zone
+ * row j (ni + 1 edges). */
+void c2d_edge_hrow(const c2d_grid *g, const c2d_fstate *s, size_t n, c2d_erow *e);
+void c2d_edge_vrow(const c2d_grid *g, const c2d_fstate *s, size_t j, c2d_erow *e);
 /* Outside pressure p(t) on the C2D_BC_PRESSURE sides at positions (px, py) into ex, ey. */
 void c2d_boundary_pressure(c2d_grid *g, const double *px, const double *py, double t);
 /* Boundary conditions of node n = (i, j) at time t on the velocity (u, v). Returns true if the

@@ -72,7 +72,7 @@ void c2d_scratch_alloc(c2d_grid *g) {
   if (g->nscratch >= g->nthreads) return;
   c2d_scratch_free(g);
   const size_t ni = g->ni, w = ni + 1;
-  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + ni;
+  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + ni + 15 * w;
   g->scr = calloc((size_t)g->nthreads, sizeof *g->scr);
   if (!g->scr) abort();
   for (int t = 0; t < g->nthreads; ++t) {
@@ -87,6 +87,14 @@ void c2d_scratch_alloc(c2d_grid *g) {
                         &s->vbb,   &s->rf[0], &s->rf[1], &s->rfb};
     for (int k = 0; k < 9; ++k, b += w) *nrows[k] = b;
     s->erow = b;
+    b += ni;
+    c2d_erow *er[5] = {&s->eh[0], &s->eh[1], &s->ev[0], &s->ev[1], &s->ev[2]};
+    for (int k = 0; k < 5; ++k) {
+      er[k]->gx = b;
+      er[k]->gy = b + w;
+      er[k]->ic = b + 2 * w;
+      b += 3 * w;
+    }
   }
   if (!g->wside) {
     g->wside = calloc(2 * (g->ni + 1) + 2 * (g->nj + 1), sizeof(double));
@@ -232,6 +240,28 @@ static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, co
   }
 }
 
+/* The corner forces of zone row j (c2d_force_row) into fc, ma; with the limiter, first the edge
+ * rows it reads that the thread's rings do not hold yet (rows are visited in increasing order
+ * within a phase; *hdone, *vdone: the last node and zone row computed, −1 at a phase's start). */
+static void sweep_forces(const c2d_grid *g, const sweep *sw, c2d_scratch *me, size_t j, double *fc,
+                         double *ma, long *hdone, long *vdone) {
+  const long nj = (long)g->nj, lj = (long)j;
+  if (!g->limiter) {
+    c2d_force_row(g, j, &sw->in, NULL, fc, ma);
+    return;
+  }
+  for (long n = *hdone + 1 > lj ? *hdone + 1 : lj; n <= lj + 1; ++n)
+    c2d_edge_hrow(g, &sw->in, (size_t)n, &me->eh[n & 1]);
+  *hdone = lj + 1;
+  const long vlo = lj > 0 ? lj - 1 : 0, vhi = lj + 1 < nj ? lj + 1 : nj - 1;
+  for (long m = *vdone + 1 > vlo ? *vdone + 1 : vlo; m <= vhi; ++m)
+    c2d_edge_vrow(g, &sw->in, (size_t)m, &me->ev[m % 3]);
+  *vdone = vhi;
+  const c2d_elim lim = {&me->eh[j & 1], &me->eh[(j + 1) & 1], lj > 0 ? &me->ev[(j - 1) % 3] : NULL,
+                        &me->ev[j % 3], lj + 1 < nj ? &me->ev[(j + 1) % 3] : NULL};
+  c2d_force_row(g, j, &sw->in, &lim, fc, ma);
+}
+
 /* Thread t of nt: its band [j0, j1) of zone rows (the first nb = min(nt, nj) threads). */
 static bool band_of(size_t nj, int nt, int t, size_t *j0, size_t *j1) {
   const size_t nb = (size_t)nt < nj ? (size_t)nt : nj, ut = (size_t)t;
@@ -261,7 +291,9 @@ static void sweep_thread(c2d_grid *g, const sweep *sw, int nt, int t, sweep_out 
   o->inv_val = o->eos_val = 0.0;
   o->dt = INFINITY;
   o->dvr = 0.0;
-  if (active && !last) c2d_force_row(g, j1 - 1, &sw->in, me->fcb, me->mab);
+  long hdone = -1, vdone = -1;
+  if (active && !last) sweep_forces(g, sw, me, j1 - 1, me->fcb, me->mab, &hdone, &vdone);
+  hdone = vdone = -1;
 #ifdef _OPENMP
 #pragma omp barrier
 #endif
@@ -269,7 +301,7 @@ static void sweep_thread(c2d_grid *g, const sweep *sw, int nt, int t, sweep_out 
     for (size_t z = j0; z < j1; ++z) {
       const bool mine_b = z == j1 - 1 && !last;
       double *fb = mine_b ? me->fcb : me->fc[z & 1], *mab = mine_b ? me->mab : me->ma[z & 1];
-      if (!mine_b) c2d_force_row(g, z, &sw->in, fb, mab);
+      if (!mine_b) sweep_forces(g, sw, me, z, fb, mab, &hdone, &vdone);
       const double *fa = NULL, *maa = NULL;
       if (z > j0) {
         fa = me->fc[(z - 1) & 1];
