@@ -45,19 +45,23 @@ static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y
   }
 }
 
-/* Velocity gradients g = Δu/l of the edges a → a + st, a = a0 + i for i < n (positions and
- * velocities of s), with ic = 1/|g|² (g and ic 0 on a degenerate or motionless edge). */
-static void edge_row(const c2d_fstate *s, size_t a0, size_t st, size_t n, c2d_erow *e) {
-  const double *restrict x = s->x + a0, *restrict y = s->y + a0, *restrict u = s->u + a0,
-                         *restrict v = s->v + a0;
+/* Velocity gradients g = Δu/l of the edges i → i + st, i < n, with ic = 1/|g|² (g and ic 0 on
+ * a degenerate or motionless edge). Restrict parameters: the loop vectorizes. */
+static void edge_grads(const double *restrict x, const double *restrict y, const double *restrict u,
+                       const double *restrict v, size_t st, size_t n, double *restrict egx,
+                       double *restrict egy, double *restrict eic) {
   for (size_t i = 0; i < n; ++i) {
     double dx = x[i + st] - x[i], dy = y[i + st] - y[i], l = sqrt(dx * dx + dy * dy);
     double il = l > 0.0 ? 1.0 / l : 0.0;
     double gx = (u[i + st] - u[i]) * il, gy = (v[i + st] - v[i]) * il, n2 = gx * gx + gy * gy;
-    e->gx[i] = gx;
-    e->gy[i] = gy;
-    e->ic[i] = n2 > 0.0 ? 1.0 / n2 : 0.0;
+    egx[i] = gx;
+    egy[i] = gy;
+    eic[i] = n2 > 0.0 ? 1.0 / n2 : 0.0;
   }
+}
+
+static void edge_row(const c2d_fstate *s, size_t a0, size_t st, size_t n, const c2d_erow *e) {
+  edge_grads(s->x + a0, s->y + a0, s->u + a0, s->v + a0, st, n, e->gx, e->gy, e->ic);
 }
 
 /* The edges along node row n, (i, n) → (i+1, n), i < ni. */
@@ -74,19 +78,25 @@ void c2d_edge_vrow(const c2d_grid *g, const c2d_fstate *s, size_t j, c2d_erow *e
  * row el (present if hl) and edge r of row er (present if hr): the ratios
  * r = (g_nb · g_c)/|g_c|² (the orientation of the line cancels); a missing neighbour at the mesh
  * boundary takes the other's ratio (both missing: ψ = 0). Branch-free: an absent neighbour's
- * index must still be valid. */
-static inline double edge_psi(const c2d_erow *ec, size_t c, const c2d_erow *el, size_t l, bool hl,
-                              const c2d_erow *er, size_t r, bool hr) {
-  const double gx = ec->gx[c], gy = ec->gy[c], ic = ec->ic[c];
-  double rl = hl ? (el->gx[l] * gx + el->gy[l] * gy) * ic : 0.0;
-  double rr = hr ? (er->gx[r] * gx + er->gy[r] * gy) * ic : 0.0;
-  rl = hl ? rl : rr;
-  rr = hr ? rr : rl;
+ * index must still be valid. The flags hl, hr are doubles (1 present, 0 absent): selects on a
+ * double comparison vectorize, on a bool they do not (GCC 12). */
+static inline double psi_of(double gx, double gy, double ic, double lgx, double lgy, double hl,
+                            double rgx, double rgy, double hr) {
+  double rl = hl > 0.0 ? (lgx * gx + lgy * gy) * ic : 0.0;
+  double rr = hr > 0.0 ? (rgx * gx + rgy * gy) * ic : 0.0;
+  rl = hl > 0.0 ? rl : rr;
+  rr = hr > 0.0 ? rr : rl;
   double psi = 0.5 * (rl + rr);
   psi = 2.0 * rl < psi ? 2.0 * rl : psi;
   psi = 2.0 * rr < psi ? 2.0 * rr : psi;
   psi = psi > 1.0 ? 1.0 : psi;
   return psi > 0.0 ? psi : 0.0;
+}
+
+static inline double edge_psi(const c2d_erow *ec, ptrdiff_t c, const c2d_erow *el, ptrdiff_t l,
+                              bool hl, const c2d_erow *er, ptrdiff_t r, bool hr) {
+  return psi_of(ec->gx[c], ec->gy[c], ec->ic[c], el->gx[l], el->gy[l], hl, er->gx[r], er->gy[r],
+                hr);
 }
 
 /* Bilinear shape-function integrals over a quad (2 × 2 Gauss points, exact here):
@@ -123,13 +133,27 @@ static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
   for (int k = 0; k < 4; ++k) rb[k] = ma[k] > 0 ? mr[k] / ma[k] : 0.0;
 }
 
+/* The edge viscosity of one zone edge ([CSW98]): Δu = (du, dv) and Δx = (dx, dy) along it, S =
+ * (sx, sy) the median from the zone centre to its midpoint, ψ its limiter, ρ and qq = q1²c² the
+ * zone's. Returns q|S|/|Δu| (the force on the edge's nodes is ± that times Δu), 0 unless the
+ * edge compresses (and |Δu|² has not underflowed). q/|Δu| is formed without the |Δu| that
+ * cancels. */
+static inline double edge_q(double du, double dv, double dx, double dy, double sx, double sy,
+                            double psi, double rho, double qq, double q2z) {
+  double adu = sqrt(du * du + dv * dv);
+  double a = q2z * adu;
+  double qa = rho * (1.0 - psi) * (a + sqrt(a * a + qq)) * sqrt(sx * sx + sy * sy);
+  return du * dx + dv * dy < 0.0 && adu > 1e-150 ? qa : 0.0;
+}
+
 /* The corner forces of zone (i0, j0) into f[8] (x, y per corner) and, in r–z, its corner area
  * masses ρ_z A_c into ma[4], from the state s (lim: the limiter's edge rows, NULL: no
  * limiter). */
 static inline __attribute__((always_inline)) void
 zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c2d_elim *lim,
-           double *restrict f, double *restrict ma) {
-  const size_t z = i0 + g->ni * j0;
+           double *restrict fc, double *restrict ma, const bool rz_geo, const bool hg_on) {
+  const size_t z = i0 + g->ni * j0, ni = g->ni;
+  double f[8];
   const double *px = s->x, *py = s->y, *rz = s->rho, *cz = s->c;
   size_t nd[4];
   zone_nodes_ij(g, i0, j0, nd);
@@ -139,14 +163,15 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
   {
     const double P = s->p[z];
     double gvx[4], gvy[4];
-    const c2d_geometry fg = g->area_weighted ? C2D_XY : g->geo; /* geometry of the gradients */
+    const c2d_geometry geo = rz_geo ? C2D_RZ : C2D_XY;
+    const c2d_geometry fg = g->area_weighted ? C2D_XY : geo; /* geometry of the gradients */
     poly_grad(fg, X, Y, gvx, gvy);
-    if (g->geo == C2D_RZ)
+    if (rz_geo)
       for (int k = 0; k < 4; ++k) {
         double CX[4], CY[4];
         corner_quad(X, Y, 0.25 * (X[0] + X[1] + X[2] + X[3]), 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]), k,
                     CX, CY);
-        ma[k] = rz[z] * quad_area(CX, CY);
+        ma[k * ni + i0] = rz[z] * quad_area(CX, CY);
       }
     for (int k = 0; k < 4; ++k) {
       f[2 * k] = P * gvx[k];
@@ -156,11 +181,11 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
     double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
     {
       double dpc[4];
-      if (g->hg > 0.0) {
+      if (hg_on) {
         for (int k = 0; k < 4; ++k) {
           double CX[4], CY[4];
           corner_quad(X, Y, xc, yc, k, CX, CY);
-          double vc = poly_volume(g->geo, CX, CY);
+          double vc = poly_volume(geo, CX, CY);
           dpc[k] = vc > 0.0 ? g->hg * cz[z] * cz[z] * (g->mc[4 * z + k] / vc - rz[z]) : 0.0;
         }
         /* f_q += Σ_c δp_c ∂V_c/∂x_q through the corner vertices (node, midpoints, centre). */
@@ -192,13 +217,14 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
      * 1: the right edge across zone row j0, 2: along node row j0 + 1, 3: the left edge). */
     double psi[4] = {0, 0, 0, 0};
     if (lim) {
-      const size_t il = i0 > 0 ? i0 - 1 : i0, ir = i0 + 1 < g->ni ? i0 + 1 : i0;
-      const bool hl = i0 > 0, hr = i0 + 1 < g->ni, hb = lim->vm != NULL, ht = lim->vp != NULL;
+      /* il, ir: valid indices even at the row's ends (the edge rows have a pad before and after) */
+      const ptrdiff_t i = (ptrdiff_t)i0, il = i - 1, ir = i + 1;
+      const bool hl = i0 > 0, hr = i0 + 1 < ni, hb = lim->vm != NULL, ht = lim->vp != NULL;
       const c2d_erow *vm = hb ? lim->vm : lim->v0, *vp = ht ? lim->vp : lim->v0;
-      psi[0] = edge_psi(lim->hlo, i0, lim->hlo, il, hl, lim->hlo, ir, hr);
-      psi[1] = edge_psi(lim->v0, i0 + 1, vm, i0 + 1, hb, vp, i0 + 1, ht);
-      psi[2] = edge_psi(lim->hhi, i0, lim->hhi, il, hl, lim->hhi, ir, hr);
-      psi[3] = edge_psi(lim->v0, i0, vm, i0, hb, vp, i0, ht);
+      psi[0] = edge_psi(lim->hlo, i, lim->hlo, il, hl, lim->hlo, ir, hr);
+      psi[1] = edge_psi(lim->v0, i + 1, vm, i + 1, hb, vp, i + 1, ht);
+      psi[2] = edge_psi(lim->hhi, i, lim->hhi, il, hl, lim->hhi, ir, hr);
+      psi[3] = edge_psi(lim->v0, i, vm, i, hb, vp, i, ht);
     }
     const double qq = g->q1 * g->q1 * cz[z] * cz[z], q2z = g->q2 * g->zeta;
     double vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -206,15 +232,8 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
       int kn = (k + 1) & 3;
       double du = U[kn] - U[k], dv = V[kn] - V[k];
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k];
-      double adu = sqrt(du * du + dv * dv);
-      /* compressive, and |Δu|² has not underflowed */
-      bool on = (du * dx + dv * dy < 0.0) & (adu > 1e-150);
-      double a = q2z * adu;
-      /* q/|Δu|: the |Δu| of q and of the direction Δu/|Δu| cancel */
-      double qa = rz[z] * (1.0 - psi[k]) * (a + sqrt(a * a + qq));
       double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
-      /* the median's surface: length |S| (planar), |S| × the radius of its midpoint (r–z) */
-      double sq = on ? qa * sqrt(sx * sx + sy * sy) : 0.0;
+      double sq = edge_q(du, dv, dx, dy, sx, sy, psi[k], rz[z], qq, q2z);
       vx[2 * k] += sq * du;
       vx[2 * k + 1] += sq * dv;
       vx[2 * kn] -= sq * du;
@@ -232,15 +251,101 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
       }
     }
     for (int k = 0; k < 8; ++k) ex[k] += vx[k];
-    for (int k = 0; k < 8; ++k) f[k] += ex[k];
+    for (int k = 0; k < 8; ++k) fc[k * ni + i0] = f[k] + ex[k];
   }
 }
 
-/* The corner forces of zone row j from the state s: fc[8 i + 2k (+1)] the x (y) force of zone
- * (i, j) on its corner k, ma[4 i + k] its r–z corner area masses. */
+/* zone_force for x–y without sub-zonal pressure, over a whole zone row, its arrays as restrict
+ * parameters so that the compiler vectorizes the loop across zones: node rows j (a) and j + 1
+ * (b); zone P, ρ, c; the limiter's edge rows (hlo, hhi along node rows j, j + 1 with pads at
+ * either end; v0 across zone row j, vm and vp across rows j ∓ 1, present if hb, ht = 1; lon = 0:
+ * no limiter, ψ = 0). The same arithmetic as zone_force. Flags are doubles: see psi_of. */
+static __attribute__((noinline)) void
+force_row_xy_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
+               const double *restrict ya, const double *restrict yb, const double *restrict ua,
+               const double *restrict ub, const double *restrict va, const double *restrict vb,
+               const double *restrict P, const double *restrict R, const double *restrict C,
+               double q1, double q2z, double lon, const double *restrict hlx,
+               const double *restrict hly, const double *restrict hlc, const double *restrict hhx,
+               const double *restrict hhy, const double *restrict hhc, const double *restrict v0x,
+               const double *restrict v0y, const double *restrict v0c, const double *restrict vmx,
+               const double *restrict vmy, const double *restrict vpx, const double *restrict vpy,
+               double hb, double ht, double *restrict f0, double *restrict f1, double *restrict f2,
+               double *restrict f3, double *restrict f4, double *restrict f5, double *restrict f6,
+               double *restrict f7) {
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
+                 Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
+    const double U[4] = {ua[i], ua[i + 1], ub[i + 1], ub[i]},
+                 V[4] = {va[i], va[i + 1], vb[i + 1], vb[i]};
+    double f[8];
+    for (int k = 0; k < 4; ++k) {
+      int kn = (k + 1) & 3, kp = (k + 3) & 3;
+      f[2 * k] = P[i] * (0.5 * (Y[kn] - Y[kp]));
+      f[2 * k + 1] = P[i] * (0.5 * (X[kp] - X[kn]));
+    }
+    double psi[4];
+    {
+      const double hl = i > 0 ? lon : 0.0, hr = i + 1 < ni ? lon : 0.0;
+      psi[0] =
+          psi_of(hlx[i], hly[i], hlc[i], hlx[i - 1], hly[i - 1], hl, hlx[i + 1], hly[i + 1], hr);
+      psi[1] = psi_of(v0x[i + 1], v0y[i + 1], v0c[i + 1], vmx[i + 1], vmy[i + 1], hb, vpx[i + 1],
+                      vpy[i + 1], ht);
+      psi[2] =
+          psi_of(hhx[i], hhy[i], hhc[i], hhx[i - 1], hhy[i - 1], hl, hhx[i + 1], hhy[i + 1], hr);
+      psi[3] = psi_of(v0x[i], v0y[i], v0c[i], vmx[i], vmy[i], hb, vpx[i], vpy[i], ht);
+    }
+    const double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
+    const double qq = q1 * q1 * C[i] * C[i];
+    double vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int k = 0; k < 4; ++k) {
+      int kn = (k + 1) & 3;
+      double du = U[kn] - U[k], dv = V[kn] - V[k];
+      double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
+      double sq = edge_q(du, dv, X[kn] - X[k], Y[kn] - Y[k], sx, sy, psi[k], R[i], qq, q2z);
+      vx[2 * k] += sq * du;
+      vx[2 * k + 1] += sq * dv;
+      vx[2 * kn] -= sq * du;
+      vx[2 * kn + 1] -= sq * dv;
+    }
+    /* eight restrict outputs: one array with offsets k ni would not vectorize */
+    f0[i] = f[0] + vx[0];
+    f1[i] = f[1] + vx[1];
+    f2[i] = f[2] + vx[2];
+    f3[i] = f[3] + vx[3];
+    f4[i] = f[4] + vx[4];
+    f5[i] = f[5] + vx[5];
+    f6[i] = f[6] + vx[6];
+    f7[i] = f[7] + vx[7];
+  }
+}
+
+static void force_row_xy(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
+                         double *fc) {
+  const size_t ni = g->ni, w = ni + 1, a = w * j, b = a + w, z = ni * j;
+  /* without the limiter: all neighbours absent (ψ = 0), any valid edge row stands in */
+  const c2d_erow *e0 = &g->scr[0].eh[0];
+  const c2d_erow *hlo = lim ? lim->hlo : e0, *hhi = lim ? lim->hhi : e0, *v0 = lim ? lim->v0 : e0;
+  const c2d_erow *vm = lim && lim->vm ? lim->vm : v0, *vp = lim && lim->vp ? lim->vp : v0;
+  force_row_xy_k((ptrdiff_t)ni, s->x + a, s->x + b, s->y + a, s->y + b, s->u + a, s->u + b,
+                 s->v + a, s->v + b, s->p + z, s->rho + z, s->c + z, g->q1, g->q2 * g->zeta,
+                 lim ? 1.0 : 0.0, hlo->gx, hlo->gy, hlo->ic, hhi->gx, hhi->gy, hhi->ic, v0->gx,
+                 v0->gy, v0->ic, vm->gx, vm->gy, vp->gx, vp->gy, lim && lim->vm ? 1.0 : 0.0,
+                 lim && lim->vp ? 1.0 : 0.0, fc, fc + ni, fc + 2 * ni, fc + 3 * ni, fc + 4 * ni,
+                 fc + 5 * ni, fc + 6 * ni, fc + 7 * ni);
+}
+
+/* The corner forces of zone row j from the state s: fc[(2k (+1)) ni + i] the x (y) force of
+ * zone (i, j) on its corner k, ma[k ni + i] its r–z corner area masses. The x–y row without
+ * sub-zonal pressure (no calls in the loop) has loops of its own, which the compiler
+ * vectorizes across the zones. */
 void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
                    double *restrict fc, double *restrict ma) {
-  for (size_t i = 0; i < g->ni; ++i) zone_force(g, i, j, s, lim, fc + 8 * i, ma + 4 * i);
+  const size_t ni = g->ni;
+  const bool rz = g->geo == C2D_RZ, hg = g->hg > 0.0;
+  if (!rz && !hg) force_row_xy(g, j, s, lim, fc);
+  else
+    for (size_t i = 0; i < ni; ++i) zone_force(g, i, j, s, lim, fc, ma, rz, hg);
 }
 
 /* Outside pressure p(t) on the edges of C2D_BC_PRESSURE sides at positions (px, py): edge a → b

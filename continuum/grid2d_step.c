@@ -72,7 +72,7 @@ void c2d_scratch_alloc(c2d_grid *g) {
   if (g->nscratch >= g->nthreads) return;
   c2d_scratch_free(g);
   const size_t ni = g->ni, w = ni + 1;
-  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + ni + 15 * w;
+  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + ni + 15 * (w + 2);
   g->scr = calloc((size_t)g->nthreads, sizeof *g->scr);
   if (!g->scr) abort();
   for (int t = 0; t < g->nthreads; ++t) {
@@ -89,11 +89,11 @@ void c2d_scratch_alloc(c2d_grid *g) {
     s->erow = b;
     b += ni;
     c2d_erow *er[5] = {&s->eh[0], &s->eh[1], &s->ev[0], &s->ev[1], &s->ev[2]};
-    for (int k = 0; k < 5; ++k) {
-      er[k]->gx = b;
-      er[k]->gy = b + w;
-      er[k]->ic = b + 2 * w;
-      b += 3 * w;
+    for (int k = 0; k < 5; ++k) { /* each with a zero pad before and after */
+      er[k]->gx = b + 1;
+      er[k]->gy = b + w + 3;
+      er[k]->ic = b + 2 * w + 5;
+      b += 3 * (w + 2);
     }
   }
   if (!g->wside) {
@@ -161,24 +161,24 @@ static void node_row(c2d_grid *g, const sweep *sw, size_t j, const double *fa, c
   for (size_t i = 0; i <= ni; ++i) {
     double sx = 0.0, sy = 0.0, sa = 0.0;
     if (fb && i < ni) {
-      sx += fb[8 * i];
-      sy += fb[8 * i + 1];
-      sa += mab[4 * i];
+      sx += fb[i];
+      sy += fb[ni + i];
+      sa += mab[i];
     }
     if (fb && i > 0) {
-      sx += fb[8 * (i - 1) + 2];
-      sy += fb[8 * (i - 1) + 3];
-      sa += mab[4 * (i - 1) + 1];
+      sx += fb[2 * ni + i - 1];
+      sy += fb[3 * ni + i - 1];
+      sa += mab[ni + i - 1];
     }
     if (fa && i > 0) {
-      sx += fa[8 * (i - 1) + 4];
-      sy += fa[8 * (i - 1) + 5];
-      sa += maa[4 * (i - 1) + 2];
+      sx += fa[4 * ni + i - 1];
+      sy += fa[5 * ni + i - 1];
+      sa += maa[2 * ni + i - 1];
     }
     if (fa && i < ni) {
-      sx += fa[8 * i + 6];
-      sy += fa[8 * i + 7];
-      sa += maa[4 * i + 3];
+      sx += fa[6 * ni + i];
+      sy += fa[7 * ni + i];
+      sa += maa[3 * ni + i];
     }
     node_update(g, sw, i, j, sx, sy, sa, nr);
   }
@@ -195,15 +195,14 @@ static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, co
   double *en = sw->corr ? g->e + z0 : erow;
   for (size_t i = 0; i < ni; ++i) {
     const size_t z = z0 + i;
-    const double *fz = f + 8 * i;
     const double r0 = lo->r ? lo->r[i] : 1.0, r1 = lo->r ? lo->r[i + 1] : 1.0;
     const double r2 = hi->r ? hi->r[i + 1] : 1.0, r3 = hi->r ? hi->r[i] : 1.0;
     double s =
         0.0; /* −Σ_c r̃ f_c·ū, corners k = 0..3 (nodes (i, j), (i+1, j), (i+1, j+1), (i, j+1)) */
-    s += r0 * (fz[0] * lo->u[i] + fz[1] * lo->v[i]);
-    s += r1 * (fz[2] * lo->u[i + 1] + fz[3] * lo->v[i + 1]);
-    s += r2 * (fz[4] * hi->u[i + 1] + fz[5] * hi->v[i + 1]);
-    s += r3 * (fz[6] * hi->u[i] + fz[7] * hi->v[i]);
+    s += r0 * (f[i] * lo->u[i] + f[ni + i] * lo->v[i]);
+    s += r1 * (f[2 * ni + i] * lo->u[i + 1] + f[3 * ni + i] * lo->v[i + 1]);
+    s += r2 * (f[4 * ni + i] * hi->u[i + 1] + f[5 * ni + i] * hi->v[i + 1]);
+    s += r3 * (f[6 * ni + i] * hi->u[i] + f[7 * ni + i] * hi->v[i]);
     if (sw->corr) en[i] -= dt * s / g->m[z];
     else en[i] = g->e[z] - 0.5 * dt * s / g->m[z];
     const size_t nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
