@@ -150,23 +150,22 @@ static inline double c2d_zone_dt(const c2d_grid *g, const double X[4], const dou
   double l2 = INFINITY;
   for (int k = 0; k < 4; ++k) {
     int kn = (k + 1) & 3;
-    double dx = X[kn] - X[k], dy = Y[kn] - Y[k], d2 = dx * dx + dy * dy;
-    if (d2 > 0.0 && d2 < l2) l2 = d2;
+    double dx = X[kn] - X[k], dy = Y[kn] - Y[k], e2 = dx * dx + dy * dy;
+    l2 = e2 > 0.0 && e2 < l2 ? e2 : l2;
   }
   double a1 = X[2] - X[0], b1 = Y[2] - Y[0], a2 = X[3] - X[1], b2 = Y[3] - Y[1];
-  double dd = fmax(a1 * a1 + b1 * b1, a2 * a2 + b2 * b2); /* longest diagonal² */
+  const double d1 = a1 * a1 + b1 * b1, d2 = a2 * a2 + b2 * b2;
+  const double dd = d1 > d2 ? d1 : d2; /* longest diagonal² */
   double h = 2.0 * quad_area(X, Y) / sqrt(dd);
   double L = sqrt(l2);
   if (h < L) L = h;
-  double dumax = 0.0;
+  double du2 = 0.0; /* the largest compressive |Δu|²: one sqrt (sqrt is monotonic) */
   for (int k = 0; k < 4; ++k) {
     int kn = (k + 1) & 3;
-    double du = U[kn] - U[k], dv = V[kn] - V[k];
-    if (du * (X[kn] - X[k]) + dv * (Y[kn] - Y[k]) < 0.0) {
-      double a = sqrt(du * du + dv * dv);
-      dumax = a > dumax ? a : dumax;
-    }
+    double du = U[kn] - U[k], dv = V[kn] - V[k], a2 = du * du + dv * dv;
+    du2 = du * (X[kn] - X[k]) + dv * (Y[kn] - Y[k]) < 0.0 && a2 > du2 ? a2 : du2;
   }
+  const double dumax = sqrt(du2);
   double qs = 2.0 * g->q2 * g->zeta * dumax;
   double sig = qs + sqrt(qs * qs + c * c);
   return sig > 0.0 ? g->cfl * L / sig : INFINITY;

@@ -32,6 +32,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -54,7 +55,7 @@ typedef struct sweep_out {
   char pad[8];
 } sweep_out;
 
-/* A node row's ū, v̄ and r̃ (NULL: r̃ = 1). */
+/* A node row's ū, v̄ and r̃ (1 unless rz_area_weighted). */
 typedef struct nrow {
   double *u, *v, *r;
 } nrow;
@@ -72,7 +73,7 @@ void c2d_scratch_alloc(c2d_grid *g) {
   if (g->nscratch >= g->nthreads) return;
   c2d_scratch_free(g);
   const size_t ni = g->ni, w = ni + 1;
-  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + ni + 15 * (w + 2);
+  const size_t per = 3 * (8 * ni + 4 * ni) + 9 * w + 2 * ni + 15 * (w + 2);
   g->scr = calloc((size_t)g->nthreads, sizeof *g->scr);
   if (!g->scr) abort();
   for (int t = 0; t < g->nthreads; ++t) {
@@ -86,8 +87,8 @@ void c2d_scratch_alloc(c2d_grid *g) {
     double **nrows[] = {&s->ub[0], &s->ub[1], &s->ubb,   &s->vb[0], &s->vb[1],
                         &s->vbb,   &s->rf[0], &s->rf[1], &s->rfb};
     for (int k = 0; k < 9; ++k, b += w) *nrows[k] = b;
-    s->erow = b;
-    b += ni;
+    s->erow = b; /* 2 ni: energies, then the predictor's volumes */
+    b += 2 * ni;
     c2d_erow *er[5] = {&s->eh[0], &s->eh[1], &s->ev[0], &s->ev[1], &s->ev[2]};
     for (int k = 0; k < 5; ++k) { /* each with a zero pad before and after */
       er[k]->gx = b + 1;
@@ -149,16 +150,99 @@ static inline __attribute__((always_inline)) void node_update(c2d_grid *g, const
   }
   nr->u[i] = ub;
   nr->v[i] = vb;
-  if (nr->r) nr->r[i] = r;
+  nr->r[i] = r;
+}
+
+/* The gathered force (sx, sy), area mass sa and acceleration of interior node i of a row
+ * (node_update's arithmetic; aw > 0: r̃ = M/sa, else 1): corners in node_row's order. */
+#define NODE_INTERIOR_ACCEL                                                                        \
+  double sx = 0.0, sy = 0.0, sa = 0.0;                                                             \
+  sx += fb0[i];                                                                                    \
+  sy += fb1[i];                                                                                    \
+  sa += mb0[i];                                                                                    \
+  sx += fb2[i - 1];                                                                                \
+  sy += fb3[i - 1];                                                                                \
+  sa += mb1[i - 1];                                                                                \
+  sx += fa4[i - 1];                                                                                \
+  sy += fa5[i - 1];                                                                                \
+  sa += ma2[i - 1];                                                                                \
+  sx += fa6[i];                                                                                    \
+  sy += fa7[i];                                                                                    \
+  sa += ma3[i];                                                                                    \
+  const double Mi = M[i], r = aw > 0.0 ? Mi / sa : 1.0;                                            \
+  const double ax = Mi > 0.0 ? (r * sx + 0.0) / Mi : 0.0, ay = Mi > 0.0 ? (r * sy + 0.0) / Mi : 0.0;
+#define NODE_INTERIOR_ARGS                                                                         \
+  ptrdiff_t ni, double dt, double aw, const double *restrict fb0, const double *restrict fb1,      \
+      const double *restrict fb2, const double *restrict fb3, const double *restrict fa4,          \
+      const double *restrict fa5, const double *restrict fa6, const double *restrict fa7,          \
+      const double *restrict mb0, const double *restrict mb1, const double *restrict ma2,          \
+      const double *restrict ma3, const double *restrict M, double *restrict nu,                   \
+      double *restrict nv, double *restrict nr
+
+/* Nodes i = 1 .. ni − 1 of an interior node row (four corners, no boundary condition), predictor:
+ * û into ou, ov, x^{n+½} into ox, oy (from u, v, x, y). Restrict arrays: vectorizes. */
+static void node_interior_pred_k(NODE_INTERIOR_ARGS, const double *restrict u,
+                                 const double *restrict v, const double *restrict x,
+                                 const double *restrict y, double *restrict ou, double *restrict ov,
+                                 double *restrict ox, double *restrict oy) {
+  for (ptrdiff_t i = 1; i < ni; ++i) {
+    NODE_INTERIOR_ACCEL
+    const double u1 = u[i] + dt * ax, v1 = v[i] + dt * ay;
+    const double ub = 0.5 * (u[i] + u1), vb = 0.5 * (v[i] + v1);
+    ou[i] = ub;
+    ov[i] = vb;
+    ox[i] = x[i] + 0.5 * dt * ub;
+    oy[i] = y[i] + 0.5 * dt * vb;
+    nu[i] = ub;
+    nv[i] = vb;
+    nr[i] = r;
+  }
+}
+
+/* The same, corrector: uⁿ⁺¹ and xⁿ⁺¹ in place. */
+static void node_interior_corr_k(NODE_INTERIOR_ARGS, double *restrict u, double *restrict v,
+                                 double *restrict x, double *restrict y) {
+  for (ptrdiff_t i = 1; i < ni; ++i) {
+    NODE_INTERIOR_ACCEL
+    const double u0 = u[i], v0 = v[i], u1 = u0 + dt * ax, v1 = v0 + dt * ay;
+    const double ub = 0.5 * (u0 + u1), vb = 0.5 * (v0 + v1);
+    u[i] = u1;
+    v[i] = v1;
+    x[i] += dt * ub;
+    y[i] += dt * vb;
+    nu[i] = ub;
+    nv[i] = vb;
+    nr[i] = r;
+  }
 }
 
 /* Node row j: gathers the corners that touch each node in a fixed order — zone (i, j) corner
  * 0, (i−1, j) corner 1, (i−1, j−1) corner 2, (i, j−1) corner 3 — from the forces fa (ma_a) of
- * zone row j − 1 and fb (ma_b) of zone row j (NULL: no such row), then updates it. */
+ * zone row j − 1 and fb (ma_b) of zone row j (NULL: no such row), then updates it. The interior
+ * nodes of an interior row go through the vectorized kernels (the same arithmetic). */
 static void node_row(c2d_grid *g, const sweep *sw, size_t j, const double *fa, const double *maa,
                      const double *fb, const double *mab, const nrow *nr) {
   const size_t ni = g->ni;
+  const bool interior = fa && fb && ni > 1; /* then 0 < j < nj: no side node for 0 < i < ni */
   for (size_t i = 0; i <= ni; ++i) {
+    if (interior && i == 1) {
+      const size_t n0 = (ni + 1) * j;
+      const ptrdiff_t n = (ptrdiff_t)ni;
+      const double aw = g->area_weighted ? 1.0 : 0.0;
+      if (sw->corr)
+        node_interior_corr_k(n, sw->dt, aw, fb, fb + ni, fb + 2 * ni, fb + 3 * ni, fa + 4 * ni,
+                             fa + 5 * ni, fa + 6 * ni, fa + 7 * ni, mab, mab + ni, maa + 2 * ni,
+                             maa + 3 * ni, g->M + n0, nr->u, nr->v, nr->r, g->u + n0, g->v + n0,
+                             g->x + n0, g->y + n0);
+      else
+        node_interior_pred_k(n, sw->dt, aw, fb, fb + ni, fb + 2 * ni, fb + 3 * ni, fa + 4 * ni,
+                             fa + 5 * ni, fa + 6 * ni, fa + 7 * ni, mab, mab + ni, maa + 2 * ni,
+                             maa + 3 * ni, g->M + n0, nr->u, nr->v, nr->r, g->u + n0, g->v + n0,
+                             g->x + n0, g->y + n0, sw->ou + n0, sw->ov + n0, sw->ox + n0,
+                             sw->oy + n0);
+      i = ni - 1;
+      continue;
+    }
     double sx = 0.0, sy = 0.0, sa = 0.0;
     if (fb && i < ni) {
       sx += fb[i];
@@ -184,59 +268,142 @@ static void node_row(c2d_grid *g, const sweep *sw, size_t j, const double *fa, c
   }
 }
 
+/* e_out = e_in − hdt Σ_c r̃ f_c·ū / m over a zone row (hdt = ½Δt predictor, Δt corrector):
+ * corner forces f0..f7 (SoA), ū, v̄, r̃ of the node rows below (l*) and above (h*). */
+static void
+energy_row_k(ptrdiff_t ni, double hdt, const double *restrict f0, const double *restrict f1,
+             const double *restrict f2, const double *restrict f3, const double *restrict f4,
+             const double *restrict f5, const double *restrict f6, const double *restrict f7,
+             const double *restrict lu, const double *restrict lv, const double *restrict lr,
+             const double *restrict hu, const double *restrict hv, const double *restrict hr,
+             const double *restrict e_in, const double *restrict m, double *restrict e_out) {
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    /* −Σ_c r̃ f_c·ū, corners k = 0..3 (nodes (i, j), (i+1, j), (i+1, j+1), (i, j+1)) */
+    double s = 0.0;
+    s += lr[i] * (f0[i] * lu[i] + f1[i] * lv[i]);
+    s += lr[i + 1] * (f2[i] * lu[i + 1] + f3[i] * lv[i + 1]);
+    s += hr[i + 1] * (f4[i] * hu[i + 1] + f5[i] * hv[i + 1]);
+    s += hr[i] * (f6[i] * hu[i] + f7[i] * hv[i]);
+    e_out[i] = e_in[i] - hdt * s / m[i];
+  }
+}
+
+/* x–y zone volumes (areas) and densities of a row from node rows a, b; in the corrector (vol_old
+ * not NULL) also the largest relative volume change. Returns the number of zones with area ≤ 0
+ * (or NaN). */
+static long area_row_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
+                       const double *restrict ya, const double *restrict yb,
+                       const double *restrict m, double *restrict vol, double *restrict rho,
+                       double *restrict dvr) {
+  long bad = 0;
+  double d = 0.0;
+#pragma omp simd reduction(+ : bad) reduction(max : d)
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
+                 Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
+    const double a = quad_area(X, Y);
+    if (dvr) {
+      const double r = fabs(a - vol[i]) / a; /* volume change over the step */
+      d = r > d ? r : d;
+    }
+    vol[i] = a;
+    rho[i] = m[i] / a;
+    bad += !(a > 0.0);
+  }
+  if (dvr && d > *dvr) *dvr = d;
+  return bad;
+}
+
+/* Courant limits of a zone row at the new state (c2d_zone_dt): the smallest; *nonfinite counts
+ * zones with a non-finite e or p. */
+static double dt_row_k(const c2d_grid *g, ptrdiff_t ni, const double *restrict xa,
+                       const double *restrict xb, const double *restrict ya,
+                       const double *restrict yb, const double *restrict ua,
+                       const double *restrict ub, const double *restrict va,
+                       const double *restrict vb, const double *restrict c,
+                       const double *restrict e, const double *restrict p, long *nonfinite) {
+  double dt = INFINITY;
+  long nf = 0;
+#pragma omp simd reduction(min : dt) reduction(+ : nf)
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
+                 Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
+    const double U[4] = {ua[i], ua[i + 1], ub[i + 1], ub[i]},
+                 V[4] = {va[i], va[i + 1], vb[i + 1], vb[i]};
+    const double dz = c2d_zone_dt(g, X, Y, U, V, c[i]);
+    dt = dz < dt ? dz : dt;
+    nf += !isfinite(e[i]) | !isfinite(p[i]);
+  }
+  *nonfinite = nf;
+  return dt;
+}
+
 /* Zone row j after its nodes moved: the work of its corner forces f with ū of node rows j (lo)
  * and j + 1 (hi), the energy, volume and density, the EOS; in the corrector also the Courant
  * limit, the volume change and the finiteness check. Failures go to o (lowest zone). */
 static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, const nrow *lo,
                      const nrow *hi, double *erow, sweep_out *o) {
   const size_t ni = g->ni, w = ni + 1, z0 = ni * j, n0 = w * j;
+  const ptrdiff_t n = (ptrdiff_t)ni;
   const double dt = sw->dt, *px = sw->ox, *py = sw->oy;
-  /* energies: the corrector updates e in place; the predictor's e^{n+½} is row scratch */
-  double *en = sw->corr ? g->e + z0 : erow;
-  for (size_t i = 0; i < ni; ++i) {
-    const size_t z = z0 + i;
-    const double r0 = lo->r ? lo->r[i] : 1.0, r1 = lo->r ? lo->r[i + 1] : 1.0;
-    const double r2 = hi->r ? hi->r[i + 1] : 1.0, r3 = hi->r ? hi->r[i] : 1.0;
-    double s =
-        0.0; /* −Σ_c r̃ f_c·ū, corners k = 0..3 (nodes (i, j), (i+1, j), (i+1, j+1), (i, j+1)) */
-    s += r0 * (f[i] * lo->u[i] + f[ni + i] * lo->v[i]);
-    s += r1 * (f[2 * ni + i] * lo->u[i + 1] + f[3 * ni + i] * lo->v[i + 1]);
-    s += r2 * (f[4 * ni + i] * hi->u[i + 1] + f[5 * ni + i] * hi->v[i + 1]);
-    s += r3 * (f[6 * ni + i] * hi->u[i] + f[7 * ni + i] * hi->v[i]);
-    if (sw->corr) en[i] -= dt * s / g->m[z];
-    else en[i] = g->e[z] - 0.5 * dt * s / g->m[z];
-    const size_t nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
-    double X[4], Y[4];
-    gather_nd(nd, px, py, X, Y);
-    const double a = quad_area(X, Y);
-    const double vz = g->geo == C2D_RZ ? quad_rvol(X, Y) : a;
-    if (sw->corr) {
-      const double r = fabs(vz - g->vol[z]) / vz; /* volume change over the step */
-      if (r > o->dvr) o->dvr = r;
-      g->vol[z] = vz;
-    }
-    sw->orho[z] = g->m[z] / vz;
-    if ((!(a > 0.0) || !(vz > 0.0)) && z < o->inv_z) {
-      o->inv_z = z;
-      o->inv_val = a;
-    }
+  /* e^{n+½} (predictor) or eⁿ⁺¹ (corrector, then copied to e) into the row scratch */
+  energy_row_k(n, sw->corr ? dt : 0.5 * dt, f, f + ni, f + 2 * ni, f + 3 * ni, f + 4 * ni,
+               f + 5 * ni, f + 6 * ni, f + 7 * ni, lo->u, lo->v, lo->r, hi->u, hi->v, hi->r,
+               g->e + z0, g->m + z0, erow);
+  double *en = erow;
+  if (sw->corr) {
+    memcpy(g->e + z0, erow, ni * sizeof(double));
+    en = g->e + z0;
   }
-  const size_t bad = c2d_eos_zones(g, z0, ni, sw->orho + z0, en, sw->op + z0, sw->oc + z0);
-  if (bad != SIZE_MAX && bad < o->eos_z) {
-    o->eos_z = bad;
-    o->eos_val = en[bad - z0];
+  double *vol = sw->corr ? g->vol + z0 : erow + ni; /* the predictor keeps no volumes */
+  long bad = 0;
+  if (g->geo == C2D_XY)
+    bad = area_row_k(n, px + n0, px + n0 + w, py + n0, py + n0 + w, g->m + z0, vol, sw->orho + z0,
+                     sw->corr ? &o->dvr : NULL);
+  else
+    for (size_t i = 0; i < ni; ++i) {
+      const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
+      double X[4], Y[4];
+      gather_nd(nd, px, py, X, Y);
+      const double a = quad_area(X, Y), vz = quad_rvol(X, Y);
+      if (sw->corr) {
+        const double r = fabs(vz - vol[i]) / vz; /* volume change over the step */
+        if (r > o->dvr) o->dvr = r;
+      }
+      vol[i] = vz;
+      sw->orho[z] = g->m[z] / vz;
+      bad += !(a > 0.0) || !(vz > 0.0);
+    }
+  if (bad)
+    for (size_t i = 0; i < ni; ++i) { /* the first one, as the diagnostic */
+      const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
+      double X[4], Y[4];
+      gather_nd(nd, px, py, X, Y);
+      const double a = quad_area(X, Y);
+      const double vz = g->geo == C2D_RZ ? quad_rvol(X, Y) : a;
+      if ((!(a > 0.0) || !(vz > 0.0)) && z < o->inv_z) {
+        o->inv_z = z;
+        o->inv_val = a;
+        break;
+      }
+    }
+  const size_t badz = c2d_eos_zones(g, z0, ni, sw->orho + z0, en, sw->op + z0, sw->oc + z0);
+  if (badz != SIZE_MAX && badz < o->eos_z) {
+    o->eos_z = badz;
+    o->eos_val = en[badz - z0];
   }
   if (!sw->corr) return;
-  for (size_t i = 0; i < ni; ++i) {
-    const size_t z = z0 + i;
-    const size_t nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
-    double X[4], Y[4], U[4], V[4];
-    gather_nd(nd, g->x, g->y, X, Y);
-    gather_nd(nd, g->u, g->v, U, V);
-    const double dz = c2d_zone_dt(g, X, Y, U, V, g->c[z]);
-    if (dz < o->dt) o->dt = dz;
-    if ((!isfinite(g->e[z]) || !isfinite(g->p[z])) && z < o->nan_z) o->nan_z = z;
-  }
+  long nf = 0;
+  const double dz =
+      dt_row_k(g, n, g->x + n0, g->x + n0 + w, g->y + n0, g->y + n0 + w, g->u + n0, g->u + n0 + w,
+               g->v + n0, g->v + n0 + w, g->c + z0, g->e + z0, g->p + z0, &nf);
+  if (dz < o->dt) o->dt = dz;
+  if (nf)
+    for (size_t i = 0; i < ni; ++i)
+      if (!isfinite(g->e[z0 + i]) || !isfinite(g->p[z0 + i])) {
+        if (z0 + i < o->nan_z) o->nan_z = z0 + i;
+        break;
+      }
 }
 
 /* The corner forces of zone row j (c2d_force_row) into fc, ma; with the limiter, first the edge
@@ -274,9 +441,9 @@ static bool band_of(size_t nj, int nt, int t, size_t *j0, size_t *j1) {
 /* Node row n's slot: the band's first node row (t > 0) in the slot the previous band reads. */
 static inline nrow node_slot(const c2d_grid *g, const c2d_scratch *s, bool first_of_band,
                              size_t n) {
+  (void)g;
   nrow r = {first_of_band ? s->ubb : s->ub[n & 1], first_of_band ? s->vbb : s->vb[n & 1],
             first_of_band ? s->rfb : s->rf[n & 1]};
-  if (!g->area_weighted) r.r = NULL;
   return r;
 }
 
