@@ -288,54 +288,48 @@ energy_row_k(ptrdiff_t ni, double hdt, const double *restrict f0, const double *
   }
 }
 
-/* x–y zone volumes (areas) and densities of a row from node rows a, b; in the corrector (vol_old
- * not NULL) also the largest relative volume change. Returns the number of zones with area ≤ 0
- * (or NaN). */
-static long area_row_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
+/* x–y zone volumes (areas) and densities of a row from node rows a, b. Plain loops over restrict
+ * rows (they vectorize; `omp simd` reductions here did not, GCC 12), the reductions after. */
+static void area_row_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
                        const double *restrict ya, const double *restrict yb,
-                       const double *restrict m, double *restrict vol, double *restrict rho,
-                       double *restrict dvr) {
-  long bad = 0;
-  double d = 0.0;
-#pragma omp simd reduction(+ : bad) reduction(max : d)
+                       const double *restrict m, double *restrict vol, double *restrict rho) {
   for (ptrdiff_t i = 0; i < ni; ++i) {
     const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
                  Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
     const double a = quad_area(X, Y);
-    if (dvr) {
-      const double r = fabs(a - vol[i]) / a; /* volume change over the step */
-      d = r > d ? r : d;
-    }
     vol[i] = a;
     rho[i] = m[i] / a;
-    bad += !(a > 0.0);
   }
-  if (dvr && d > *dvr) *dvr = d;
-  return bad;
 }
 
-/* Courant limits of a zone row at the new state (c2d_zone_dt): the smallest; *nonfinite counts
- * zones with a non-finite e or p. */
-static double dt_row_k(const c2d_grid *g, ptrdiff_t ni, const double *restrict xa,
-                       const double *restrict xb, const double *restrict ya,
-                       const double *restrict yb, const double *restrict ua,
-                       const double *restrict ub, const double *restrict va,
-                       const double *restrict vb, const double *restrict c,
-                       const double *restrict e, const double *restrict p, long *nonfinite) {
-  double dt = INFINITY;
-  long nf = 0;
-#pragma omp simd reduction(min : dt) reduction(+ : nf)
+/* The same in the corrector: also the relative volume change dv (vol holds the old volumes). */
+static void area_row_dv_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
+                          const double *restrict ya, const double *restrict yb,
+                          const double *restrict m, double *restrict vol, double *restrict rho,
+                          double *restrict dv) {
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
+                 Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
+    const double a = quad_area(X, Y);
+    dv[i] = fabs(a - vol[i]) / a; /* volume change over the step */
+    vol[i] = a;
+    rho[i] = m[i] / a;
+  }
+}
+
+/* Courant limits of a zone row at the new state (c2d_zone_dt) into dz. */
+static void dt_row_k(const c2d_grid *g, ptrdiff_t ni, const double *restrict xa,
+                     const double *restrict xb, const double *restrict ya,
+                     const double *restrict yb, const double *restrict ua,
+                     const double *restrict ub, const double *restrict va,
+                     const double *restrict vb, const double *restrict c, double *restrict dz) {
   for (ptrdiff_t i = 0; i < ni; ++i) {
     const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
                  Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
     const double U[4] = {ua[i], ua[i + 1], ub[i + 1], ub[i]},
                  V[4] = {va[i], va[i + 1], vb[i + 1], vb[i]};
-    const double dz = c2d_zone_dt(g, X, Y, U, V, c[i]);
-    dt = dz < dt ? dz : dt;
-    nf += !isfinite(e[i]) | !isfinite(p[i]);
+    dz[i] = c2d_zone_dt(g, X, Y, U, V, c[i]);
   }
-  *nonfinite = nf;
-  return dt;
 }
 
 /* Zone row j after its nodes moved: the work of its corner forces f with ū of node rows j (lo)
@@ -357,24 +351,15 @@ static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, co
   }
   double *vol = sw->corr ? g->vol + z0 : erow + ni; /* the predictor keeps no volumes */
   long bad = 0;
-  if (g->geo == C2D_XY)
-    bad = area_row_k(n, px + n0, px + n0 + w, py + n0, py + n0 + w, g->m + z0, vol, sw->orho + z0,
-                     sw->corr ? &o->dvr : NULL);
-  else
-    for (size_t i = 0; i < ni; ++i) {
-      const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
-      double X[4], Y[4];
-      gather_nd(nd, px, py, X, Y);
-      const double a = quad_area(X, Y), vz = quad_rvol(X, Y);
-      if (sw->corr) {
-        const double r = fabs(vz - vol[i]) / vz; /* volume change over the step */
-        if (r > o->dvr) o->dvr = r;
-      }
-      vol[i] = vz;
-      sw->orho[z] = g->m[z] / vz;
-      bad += !(a > 0.0) || !(vz > 0.0);
-    }
-  if (bad)
+  if (g->geo == C2D_XY) {
+    if (sw->corr) {
+      double *dv = erow + ni; /* the corrector's free scratch half */
+      area_row_dv_k(n, px + n0, px + n0 + w, py + n0, py + n0 + w, g->m + z0, vol, sw->orho + z0,
+                    dv);
+      for (size_t i = 0; i < ni; ++i) o->dvr = dv[i] > o->dvr ? dv[i] : o->dvr;
+    } else area_row_k(n, px + n0, px + n0 + w, py + n0, py + n0 + w, g->m + z0, vol, sw->orho + z0);
+    for (size_t i = 0; i < ni; ++i) bad += !(vol[i] > 0.0);
+  } else if (bad)
     for (size_t i = 0; i < ni; ++i) { /* the first one, as the diagnostic */
       const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
       double X[4], Y[4];
@@ -393,17 +378,14 @@ static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, co
     o->eos_val = en[badz - z0];
   }
   if (!sw->corr) return;
-  long nf = 0;
-  const double dz =
-      dt_row_k(g, n, g->x + n0, g->x + n0 + w, g->y + n0, g->y + n0 + w, g->u + n0, g->u + n0 + w,
-               g->v + n0, g->v + n0 + w, g->c + z0, g->e + z0, g->p + z0, &nf);
-  if (dz < o->dt) o->dt = dz;
-  if (nf)
-    for (size_t i = 0; i < ni; ++i)
-      if (!isfinite(g->e[z0 + i]) || !isfinite(g->p[z0 + i])) {
-        if (z0 + i < o->nan_z) o->nan_z = z0 + i;
-        break;
-      }
+  double *dz = erow; /* eⁿ⁺¹ is in e by now */
+  dt_row_k(g, n, g->x + n0, g->x + n0 + w, g->y + n0, g->y + n0 + w, g->u + n0, g->u + n0 + w,
+           g->v + n0, g->v + n0 + w, g->c + z0, dz);
+  for (size_t i = 0; i < ni; ++i) {
+    if (dz[i] < o->dt) o->dt = dz[i];
+    if ((!isfinite(g->e[z0 + i]) || !isfinite(g->p[z0 + i])) && z0 + i < o->nan_z)
+      o->nan_z = z0 + i;
+  }
 }
 
 /* The corner forces of zone row j (c2d_force_row) into fc, ma; with the limiter, first the edge
