@@ -359,7 +359,21 @@ static void zone_row(c2d_grid *g, const sweep *sw, size_t j, const double *f, co
       for (size_t i = 0; i < ni; ++i) o->dvr = dv[i] > o->dvr ? dv[i] : o->dvr;
     } else area_row_k(n, px + n0, px + n0 + w, py + n0, py + n0 + w, g->m + z0, vol, sw->orho + z0);
     for (size_t i = 0; i < ni; ++i) bad += !(vol[i] > 0.0);
-  } else if (bad)
+  } else
+    for (size_t i = 0; i < ni; ++i) {
+      const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
+      double X[4], Y[4];
+      gather_nd(nd, px, py, X, Y);
+      const double a = quad_area(X, Y), vz = quad_rvol(X, Y);
+      if (sw->corr) {
+        const double r = fabs(vz - vol[i]) / vz; /* volume change over the step */
+        if (r > o->dvr) o->dvr = r;
+      }
+      vol[i] = vz;
+      sw->orho[z] = g->m[z] / vz;
+      bad += !(a > 0.0) || !(vz > 0.0);
+    }
+  if (bad)
     for (size_t i = 0; i < ni; ++i) { /* the first one, as the diagnostic */
       const size_t z = z0 + i, nd[4] = {n0 + i, n0 + i + 1, n0 + w + i + 1, n0 + w + i};
       double X[4], Y[4];
