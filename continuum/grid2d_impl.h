@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
-/* grid2d_impl.h — private to the 2D grid (grid2d.c, the scheme; grid2d_setup.c, set-up and
- * queries): the grid's state, the zone geometry both use, and the scheme's passes that set-up
- * calls. Not for use outside continuum/.
+/* grid2d_impl.h — private to the 2D grid (grid2d.c, the scheme's kernels; grid2d_step.c, the
+ * time step; grid2d_setup.c, set-up and queries): the grid's state, the zone geometry they use,
+ * and the kernels they share. Not for use outside continuum/.
  */
 #ifndef MSCALE_GRID2D_IMPL_H
 #define MSCALE_GRID2D_IMPL_H

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* grid2d_step.c — the time step of the 2D grid (c2d_grid_step; the corner forces and the zone
- * state: grid2d.c). docs/continuum2d.md, "Time step" and "Performance".
+ * state: grid2d.c). docs/continuum2d.md §6 (layout, speed) and §7 (threads).
  *
  * Step tⁿ → tⁿ⁺¹ (predictor–corrector of [CBSW98], as the 1D scheme, continuum/step.c):
  *   predictor  Fⁿ from (xⁿ, uⁿ, pⁿ); u* = uⁿ + Δt Fⁿ/M (boundary conditions at tⁿ⁺¹);
