@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* grid2d.c — the 2D staggered Lagrangian quad grid with the compatible discretisation
- * ([CBSW98], docs/continuum2d.md): the corner forces, the boundary conditions, the zone update
- * and the time step. Public API in cont2d.h; set-up, tag lines and queries: grid2d_setup.c.
+ * ([CBSW98], docs/continuum2d.md): the corner forces, the boundary conditions and the zone
+ * state. Public API in cont2d.h; set-up, tag lines and queries: grid2d_setup.c.
  *
  * Corner forces of zone z on its node p (k = 0..3 counter-clockwise), V the zone's area (x–y)
  * or per-radian volume ∫ r dA (r–z):
@@ -17,18 +17,7 @@
  * across r). Option rz_area_weighted: f multiplied by r̃_p = M_p / Σ_c ρ_z A_c on planar
  * gradients (r̃ = 1 otherwise).
  *
- * Step tⁿ → tⁿ⁺¹ (predictor–corrector of [CBSW98], as the 1D scheme, continuum/step.c):
- *   predictor  Fⁿ from (xⁿ, uⁿ, pⁿ); u* = uⁿ + Δt Fⁿ/M (boundary conditions at tⁿ⁺¹);
- *              û = ½(uⁿ + u*); x^{n+½} = xⁿ + ½Δt û; e^{n+½} = eⁿ − ½Δt Σ_c r̃ f_cⁿ·û / m_z;
- *              ρ^{n+½}, p^{n+½}
- *   corrector  F from (x^{n+½}, û, p^{n+½}); uⁿ⁺¹ = uⁿ + Δt F/M (BCs); ū = ½(uⁿ + uⁿ⁺¹);
- *              xⁿ⁺¹ = xⁿ + Δt ū; eⁿ⁺¹ = eⁿ − Δt Σ_c r̃ f_c·ū / m_z; ρⁿ⁺¹, pⁿ⁺¹, cⁿ⁺¹.
- * Σ ½M(uⁿ⁺¹² − uⁿ²) = Σ M(uⁿ⁺¹ − uⁿ)·ū = Δt Σ_p r̃_p Σ_c f_c·ū = −Σ m_z(eⁿ⁺¹ − eⁿ) for every
- * free node; at a constrained node the difference is the boundary's work (g->work).
- *
- * Threads: zones compute their four corner forces into fc[]; nodes gather the (up to) four
- * corners that touch them in a fixed order — no scatter, so results do not depend on the
- * number of threads.
+ * The time step (predictor–corrector, threads): grid2d_step.c.
  */
 #include "grid2d_impl.h"
 
@@ -37,31 +26,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
-/* The share of the calling thread of [0, count) items of a row-major (width) index space, as
- * schedule(static) would give it (contiguous, in thread order), and the (i, j) of its first item;
- * the loops then step i, j without dividing every index. */
-static inline void thread_share(size_t count, size_t width, size_t lo_hi[2], size_t *i, size_t *j) {
-#ifdef _OPENMP
-  const size_t nt = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
-#else
-  const size_t nt = 1, t = 0;
-#endif
-  const size_t q = count / nt, r = count % nt;
-  lo_hi[0] = t * q + (t < r ? t : r);
-  lo_hi[1] = lo_hi[0] + q + (t < r ? 1 : 0);
-  *i = lo_hi[0] % width;
-  *j = lo_hi[0] / width;
-}
-/* for (i, j) over the calling thread's share (thread_share) of count items, width per row;
- * the body sees i and j (and q_, the linear index). */
-#define FOR_SHARE(count, width)                                                                    \
-  for (size_t q_ = 0, lh_[2], i = 0, j = 0; q_ == 0; q_ = 1)                                       \
-    for (thread_share((count), (width), lh_, &i, &j), q_ = lh_[0]; q_ < lh_[1];                    \
-         ++q_, i = i + 1 == (width) ? 0 : i + 1, j += i == 0)
 
 /* ∂V/∂x_k of a 4-vertex polygon: planar area ½(y_{k+1} − y_{k−1}, x_{k−1} − x_{k+1}); in r–z the
  * per-radian volume V = (1/6) Σ (r_k + r_{k+1})(r_k z_{k+1} − r_{k+1} z_k) differentiated. */
@@ -81,48 +45,58 @@ static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y
   }
 }
 
-/* Normalised velocity gradient along the node pair a → b (0 if the pair is degenerate). */
-static inline void edge_grad(const c2d_grid *g, const double *px, const double *py,
-                             const double *pu, const double *pv, size_t a, size_t b, double gr[2]) {
-  double dx = px[b] - px[a], dy = py[b] - py[a], l = sqrt(dx * dx + dy * dy);
-  (void)g;
-  if (l <= 0.0) {
-    gr[0] = gr[1] = 0.0;
-    return;
+/* Velocity gradients g = Δu/l of the edges i → i + st, i < n, with ic = 1/|g|² (g and ic 0 on
+ * a degenerate or motionless edge). Restrict parameters: the loop vectorizes. */
+static void edge_grads(const double *restrict x, const double *restrict y, const double *restrict u,
+                       const double *restrict v, size_t st, size_t n, double *restrict egx,
+                       double *restrict egy, double *restrict eic) {
+  for (size_t i = 0; i < n; ++i) {
+    double dx = x[i + st] - x[i], dy = y[i + st] - y[i], l = sqrt(dx * dx + dy * dy);
+    double il = l > 0.0 ? 1.0 / l : 0.0;
+    double gx = (u[i + st] - u[i]) * il, gy = (v[i + st] - v[i]) * il, n2 = gx * gx + gy * gy;
+    egx[i] = gx;
+    egy[i] = gy;
+    eic[i] = n2 > 0.0 ? 1.0 / n2 : 0.0;
   }
-  gr[0] = (pu[b] - pu[a]) / l;
-  gr[1] = (pv[b] - pv[a]) / l;
 }
 
-/* CSW98 limiter ψ for the zone edge from logical node (ia, ja) to (ib, jb) (neighbours along
- * the same logical line; a missing neighbour at the mesh boundary takes the other's ratio). */
-static double edge_limiter(const c2d_grid *g, const double *px, const double *py, const double *pu,
-                           const double *pv, long ia, long ja, long ib, long jb) {
-  long di = ib - ia, dj = jb - ja, w = (long)g->ni + 1;
-  double gc[2], gl[2], gr[2];
-  edge_grad(g, px, py, pu, pv, (size_t)(ia + w * ja), (size_t)(ib + w * jb), gc);
-  double n2 = gc[0] * gc[0] + gc[1] * gc[1];
-  if (n2 <= 0.0) return 0.0;
-  long il = ia - di, jl = ja - dj, ir = ib + di, jr = jb + dj;
-  bool hl = il >= 0 && jl >= 0 && il <= (long)g->ni && jl <= (long)g->nj;
-  bool hr = ir >= 0 && jr >= 0 && ir <= (long)g->ni && jr <= (long)g->nj;
-  double rl = 0.0, rr = 0.0;
-  if (hl) {
-    edge_grad(g, px, py, pu, pv, (size_t)(il + w * jl), (size_t)(ia + w * ja), gl);
-    rl = (gl[0] * gc[0] + gl[1] * gc[1]) / n2;
-  }
-  if (hr) {
-    edge_grad(g, px, py, pu, pv, (size_t)(ib + w * jb), (size_t)(ir + w * jr), gr);
-    rr = (gr[0] * gc[0] + gr[1] * gc[1]) / n2;
-  }
-  if (!hl && !hr) return 0.0;
-  if (!hl) rl = rr;
-  if (!hr) rr = rl;
+static void edge_row(const c2d_fstate *s, size_t a0, size_t st, size_t n, const c2d_erow *e) {
+  edge_grads(s->x + a0, s->y + a0, s->u + a0, s->v + a0, st, n, e->gx, e->gy, e->ic);
+}
+
+/* The edges along node row n, (i, n) → (i+1, n), i < ni. */
+void c2d_edge_hrow(const c2d_grid *g, const c2d_fstate *s, size_t n, c2d_erow *e) {
+  edge_row(s, (g->ni + 1) * n, 1, g->ni, e);
+}
+
+/* The edges across zone row j, (i, j) → (i, j+1), i ≤ ni. */
+void c2d_edge_vrow(const c2d_grid *g, const c2d_fstate *s, size_t j, c2d_erow *e) {
+  edge_row(s, (g->ni + 1) * j, g->ni + 1, g->ni + 1, e);
+}
+
+/* CSW98 limiter ψ of edge c of row ec from its neighbours along the same logical line, edge l of
+ * row el (present if hl) and edge r of row er (present if hr): the ratios
+ * r = (g_nb · g_c)/|g_c|² (the orientation of the line cancels); a missing neighbour at the mesh
+ * boundary takes the other's ratio (both missing: ψ = 0). Branch-free: an absent neighbour's
+ * index must still be valid. The flags hl, hr are doubles (1 present, 0 absent): selects on a
+ * double comparison vectorize, on a bool they do not (GCC 12). */
+static inline double psi_of(double gx, double gy, double ic, double lgx, double lgy, double hl,
+                            double rgx, double rgy, double hr) {
+  double rl = hl > 0.0 ? (lgx * gx + lgy * gy) * ic : 0.0;
+  double rr = hr > 0.0 ? (rgx * gx + rgy * gy) * ic : 0.0;
+  rl = hl > 0.0 ? rl : rr;
+  rr = hr > 0.0 ? rr : rl;
   double psi = 0.5 * (rl + rr);
-  if (2.0 * rl < psi) psi = 2.0 * rl;
-  if (2.0 * rr < psi) psi = 2.0 * rr;
-  if (psi > 1.0) psi = 1.0;
+  psi = 2.0 * rl < psi ? 2.0 * rl : psi;
+  psi = 2.0 * rr < psi ? 2.0 * rr : psi;
+  psi = psi > 1.0 ? 1.0 : psi;
   return psi > 0.0 ? psi : 0.0;
+}
+
+static inline double edge_psi(const c2d_erow *ec, ptrdiff_t c, const c2d_erow *el, ptrdiff_t l,
+                              bool hl, const c2d_erow *er, ptrdiff_t r, bool hr) {
+  return psi_of(ec->gx[c], ec->gy[c], ec->ic[c], el->gx[l], el->gy[l], hl, er->gx[r], er->gy[r],
+                hr);
 }
 
 /* Bilinear shape-function integrals over a quad (2 × 2 Gauss points, exact here):
@@ -159,29 +133,45 @@ static void fe_radii(const double X[4], const double Y[4], double rb[4]) {
   for (int k = 0; k < 4; ++k) rb[k] = ma[k] > 0 ? mr[k] / ma[k] : 0.0;
 }
 
-/* The corner forces of zone z = (i, j) (c2d_zone_forces). The zone loops run over rows and
- * columns so that no zone divides its index (the divisions were a visible share of the pass). */
+/* The edge viscosity of one zone edge ([CSW98]): Δu = (du, dv) and Δx = (dx, dy) along it, S =
+ * (sx, sy) the median from the zone centre to its midpoint, ψ its limiter, ρ and qq = q1²c² the
+ * zone's. Returns q|S|/|Δu| (the force on the edge's nodes is ± that times Δu), 0 unless the
+ * edge compresses (and |Δu|² has not underflowed). q/|Δu| is formed without the |Δu| that
+ * cancels. */
+static inline double edge_q(double du, double dv, double dx, double dy, double sx, double sy,
+                            double psi, double rho, double qq, double q2z) {
+  double adu = sqrt(du * du + dv * dv);
+  double a = q2z * adu;
+  double qa = rho * (1.0 - psi) * (a + sqrt(a * a + qq)) * sqrt(sx * sx + sy * sy);
+  return du * dx + dv * dy < 0.0 && adu > 1e-150 ? qa : 0.0;
+}
+
+/* The corner forces of zone (i0, j0) into f[8] (x, y per corner) and, in r–z, its corner area
+ * masses ρ_z A_c into ma[4], from the state s (lim: the limiter's edge rows, NULL: no
+ * limiter). */
 static inline __attribute__((always_inline)) void
-zone_force(c2d_grid *g, size_t i0, size_t j0, const double *px, const double *py, const double *pu,
-           const double *pv, const double *pz, const double *rz, const double *cz) {
-  const size_t z = i0 + g->ni * j0;
+zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c2d_elim *lim,
+           double *restrict fc, double *restrict ma, const bool rz_geo, const bool hg_on) {
+  const size_t z = i0 + g->ni * j0, ni = g->ni;
+  double f[8];
+  const double *px = s->x, *py = s->y, *rz = s->rho, *cz = s->c;
   size_t nd[4];
   zone_nodes_ij(g, i0, j0, nd);
   double X[4], Y[4], U[4], V[4];
   gather_nd(nd, px, py, X, Y);
-  gather_nd(nd, pu, pv, U, V);
+  gather_nd(nd, s->u, s->v, U, V);
   {
-    double *f = g->fc + 8 * z;
-    const double P = pz[z];
+    const double P = s->p[z];
     double gvx[4], gvy[4];
-    const c2d_geometry fg = g->area_weighted ? C2D_XY : g->geo; /* geometry of the gradients */
+    const c2d_geometry geo = rz_geo ? C2D_RZ : C2D_XY;
+    const c2d_geometry fg = g->area_weighted ? C2D_XY : geo; /* geometry of the gradients */
     poly_grad(fg, X, Y, gvx, gvy);
-    if (g->geo == C2D_RZ)
+    if (rz_geo)
       for (int k = 0; k < 4; ++k) {
         double CX[4], CY[4];
         corner_quad(X, Y, 0.25 * (X[0] + X[1] + X[2] + X[3]), 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]), k,
                     CX, CY);
-        g->ma[4 * z + k] = rz[z] * quad_area(CX, CY);
+        ma[k * ni + i0] = rz[z] * quad_area(CX, CY);
       }
     for (int k = 0; k < 4; ++k) {
       f[2 * k] = P * gvx[k];
@@ -191,11 +181,11 @@ zone_force(c2d_grid *g, size_t i0, size_t j0, const double *px, const double *py
     double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
     {
       double dpc[4];
-      if (g->hg > 0.0) {
+      if (hg_on) {
         for (int k = 0; k < 4; ++k) {
           double CX[4], CY[4];
           corner_quad(X, Y, xc, yc, k, CX, CY);
-          double vc = poly_volume(g->geo, CX, CY);
+          double vc = poly_volume(geo, CX, CY);
           dpc[k] = vc > 0.0 ? g->hg * cz[z] * cz[z] * (g->mc[4 * z + k] / vc - rz[z]) : 0.0;
         }
         /* f_q += Σ_c δp_c ∂V_c/∂x_q through the corner vertices (node, midpoints, centre). */
@@ -222,29 +212,32 @@ zone_force(c2d_grid *g, size_t i0, size_t j0, const double *px, const double *py
         }
       }
     }
-    /* Edge viscosity, compression only. */
-    const long i = (long)i0, j = (long)j0;
-    const long li[4] = {i, i + 1, i + 1, i}, lj[4] = {j, j, j + 1, j + 1};
-    double dumax = 0.0, vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    /* Edge viscosity, compression only; the four edges without branches (whether an edge
+     * compresses is data, not predictable). ψ from the edge rows (k = 0: along node row j0,
+     * 1: the right edge across zone row j0, 2: along node row j0 + 1, 3: the left edge). */
+    double psi[4] = {0, 0, 0, 0};
+    if (lim) {
+      /* il, ir: valid indices even at the row's ends (the edge rows have a pad before and after) */
+      const ptrdiff_t i = (ptrdiff_t)i0, il = i - 1, ir = i + 1;
+      const bool hl = i0 > 0, hr = i0 + 1 < ni, hb = lim->vm != NULL, ht = lim->vp != NULL;
+      const c2d_erow *vm = hb ? lim->vm : lim->v0, *vp = ht ? lim->vp : lim->v0;
+      psi[0] = edge_psi(lim->hlo, i, lim->hlo, il, hl, lim->hlo, ir, hr);
+      psi[1] = edge_psi(lim->v0, i + 1, vm, i + 1, hb, vp, i + 1, ht);
+      psi[2] = edge_psi(lim->hhi, i, lim->hhi, il, hl, lim->hhi, ir, hr);
+      psi[3] = edge_psi(lim->v0, i, vm, i, hb, vp, i, ht);
+    }
+    const double qq = g->q1 * g->q1 * cz[z] * cz[z], q2z = g->q2 * g->zeta;
+    double vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int k = 0; k < 4; ++k) {
       int kn = (k + 1) & 3;
       double du = U[kn] - U[k], dv = V[kn] - V[k];
       double dx = X[kn] - X[k], dy = Y[kn] - Y[k];
-      if (du * dx + dv * dy >= 0.0) continue;
-      double adu = sqrt(du * du + dv * dv);
-      if (!(adu > 1e-150)) continue; /* |Δu|² underflows: no viscosity (and no 0/0 below) */
-      if (adu > dumax) dumax = adu;
-      double psi = g->limiter ? edge_limiter(g, px, py, pu, pv, li[k], lj[k], li[kn], lj[kn]) : 0.0;
-      double a = g->q2 * g->zeta * adu;
-      double q = rz[z] * (1.0 - psi) * adu * (a + sqrt(a * a + g->q1 * g->q1 * cz[z] * cz[z]));
       double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
-      /* the median's surface: length |S| (planar), |S| × the radius of its midpoint (r–z) */
-      double sa = sqrt(sx * sx + sy * sy);
-      double s = q * sa / adu;
-      vx[2 * k] += s * du;
-      vx[2 * k + 1] += s * dv;
-      vx[2 * kn] -= s * du;
-      vx[2 * kn + 1] -= s * dv;
+      double sq = edge_q(du, dv, dx, dy, sx, sy, psi[k], rz[z], qq, q2z);
+      vx[2 * k] += sq * du;
+      vx[2 * k + 1] += sq * dv;
+      vx[2 * kn] -= sq * du;
+      vx[2 * kn + 1] -= sq * dv;
     }
     if (fg == C2D_RZ) {
       /* r–z: the planar viscous corner force times r̄_c = ∫N_k r dA / ∫N_k dA, the radius of
@@ -258,66 +251,108 @@ zone_force(c2d_grid *g, size_t i0, size_t j0, const double *px, const double *py
       }
     }
     for (int k = 0; k < 8; ++k) ex[k] += vx[k];
-    g->dumax[z] = dumax;
-    for (int k = 0; k < 8; ++k) f[k] += ex[k];
+    for (int k = 0; k < 8; ++k) fc[k * ni + i0] = f[k] + ex[k];
   }
 }
 
-/* Zone pass: planar corner forces (pressure pz, sub-zonal pressure, edge viscosity) at positions
- * (px, py) and velocities (pu, pv); densities rz, sound speeds cz. */
-void c2d_zone_forces(c2d_grid *g, const double *px, const double *py, const double *pu,
-                     const double *pv, const double *pz, const double *rz, const double *cz) {
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nz, g->ni) zone_force(g, i, j, px, py, pu, pv, pz, rz, cz);
+/* zone_force for x–y without sub-zonal pressure, over a whole zone row, its arrays as restrict
+ * parameters so that the compiler vectorizes the loop across zones: node rows j (a) and j + 1
+ * (b); zone P, ρ, c; the limiter's edge rows (hlo, hhi along node rows j, j + 1 with pads at
+ * either end; v0 across zone row j, vm and vp across rows j ∓ 1, present if hb, ht = 1; lon = 0:
+ * no limiter, ψ = 0). The same arithmetic as zone_force. Flags are doubles: see psi_of. */
+static __attribute__((noinline)) void
+force_row_xy_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
+               const double *restrict ya, const double *restrict yb, const double *restrict ua,
+               const double *restrict ub, const double *restrict va, const double *restrict vb,
+               const double *restrict P, const double *restrict R, const double *restrict C,
+               double q1, double q2z, double lon, const double *restrict hlx,
+               const double *restrict hly, const double *restrict hlc, const double *restrict hhx,
+               const double *restrict hhy, const double *restrict hhc, const double *restrict v0x,
+               const double *restrict v0y, const double *restrict v0c, const double *restrict vmx,
+               const double *restrict vmy, const double *restrict vpx, const double *restrict vpy,
+               double hb, double ht, double *restrict f0, double *restrict f1, double *restrict f2,
+               double *restrict f3, double *restrict f4, double *restrict f5, double *restrict f6,
+               double *restrict f7) {
+  for (ptrdiff_t i = 0; i < ni; ++i) {
+    const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
+                 Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
+    const double U[4] = {ua[i], ua[i + 1], ub[i + 1], ub[i]},
+                 V[4] = {va[i], va[i + 1], vb[i + 1], vb[i]};
+    double f[8];
+    for (int k = 0; k < 4; ++k) {
+      int kn = (k + 1) & 3, kp = (k + 3) & 3;
+      f[2 * k] = P[i] * (0.5 * (Y[kn] - Y[kp]));
+      f[2 * k + 1] = P[i] * (0.5 * (X[kp] - X[kn]));
+    }
+    double psi[4];
+    {
+      const double hl = i > 0 ? lon : 0.0, hr = i + 1 < ni ? lon : 0.0;
+      psi[0] =
+          psi_of(hlx[i], hly[i], hlc[i], hlx[i - 1], hly[i - 1], hl, hlx[i + 1], hly[i + 1], hr);
+      psi[1] = psi_of(v0x[i + 1], v0y[i + 1], v0c[i + 1], vmx[i + 1], vmy[i + 1], hb, vpx[i + 1],
+                      vpy[i + 1], ht);
+      psi[2] =
+          psi_of(hhx[i], hhy[i], hhc[i], hhx[i - 1], hhy[i - 1], hl, hhx[i + 1], hhy[i + 1], hr);
+      psi[3] = psi_of(v0x[i], v0y[i], v0c[i], vmx[i], vmy[i], hb, vpx[i], vpy[i], ht);
+    }
+    const double xc = 0.25 * (X[0] + X[1] + X[2] + X[3]), yc = 0.25 * (Y[0] + Y[1] + Y[2] + Y[3]);
+    const double qq = q1 * q1 * C[i] * C[i];
+    double vx[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int k = 0; k < 4; ++k) {
+      int kn = (k + 1) & 3;
+      double du = U[kn] - U[k], dv = V[kn] - V[k];
+      double sx = 0.5 * (X[k] + X[kn]) - xc, sy = 0.5 * (Y[k] + Y[kn]) - yc;
+      double sq = edge_q(du, dv, X[kn] - X[k], Y[kn] - Y[k], sx, sy, psi[k], R[i], qq, q2z);
+      vx[2 * k] += sq * du;
+      vx[2 * k + 1] += sq * dv;
+      vx[2 * kn] -= sq * du;
+      vx[2 * kn + 1] -= sq * dv;
+    }
+    /* eight restrict outputs: one array with offsets k ni would not vectorize */
+    f0[i] = f[0] + vx[0];
+    f1[i] = f[1] + vx[1];
+    f2[i] = f[2] + vx[2];
+    f3[i] = f[3] + vx[3];
+    f4[i] = f[4] + vx[4];
+    f5[i] = f[5] + vx[5];
+    f6[i] = f[6] + vx[6];
+    f7[i] = f[7] + vx[7];
+  }
 }
 
-/* Node pass: gather the corner forces touching each node (fixed order), radius factor. */
-static void node_gather(c2d_grid *g) {
-  const size_t ni = g->ni, nj = g->nj, w = ni + 1;
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nn, (g->ni + 1)) {
-    const size_t n = i + w * j;
-    double sx = 0.0, sy = 0.0, sa = 0.0;
-    /* zone (i, j) corner 0, (i−1, j) corner 1, (i−1, j−1) corner 2, (i, j−1) corner 3 */
-    if (i < ni && j < nj) {
-      size_t z = i + ni * j;
-      sx += g->fc[8 * z];
-      sy += g->fc[8 * z + 1];
-      sa += g->ma[4 * z];
-    }
-    if (i > 0 && j < nj) {
-      size_t z = i - 1 + ni * j;
-      sx += g->fc[8 * z + 2];
-      sy += g->fc[8 * z + 3];
-      sa += g->ma[4 * z + 1];
-    }
-    if (i > 0 && j > 0) {
-      size_t z = i - 1 + ni * (j - 1);
-      sx += g->fc[8 * z + 4];
-      sy += g->fc[8 * z + 5];
-      sa += g->ma[4 * z + 2];
-    }
-    if (i < ni && j > 0) {
-      size_t z = i + ni * (j - 1);
-      sx += g->fc[8 * z + 6];
-      sy += g->fc[8 * z + 7];
-      sa += g->ma[4 * z + 3];
-    }
-    g->fx[n] = sx;
-    g->fy[n] = sy;
-    g->rf[n] = g->area_weighted ? g->M[n] / sa : 1.0;
-  }
+static void force_row_xy(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
+                         double *fc) {
+  const size_t ni = g->ni, w = ni + 1, a = w * j, b = a + w, z = ni * j;
+  /* without the limiter: all neighbours absent (ψ = 0), any valid edge row stands in */
+  const c2d_erow *e0 = &g->scr[0].eh[0];
+  const c2d_erow *hlo = lim ? lim->hlo : e0, *hhi = lim ? lim->hhi : e0, *v0 = lim ? lim->v0 : e0;
+  const c2d_erow *vm = lim && lim->vm ? lim->vm : v0, *vp = lim && lim->vp ? lim->vp : v0;
+  force_row_xy_k((ptrdiff_t)ni, s->x + a, s->x + b, s->y + a, s->y + b, s->u + a, s->u + b,
+                 s->v + a, s->v + b, s->p + z, s->rho + z, s->c + z, g->q1, g->q2 * g->zeta,
+                 lim ? 1.0 : 0.0, hlo->gx, hlo->gy, hlo->ic, hhi->gx, hhi->gy, hhi->ic, v0->gx,
+                 v0->gy, v0->ic, vm->gx, vm->gy, vp->gx, vp->gy, lim && lim->vm ? 1.0 : 0.0,
+                 lim && lim->vp ? 1.0 : 0.0, fc, fc + ni, fc + 2 * ni, fc + 3 * ni, fc + 4 * ni,
+                 fc + 5 * ni, fc + 6 * ni, fc + 7 * ni);
+}
+
+/* The corner forces of zone row j from the state s: fc[(2k (+1)) ni + i] the x (y) force of
+ * zone (i, j) on its corner k, ma[k ni + i] its r–z corner area masses. The x–y row without
+ * sub-zonal pressure (no calls in the loop) has loops of its own, which the compiler
+ * vectorizes across the zones. */
+void c2d_force_row(const c2d_grid *g, size_t j, const c2d_fstate *s, const c2d_elim *lim,
+                   double *restrict fc, double *restrict ma) {
+  const size_t ni = g->ni;
+  const bool rz = g->geo == C2D_RZ, hg = g->hg > 0.0;
+  if (!rz && !hg) force_row_xy(g, j, s, lim, fc);
+  else
+    for (size_t i = 0; i < ni; ++i) zone_force(g, i, j, s, lim, fc, ma, rz, hg);
 }
 
 /* Outside pressure p(t) on the edges of C2D_BC_PRESSURE sides at positions (px, py): edge a → b
  * (counter-clockwise in its zone, outward normal ∝ (y_b − y_a, x_a − x_b)) pushes its nodes with
  * −p n ∫ N r ds: L/2 each in x–y, L(2r_a + r_b)/6 in r–z (the boundary part of ∂V/∂x, so a
  * matching outside pressure is in exact equilibrium). Serial: boundary nodes only. */
-static void boundary_pressure(c2d_grid *g, const double *px, const double *py, double t) {
+void c2d_boundary_pressure(c2d_grid *g, const double *px, const double *py, double t) {
   if (!g->has_pressure) return;
   const size_t ni = g->ni, nj = g->nj, w = ni + 1;
   for (int s = 0; s < 4; ++s) {
@@ -362,8 +397,8 @@ static void boundary_pressure(c2d_grid *g, const double *px, const double *py, d
 
 /* Boundary conditions of node n at time t on the velocity (u, v). Returns true if the node is
  * constrained (its reaction does work). */
-static bool apply_bc_ij(const c2d_grid *g, size_t i, size_t j, size_t n, double t, double *u,
-                        double *v) {
+bool c2d_apply_bc_ij(const c2d_grid *g, size_t i, size_t j, size_t n, double t, double *u,
+                     double *v) {
   bool on[4] = {i == 0, i == g->ni, j == 0, j == g->nj};
   bool con = false;
   for (int s = 0; s < 4; ++s) {
@@ -397,15 +432,10 @@ static bool apply_bc_ij(const c2d_grid *g, size_t i, size_t j, size_t n, double 
 
 bool c2d_apply_bc(const c2d_grid *g, size_t n, double t, double *u, double *v) {
   const size_t w = g->ni + 1;
-  return apply_bc_ij(g, n % w, n / w, n, t, u, v);
+  return c2d_apply_bc_ij(g, n % w, n / w, n, t, u, v);
 }
 
-/* Only the nodes of the mesh's sides can be constrained (an interior node: nothing to do). */
-static inline bool on_side(const c2d_grid *g, size_t i, size_t j) {
-  return i == 0 || j == 0 || i == g->ni || j == g->nj;
-}
-
-static ms_status fail_zone(c2d_grid *g, size_t z, const char *what, double value) {
+ms_status c2d_fail_zone(c2d_grid *g, size_t z, const char *what, double value) {
   size_t nd[4];
   zone_nodes(g, z, nd);
   snprintf(g->err, sizeof g->err,
@@ -416,219 +446,59 @@ static ms_status fail_zone(c2d_grid *g, size_t z, const char *what, double value
   return MS_ERR_UNSTABLE;
 }
 
-/* Volumes, densities at positions (px, py); the EOS for (rho, e) → (p, c). */
+/* The EOS over zones [z0, z0 + n) (the material runs they cross): (rho, e) → (p, c), arrays
+ * starting at zone z0. Returns the first zone outside its EOS's domain, or (size_t)-1. */
+size_t c2d_eos_zones(const c2d_grid *g, size_t z0, size_t n, const double *rho, const double *e,
+                     double *p, double *c) {
+  size_t lo = 0, hi = g->nruns; /* the run holding z0: the last with first ≤ z0 */
+  while (hi - lo > 1) {
+    size_t mid = (lo + hi) / 2;
+    if (g->runs[mid].first <= z0) lo = mid;
+    else hi = mid;
+  }
+  const size_t zend = z0 + n;
+  for (size_t r = lo, z = z0; r < g->nruns && z < zend; ++r) {
+    const c2d_run *run = &g->runs[r];
+    size_t rend = run->first + run->n < zend ? run->first + run->n : zend;
+    if (rend <= z) continue;
+    size_t bad = 0;
+    const size_t o = z - z0;
+    if (eos_eval(run->eos, rend - z, rho + o, e + o, p + o, c + o, &bad) != MS_OK) return z + bad;
+    z = rend;
+  }
+  return (size_t)-1;
+}
+
+/* Volumes, densities at positions (px, py); the EOS for (rho, e) → (p, c). Set-up only (the
+ * time step does this inside its sweeps, grid2d_step.c). */
 ms_status c2d_zone_state(c2d_grid *g, const double *px, const double *py, const double *e,
                          double *vol, double *rho, double *p, double *c) {
-  size_t bad_zone = (size_t)-1;
-  double bad_val = 0.0;
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nz, g->ni) {
-    const size_t z = i + g->ni * j;
-    size_t nd[4];
-    zone_nodes_ij(g, i, j, nd);
+  for (size_t z = 0; z < g->nz; ++z) {
     double X[4], Y[4];
-    gather_nd(nd, px, py, X, Y);
+    gather(g, z, px, py, X, Y);
     double a = quad_area(X, Y);
     double vz = g->geo == C2D_RZ ? quad_rvol(X, Y) : a;
     vol[z] = vz;
     rho[z] = g->m[z] / vz;
-    if (!(a > 0.0) || !(vz > 0.0)) {
-#ifdef _OPENMP
-#pragma omp critical
-#endif
-      if (z < bad_zone) {
-        bad_zone = z;
-        bad_val = a;
-      }
-    }
+    if (!(a > 0.0) || !(vz > 0.0)) return c2d_fail_zone(g, z, "inverted (area ≤ 0)", a);
   }
-  if (bad_zone != (size_t)-1) return fail_zone(g, bad_zone, "inverted (area ≤ 0)", bad_val);
-  for (size_t r = 0; r < g->nruns; ++r) {
-    const c2d_run *run = &g->runs[r];
-    size_t bad = 0;
-    if (eos_eval(run->eos, run->n, rho + run->first, e + run->first, p + run->first, c + run->first,
-                 &bad) != MS_OK) {
-      size_t z = run->first + bad;
-      return fail_zone(g, z, "EOS outside its domain (specific internal energy)", e[z]);
-    }
-  }
+  size_t bad = c2d_eos_zones(g, 0, g->nz, rho, e, p, c);
+  if (bad != (size_t)-1)
+    return c2d_fail_zone(g, bad, "EOS outside its domain (specific internal energy)", e[bad]);
   return MS_OK;
 }
 
+/* Courant limit over the zones (set-up; the time step takes it inside its corrector sweep). */
 double c2d_stable_dt(const c2d_grid *g) {
   double dt = INFINITY;
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads) reduction(min : dt)
-#endif
-  FOR_SHARE(g->nz, g->ni) {
-    const size_t z = i + g->ni * j;
+  for (size_t z = 0; z < g->nz; ++z) {
     size_t nd[4];
-    zone_nodes_ij(g, i, j, nd);
-    double X[4], Y[4];
+    zone_nodes(g, z, nd);
+    double X[4], Y[4], U[4], V[4];
     gather_nd(nd, g->x, g->y, X, Y);
-    double l2 = INFINITY;
-    for (int k = 0; k < 4; ++k) {
-      int kn = (k + 1) & 3;
-      double dx = X[kn] - X[k], dy = Y[kn] - Y[k], d2 = dx * dx + dy * dy;
-      if (d2 > 0.0 && d2 < l2) l2 = d2;
-    }
-    double a1 = X[2] - X[0], b1 = Y[2] - Y[0], a2 = X[3] - X[1], b2 = Y[3] - Y[1];
-    double dd = fmax(a1 * a1 + b1 * b1, a2 * a2 + b2 * b2); /* longest diagonal² */
-    double h = 2.0 * quad_area(X, Y) / sqrt(dd);
-    double L = sqrt(l2);
-    if (h < L) L = h;
-    double U[4], V[4], dumax = 0.0;
     gather_nd(nd, g->u, g->v, U, V);
-    for (int k = 0; k < 4; ++k) {
-      int kn = (k + 1) & 3;
-      double du = U[kn] - U[k], dv = V[kn] - V[k];
-      if (du * (X[kn] - X[k]) + dv * (Y[kn] - Y[k]) < 0.0) {
-        double a = sqrt(du * du + dv * dv);
-        dumax = a > dumax ? a : dumax;
-      }
-    }
-    double qs = 2.0 * g->q2 * g->zeta * dumax;
-    double sig = qs + sqrt(qs * qs + g->c[z] * g->c[z]);
-    double dz = sig > 0.0 ? g->cfl * L / sig : INFINITY;
+    double dz = c2d_zone_dt(g, X, Y, U, V, g->c[z]);
     if (dz < dt) dt = dz;
   }
   return dt;
-}
-
-/* Acceleration of node n from the gathered planar force. */
-static inline void node_accel(const c2d_grid *g, size_t n, double *ax, double *ay) {
-  double M = g->M[n];
-  if (!(M > 0.0)) {
-    *ax = *ay = 0.0;
-    return;
-  }
-  *ax = (g->rf[n] * g->fx[n] + g->ex[n]) / M;
-  *ay = (g->rf[n] * g->fy[n] + g->ey[n]) / M;
-}
-
-/* Work rate −Σ_c r̃ f_c·w of zone z with node velocities (wu, wv). */
-static inline double zone_work(const c2d_grid *g, size_t i, size_t j, const double *wu,
-                               const double *wv) {
-  const size_t z = i + g->ni * j;
-  size_t nd[4];
-  zone_nodes_ij(g, i, j, nd);
-  const double *f = g->fc + 8 * z;
-  double s = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    double r = g->rf[nd[k]];
-    s += r * (f[2 * k] * wu[nd[k]] + f[2 * k + 1] * wv[nd[k]]);
-  }
-  return s;
-}
-
-ms_status c2d_grid_step(c2d_grid *g, double dt_limit) {
-  double dt = g->dt_next;
-  if (dt > dt_limit) dt = dt_limit;
-  if (!(dt >= g->dt_min) && dt_limit >= g->dt_min) {
-    snprintf(g->err, sizeof g->err, "step %ld, t = %.9g %s: time step %.3g below dt_min %.3g %s",
-             g->step + 1, ms_out_time(g->t), ms_out_time_label(), ms_out_time(dt),
-             ms_out_time(g->dt_min), ms_out_time_label());
-    return MS_ERR_UNSTABLE;
-  }
-  const double t1 = g->t + dt;
-  const size_t nn = g->nn, nz = g->nz, ni = g->ni;
-  /* Predictor. */
-  c2d_zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
-  node_gather(g);
-  boundary_pressure(g, g->x, g->y, g->t);
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nn, (g->ni + 1)) {
-    const size_t n = i + (ni + 1) * j;
-    double ax, ay;
-    node_accel(g, n, &ax, &ay);
-    double us = g->u[n] + dt * ax, vs = g->v[n] + dt * ay;
-    if (on_side(g, i, j)) apply_bc_ij(g, i, j, n, t1, &us, &vs);
-    g->uh[n] = 0.5 * (g->u[n] + us);
-    g->vh[n] = 0.5 * (g->v[n] + vs);
-    g->xh[n] = g->x[n] + 0.5 * dt * g->uh[n];
-    g->yh[n] = g->y[n] + 0.5 * dt * g->vh[n];
-  }
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nz, g->ni) {
-    const size_t z = i + ni * j;
-    g->eh[z] = g->e[z] - 0.5 * dt * zone_work(g, i, j, g->uh, g->vh) / g->m[z];
-  }
-  ms_status st = c2d_zone_state(g, g->xh, g->yh, g->eh, g->vol_old, g->rhoh, g->ph, g->ch);
-  if (st != MS_OK) return st;
-  /* Corrector. */
-  c2d_zone_forces(g, g->xh, g->yh, g->uh, g->vh, g->ph, g->rhoh, g->ch);
-  node_gather(g);
-  boundary_pressure(g, g->xh, g->yh, g->t + 0.5 * dt);
-  double work = 0.0;
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nn, (g->ni + 1)) {
-    const size_t n = i + (ni + 1) * j;
-    double ax, ay;
-    node_accel(g, n, &ax, &ay);
-    double u1 = g->u[n] + dt * ax, v1 = g->v[n] + dt * ay;
-    const bool con = on_side(g, i, j) && apply_bc_ij(g, i, j, n, t1, &u1, &v1);
-    double ub = 0.5 * (g->u[n] + u1), vb = 0.5 * (g->v[n] + v1);
-    /* Reaction work at constrained nodes: ΔKE minus the work of the grid's own forces. */
-    g->xh[n] = con ? g->M[n] * ((u1 - g->u[n]) * ub + (v1 - g->v[n]) * vb) -
-                         dt * g->rf[n] * (g->fx[n] * ub + g->fy[n] * vb)
-                   : 0.0;
-    g->uh[n] = ub;
-    g->vh[n] = vb;
-    g->u[n] = u1;
-    g->v[n] = v1;
-    g->x[n] += dt * ub;
-    g->y[n] += dt * vb;
-  }
-  for (size_t n = 0; n < nn; ++n) work += g->xh[n]; /* serial: thread-count independent */
-  g->work += work;
-#ifdef _OPENMP
-#pragma omp parallel num_threads(g->nthreads)
-#endif
-  FOR_SHARE(g->nz, g->ni) {
-    const size_t z = i + ni * j;
-    g->vol_old[z] = g->vol[z];
-    g->e[z] -= dt * zone_work(g, i, j, g->uh, g->vh) / g->m[z];
-  }
-  g->t = t1;
-  st = c2d_zone_state(g, g->x, g->y, g->e, g->vol, g->rho, g->p, g->c);
-  if (st != MS_OK) return st;
-  g->step++;
-  /* Next step: Courant (with the viscosity's compressive |Δu| at tⁿ⁺¹), volume change, growth. */
-  double dtn = c2d_stable_dt(g);
-  double dvr = 0.0;
-  for (size_t z = 0; z < nz; ++z) {
-    double r = fabs(g->vol[z] - g->vol_old[z]) / g->vol[z];
-    if (r > dvr) dvr = r;
-  }
-  if (dvr > 0) {
-    double dv = g->dv_max / dvr * dt;
-    if (dv < dtn) dtn = dv;
-  }
-  if (dtn > g->dt_growth * dt) dtn = g->dt_growth * dt;
-  if (dtn > g->dt_max) dtn = g->dt_max;
-  g->dt_next = dtn;
-  for (size_t z = 0; z < nz; ++z)
-    if (!isfinite(g->e[z]) || !isfinite(g->p[z]))
-      return fail_zone(g, z, "non-finite energy or pressure", g->e[z]);
-  for (size_t k = 0; k < g->ntags; ++k) c2d_tag_record(g, &g->tags[k]);
-  return MS_OK;
-}
-
-ms_status c2d_grid_run_to(c2d_grid *g, double t_end) {
-  while (g->t < t_end * (1.0 - 1e-14)) {
-    double lim = t_end - g->t;
-    /* Avoid a sliver step at the end. */
-    if (g->dt_next < lim && g->dt_next > 0.5 * lim) lim = 0.5 * lim;
-    ms_status st = c2d_grid_step(g, lim);
-    if (st != MS_OK) return st;
-  }
-  return MS_OK;
 }

@@ -107,21 +107,18 @@ static c2d_grid *grid_make(const c2d_setup *s, char *err, size_t errlen) {
   g->nn = (s->ni + 1) * (s->nj + 1);
   g->nz = s->ni * s->nj;
   size_t nn = g->nn, nz = g->nz;
-  double **na[] = {&g->x,  &g->y,  &g->u,  &g->v,  &g->M,  &g->xh,
-                   &g->yh, &g->uh, &g->vh, &g->fx, &g->fy, &g->rf};
+  double **na[] = {&g->x, &g->y, &g->u, &g->v, &g->M, &g->xh, &g->yh, &g->uh, &g->vh};
   for (size_t k = 0; k < sizeof na / sizeof na[0]; ++k) *na[k] = xcalloc(nn, sizeof(double));
   g->rx0 = xcalloc(2 * nn, sizeof(double));
   g->ex = xcalloc(nn, sizeof(double));
   g->ey = xcalloc(nn, sizeof(double));
-  double **za[] = {&g->m,  &g->rho,  &g->e,  &g->p,  &g->c,       &g->vol,
-                   &g->eh, &g->rhoh, &g->ph, &g->ch, &g->vol_old, &g->dumax};
+  double **za[] = {&g->m, &g->rho, &g->e, &g->p, &g->c, &g->vol, &g->rhoh, &g->ph, &g->ch};
   for (size_t k = 0; k < sizeof za / sizeof za[0]; ++k) *za[k] = xcalloc(nz, sizeof(double));
   g->mc = xcalloc(4 * nz, sizeof(double));
-  g->ma = xcalloc(4 * nz, sizeof(double));
-  g->fc = xcalloc(8 * nz, sizeof(double));
   g->material = xcalloc(nz, sizeof(int));
   g->runs = xcalloc(nz, sizeof(c2d_run));
   g->nthreads = 1;
+  c2d_scratch_alloc(g);
   memcpy(g->x, s->x, nn * sizeof(double));
   memcpy(g->y, s->y, nn * sizeof(double));
   if (s->u) memcpy(g->u, s->u, nn * sizeof(double));
@@ -182,7 +179,6 @@ static c2d_grid *grid_make(const c2d_setup *s, char *err, size_t errlen) {
     return NULL;
   }
   for (size_t n = 0; n < nn; ++n) c2d_apply_bc(g, n, 0.0, &g->u[n], &g->v[n]);
-  c2d_zone_forces(g, g->x, g->y, g->u, g->v, g->p, g->rho, g->c);
   double dt = c2d_stable_dt(g);
   g->dt_next = s->dt_initial > 0 ? s->dt_initial : 0.1 * dt;
   if (!isfinite(g->dt_next)) g->dt_next = g->dt_max < INFINITY ? g->dt_max : 1e-6;
@@ -196,9 +192,9 @@ ms_status c2d_grid_create(const c2d_setup *s, c2d_grid **out, char *err, size_t 
 
 static void c2d_grid_release(c2d_grid *g) {
   if (!g) return;
-  double *arr[] = {g->x,    g->y,  g->u,   g->v,       g->M,   g->xh, g->yh, g->uh,   g->vh,  g->fx,
-                   g->fy,   g->rf, g->rx0, g->m,       g->rho, g->e,  g->p,  g->c,    g->vol, g->eh,
-                   g->rhoh, g->ph, g->ch,  g->vol_old, g->mc,  g->ma, g->fc, g->dumax};
+  double *arr[] = {g->x,   g->y, g->u, g->v, g->M,   g->xh,   g->yh, g->uh, g->vh, g->rx0,  g->m,
+                   g->rho, g->e, g->p, g->c, g->vol, g->rhoh, g->ph, g->ch, g->mc, g->wside};
+  c2d_scratch_free(g);
   for (size_t k = 0; k < sizeof arr / sizeof arr[0]; ++k) free(arr[k]);
   for (int k = 0; k < 4; ++k) cont_fn_free(&g->bc[k].fn);
   free(g->ex);
@@ -291,7 +287,10 @@ c2d_line_history c2d_grid_line_history(const c2d_grid *g, size_t tag) {
 const char *c2d_grid_error(const c2d_grid *g) { return g->err; }
 double c2d_grid_time(const c2d_grid *g) { return g->t; }
 long c2d_grid_steps(const c2d_grid *g) { return g->step; }
-void c2d_grid_set_threads(c2d_grid *g, int nthreads) { g->nthreads = nthreads > 0 ? nthreads : 1; }
+void c2d_grid_set_threads(c2d_grid *g, int nthreads) {
+  g->nthreads = nthreads > 0 ? nthreads : 1;
+  c2d_scratch_alloc(g); /* the sweeps' per-thread rows (no allocation inside a time step) */
+}
 
 c2d_view c2d_grid_view(const c2d_grid *g) {
   c2d_view v = {g->ni, g->nj,  g->nn, g->nz, g->x, g->y, g->u,   g->v,

@@ -133,6 +133,11 @@ ms_status eos_eval(const eos_t *eos, size_t n, const double *rho, const double *
         double c2 = c[i];
         c[i] = isnan(c2) ? NAN : c2 > floor2 ? sqrt(c2) : floor;
       }
+    /* a branch-free count first (it vectorizes), the scan for the first bad state only then */
+    size_t nbad = 0;
+    for (size_t i = 0; i < n; ++i)
+      nbad += !(rho[i] > 0.0) | !isfinite(e[i]) | isnan(p[i]) | (c != NULL && isnan(c[i]));
+    if (nbad == 0) return MS_OK;
     for (size_t i = 0; i < n; ++i) {
       if (!(rho[i] > 0.0) || !isfinite(e[i]) || isnan(p[i]) || (c && isnan(c[i]))) {
         p[i] = NAN;

@@ -1,9 +1,12 @@
 /* SPDX-License-Identifier: MIT */
 /* Zone-steps per second of the 2D grid (issue 24): an aluminium block (Mie–Grüneisen, the
  * repository's `al`, docs/design.md §3) of N × N zones hit by a 1 km/s piston, walls elsewhere,
- * K steps. Usage: c2d_speed [N=1000] [K=20] [threads=1] [limiter=1]. Not a test: prints one line. */
+ * K steps. Usage: c2d_speed [N=1000] [K=20] [threads=1] [limiter=1]. Not a test: prints one line,
+ * the loop's wall time and its process CPU time (all threads; the figure to quote on a loaded
+ * machine, docs/benchmarks.md "How to measure"). */
 #include <stdio.h>
 #include <stdlib.h>
+#include <time.h>
 
 #include "c2d_test.h"
 
@@ -38,14 +41,16 @@ int main(int argc, char **argv) {
   c2d_grid_set_threads(g, th);
   c2d_grid_step(g, INFINITY); /* warm-up */
   double t0 = ms_wall_time();
+  const clock_t c0 = clock();
   for (long i = 0; i < k; ++i)
     if (c2d_grid_step(g, INFINITY) != MS_OK) {
       fprintf(stderr, "%s\n", c2d_grid_error(g));
       return 1;
     }
-  double w = ms_wall_time() - t0;
-  printf("c2d_speed: %zu x %zu zones, %ld steps, %d thread(s): %.3f s, %.3e zone-steps/s\n", n, n,
-         k, th, w, (double)(n * n) * (double)k / w);
+  double w = ms_wall_time() - t0, cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
+  printf("c2d_speed: %zu x %zu zones, %ld steps, %d thread(s): %.3f s, %.3e zone-steps/s; "
+         "%.3f s CPU, %.3e zone-steps per CPU-s\n",
+         n, n, k, th, w, (double)(n * n) * (double)k / w, cpu, (double)(n * n) * (double)k / cpu);
   c2d_grid_destroy(&g);
   fixture_free(&f);
   eos_destroy(&al);

@@ -21,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <cmocka.h>
 
 #include "cont2d.h"
@@ -86,7 +87,12 @@ static void test_drive2d(void **state) {
   assert_non_null(gp);
   c2d_grid *g = c2d_problem_grid(gp);
   const double t_end = 0.08, t0 = 0.038, depth = 0.075, Lc = 1.5, hg = 0.0125;
+  /* the cost of the grid beside the particles (docs/mpi.md "The 2D grid beside particles"):
+   * CPU time of the grid phase and of the particle phase */
+  const clock_t c_grid = clock();
   assert_int_equal(c2d_grid_run_to(g, t_end), MS_OK);
+  const double cpu_grid = (double)(clock() - c_grid) / CLOCKS_PER_SEC;
+  const c2d_view gv = c2d_grid_view(g);
   const c2d_line_history drive = c2d_grid_line_history(g, 0), fs = c2d_grid_line_history(g, 1);
   assert_true(fabs(drive.y[0] + 0.325) < 1e-12 && fs.y[0] == -0.4);
   /* at t0 the shock (U_s ≈ 6.7 km/s from y = 0 at t = 0) is still 0.1 cm above the line */
@@ -126,6 +132,7 @@ static void test_drive2d(void **state) {
          *upt = calloc(MAXREC * ncol, sizeof *upt);
   double *sum = calloc(ncol, sizeof *sum);
   size_t *cnt = calloc(ncol, sizeof *cnt), kf = 0;
+  const clock_t c_ptl = clock();
   for (size_t k = 0; k < nsteps; k++) {
     const ms_status st = ptl_region_step(r);
     if (st != MS_OK) printf("%s\n", ptl_region_error(r));
@@ -153,6 +160,11 @@ static void test_drive2d(void **state) {
       upt[c * MAXREC + k] = cnt[c] ? sum[c] / (double)cnt[c] : NAN;
     }
   }
+  const double cpu_ptl = (double)(clock() - c_ptl) / CLOCKS_PER_SEC;
+  printf("drive2d cost: grid %zu zones x %ld steps, %.2f s CPU; particles %zu x %zu steps, %.2f s "
+         "CPU (grid %.1f %% of the run)\n",
+         gv.nzones, c2d_grid_steps(g), cpu_grid, ptl_region_get_geometry(r).particles, nsteps,
+         cpu_ptl, 100 * cpu_grid / (cpu_grid + cpu_ptl));
   /* Plateau: the means over [t_b + w/2, t_b + w], t_b the grid's breakout (5 % of its largest
    * velocity), w = 0.018 — after the grid's smeared rise and its overshoot (measured on the axis:
    * 2.03 at t_b + 0.0085, back to 2.00 ± 0.2 % from t_b + 0.009) and before the release that
