@@ -65,7 +65,9 @@ static void read_sections(cpl2d_problem *p, dk_doc *doc, const dk_node *sec, dk_
     dk_read_double(e, doc, D, "t0", MS_DIM_TIME, false, 0.0, 0.0, INFINITY, &p->how.t0);
     dk_read_bool(e, doc, D, "mirror", false, false, &p->how.mirror);
     dk_read_bool(e, doc, D, "lateral", false, true, &p->how.lateral);
-    dk_read_double(e, doc, D, "y0", MS_DIM_LENGTH, false, -1.0, -1.0, INFINITY, &p->how.y0);
+    p->how.y0 = -1; /* absent: width/2 with mirror, else −min s (set at the run) */
+    if (dk_get(D, "y0"))
+      dk_read_double(e, doc, D, "y0", MS_DIM_LENGTH, true, 0.0, 0.0, INFINITY, &p->how.y0);
     read_direction(p, doc, D, e);
   }
   const dk_node *P = dk_get(sec, "particles");
@@ -87,8 +89,9 @@ static void read_sections(cpl2d_problem *p, dk_doc *doc, const dk_node *sec, dk_
   if (O && dk_expect_map(e, doc, O, "output")) {
     dk_read_int(e, doc, O, "snapshots", false, 4, 1, 1000, &p->n_out);
     dk_read_int(e, doc, O, "column_every", false, 1, 1, 1000000, &p->column_every);
-    dk_read_double(e, doc, O, "column_upto", MS_DIM_LENGTH, false, INFINITY, 0.0, INFINITY,
-                   &p->column_upto);
+    if (dk_get(O, "column_upto")) /* absent: every node */
+      dk_read_double(e, doc, O, "column_upto", MS_DIM_LENGTH, true, 0.0, 0.0, INFINITY,
+                     &p->column_upto);
   }
 }
 
