@@ -50,6 +50,9 @@ static const problem_type problem_types[] = {
     {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", true,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
      (problem_destroy_fn)cpl_problem_destroy},
+    {"coupled2d", "2D grid, then particles driven column by column from its tagged node line",
+     false, (problem_read_fn)cpl2d_problem_read, (problem_run_fn)cpl2d_problem_run,
+     (problem_destroy_fn)cpl2d_problem_destroy},
 };
 enum { N_PROBLEM_TYPES = sizeof problem_types / sizeof problem_types[0] };
 

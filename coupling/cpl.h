@@ -348,6 +348,17 @@ struct c2d_line_history;
 ms_status cpl_drive_from_line(struct ptl_region *r, const struct c2d_line_history *h,
                               const cpl_line_drive *d);
 
+/* The deck problem `coupled2d` (docs/input-coupled.md "coupled2d", docs/coupling.md §5a): a 2D
+ * grid (`grid:`, the keys of a grid2d section) runs to its end, then a discrete-model region
+ * between its tagged drive line and free-surface line is driven by the line
+ * (cpl_drive_from_line) to the same end; particles_NNNN.h5 + particles.xmf and
+ * free_surface_columns.csv (grid vs particles per column). Serial. */
+typedef struct cpl2d_problem cpl2d_problem;
+cpl2d_problem *cpl2d_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
+                                  dk_errors *e);
+ms_status cpl2d_problem_run(ms_ctx *ctx, cpl2d_problem *p);
+void cpl2d_problem_destroy(cpl2d_problem **p); /* null-safe; sets *p = NULL */
+
 /* Drive check: free-surface velocity of the particles against the grid's free-surface tag,
  * sampled at the same times. Breakout t_break: the grid's velocity first exceeds 5 % of its
  * maximum; plateaus: means over [t_break + window/2, t_break + window]; t_half_*: first time

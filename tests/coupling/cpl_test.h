@@ -21,6 +21,21 @@ static inline void assert_close_at(double a, double b, double tol, const char *w
   }
 }
 
+/* Mean of the samples (t_k, u_k) over [a, b] (trapezoid on the samples inside, linear ends): the
+ * plateau of the 2D line-drive checks (test_drive2d, test_coupled2d_deck). */
+static inline double cpl_test_mean_over(size_t n, const double *t, const double *u, double a,
+                                        double b) {
+  double s = 0;
+  for (size_t k = 1; k < n; k++) {
+    const double lo = fmax(a, t[k - 1]), hi = fmin(b, t[k]);
+    if (!(hi > lo)) continue;
+    const double d = t[k] - t[k - 1], ul = u[k - 1] + (u[k] - u[k - 1]) * (lo - t[k - 1]) / d,
+                 uh = u[k - 1] + (u[k] - u[k - 1]) * (hi - t[k - 1]) / d;
+    s += 0.5 * (ul + uh) * (hi - lo);
+  }
+  return s / (b - a);
+}
+
 /* A `coupled` deck read from text (cpl_test_read: p is NULL and e holds the errors of a bad
  * deck), run in a temporary directory that must then hold `files` and is removed
  * (cpl_test_run_tmp), or both with no error allowed (cpl_test_run_deck); the problem stays for

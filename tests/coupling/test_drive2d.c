@@ -26,6 +26,7 @@
 
 #include "cont2d.h"
 #include "cpl.h"
+#include "cpl_test.h"
 #include "ptl_region.h"
 
 /* Al as the shipped decks give it (mg_linear 2.703, 5.35, 1.34, Γ0 2; docs/design.md §3). */
@@ -61,19 +62,6 @@ static const char *const PARTICLES = "particles:\n"
                                      "  yield: none\n";
 
 enum { MAXREC = 4000 };
-
-/* Mean of the samples (t_k, u_k) over [a, b] (trapezoid on the samples inside, linear ends). */
-static double mean_over(size_t n, const double *t, const double *u, double a, double b) {
-  double s = 0;
-  for (size_t k = 1; k < n; k++) {
-    const double lo = fmax(a, t[k - 1]), hi = fmin(b, t[k]);
-    if (!(hi > lo)) continue;
-    const double d = t[k] - t[k - 1], ul = u[k - 1] + (u[k] - u[k - 1]) * (lo - t[k - 1]) / d,
-                 uh = u[k - 1] + (u[k] - u[k - 1]) * (hi - t[k - 1]) / d;
-    s += 0.5 * (ul + uh) * (hi - lo);
-  }
-  return s / (b - a);
-}
 
 static void test_drive2d(void **state) {
   (void)state;
@@ -182,8 +170,8 @@ static void test_drive2d(void **state) {
     const double shift = chk.t_half_particles - chk.t_half_grid;
     const double a = chk.t_break + 0.5 * win, b = chk.t_break + win;
     assert_true(b + fabs(shift) < tt[nsteps - 1]);
-    const double pg = mean_over(nsteps, tt, g1, a, b),
-                 pp = mean_over(nsteps, tt, p1, a + shift, b + shift), rel = pp / pg - 1;
+    const double pg = cpl_test_mean_over(nsteps, tt, g1, a, b),
+                 pp = cpl_test_mean_over(nsteps, tt, p1, a + shift, b + shift), rel = pp / pg - 1;
     printf("x = %.3f: breakout %.4f, plateau grid %.4f, particles %.4f km/s (%+.2f %%), "
            "half-rise %.4f / %.4f\n",
            (double)c * dx, chk.t_break, pg, pp, 100 * rel, chk.t_half_grid, chk.t_half_particles);
