@@ -272,7 +272,7 @@ struct dm_fin;
  * current configuration (w, u of f->m->s) and returns its stable time step (INFINITY: none). */
 typedef double (*dm_fin_ext_fn)(void *user, const struct dm_fin *f, double *fext);
 typedef struct dm_fin {
-  dm_model *m; /* not owned; families, A⁻¹; m->Q holds the gather's Q */
+  dm_model *m; /* not owned; families, A⁻¹; m->Q holds the gather's Q, transposed */
   size_t n;
   int dim;
   const dm_fin_material *mat; /* not owned */

@@ -33,54 +33,62 @@ static void inv3(const double *a, double det, double *r) {
 
 static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED; }
 
+/* 4-lane vectors (GCC/Clang vector extension, lowered to what the target has). ld4 loads a
+ * particle's 3-vector and the next double (lane 3, unused): the arrays it reads (X, w, u of
+ * dm_state_alloc, v̄, Q, the backup's w) carry one double of padding at their end. */
+typedef double v4d __attribute__((vector_size(32)));
+static inline v4d ld4(const double *p) {
+  v4d v;
+  memcpy(&v, p, sizeof v);
+  return v;
+}
+static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
+
 /* The bond moments of particle i, each Σ_k Δa_ik ⊗ ξ_ik (row a, column b: Σ Δa_a ξ_b), so that
  * per-bond products with A⁻¹, P or C become one 3×3 product per particle afterwards (C =
  * (Σ Δw ⊗ ξ) A⁻¹, since g_ik = A⁻¹ξ_ik and A symmetric). Bw: of the displacement after a drift
  * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. With vb: Bv of
- * the half kick's mean velocity v̄ and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift). The
- * accumulators are independent (no long dependency chain; the compiler keeps them in registers).
- * `kick` and `stress` are constants at each call site, so each use compiles to its own loop. */
+ * the half kick's mean velocity v̄ and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift). Column c of
+ * each moment is one 4-lane vector over the components of Δa (lane 3 unused), updated per bond by
+ * ξ_c (broadcast) times Δa: three multiply-adds per moment, no lane shuffles in the loop, and
+ * independent accumulators. `kick` and `stress` are constants at each call site, so each use
+ * compiles to its own loop. */
 static inline void bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
                                 const double *restrict u, const double *restrict vb, double dt,
                                 bool stress, bool kick, double *restrict Bw, double *restrict Bu,
                                 double *restrict Bv, double *restrict sv) {
   const double *restrict X = m->s->X;
   const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
-  double wi[3], wn[3], ui[3], vi[3];
-  for (int a = 0; a < 3; ++a) {
-    wi[a] = w[3 * i + a], ui[a] = u ? u[3 * i + a] : 0.0, vi[a] = vb ? vb[3 * i + a] : 0.0;
-    wn[a] = wi[a] + dt * ui[a];
-  }
-  /* rows of acc: Δ(w + dt u)_a, Δu_a (stress), Δv̄_a (kick); each row is a 4-lane vector over
-   * ξ's components (4th lane 0), so a row update is one multiply-add of ξ by a scalar (GCC/Clang
-   * vector extension; lowered to what the target has) */
-  typedef double v4d __attribute__((vector_size(32)));
-  const int r0 = stress ? 0 : 6, r1 = kick ? 9 : 6;
-  v4d acc[9] = {{0}};
-  double s0 = 0.0;
+  const v4d zero = {0}, wi = ld4(&w[3 * i]), ui = stress ? ld4(&u[3 * i]) : zero;
+  const v4d vi = kick ? ld4(&vb[3 * i]) : zero, wn = wi + dt * ui;
+  v4d aw0 = zero, aw1 = zero, aw2 = zero, au0 = zero, au1 = zero, au2 = zero;
+  v4d av0 = zero, av1 = zero, av2 = zero, s4 = zero;
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
     const double *sh = m->shift[m->img[b]];
-    const v4d xi = {X[3 * k] + sh[0] - x0, X[3 * k + 1] + sh[1] - y0, X[3 * k + 2] + sh[2] - z0,
-                    0.0};
-    double d[9];
-    for (int a = 0; a < 3; ++a) {
-      const double wk = w[3 * k + a];
-      if (stress) {
-        const double uk = u[3 * k + a];
-        d[a] = wk + dt * uk - wn[a], d[3 + a] = uk - ui[a];
-      }
-      if (kick) d[6 + a] = vb[3 * k + a] - vi[a], s0 += d[6 + a] * (wk - wi[a]);
+    const v4d x = bc4(X[3 * k] + sh[0] - x0), y = bc4(X[3 * k + 1] + sh[1] - y0),
+              z = bc4(X[3 * k + 2] + sh[2] - z0);
+    const v4d wk = ld4(&w[3 * k]);
+    if (stress) {
+      const v4d uk = ld4(&u[3 * k]), dw = wk + dt * uk - wn, du = uk - ui;
+      aw0 += dw * x, aw1 += dw * y, aw2 += dw * z;
+      au0 += du * x, au1 += du * y, au2 += du * z;
     }
-    for (int r = r0; r < r1; ++r) acc[r] += d[r] * xi;
+    if (kick) {
+      const v4d dv = ld4(&vb[3 * k]) - vi;
+      av0 += dv * x, av1 += dv * y, av2 += dv * z;
+      s4 += dv * (wk - wi);
+    }
   }
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c) {
-      if (stress) Bw[3 * a + c] = acc[a][c], Bu[3 * a + c] = acc[3 + a][c];
-      if (kick) Bv[3 * a + c] = acc[6 + a][c];
+  for (int a = 0; a < 3; ++a) {
+    if (stress) {
+      Bw[3 * a] = aw0[a], Bw[3 * a + 1] = aw1[a], Bw[3 * a + 2] = aw2[a];
+      Bu[3 * a] = au0[a], Bu[3 * a + 1] = au1[a], Bu[3 * a + 2] = au2[a];
     }
-  if (kick) *sv = s0;
+    if (kick) Bv[3 * a] = av0[a], Bv[3 * a + 1] = av1[a], Bv[3 * a + 2] = av2[a];
+  }
+  if (kick) *sv = s4[0] + s4[1] + s4[2];
 }
 
 /* r = B A (3×3, row-major) */
@@ -211,7 +219,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) {
       QP[3 * a + b] = V * (P[3 * a] * Ai[b] + P[3 * a + 1] * Ai[3 + b] + P[3 * a + 2] * Ai[6 + b]);
-      Q[3 * a + b] = QP[3 * a + b] - kap * C[3 * a + b];
+      Q[3 * b + a] = QP[3 * a + b] - kap * C[3 * a + b]; /* transposed: gather_one */
     }
   f->rho[i] = rho, f->p[i] = p, f->q[i] = q;
   const double cL = sqrt(c * c + (strength ? 4.0 * G / (3.0 * rho) : 0.0));
@@ -223,35 +231,30 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
 }
 
 /* The force on particle i, F_i = Σ_k [(Q_i + Q_k) ξ_ik + (κ_i + κ_k) Δw_ik] (dm_model.c's
- * gather_force, the same sum): Q_k ξ as three 4-lane rows (row a of Q_k loaded with the next
- * element in the 4th lane, times ξ padded with 0 there; row 2 is loaded one element early so
- * the load stays inside Q, against ξ shifted by one lane), summed over lanes at the end. */
+ * gather_force, the same sum) = Q_i Σ_k ξ_ik + Σ_k [Q_k ξ_ik + (κ_i + κ_k) Δw_ik]. m->Q holds
+ * each Q transposed (stress_one), so Q_k ξ is Σ_c ξ_c (column c of Q_k): three broadcasts times
+ * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. */
 static void gather_one(const dm_model *restrict m, const double *restrict w, size_t i,
                        double *restrict F) {
-  typedef double v4d __attribute__((vector_size(32)));
-  const double *restrict X = m->s->X, *restrict Q = m->Q, *restrict kap = m->kappa;
+  const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
-  const v4d wi = {w[3 * i], w[3 * i + 1], w[3 * i + 2], 0.0};
-  v4d r0 = {0}, r1 = {0}, r2 = {0}, fw = {0}, sxi = {0};
+  const v4d zero = {0}, wi = ld4(&w[3 * i]);
+  v4d r0 = zero, r1 = zero, r2 = zero, fw = zero;
+  double sx = 0, sy = 0, sz = 0;
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
     const double *sh = m->shift[m->img[b]];
     const double x = X[3 * k] + sh[0] - x0, y = X[3 * k + 1] + sh[1] - y0,
                  z = X[3 * k + 2] + sh[2] - z0;
-    const v4d xi = {x, y, z, 0.0}, xs = {0.0, x, y, z};
-    const v4d wk = {w[3 * k], w[3 * k + 1], w[3 * k + 2], 0.0};
-    v4d q0, q1, q2;
-    memcpy(&q0, &Q[9 * k], sizeof q0), memcpy(&q1, &Q[9 * k + 3], sizeof q1);
-    memcpy(&q2, &Q[9 * k + 5], sizeof q2);
-    r0 += q0 * xi, r1 += q1 * xi, r2 += q2 * xs;
-    fw += (ki + kap[k]) * (wk - wi);
-    sxi += xi;
+    const double *q = &QT[9 * k];
+    r0 += bc4(x) * ld4(q), r1 += bc4(y) * ld4(q + 3), r2 += bc4(z) * ld4(q + 6);
+    fw += bc4(ki + kap[k]) * (ld4(&w[3 * k]) - wi);
+    sx += x, sy += y, sz += z;
   }
-  const double *qi = &Q[9 * i];
-  F[3 * i] = r0[0] + r0[1] + r0[2] + fw[0] + qi[0] * sxi[0] + qi[1] * sxi[1] + qi[2] * sxi[2];
-  F[3 * i + 1] = r1[0] + r1[1] + r1[2] + fw[1] + qi[3] * sxi[0] + qi[4] * sxi[1] + qi[5] * sxi[2];
-  F[3 * i + 2] = r2[1] + r2[2] + r2[3] + fw[2] + qi[6] * sxi[0] + qi[7] * sxi[1] + qi[8] * sxi[2];
+  const double *qi = &QT[9 * i]; /* Q_i ξ-sum: row a of Q_i is qi[a], qi[3 + a], qi[6 + a] */
+  for (int a = 0; a < 3; ++a)
+    F[3 * i + a] = r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sx + qi[3 + a] * sy + qi[6 + a] * sz;
 }
 
 static ms_status bad_energy(dm_fin *f, long i) {
@@ -464,7 +467,8 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->ehg = ms_calloc(n1, sizeof(double));
   f->F = ms_calloc(9 * n1, sizeof(double)), f->s = ms_calloc(9 * n1, sizeof(double));
   f->QP = ms_calloc(9 * n1, sizeof(double)), f->sig = ms_calloc(9 * n1, sizeof(double));
-  f->frc = ms_calloc(3 * n1, sizeof(double)), f->vbar = ms_calloc(3 * n1, sizeof(double));
+  f->frc = ms_calloc(3 * n1, sizeof(double)),
+  f->vbar = ms_calloc(3 * n1 + 1, sizeof(double)); /* +1: ld4 */
   dm_frac_alloc(f);
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);

@@ -236,9 +236,9 @@ static ms_status run_steps(dmf_run *r) {
     if (last) break;
     dmf_backup_take(r, r->t);
     if (r->t + f->dt_next > t_end) f->dt_next = t_end - r->t;
-    const double dt = f->dt_next, w0 = ms_wall_time();
+    const double dt = f->dt_next, w0 = ms_wall_time(), c0 = dmp_cpu_time();
     st = dm_fin_step(f);
-    r->wall += ms_wall_time() - w0;
+    r->wall += ms_wall_time() - w0, r->cpu += dmp_cpu_time() - c0;
     r->t += dt;
     if (st != MS_OK) {
       dmf_report_unstable(r, f->bad, f->bad_what, f->bad_value, r->t);
@@ -284,7 +284,7 @@ static void report(dmf_run *r) {
            "discrete model (response eos): fracture: %zu particles failed, broken energy %.6g kJ "
            "(in the balance: K + U + E_hg + broken - W - E0)",
            dm_fin_failed_count(f), dm_fin_broken_energy(f));
-  sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall;
+  sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall, sum->cpu_s = r->cpu;
   sum->particle_steps_per_s =
       r->wall > 0 ? (double)r->nreal * (double)(steps - r->step0) / r->wall : 0;
   sum->energy_err_max =
