@@ -44,25 +44,33 @@ static inline v4d ld4(const double *p) {
 }
 static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
 
+/* Bond moments of one particle: Bw, Bu (stress), Bv, sv (a half kick's v̄), Bc, sc (the pending
+ * closing half kick's v̄). */
+typedef struct moments {
+  double Bw[9], Bu[9], Bv[9], Bc[9], sv, sc;
+} moments;
+
 /* The bond moments of particle i, each Σ_k Δa_ik ⊗ ξ_ik (row a, column b: Σ Δa_a ξ_b), so that
  * per-bond products with A⁻¹, P or C become one 3×3 product per particle afterwards (C =
  * (Σ Δw ⊗ ξ) A⁻¹, since g_ik = A⁻¹ξ_ik and A symmetric). Bw: of the displacement after a drift
- * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. With vb: Bv of
- * the half kick's mean velocity v̄ and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift). Column c of
- * each moment is one 4-lane vector over the components of Δa (lane 3 unused), updated per bond by
- * ξ_c (broadcast) times Δa: three multiply-adds per moment, no lane shuffles in the loop, and
- * independent accumulators. `kick` and `stress` are constants at each call site, so each use
- * compiles to its own loop. */
+ * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. kick: Bv of
+ * a half kick's mean velocity vb and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift); close: the same,
+ * Bc and sc, of vc. Column c of each moment is one 4-lane vector over the components of Δa
+ * (lane 3 unused), updated per bond by ξ_c (broadcast) times Δa: three multiply-adds per moment,
+ * no lane shuffles in the loop, independent accumulators. The flags are constants at each call
+ * site, so each use compiles to its own loop; Bc and sc get the same bits in each. */
 static inline void bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
-                                const double *restrict u, const double *restrict vb, double dt,
-                                bool stress, bool kick, double *restrict Bw, double *restrict Bu,
-                                double *restrict Bv, double *restrict sv) {
+                                const double *restrict u, const double *restrict vb,
+                                const double *restrict vc, double dt, bool stress, bool kick,
+                                bool close, moments *restrict M) {
   const double *restrict X = m->s->X;
   const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
   const v4d zero = {0}, wi = ld4(&w[3 * i]), ui = stress ? ld4(&u[3 * i]) : zero;
-  const v4d vi = kick ? ld4(&vb[3 * i]) : zero, wn = wi + dt * ui;
+  const v4d vi = kick ? ld4(&vb[3 * i]) : zero, ci = close ? ld4(&vc[3 * i]) : zero;
+  const v4d wn = wi + dt * ui;
   v4d aw0 = zero, aw1 = zero, aw2 = zero, au0 = zero, au1 = zero, au2 = zero;
   v4d av0 = zero, av1 = zero, av2 = zero, s4 = zero;
+  v4d ac0 = zero, ac1 = zero, ac2 = zero, c4 = zero;
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
@@ -80,15 +88,22 @@ static inline void bond_moments(const dm_model *restrict m, size_t i, const doub
       av0 += dv * x, av1 += dv * y, av2 += dv * z;
       s4 += dv * (wk - wi);
     }
+    if (close) {
+      const v4d dc = ld4(&vc[3 * k]) - ci;
+      ac0 += dc * x, ac1 += dc * y, ac2 += dc * z;
+      c4 += dc * (wk - wi);
+    }
   }
   for (int a = 0; a < 3; ++a) {
     if (stress) {
-      Bw[3 * a] = aw0[a], Bw[3 * a + 1] = aw1[a], Bw[3 * a + 2] = aw2[a];
-      Bu[3 * a] = au0[a], Bu[3 * a + 1] = au1[a], Bu[3 * a + 2] = au2[a];
+      M->Bw[3 * a] = aw0[a], M->Bw[3 * a + 1] = aw1[a], M->Bw[3 * a + 2] = aw2[a];
+      M->Bu[3 * a] = au0[a], M->Bu[3 * a + 1] = au1[a], M->Bu[3 * a + 2] = au2[a];
     }
-    if (kick) Bv[3 * a] = av0[a], Bv[3 * a + 1] = av1[a], Bv[3 * a + 2] = av2[a];
+    if (kick) M->Bv[3 * a] = av0[a], M->Bv[3 * a + 1] = av1[a], M->Bv[3 * a + 2] = av2[a];
+    if (close) M->Bc[3 * a] = ac0[a], M->Bc[3 * a + 1] = ac1[a], M->Bc[3 * a + 2] = ac2[a];
   }
-  if (kick) *sv = s4[0] + s4[1] + s4[2];
+  if (kick) M->sv = s4[0] + s4[1] + s4[2];
+  if (close) M->sc = c4[0] + c4[1] + c4[2];
 }
 
 /* r = B A (3×3, row-major) */
@@ -99,9 +114,9 @@ static inline void mul33(const double *restrict B, const double *restrict A, dou
 }
 
 void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]) {
-  double Bw[9], Bu[9]; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
-  bond_moments(m, i, w, w, NULL, 0.0, true, false, Bw, Bu, NULL, NULL);
-  mul33(Bw, &m->Ainv[9 * i], C);
+  moments M; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
+  bond_moments(m, i, w, w, NULL, NULL, 0.0, true, false, false, &M);
+  mul33(M.Bw, &m->Ainv[9 * i], C);
 }
 
 /* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
@@ -118,19 +133,26 @@ static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double 
 
 /* Strain, stress and Q of particle i at w + dt u (the drift of this step, done after the pass),
  * with rates from u; advances the deviator by dt. With h > 0 first the energy increments of the
- * half kick just made (its v̄ in f->vbar; *bad_e set if e is not finite). Returns the particle's
- * stable time step, or −1 (bad state, recorded in *what). */
+ * pending closing half kick of the last step (f->pending; then e and e_hg also into keep_e,
+ * keep_ehg) and of the half kick just made (its v̄ in f->vbar); *bad_e set if e is not finite.
+ * Returns the particle's stable time step, or −1 (bad state, recorded in *what). */
 static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, const char **what,
                          double *val) {
   dm_model *m = f->m;
   const dm_state *st = m->s;
   const double *Ai = &m->Ainv[9 * i];
-  double C[9], Fd[9], Bw[9], Bu[9], Bv[9], sv = 0;
-  if (h > 0) {
-    bond_moments(m, i, st->w, st->u, f->vbar, dt, true, true, Bw, Bu, Bv, &sv);
-    if (!kick_energy(f, i, h, Bv, sv)) *bad_e = true;
-  } else bond_moments(m, i, st->w, st->u, NULL, dt, true, false, Bw, Bu, NULL, NULL);
-  mul33(Bw, Ai, C), mul33(Bu, Ai, Fd);
+  double C[9], Fd[9];
+  moments M;
+  if (h > 0 && f->pending) {
+    bond_moments(m, i, st->w, st->u, f->vbar, f->vclose, dt, true, true, true, &M);
+    if (!kick_energy(f, i, f->h_close, M.Bc, M.sc)) *bad_e = true;
+    if (f->keep_e) f->keep_e[i] = f->e[i], f->keep_ehg[i] = f->ehg[i];
+    if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
+  } else if (h > 0) {
+    bond_moments(m, i, st->w, st->u, f->vbar, NULL, dt, true, true, false, &M);
+    if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
+  } else bond_moments(m, i, st->w, st->u, NULL, NULL, dt, true, false, false, &M);
+  mul33(M.Bw, Ai, C), mul33(M.Bu, Ai, Fd);
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
@@ -291,6 +313,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
       if (tdt < dtmin || (tdt == dtmin && ti < imin)) dtmin = tdt, imin = ti;
     }
   }
+  if (h > 0) f->pending = false;              /* the stress pass added them */
   if (bad_e < n) return bad_energy(f, bad_e); /* the kick failed: no drift */
   dm_state *st = f->m->s;
   if (dt > 0)
@@ -320,16 +343,20 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   return MS_OK;
 }
 
-ms_status dm_fin_refresh(dm_fin *f) { return forces(f, 0.0, 0.0); }
+ms_status dm_fin_refresh(dm_fin *f) {
+  const ms_status r = dm_fin_flush(f); /* at the QP and F it is about to replace */
+  return r != MS_OK ? r : forces(f, 0.0, 0.0);
+}
 
 /* The velocity part of a half kick of length h = dt/2 with the current forces: u, its mean v̄
- * over the kick, and the work of the driven particles and of the external force. */
-static void kick_velocities(dm_fin *f, double h) {
+ * over the kick (into vbar [n][3]), and the work of the driven particles and of the external
+ * force. */
+static void kick_velocities(dm_fin *f, double h, double *vbar) {
   dm_state *st = f->m->s;
   const long n = (long)f->n;
   double dW = 0.0, dWe = 0.0;
   for (long i = 0; i < n; ++i) {
-    double *u = &st->u[3 * i], *vb = &f->vbar[3 * i];
+    double *u = &st->u[3 * i], *vb = &vbar[3 * i];
     if (is_driven(st->bc[i])) {
       for (int a = 0; a < 3; ++a) vb[a] = u[a];
       dW -= h * (f->frc[3 * i] * u[0] + f->frc[3 * i + 1] * u[1] + f->frc[3 * i + 2] * u[2]);
@@ -346,31 +373,39 @@ static void kick_velocities(dm_fin *f, double h) {
   f->work += dW, f->ext_work += dWe;
 }
 
-/* The energy part of the closing half kick (the opening one's is in the stress pass). */
-static ms_status kick_energies(dm_fin *f, double h) {
+ms_status dm_fin_flush(dm_fin *f) {
+  if (!f->pending) return MS_OK;
   dm_model *m = f->m;
   const dm_state *st = m->s;
   const long n = (long)f->n;
+  const double h = f->h_close;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
   for (long i = 0; i < n; ++i) {
-    double Bv[9], sv;
-    bond_moments(m, (size_t)i, st->w, NULL, f->vbar, 0.0, false, true, NULL, NULL, Bv, &sv);
-    if (!kick_energy(f, (size_t)i, h, Bv, sv) && i < bad) bad = i;
+    moments M;
+    bond_moments(m, (size_t)i, st->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
+    if (!kick_energy(f, (size_t)i, h, M.Bc, M.sc) && i < bad) bad = i;
   }
+  f->pending = false;
   return bad < n ? bad_energy(f, bad) : MS_OK;
 }
 
-/* Kick (u; e in the stress pass) – drift (after the stress pass) – forces – kick (u, e). */
-ms_status dm_fin_step(dm_fin *f) {
+/* Kick (u; e in the stress pass, with the last step's pending closing kick) – drift (after the
+ * stress pass) – forces – kick (u; e pending). */
+ms_status dm_fin_advance(dm_fin *f) {
   const double dt = f->dt_next;
-  kick_velocities(f, 0.5 * dt);
+  kick_velocities(f, 0.5 * dt, f->vbar);
   ms_status r = forces(f, dt, 0.5 * dt);
   if (r != MS_OK) return r;
-  kick_velocities(f, 0.5 * dt);
-  r = kick_energies(f, 0.5 * dt);
+  kick_velocities(f, 0.5 * dt, f->vclose);
+  f->h_close = 0.5 * dt, f->pending = true;
   ++f->step;
-  return r;
+  return MS_OK;
+}
+
+ms_status dm_fin_step(dm_fin *f) {
+  const ms_status r = dm_fin_advance(f);
+  return r != MS_OK ? r : dm_fin_flush(f);
 }
 
 void dm_fs_history_init(dm_fs_history *h, size_t cap) {
@@ -427,6 +462,8 @@ void dm_fin_bond_penalty(dm_fin *f) {
 }
 
 ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user) {
+  const ms_status r = dm_fin_flush(f); /* at the QP and F it is about to replace */
+  if (r != MS_OK) return r;
   f->ext = fn, f->ext_user = user;
   if (fn && !f->fext) f->fext = ms_calloc(3 * (f->n ? f->n : 1), sizeof(double));
   return forces(f, 0.0, 0.0);
@@ -436,7 +473,7 @@ void dm_fin_destroy(dm_fin **fp) {
   if (!fp || !*fp) return;
   dm_fin *f = *fp;
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
-  free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar);
+  free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar), free(f->vclose);
   dm_frac_free(f);
   free(f->fext);
   free(f);
@@ -469,6 +506,7 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->QP = ms_calloc(9 * n1, sizeof(double)), f->sig = ms_calloc(9 * n1, sizeof(double));
   f->frc = ms_calloc(3 * n1, sizeof(double)),
   f->vbar = ms_calloc(3 * n1 + 1, sizeof(double)); /* +1: ld4 */
+  f->vclose = ms_calloc(3 * n1 + 1, sizeof(double));
   dm_frac_alloc(f);
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);

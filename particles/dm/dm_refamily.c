@@ -77,6 +77,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_state *s = old->s;
   const size_t n = f->n;
   memset(rep, 0, sizeof *rep);
+  const ms_status fl = dm_fin_flush(f); /* at the families it is about to replace */
+  if (fl != MS_OK) return fl;
   rep->released = penalty_stored(f);
   double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
   double jmin = INFINITY, jmax = 0;
