@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void inv3(const double *a, double det, double *r) {
+DM_KERNEL_INLINE static inline void inv3(const double *a, double det, double *r) {
   const double id = 1.0 / det;
   r[0] = (a[4] * a[8] - a[5] * a[7]) * id;
   r[1] = (a[2] * a[7] - a[1] * a[8]) * id;
@@ -37,12 +37,12 @@ static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED;
  * particle's 3-vector and the next double (lane 3, unused): the arrays it reads (X, w, u of
  * dm_state_alloc, v̄, Q, the backup's w) carry one double of padding at their end. */
 typedef double v4d __attribute__((vector_size(32)));
-static inline v4d ld4(const double *p) {
+DM_KERNEL_INLINE static inline v4d ld4(const double *p) {
   v4d v;
   memcpy(&v, p, sizeof v);
   return v;
 }
-static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
+DM_KERNEL_INLINE static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
 
 /* Bond moments of one particle: Bw, Bu (stress), Bv, sv (a half kick's v̄), Bc, sc (the pending
  * closing half kick's v̄). */
@@ -59,10 +59,11 @@ typedef struct moments {
  * (lane 3 unused), updated per bond by ξ_c (broadcast) times Δa: three multiply-adds per moment,
  * no lane shuffles in the loop, independent accumulators. The flags are constants at each call
  * site, so each use compiles to its own loop; Bc and sc get the same bits in each. */
-static inline void bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
-                                const double *restrict u, const double *restrict vb,
-                                const double *restrict vc, double dt, bool stress, bool kick,
-                                bool close, moments *restrict M) {
+DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, size_t i,
+                                                 const double *restrict w, const double *restrict u,
+                                                 const double *restrict vb,
+                                                 const double *restrict vc, double dt, bool stress,
+                                                 bool kick, bool close, moments *restrict M) {
   const double *restrict X = m->s->X;
   const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
   const v4d zero = {0}, wi = ld4(&w[3 * i]), ui = stress ? ld4(&u[3 * i]) : zero;
@@ -107,13 +108,15 @@ static inline void bond_moments(const dm_model *restrict m, size_t i, const doub
 }
 
 /* r = B A (3×3, row-major) */
-static inline void mul33(const double *restrict B, const double *restrict A, double *restrict r) {
+DM_KERNEL_INLINE static inline void mul33(const double *restrict B, const double *restrict A,
+                                          double *restrict r) {
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
       r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
 }
 
-void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]) {
+DM_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i,
+                                                   double C[9]) {
   moments M; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
   bond_moments(m, i, w, w, NULL, NULL, 0.0, true, false, false, &M);
   mul33(M.Bw, &m->Ainv[9 * i], C);
@@ -122,7 +125,8 @@ void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, 
 /* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
  * and the Q_P and F of the last force evaluation: Σ_k Δv̄·(Q_P ξ) = Q_P : Bv and
  * Σ_k Δv̄·z = sv − (F − I) : Bv (z = Δw − (F − I) ξ). Returns false if e is not finite. */
-static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double sv) {
+DM_KERNEL_INLINE static inline bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv,
+                                                double sv) {
   const double *QP = &f->QP[9 * i], *F = &f->F[9 * i];
   double pw = 0.0, ph = sv + Bv[0] + Bv[4] + Bv[8];
   for (int a = 0; a < 9; ++a) pw += QP[a] * Bv[a], ph -= F[a] * Bv[a];
@@ -136,8 +140,8 @@ static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double 
  * pending closing half kick of the last step (f->pending; then e and e_hg also into keep_e,
  * keep_ehg) and of the half kick just made (its v̄ in f->vbar); *bad_e set if e is not finite.
  * Returns the particle's stable time step, or −1 (bad state, recorded in *what). */
-static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, const char **what,
-                         double *val) {
+DM_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e,
+                                          const char **what, double *val) {
   dm_model *m = f->m;
   const dm_state *st = m->s;
   const double *Ai = &m->Ainv[9 * i];
@@ -256,8 +260,8 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
  * gather_force, the same sum) = Q_i Σ_k ξ_ik + Σ_k [Q_k ξ_ik + (κ_i + κ_k) Δw_ik]. m->Q holds
  * each Q transposed (stress_one), so Q_k ξ is Σ_c ξ_c (column c of Q_k): three broadcasts times
  * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. */
-static void gather_one(const dm_model *restrict m, const double *restrict w, size_t i,
-                       double *restrict F) {
+DM_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
+                                        size_t i, double *restrict F) {
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
   const v4d zero = {0}, wi = ld4(&w[3 * i]);
@@ -277,6 +281,20 @@ static void gather_one(const dm_model *restrict m, const double *restrict w, siz
   const double *qi = &QT[9 * i]; /* Q_i ξ-sum: row a of Q_i is qi[a], qi[3 + a], qi[6 + a] */
   for (int a = 0; a < 3; ++a)
     F[3 * i + a] = r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sx + qi[3 + a] * sy + qi[6 + a] * sz;
+}
+
+/* w += dt u over n doubles: cloned like the stress pass, which forms the same w + dt u. */
+DM_KERNEL_CLONES static void drift(double *restrict w, const double *restrict u, double dt,
+                                   size_t n) {
+  for (size_t j = 0; j < n; ++j) w[j] += dt * u[j];
+}
+
+/* The pending closing half kick's energies of particle i (dm_fin_flush); false if e is not
+ * finite. */
+DM_KERNEL_CLONES static bool flush_one(dm_fin *f, size_t i) {
+  moments M;
+  bond_moments(f->m, i, f->m->s->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
+  return kick_energy(f, i, f->h_close, M.Bc, M.sc);
 }
 
 static ms_status bad_energy(dm_fin *f, long i) {
@@ -316,8 +334,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   if (h > 0) f->pending = false;              /* the stress pass added them */
   if (bad_e < n) return bad_energy(f, bad_e); /* the kick failed: no drift */
   dm_state *st = f->m->s;
-  if (dt > 0)
-    for (size_t j = 0; j < 3 * f->n; ++j) st->w[j] += dt * st->u[j];
+  if (dt > 0) drift(st->w, st->u, dt, 3 * f->n);
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
     double val = 0;
@@ -375,17 +392,11 @@ static void kick_velocities(dm_fin *f, double h, double *vbar) {
 
 ms_status dm_fin_flush(dm_fin *f) {
   if (!f->pending) return MS_OK;
-  dm_model *m = f->m;
-  const dm_state *st = m->s;
   const long n = (long)f->n;
-  const double h = f->h_close;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
-  for (long i = 0; i < n; ++i) {
-    moments M;
-    bond_moments(m, (size_t)i, st->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
-    if (!kick_energy(f, (size_t)i, h, M.Bc, M.sc) && i < bad) bad = i;
-  }
+  for (long i = 0; i < n; ++i)
+    if (!flush_one(f, (size_t)i) && i < bad) bad = i;
   f->pending = false;
   return bad < n ? bad_energy(f, bad) : MS_OK;
 }
