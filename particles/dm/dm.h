@@ -60,6 +60,7 @@ typedef struct dm_model {
   uint32_t *nbr;
   uint8_t *img;
   double shift[27][3];
+  double shift4[27][4]; /* the same, 4th lane 0 (4-lane loads, dm_finite.c) */
   size_t nbonds;
   double *Ainv;  /* [n][9] A_i⁻¹ (zero outside the dim×dim block) */
   double *cond;  /* [n] condition number of A_i */

@@ -65,8 +65,8 @@ DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, siz
                                                  const double *restrict vc, double dt, bool stress,
                                                  bool kick, bool close, moments *restrict M) {
   const double *restrict X = m->s->X;
-  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
-  const v4d zero = {0}, wi = ld4(&w[3 * i]), ui = stress ? ld4(&u[3 * i]) : zero;
+  const v4d zero = {0}, xi0 = ld4(&X[3 * i]), wi = ld4(&w[3 * i]);
+  const v4d ui = stress ? ld4(&u[3 * i]) : zero;
   const v4d vi = kick ? ld4(&vb[3 * i]) : zero, ci = close ? ld4(&vc[3 * i]) : zero;
   const v4d wn = wi + dt * ui;
   v4d aw0 = zero, aw1 = zero, aw2 = zero, au0 = zero, au1 = zero, au2 = zero;
@@ -75,9 +75,8 @@ DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, siz
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
-    const double *sh = m->shift[m->img[b]];
-    const v4d x = bc4(X[3 * k] + sh[0] - x0), y = bc4(X[3 * k + 1] + sh[1] - y0),
-              z = bc4(X[3 * k + 2] + sh[2] - z0);
+    const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
+    const v4d x = bc4(xi[0]), y = bc4(xi[1]), z = bc4(xi[2]);
     const v4d wk = ld4(&w[3 * k]);
     if (stress) {
       const v4d uk = ld4(&u[3 * k]), dw = wk + dt * uk - wn, du = uk - ui;
@@ -263,24 +262,24 @@ DM_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
 DM_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
                                         size_t i, double *restrict F) {
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
-  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
-  const v4d zero = {0}, wi = ld4(&w[3 * i]);
+  const double ki = kap[i];
+  const v4d zero = {0}, wi = ld4(&w[3 * i]), xi0 = ld4(&X[3 * i]);
   v4d r0 = zero, r1 = zero, r2 = zero, fw = zero;
-  double sx = 0, sy = 0, sz = 0;
+  v4d sxi = zero; /* Σ_k ξ_ik */
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
-    const double *sh = m->shift[m->img[b]];
-    const double x = X[3 * k] + sh[0] - x0, y = X[3 * k + 1] + sh[1] - y0,
-                 z = X[3 * k + 2] + sh[2] - z0;
+    const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
+    const double x = xi[0], y = xi[1], z = xi[2];
     const double *q = &QT[9 * k];
     r0 += bc4(x) * ld4(q), r1 += bc4(y) * ld4(q + 3), r2 += bc4(z) * ld4(q + 6);
     fw += bc4(ki + kap[k]) * (ld4(&w[3 * k]) - wi);
-    sx += x, sy += y, sz += z;
+    sxi += xi;
   }
   const double *qi = &QT[9 * i]; /* Q_i ξ-sum: row a of Q_i is qi[a], qi[3 + a], qi[6 + a] */
   for (int a = 0; a < 3; ++a)
-    F[3 * i + a] = r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sx + qi[3 + a] * sy + qi[6 + a] * sz;
+    F[3 * i + a] =
+        r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sxi[0] + qi[3 + a] * sxi[1] + qi[6 + a] * sxi[2];
 }
 
 /* w += dt u over n doubles: cloned like the stress pass, which forms the same w + dt u. */
