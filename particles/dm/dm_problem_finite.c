@@ -201,6 +201,16 @@ static ms_status flush(dmf_run *r) {
 /* A step (or the flush of its energies) failed: the report and the last good state's snapshot
  * (dm_fin_run.h's backup: the start of the failed step). */
 static ms_status failed(dmf_run *r, ms_status st) {
+  /* the backup's e and e_hg were completed by the failed step's stress pass (keep_e): a
+   * non-finite one there (the last step's closing kick) leaves no good state to write */
+  for (size_t i = 0; i < r->s.n && r->bk.valid; ++i)
+    if (!isfinite(r->bk.e[i]) || !isfinite(r->bk.ehg[i])) {
+      r->bk.valid = 0;
+      ms_log(r->ctx, MS_LOG_WARN,
+             "discrete model (response eos): particle %zu: the energy of the last step's closing "
+             "half kick is not finite: no snapshot of the last good state",
+             i);
+    }
   dmf_report_unstable(r, r->f->bad, r->f->bad_what, r->f->bad_value, r->t);
   r->t = r->bk.t;
   return st;
