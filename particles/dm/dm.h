@@ -60,6 +60,7 @@ typedef struct dm_model {
   uint32_t *nbr;
   uint8_t *img;
   double shift[27][3];
+  double shift4[27][4]; /* the same, 4th lane 0 (4-lane loads, dm_finite.c) */
   size_t nbonds;
   double *Ainv;  /* [n][9] A_i⁻¹ (zero outside the dim×dim block) */
   double *cond;  /* [n] condition number of A_i */
@@ -273,7 +274,7 @@ struct dm_fin;
  * current configuration (w, u of f->m->s) and returns its stable time step (INFINITY: none). */
 typedef double (*dm_fin_ext_fn)(void *user, const struct dm_fin *f, double *fext);
 typedef struct dm_fin {
-  dm_model *m; /* not owned; families, A⁻¹; m->Q holds the gather's Q */
+  dm_model *m; /* not owned; families, A⁻¹; m->Q holds the gather's Q, transposed */
   size_t n;
   int dim;
   const dm_fin_material *mat; /* not owned */
@@ -283,6 +284,13 @@ typedef struct dm_fin {
                                                 accumulated bond-penalty energy (kJ) */
   double *F, *s, *QP, *sig;                  /* [n][9]: F, deviator s, V P A⁻¹, Cauchy σ */
   double *frc, *vbar;                        /* [n][3] */
+  /* The closing half kick's energies (of length h_close, mean velocity vclose [n][3]) are left
+   * pending by dm_fin_advance and added by the next step's stress pass (at the same QP, F and
+   * w, so the same bits) or by dm_fin_flush; keep_e, keep_ehg (optional, [n]): where that pass
+   * also writes e and e_hg with them added, i.e. of the state at the start of its step (a
+   * backup of that state, dm_fin_run.h). */
+  double *vclose, h_close, *keep_e, *keep_ehg;
+  bool pending;
   double work; /* work done by driven (DM_PRESCRIBED/DM_FIXED) particles (kJ) */
   /* fracture (dm_fracture.c; NULL when no material has a fracture model): failed[i] = 1 once
    * particle i failed; broken[i] the bond-penalty energy it held then (kJ), taken out of E_hg;
@@ -325,6 +333,13 @@ void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
 /* One kick–drift–kick step of length f->dt_next; MS_ERR_UNSTABLE (f->bad, f->bad_what) when a
  * J ≤ 0 or a non-finite e, p or force appears: the state is then the one of the bad step. */
 ms_status dm_fin_step(dm_fin *f);
+/* The same step, its closing half kick's energies left pending (f->pending): e and e_hg lack
+ * them until dm_fin_flush or the next step (which adds them in its stress pass, saving a pass
+ * over the bonds). dm_fin_step = dm_fin_advance + dm_fin_flush. */
+ms_status dm_fin_advance(dm_fin *f);
+/* Adds the pending half kick's energies (nothing pending: no-op); MS_ERR_UNSTABLE on a
+ * non-finite e. Call before reading e or e_hg after dm_fin_advance. */
+ms_status dm_fin_flush(dm_fin *f);
 /* Installs an external force (NULL: none) and recomputes the forces and dt_next at the current
  * state (no deviator step). */
 ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user);

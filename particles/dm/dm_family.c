@@ -219,7 +219,8 @@ ms_status dm_build_families(dm_model *m, const ms_ctx *ctx) {
   dm_state *s = m->s;
   for (int code = 0; code < 27; ++code) {
     int im[3] = {code % 3 - 1, (code / 3) % 3 - 1, code / 9 - 1};
-    for (int a = 0; a < 3; ++a) m->shift[code][a] = im[a] * m->opt.box[a];
+    for (int a = 0; a < 3; ++a) m->shift[code][a] = m->shift4[code][a] = im[a] * m->opt.box[a];
+    m->shift4[code][3] = 0.0;
   }
   cell_grid g;
   memset(&g, 0, sizeof g);

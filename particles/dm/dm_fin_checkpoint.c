@@ -113,7 +113,7 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
     path(name, sizeof name, group, "failed");
     st = read_into(h, name, f->n, 1, fl, e);
     for (size_t i = 0; st == MS_OK && i < f->n; ++i) {
-      f->failed[i] = (uint8_t)fl[i]; /* 1 failed, 2 a grain (dm_fracture.c) */
+      f->failed[i] = (uint8_t)fl[i]; /* 1 failed (dm_fracture.c) */
       if (f->failed[i]) f->m->kappa[i] = 0.0;
     }
     free(fl);

@@ -134,7 +134,8 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
 void dmf_backup_alloc(dmf_run *r) {
   const size_t n = r->s.n ? r->s.n : 1;
   dmf_backup *b = &r->bk;
-  b->w = ms_calloc(3 * n, sizeof(double)), b->u = ms_calloc(3 * n, sizeof(double));
+  /* w: +1 for dm_finite.c's 4-lane loads */
+  b->w = ms_calloc(3 * n + 1, sizeof(double)), b->u = ms_calloc(3 * n, sizeof(double));
   b->e = ms_calloc(n, sizeof(double)), b->ehg = ms_calloc(n, sizeof(double));
   b->eps_p = ms_calloc(n, sizeof(double)), b->q = ms_calloc(n, sizeof(double));
   b->p = ms_calloc(n, sizeof(double)), b->sigma_u = ms_calloc(n, sizeof(double));

@@ -44,11 +44,11 @@ typedef struct dmf_run {
   probe_rec *pr; /* [nprobes] the probe particles */
   double *hist;  /* [nrec_max][pcols]: t, w_x at each probe, every probe_every·pstride steps */
   size_t pcols, nrec, nrec_max;
-  long pstride;           /* doubled (every other row dropped) whenever the table is full */
-  double *bins, *sigma_u; /* scratch: profile bins, σ_u of the live state */
-  double E0, t, dEmax, wall;
-  double K, U, H;                       /* energies of the last good state (kJ) */
-  long step0;                           /* the step the run started from (0, or the checkpoint's) */
+  long pstride;                   /* doubled (every other row dropped) whenever the table is full */
+  double *bins, *sigma_u;         /* scratch: profile bins, σ_u of the live state */
+  double E0, t, dEmax, wall, cpu; /* wall and CPU time (s) of the steps */
+  double K, U, H;                 /* energies of the last good state (kJ) */
+  long step0;                     /* the step the run started from (0, or the checkpoint's) */
   long steps; /* the steps completed */ /* the step the run started from (0, or the checkpoint's) */
   dmf_backup bk;
 } dmf_run;

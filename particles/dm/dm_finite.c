@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void inv3(const double *a, double det, double *r) {
+DM_KERNEL_INLINE static inline void inv3(const double *a, double det, double *r) {
   const double id = 1.0 / det;
   r[0] = (a[4] * a[8] - a[5] * a[7]) * id;
   r[1] = (a[2] * a[7] - a[1] * a[8]) * id;
@@ -33,73 +33,99 @@ static void inv3(const double *a, double det, double *r) {
 
 static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED; }
 
+/* 4-lane vectors (GCC/Clang vector extension, lowered to what the target has). ld4 loads a
+ * particle's 3-vector and the next double (lane 3, unused): the arrays it reads (X, w, u of
+ * dm_state_alloc, v̄, Q, the backup's w) carry one double of padding at their end. */
+typedef double v4d __attribute__((vector_size(32)));
+DM_KERNEL_INLINE static inline v4d ld4(const double *p) {
+  v4d v;
+  memcpy(&v, p, sizeof v);
+  return v;
+}
+DM_KERNEL_INLINE static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
+
+/* Bond moments of one particle: Bw, Bu (stress), Bv, sv (a half kick's v̄), Bc, sc (the pending
+ * closing half kick's v̄). */
+typedef struct moments {
+  double Bw[9], Bu[9], Bv[9], Bc[9], sv, sc;
+} moments;
+
 /* The bond moments of particle i, each Σ_k Δa_ik ⊗ ξ_ik (row a, column b: Σ Δa_a ξ_b), so that
  * per-bond products with A⁻¹, P or C become one 3×3 product per particle afterwards (C =
  * (Σ Δw ⊗ ξ) A⁻¹, since g_ik = A⁻¹ξ_ik and A symmetric). Bw: of the displacement after a drift
- * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. With vb: Bv of
- * the half kick's mean velocity v̄ and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift). The
- * accumulators are independent (no long dependency chain; the compiler keeps them in registers).
- * `kick` and `stress` are constants at each call site, so each use compiles to its own loop. */
-static inline void bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
-                                const double *restrict u, const double *restrict vb, double dt,
-                                bool stress, bool kick, double *restrict Bw, double *restrict Bu,
-                                double *restrict Bv, double *restrict sv) {
+ * by dt (w + dt u, formed here so the drift itself can follow the pass); Bu: of u. kick: Bv of
+ * a half kick's mean velocity vb and sv = Σ_k Δv̄_ik·Δw_ik (w before the drift); close: the same,
+ * Bc and sc, of vc. Column c of each moment is one 4-lane vector over the components of Δa
+ * (lane 3 unused), updated per bond by ξ_c (broadcast) times Δa: three multiply-adds per moment,
+ * no lane shuffles in the loop, independent accumulators. The flags are constants at each call
+ * site, so each use compiles to its own loop; Bc and sc get the same bits in each. */
+DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, size_t i,
+                                                 const double *restrict w, const double *restrict u,
+                                                 const double *restrict vb,
+                                                 const double *restrict vc, double dt, bool stress,
+                                                 bool kick, bool close, moments *restrict M) {
   const double *restrict X = m->s->X;
-  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2];
-  double wi[3], wn[3], ui[3], vi[3];
-  for (int a = 0; a < 3; ++a) {
-    wi[a] = w[3 * i + a], ui[a] = u ? u[3 * i + a] : 0.0, vi[a] = vb ? vb[3 * i + a] : 0.0;
-    wn[a] = wi[a] + dt * ui[a];
-  }
-  /* rows of acc: Δ(w + dt u)_a, Δu_a (stress), Δv̄_a (kick); each row is a 4-lane vector over
-   * ξ's components (4th lane 0), so a row update is one multiply-add of ξ by a scalar (GCC/Clang
-   * vector extension; lowered to what the target has) */
-  typedef double v4d __attribute__((vector_size(32)));
-  const int r0 = stress ? 0 : 6, r1 = kick ? 9 : 6;
-  v4d acc[9] = {{0}};
-  double s0 = 0.0;
+  const v4d zero = {0}, xi0 = ld4(&X[3 * i]), wi = ld4(&w[3 * i]);
+  const v4d ui = stress ? ld4(&u[3 * i]) : zero;
+  const v4d vi = kick ? ld4(&vb[3 * i]) : zero, ci = close ? ld4(&vc[3 * i]) : zero;
+  const v4d wn = wi + dt * ui;
+  v4d aw0 = zero, aw1 = zero, aw2 = zero, au0 = zero, au1 = zero, au2 = zero;
+  v4d av0 = zero, av1 = zero, av2 = zero, s4 = zero;
+  v4d ac0 = zero, ac1 = zero, ac2 = zero, c4 = zero;
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
-    const double *sh = m->shift[m->img[b]];
-    const v4d xi = {X[3 * k] + sh[0] - x0, X[3 * k + 1] + sh[1] - y0, X[3 * k + 2] + sh[2] - z0,
-                    0.0};
-    double d[9];
-    for (int a = 0; a < 3; ++a) {
-      const double wk = w[3 * k + a];
-      if (stress) {
-        const double uk = u[3 * k + a];
-        d[a] = wk + dt * uk - wn[a], d[3 + a] = uk - ui[a];
-      }
-      if (kick) d[6 + a] = vb[3 * k + a] - vi[a], s0 += d[6 + a] * (wk - wi[a]);
+    const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
+    const v4d x = bc4(xi[0]), y = bc4(xi[1]), z = bc4(xi[2]);
+    const v4d wk = ld4(&w[3 * k]);
+    if (stress) {
+      const v4d uk = ld4(&u[3 * k]), dw = wk + dt * uk - wn, du = uk - ui;
+      aw0 += dw * x, aw1 += dw * y, aw2 += dw * z;
+      au0 += du * x, au1 += du * y, au2 += du * z;
     }
-    for (int r = r0; r < r1; ++r) acc[r] += d[r] * xi;
+    if (kick) {
+      const v4d dv = ld4(&vb[3 * k]) - vi;
+      av0 += dv * x, av1 += dv * y, av2 += dv * z;
+      s4 += dv * (wk - wi);
+    }
+    if (close) {
+      const v4d dc = ld4(&vc[3 * k]) - ci;
+      ac0 += dc * x, ac1 += dc * y, ac2 += dc * z;
+      c4 += dc * (wk - wi);
+    }
   }
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c) {
-      if (stress) Bw[3 * a + c] = acc[a][c], Bu[3 * a + c] = acc[3 + a][c];
-      if (kick) Bv[3 * a + c] = acc[6 + a][c];
+  for (int a = 0; a < 3; ++a) {
+    if (stress) {
+      M->Bw[3 * a] = aw0[a], M->Bw[3 * a + 1] = aw1[a], M->Bw[3 * a + 2] = aw2[a];
+      M->Bu[3 * a] = au0[a], M->Bu[3 * a + 1] = au1[a], M->Bu[3 * a + 2] = au2[a];
     }
-  if (kick) *sv = s0;
+    if (kick) M->Bv[3 * a] = av0[a], M->Bv[3 * a + 1] = av1[a], M->Bv[3 * a + 2] = av2[a];
+    if (close) M->Bc[3 * a] = ac0[a], M->Bc[3 * a + 1] = ac1[a], M->Bc[3 * a + 2] = ac2[a];
+  }
+  if (kick) M->sv = s4[0] + s4[1] + s4[2];
+  if (close) M->sc = c4[0] + c4[1] + c4[2];
 }
 
 /* r = B A (3×3, row-major) */
-static inline void mul33(const double *restrict B, const double *restrict A, double *restrict r) {
+DM_KERNEL_INLINE static inline void mul33(const double *restrict B, const double *restrict A,
+                                          double *restrict r) {
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
       r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
 }
 
-void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]) {
-  double Bw[9], Bu[9]; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
-  bond_moments(m, i, w, w, NULL, 0.0, true, false, Bw, Bu, NULL, NULL);
-  mul33(Bw, &m->Ainv[9 * i], C);
+DM_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i,
+                                                   double C[9]) {
+  moments M; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
+  bond_moments(m, i, w, w, NULL, NULL, 0.0, true, false, false, &M);
+  mul33(M.Bw, &m->Ainv[9 * i], C);
 }
 
 /* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
  * and the Q_P and F of the last force evaluation: Σ_k Δv̄·(Q_P ξ) = Q_P : Bv and
  * Σ_k Δv̄·z = sv − (F − I) : Bv (z = Δw − (F − I) ξ). Returns false if e is not finite. */
-static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double sv) {
+DM_KERNEL_INLINE static inline bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv,
+                                                double sv) {
   const double *QP = &f->QP[9 * i], *F = &f->F[9 * i];
   double pw = 0.0, ph = sv + Bv[0] + Bv[4] + Bv[8];
   for (int a = 0; a < 9; ++a) pw += QP[a] * Bv[a], ph -= F[a] * Bv[a];
@@ -110,63 +136,57 @@ static bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv, double 
 
 /* Strain, stress and Q of particle i at w + dt u (the drift of this step, done after the pass),
  * with rates from u; advances the deviator by dt. With h > 0 first the energy increments of the
- * half kick just made (its v̄ in f->vbar; *bad_e set if e is not finite). Returns the particle's
- * stable time step, or −1 (bad state, recorded in *what). */
-static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, const char **what,
-                         double *val) {
+ * pending closing half kick of the last step (f->pending; then e and e_hg also into keep_e,
+ * keep_ehg) and of the half kick just made (its v̄ in f->vbar); *bad_e set if e is not finite.
+ * Returns the particle's stable time step, or −1 (bad state, recorded in *what). */
+DM_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e,
+                                          const char **what, double *val) {
   if (dm_frac_failed(f, i)) return dm_frac_failed_step(f, i); /* no F, no EOS (dm_fracture.c) */
   dm_model *m = f->m;
   const dm_state *st = m->s;
   const double *Ai = &m->Ainv[9 * i];
-  double C[9], Fd[9], Bw[9], Bu[9], Bv[9], sv = 0;
-  if (h > 0) {
-    bond_moments(m, i, st->w, st->u, f->vbar, dt, true, true, Bw, Bu, Bv, &sv);
-    if (!kick_energy(f, i, h, Bv, sv)) *bad_e = true;
-  } else bond_moments(m, i, st->w, st->u, NULL, dt, true, false, Bw, Bu, NULL, NULL);
-  mul33(Bw, Ai, C), mul33(Bu, Ai, Fd);
+  double C[9], Fd[9];
+  moments M;
+  if (h > 0 && f->pending) {
+    bond_moments(m, i, st->w, st->u, f->vbar, f->vclose, dt, true, true, true, &M);
+    if (!kick_energy(f, i, f->h_close, M.Bc, M.sc)) *bad_e = true;
+    if (f->keep_e) f->keep_e[i] = f->e[i], f->keep_ehg[i] = f->ehg[i];
+    if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
+  } else if (h > 0) {
+    bond_moments(m, i, st->w, st->u, f->vbar, NULL, dt, true, true, false, &M);
+    if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
+  } else bond_moments(m, i, st->w, st->u, NULL, NULL, dt, true, false, false, &M);
+  mul33(M.Bw, Ai, C), mul33(M.Bu, Ai, Fd);
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = dm_det3(F), Jprev = f->J[i];
+  const double J = dm_det3(F);
   f->J[i] = J;
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = st->mass[i] / st->vol[i];
-  /* a failed particle whose family no longer measures its volume is a loose grain (no stress,
-   * density shown as ρ0: dm_fracture.c, dm_frac_grain); an intact one with J ≤ 0 stops the run */
-  bool grain = isfinite(J) && dm_frac_grain(f, i, J, Jprev);
-  if (!grain && (!(J > 0) || !isfinite(J))) {
+  if (!(J > 0) || !isfinite(J)) {
     *what = "J = det F", *val = J;
     return -1.0;
   }
-  double Fi[9] = {0}, L[9] = {0};
-  if (!grain) {
-    inv3(F, J, Fi);
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c)
-        L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
-  }
+  double Fi[9], L[9];
+  inv3(F, J, Fi);
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      L[3 * a + c] = Fd[3 * a] * Fi[c] + Fd[3 * a + 1] * Fi[3 + c] + Fd[3 * a + 2] * Fi[6 + c];
   const double trD = L[0] + L[4] + L[8];
-  bool open = grain || dm_frac_open(f, i, J); /* an open crack: no EOS (dm_fracture.c) */
-  double p = open ? 0.0 : eos_pressure(mt->eos, rho0 / J, f->e[i]);
-  double c = open ? eos_c0(mt->eos) : eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
-  if ((!isfinite(p) || !isfinite(c)) && dm_frac_failed(f, i)) { /* beyond the EOS: a grain */
-    f->failed[i] = 2;
-    grain = open = true, p = 0.0, c = eos_c0(mt->eos);
-  }
+  const double p = eos_pressure(mt->eos, rho0 / J, f->e[i]);
+  const double c = eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
   }
-  const double rho = grain ? rho0 : rho0 / J;
-  const double ell = grain ? f->par.ell : f->par.ell * pow(J, 1.0 / f->dim);
-  const double q =
-      trD < 0 && !open ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
+  const double rho = rho0 / J, ell = f->par.ell * pow(J, 1.0 / f->dim);
+  const double q = trD < 0 ? rho * ell * (f->par.cq * ell * -trD + f->par.cl * c) * -trD : 0.0;
   double *s = &f->s[9 * i];
   const int strength = mt->yield != DM_YIELD_NONE;
   double G = mt->G, Y = mt->Y0; /* elastic_plastic: constants */
-  /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T); not for a failed
-   * particle (no deviator; an open one's density may be beyond the cold curve) */
-  if (mt->yield >= DM_YIELD_STEINBERG_GUINAN && !dm_frac_failed(f, i)) {
+  /* steinberg_guinan G(p, T), Y(ε_p, p, T); johnson_cook Y(ε_p, ε̇, T) */
+  if (mt->yield >= DM_YIELD_STEINBERG_GUINAN) {
     const double T = dm_sg_temperature(mt->sg, mt->eos, rho, f->e[i]);
     if (!isfinite(T) && mt->frac.model != DM_FRACTURE_NONE && rho < eos_rho0(mt->eos)) {
       Y = 0.0; /* stretched beyond the cold curve (below ~0.63 ρ0 for Al): far beyond the spall
@@ -185,7 +205,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
       G = mt->sg->G0, Y = dm_jc_yield(mt->sg, f->eps_p[i], rate, T);
     } else dm_sg_moduli(mt->sg, rho / eos_rho0(mt->eos), p, T, f->eps_p[i], &G, &Y);
   }
-  if (strength && dt > 0 && !dm_frac_failed(f, i)) {
+  if (strength && dt > 0) {
     /* Jaumann: ṡ = 2G D′ + W s − s W (D = sym L, W = skew L) */
     double D[9], W[9], ds[9];
     for (int a = 0; a < 3; ++a)
@@ -227,7 +247,7 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) {
       QP[3 * a + b] = V * (P[3 * a] * Ai[b] + P[3 * a + 1] * Ai[3 + b] + P[3 * a + 2] * Ai[6 + b]);
-      Q[3 * a + b] = QP[3 * a + b] - kap * C[3 * a + b];
+      Q[3 * b + a] = QP[3 * a + b] - kap * C[3 * a + b]; /* transposed: gather_one */
     }
   f->rho[i] = rho, f->p[i] = p, f->q[i] = q;
   const double cL = sqrt(c * c + (strength ? 4.0 * G / (3.0 * rho) : 0.0));
@@ -239,35 +259,44 @@ static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e, 
 }
 
 /* The force on particle i, F_i = Σ_k [(Q_i + Q_k) ξ_ik + (κ_i + κ_k) Δw_ik] (dm_model.c's
- * gather_force, the same sum): Q_k ξ as three 4-lane rows (row a of Q_k loaded with the next
- * element in the 4th lane, times ξ padded with 0 there; row 2 is loaded one element early so
- * the load stays inside Q, against ξ shifted by one lane), summed over lanes at the end. */
-static void gather_one(const dm_model *restrict m, const double *restrict w, size_t i,
-                       double *restrict F) {
-  typedef double v4d __attribute__((vector_size(32)));
-  const double *restrict X = m->s->X, *restrict Q = m->Q, *restrict kap = m->kappa;
-  const double x0 = X[3 * i], y0 = X[3 * i + 1], z0 = X[3 * i + 2], ki = kap[i];
-  const v4d wi = {w[3 * i], w[3 * i + 1], w[3 * i + 2], 0.0};
-  v4d r0 = {0}, r1 = {0}, r2 = {0}, fw = {0}, sxi = {0};
+ * gather_force, the same sum) = Q_i Σ_k ξ_ik + Σ_k [Q_k ξ_ik + (κ_i + κ_k) Δw_ik]. m->Q holds
+ * each Q transposed (stress_one), so Q_k ξ is Σ_c ξ_c (column c of Q_k): three broadcasts times
+ * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. */
+DM_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
+                                        size_t i, double *restrict F) {
+  const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
+  const double ki = kap[i];
+  const v4d zero = {0}, wi = ld4(&w[3 * i]), xi0 = ld4(&X[3 * i]);
+  v4d r0 = zero, r1 = zero, r2 = zero, fw = zero;
+  v4d sxi = zero; /* Σ_k ξ_ik */
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
-    const double *sh = m->shift[m->img[b]];
-    const double x = X[3 * k] + sh[0] - x0, y = X[3 * k + 1] + sh[1] - y0,
-                 z = X[3 * k + 2] + sh[2] - z0;
-    const v4d xi = {x, y, z, 0.0}, xs = {0.0, x, y, z};
-    const v4d wk = {w[3 * k], w[3 * k + 1], w[3 * k + 2], 0.0};
-    v4d q0, q1, q2;
-    memcpy(&q0, &Q[9 * k], sizeof q0), memcpy(&q1, &Q[9 * k + 3], sizeof q1);
-    memcpy(&q2, &Q[9 * k + 5], sizeof q2);
-    r0 += q0 * xi, r1 += q1 * xi, r2 += q2 * xs;
-    fw += (ki + kap[k]) * (wk - wi);
+    const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
+    const double x = xi[0], y = xi[1], z = xi[2];
+    const double *q = &QT[9 * k];
+    r0 += bc4(x) * ld4(q), r1 += bc4(y) * ld4(q + 3), r2 += bc4(z) * ld4(q + 6);
+    fw += bc4(ki + kap[k]) * (ld4(&w[3 * k]) - wi);
     sxi += xi;
   }
-  const double *qi = &Q[9 * i];
-  F[3 * i] = r0[0] + r0[1] + r0[2] + fw[0] + qi[0] * sxi[0] + qi[1] * sxi[1] + qi[2] * sxi[2];
-  F[3 * i + 1] = r1[0] + r1[1] + r1[2] + fw[1] + qi[3] * sxi[0] + qi[4] * sxi[1] + qi[5] * sxi[2];
-  F[3 * i + 2] = r2[1] + r2[2] + r2[3] + fw[2] + qi[6] * sxi[0] + qi[7] * sxi[1] + qi[8] * sxi[2];
+  const double *qi = &QT[9 * i]; /* Q_i ξ-sum: row a of Q_i is qi[a], qi[3 + a], qi[6 + a] */
+  for (int a = 0; a < 3; ++a)
+    F[3 * i + a] =
+        r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sxi[0] + qi[3 + a] * sxi[1] + qi[6 + a] * sxi[2];
+}
+
+/* w += dt u over n doubles: cloned like the stress pass, which forms the same w + dt u. */
+DM_KERNEL_CLONES static void drift(double *restrict w, const double *restrict u, double dt,
+                                   size_t n) {
+  for (size_t j = 0; j < n; ++j) w[j] += dt * u[j];
+}
+
+/* The pending closing half kick's energies of particle i (dm_fin_flush); false if e is not
+ * finite. */
+DM_KERNEL_CLONES static bool flush_one(dm_fin *f, size_t i) {
+  moments M;
+  bond_moments(f->m, i, f->m->s->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
+  return kick_energy(f, i, f->h_close, M.Bc, M.sc);
 }
 
 static ms_status bad_energy(dm_fin *f, long i) {
@@ -304,10 +333,10 @@ static ms_status forces(dm_fin *f, double dt, double h) {
       if (tdt < dtmin || (tdt == dtmin && ti < imin)) dtmin = tdt, imin = ti;
     }
   }
+  if (h > 0) f->pending = false;              /* the stress pass added them */
   if (bad_e < n) return bad_energy(f, bad_e); /* the kick failed: no drift */
   dm_state *st = f->m->s;
-  if (dt > 0)
-    for (size_t j = 0; j < 3 * f->n; ++j) st->w[j] += dt * st->u[j];
+  if (dt > 0) drift(st->w, st->u, dt, 3 * f->n);
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
     double val = 0;
@@ -334,16 +363,20 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   return MS_OK;
 }
 
-ms_status dm_fin_refresh(dm_fin *f) { return forces(f, 0.0, 0.0); }
+ms_status dm_fin_refresh(dm_fin *f) {
+  const ms_status r = dm_fin_flush(f); /* at the QP and F it is about to replace */
+  return r != MS_OK ? r : forces(f, 0.0, 0.0);
+}
 
 /* The velocity part of a half kick of length h = dt/2 with the current forces: u, its mean v̄
- * over the kick, and the work of the driven particles and of the external force. */
-static void kick_velocities(dm_fin *f, double h) {
+ * over the kick (into vbar [n][3]), and the work of the driven particles and of the external
+ * force. */
+static void kick_velocities(dm_fin *f, double h, double *vbar) {
   dm_state *st = f->m->s;
   const long n = (long)f->n;
   double dW = 0.0, dWe = 0.0;
   for (long i = 0; i < n; ++i) {
-    double *u = &st->u[3 * i], *vb = &f->vbar[3 * i];
+    double *u = &st->u[3 * i], *vb = &vbar[3 * i];
     if (is_driven(st->bc[i])) {
       for (int a = 0; a < 3; ++a) vb[a] = u[a];
       dW -= h * (f->frc[3 * i] * u[0] + f->frc[3 * i + 1] * u[1] + f->frc[3 * i + 2] * u[2]);
@@ -360,33 +393,38 @@ static void kick_velocities(dm_fin *f, double h) {
   f->work += dW, f->ext_work += dWe;
 }
 
-/* The energy part of the closing half kick (the opening one's is in the stress pass). */
-static ms_status kick_energies(dm_fin *f, double h) {
-  dm_model *m = f->m;
-  const dm_state *st = m->s;
+ms_status dm_fin_flush(dm_fin *f) {
+  if (!f->pending) return MS_OK;
   const long n = (long)f->n;
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
-  for (long i = 0; i < n; ++i) {
-    double Bv[9], sv;
-    bond_moments(m, (size_t)i, st->w, NULL, f->vbar, 0.0, false, true, NULL, NULL, Bv, &sv);
-    if (!kick_energy(f, (size_t)i, h, Bv, sv) && i < bad) bad = i;
-  }
+  for (long i = 0; i < n; ++i)
+    if (!flush_one(f, (size_t)i) && i < bad) bad = i;
+  f->pending = false;
   return bad < n ? bad_energy(f, bad) : MS_OK;
 }
 
-/* Kick (u; e in the stress pass) – drift (after the stress pass) – forces – kick (u, e). */
-ms_status dm_fin_step(dm_fin *f) {
+/* Kick (u; e in the stress pass, with the last step's pending closing kick) – drift (after the
+ * stress pass) – forces – kick (u; e pending). */
+ms_status dm_fin_advance(dm_fin *f) {
   const double dt = f->dt_next;
-  kick_velocities(f, 0.5 * dt);
-  dm_frac_contact_work(f, 0.5 * dt);
+  if (f->failed && f->keep_e && f->pending) /* the stress pass skips failed particles: their e is */
+    for (size_t i = 0; i < f->n; ++i)       /* complete now (their pending increments are 0) */
+      if (f->failed[i]) f->keep_e[i] = f->e[i], f->keep_ehg[i] = f->ehg[i];
+  kick_velocities(f, 0.5 * dt, f->vbar);
+  dm_frac_contact_work(f, 0.5 * dt, f->vbar);
   ms_status r = forces(f, dt, 0.5 * dt);
   if (r != MS_OK) return r;
-  kick_velocities(f, 0.5 * dt);
-  dm_frac_contact_work(f, 0.5 * dt);
-  r = kick_energies(f, 0.5 * dt);
+  kick_velocities(f, 0.5 * dt, f->vclose);
+  dm_frac_contact_work(f, 0.5 * dt, f->vclose);
+  f->h_close = 0.5 * dt, f->pending = true;
   ++f->step;
-  return r;
+  return MS_OK;
+}
+
+ms_status dm_fin_step(dm_fin *f) {
+  const ms_status r = dm_fin_advance(f);
+  return r != MS_OK ? r : dm_fin_flush(f);
 }
 
 void dm_fs_history_init(dm_fs_history *h, size_t cap) {
@@ -443,6 +481,8 @@ void dm_fin_bond_penalty(dm_fin *f) {
 }
 
 ms_status dm_fin_set_external(dm_fin *f, dm_fin_ext_fn fn, void *user) {
+  const ms_status r = dm_fin_flush(f); /* at the QP and F it is about to replace */
+  if (r != MS_OK) return r;
   f->ext = fn, f->ext_user = user;
   if (fn && !f->fext) f->fext = ms_calloc(3 * (f->n ? f->n : 1), sizeof(double));
   return forces(f, 0.0, 0.0);
@@ -452,7 +492,7 @@ void dm_fin_destroy(dm_fin **fp) {
   if (!fp || !*fp) return;
   dm_fin *f = *fp;
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
-  free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar);
+  free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar), free(f->vclose);
   dm_frac_free(f);
   free(f->fext);
   free(f);
@@ -483,7 +523,9 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->ehg = ms_calloc(n1, sizeof(double));
   f->F = ms_calloc(9 * n1, sizeof(double)), f->s = ms_calloc(9 * n1, sizeof(double));
   f->QP = ms_calloc(9 * n1, sizeof(double)), f->sig = ms_calloc(9 * n1, sizeof(double));
-  f->frc = ms_calloc(3 * n1, sizeof(double)), f->vbar = ms_calloc(3 * n1, sizeof(double));
+  f->frc = ms_calloc(3 * n1, sizeof(double)),
+  f->vbar = ms_calloc(3 * n1 + 1, sizeof(double)); /* +1: ld4 */
+  f->vclose = ms_calloc(3 * n1 + 1, sizeof(double));
   dm_frac_alloc(f);
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);

@@ -252,12 +252,13 @@ ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin) {
   return MS_OK;
 }
 
-/* The spring's work into econ, the dashpot's into heat: a pair's dissipation
- * h g (ū_k − ū_i)·y/r, half to each particle (each end sees the same g, y and Δū negated). */
-void dm_frac_contact_work(dm_fin *f, double h) {
+/* The spring's work into econ, the dashpot's into heat over the half kick of mean velocity vb
+ * (f->vbar, or f->vclose for the closing one): a pair's dissipation h g (ū_k − ū_i)·y/r, half
+ * to each particle (each end sees the same g, y and Δū negated). */
+void dm_frac_contact_work(dm_fin *f, double h, const double *vb) {
   if (!f->failed) return;
   const dm_model *m = f->m;
-  const double *vb = f->vbar, *w = m->s->w;
+  const double *w = m->s->w;
   const long n = (long)f->n;
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < n; ++i)
@@ -277,34 +278,6 @@ void dm_frac_contact_work(dm_fin *f, double h) {
       }
       f->e[i] += heat / m->s->mass[i];
     }
-}
-
-/* The grain test of dm_impl.h. Why: the least-squares F of a failed particle's scattered
- * family can show any J, and a pressure from it is work never done — in the Piekutowski
- * perforation (docs/validation.md) failed particles' J fell from 0.77 to 0.26 in one step,
- * their pressure reached 4·10⁵ GPa and their internal energy −1.6·10⁶ kJ/g fed the kinetic
- * energy of the cloud (the balance held to round-off, the state was nonsense). A stretch of 2
- * puts a neighbour a whole spacing from where a continuum would keep it; a real flow changes J
- * by less than ~courant·|Δu|/c per step (≤ 0.2 at courant 0.4), a 30 % jump is the fit's. */
-bool dm_frac_grain(dm_fin *f, size_t i, double J, double Jprev) {
-  if (!dm_frac_failed(f, i)) return false;
-  if (f->failed[i] == 2) return true;
-  bool grain = !(J > 0) || (Jprev > 0 && fabs(J / Jprev - 1.0) > DM_FRAC_JUMP);
-  const dm_model *m = f->m;
-  const double *w = m->s->w;
-  const double l2 = DM_FRAC_DISPERSED * DM_FRAC_DISPERSED;
-  for (size_t b = m->start[i]; !grain && b < m->start[i + 1]; ++b) {
-    const size_t k = m->nbr[b];
-    double xi[3], r0 = 0, r1 = 0;
-    dm_bond_vector(m, i, b, xi);
-    for (int a = 0; a < 3; ++a) {
-      const double d = xi[a] + w[3 * k + a] - w[3 * i + a];
-      r0 += xi[a] * xi[a], r1 += d * d;
-    }
-    grain = r1 > l2 * r0;
-  }
-  if (grain) f->failed[i] = 2;
-  return grain;
 }
 
 double dm_fin_broken_energy(const dm_fin *f) {

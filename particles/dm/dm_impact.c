@@ -155,7 +155,7 @@ static void copy_fields(double *buf, size_t n, double *fld[NFIELD]) {
  * (docs/output.md, "Particle snapshots"; ptl_write_snapshot with the particles.xmf series):
  * current x = X + w, velocity u, mass, material (index into material_names: the bodies'
  * materials, each name once), then the model's fields: body, first reference X0, ρ, p, e,
- * ε_p, J (fld: live_fields' order), failed (0 intact, 1 failed, 2 a grain: dm_fracture.c);
+ * ε_p, J (fld: live_fields' order), failed (0 intact, 1 failed: dm_fracture.c);
  * attributes time, step, r0 = h. */
 static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *name,
                             const dm_fin *f, double *const fld[NFIELD], const double *X0,

@@ -52,6 +52,23 @@ bool dm_jc_set(const char *name, dm_sg *out);
 void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
                 dm_sg *out);
 
+/* Runtime dispatch of the finite-deformation model's bond loops (docs/benchmarks.md, "One binary
+ * for every x86-64"), as cluster dynamics does it (cd_impl.h): in a portable build (x86-64-v2,
+ * MSCALE_NATIVE=OFF) each function marked DM_KERNEL_CLONES is compiled for x86-64-v2, -v3 (AVX2,
+ * FMA) and -v4 (AVX-512) and picked by CPU detection when the program loads; DM_KERNEL_INLINE
+ * marks its helpers, inlined into each clone. Every path that computes the same quantity (the
+ * stress pass and the flush of the closing kick; F in the stress pass and in a snapshot; the
+ * drift) is cloned, so one CPU computes each with the same instructions, the same bits. A native
+ * build for an AVX-512 CPU needs no clones. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX512F__)
+#define DM_KERNEL_CLONES                                                                           \
+  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
+#define DM_KERNEL_INLINE __attribute__((always_inline))
+#else
+#define DM_KERNEL_CLONES
+#define DM_KERNEL_INLINE
+#endif
+
 /* det of a 3×3 matrix (row-major). */
 static inline double dm_det3(const double *a) {
   return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
@@ -73,9 +90,7 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
 
 /* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
  * dm_frac_alloc: failed[], broken[] and the contact's arrays (kcon, dtcon, fcon, econ) when a
- * material of f has a fracture model (else NULL); dm_frac_free releases them. dm_frac_open:
- * kept for the stress pass's tests; false for every particle the pass reaches (a failed one
- * leaves it through dm_frac_failed_step first). dm_frac_stress, called by the stress pass after
+ * material of f has a fracture model (else NULL); dm_frac_free releases them. dm_frac_stress, called by the stress pass after
  * σ = s − (p + q) I: the failure test of an intact particle (books its bond-penalty energy as
  * broken and switches its penalty off); a failed one gets σ = s = 0. dm_frac_failed_step: the
  * stress pass's whole work for a failed particle (Q = V P A⁻¹ = σ = s = 0, q = 0), returns its
@@ -88,23 +103,11 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
 static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
-/* A failed particle becomes a loose grain of debris for good (failed[i] = 2: no stress, no
- * EOS, density shown as ρ0) when its family no longer measures its volume: J ≤ 0, a bond
- * stretched beyond DM_FRAC_DISPERSED (its neighbours no longer surround it), or J changing by
- * more than DM_FRAC_JUMP of itself in one stress pass (the fit of a scattered family jumping,
- * not a flow: docs/particles-dm.md "Fracture"). Checks and marks particle i (dm_fracture.c);
- * Jprev ≤ 0: no previous J. */
-#define DM_FRAC_DISPERSED 2.0
-#define DM_FRAC_JUMP      0.3
-bool dm_frac_grain(dm_fin *f, size_t i, double J, double Jprev);
-static inline bool dm_frac_open(const dm_fin *f, size_t i, double J) {
-  return dm_frac_failed(f, i) && J > 1.0;
-}
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
 double dm_frac_failed_step(dm_fin *f, size_t i);
 ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin);
-void dm_frac_contact_work(dm_fin *f, double h);
+void dm_frac_contact_work(dm_fin *f, double h, const double *vb);
 /* The deck's `fracture: {model: mean_stress|principal_stress|none, spall_strength, failure_strain}`
  * of `section` (absent: no fracture); located errors (no or non-positive spall_strength) in e;
  * `where` names the section in messages. */

@@ -28,9 +28,10 @@ void dm_state_alloc(dm_state *s, size_t n, int dim) {
   s->n = n;
   s->dim = dim;
   size_t m = n ? n : 1;
-  s->X = ms_aligned_alloc(3 * m, sizeof(double));
-  s->w = ms_aligned_alloc(3 * m, sizeof(double));
-  s->u = ms_aligned_alloc(3 * m, sizeof(double));
+  /* one double of padding: 4-lane loads of the last particle's vector (dm_finite.c) */
+  s->X = ms_aligned_alloc(3 * m + 1, sizeof(double));
+  s->w = ms_aligned_alloc(3 * m + 1, sizeof(double));
+  s->u = ms_aligned_alloc(3 * m + 1, sizeof(double));
   s->mass = ms_aligned_alloc(m, sizeof(double));
   s->vol = ms_aligned_alloc(m, sizeof(double));
   s->K = ms_aligned_alloc(m, sizeof(double));
@@ -62,7 +63,7 @@ void dm_alloc_work(dm_model *m, size_t n) {
   m->kappa = ms_aligned_alloc(na, sizeof(double));
   m->C = ms_aligned_alloc(9 * na, sizeof(double));
   m->sigma = ms_aligned_alloc(9 * na, sizeof(double));
-  m->Q = ms_aligned_alloc(9 * na, sizeof(double));
+  m->Q = ms_aligned_alloc(9 * na + 1, sizeof(double)); /* +1: 4-lane loads (dm_finite.c) */
   m->energy = ms_aligned_alloc(na, sizeof(double));
 }
 

@@ -248,7 +248,7 @@ static double omega_max(dm_dist *d, const dm_state *gs) {
   return sqrt(fmax(lam, 0.0));
 }
 
-static double cpu_time(void) {
+double dmp_cpu_time(void) {
   struct timespec ts;
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -555,10 +555,10 @@ static ms_status run_steps(dm_run *r, ms_status st) {
     run_write_fields(r, step, t);
     if (step == r->nsteps) break;
     r->last_step = step;
-    double w0 = ms_wall_time(), c0 = cpu_time();
+    double w0 = ms_wall_time(), c0 = dmp_cpu_time();
     st = rkn_step(r->ig, t, dt, r->ls->w, r->ls->u, dm_dist_accel, dm_dist_constrain, r->d);
     r->wall += ms_wall_time() - w0;
-    r->cpu += cpu_time() - c0;
+    r->cpu += dmp_cpu_time() - c0;
     ms_progress_update(&prog, t + dt, step + 1);
   }
   ms_progress_finish(&prog, p->sum.t_end, r->nsteps);

@@ -180,8 +180,49 @@ static size_t first_nonfinite(const dmf_run *r, const char **what, double *val) 
   return 0;
 }
 
+/* Whether write_fields has a profile or a snapshot to write at time t. */
+static int fields_due(const dmf_run *r, double t, int last) {
+  const dm_problem *p = r->p;
+  for (size_t q = 0; q < p->nprofile_times; ++q)
+    if (!r->prof_done[q] && (t >= p->profile_times[q] * (1 - 1e-12) || last)) return 1;
+  for (size_t q = 0; q < p->nsnapshot_times; ++q)
+    if (!r->snap_done[q] && (t >= p->snapshot_times[q] * (1 - 1e-12) || last)) return 1;
+  return 0;
+}
+
+/* The pending half kick's energies (dm_fin_flush), timed with the steps. */
+static ms_status flush(dmf_run *r) {
+  const double w0 = ms_wall_time(), c0 = dmp_cpu_time();
+  const ms_status st = dm_fin_flush(r->f);
+  r->wall += ms_wall_time() - w0, r->cpu += dmp_cpu_time() - c0;
+  return st;
+}
+
+/* A step (or the flush of its energies) failed: the report and the last good state's snapshot
+ * (dm_fin_run.h's backup: the start of the failed step). */
+static ms_status failed(dmf_run *r, ms_status st) {
+  /* the backup's e and e_hg were completed by the failed step's stress pass (keep_e): a
+   * non-finite one there (the last step's closing kick) leaves no good state to write */
+  for (size_t i = 0; i < r->s.n && r->bk.valid; ++i)
+    if (!isfinite(r->bk.e[i]) || !isfinite(r->bk.ehg[i])) {
+      r->bk.valid = 0;
+      ms_log(r->ctx, MS_LOG_WARN,
+             "discrete model (response eos): particle %zu: the energy of the last step's closing "
+             "half kick is not finite: no snapshot of the last good state",
+             i);
+    }
+  dmf_report_unstable(r, r->f->bad, r->f->bad_what, r->f->bad_value, r->t);
+  r->t = r->bk.t;
+  return st;
+}
+
 /* The time loop from the run's state to the end; MS_ERR_UNSTABLE with the report and the last
- * good state's snapshot when a step fails. */
+ * good state's snapshot when a step fails. The steps leave their closing half kick's energies
+ * pending (dm_fin_advance: the next step's stress pass adds them, saving a pass over the bonds);
+ * they are added (dm_fin_flush) at the states that are recorded — every energy_every steps, the
+ * last, and those a checkpoint, a profile, a snapshot or a stop writes — and only there are the
+ * energies summed, the balance taken and checked finite. The last good state's e and e_hg are
+ * completed by the next stress pass (dm_fin keep_e, keep_ehg). */
 static ms_status run_steps(dmf_run *r) {
   const dm_problem *p = r->p;
   dm_fin *f = r->f;
@@ -189,21 +230,30 @@ static ms_status run_steps(dmf_run *r) {
   const long every = p->energy_every, nyz = p->ncell[1] * p->ncell[2];
   ms_status st = MS_OK;
   bool stopping = false; /* SIGINT/SIGTERM: stop at the next checkpoint (docs/reliability.md) */
+  f->keep_e = r->bk.e, f->keep_ehg = r->bk.ehg;
   for (long step = r->step0;; ++step) {
-    double K, U, H;
-    dm_fin_energies(f, &K, &U, &H);
-    if (!isfinite(K + U + H - f->work)) {
-      const char *what;
-      double val;
-      const size_t i = first_nonfinite(r, &what, &val);
-      dmf_report_unstable(r, i, what, val, r->t);
-      r->t = r->bk.t;
-      return MS_ERR_UNSTABLE;
-    }
-    r->K = K, r->U = U, r->H = H, r->steps = f->step;
+    r->steps = f->step;
     const int last = (p->steps > 0 && step >= p->steps) || r->t >= t_end * (1 - 1e-12);
+    const int ckpt =
+        p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 && !last;
+    const int sample = step % every == 0 || last || ckpt || stopping || fields_due(r, r->t, last);
+    double K = 0, U = 0, H = 0;
+    if (sample) {
+      st = flush(r);
+      if (st != MS_OK) return failed(r, st);
+      dm_fin_energies(f, &K, &U, &H);
+      if (!isfinite(K + U + H - f->work)) {
+        const char *what;
+        double val;
+        const size_t i = first_nonfinite(r, &what, &val);
+        dmf_report_unstable(r, i, what, val, r->t);
+        r->t = r->bk.t;
+        return MS_ERR_UNSTABLE;
+      }
+      r->K = K, r->U = U, r->H = H;
+    }
     /* the checkpoint of the state at the top of this step, before anything of it is recorded */
-    if (p->checkpoint_every > 0 && step > r->step0 && step % p->checkpoint_every == 0 && !last) {
+    if (ckpt) {
       st = dmf_checkpoint_write(r);
       if (st != MS_OK) return st;
       if (stopping) { /* `mscale run --continue` goes on from here */
@@ -217,18 +267,20 @@ static ms_status run_steps(dmf_run *r) {
       if (p->checkpoint_every <= 0) {
         ms_log(r->ctx, MS_LOG_WARN,
                "discrete model (response eos): interrupted at step %ld (no checkpoints)", step);
-        return MS_INTERRUPTED;
+        return flush(r) != MS_OK ? failed(r, MS_ERR_UNSTABLE) : MS_INTERRUPTED;
       }
       ms_log(r->ctx, MS_LOG_WARN,
              "discrete model (response eos): interrupt: stopping at the next checkpoint (step %ld)",
              (step / p->checkpoint_every + 1) * p->checkpoint_every);
     }
-    const double bal = K + U + H + dm_fin_broken_energy(f) + dm_fin_contact_energy(f) - f->work -
-                       r->E0; /* broken, contact: 0 without fracture */
-    r->dEmax = fmax(r->dEmax, fabs(bal));
-    if ((step % every == 0 || last) && r->ne < r->nemax) {
-      const double row[6] = {r->t, K, U, H, f->work, bal};
-      memcpy(&r->eh[6 * r->ne++], row, sizeof row);
+    if (sample) {
+      const double bal = K + U + H + dm_fin_broken_energy(f) + dm_fin_contact_energy(f) - f->work -
+                         r->E0; /* broken, contact: 0 without fracture */
+      r->dEmax = fmax(r->dEmax, fabs(bal));
+      if ((step % every == 0 || last) && r->ne < r->nemax) {
+        const double row[6] = {r->t, K, U, H, f->work, bal};
+        memcpy(&r->eh[6 * r->ne++], row, sizeof row);
+      }
     }
     write_fields(r, r->t, last);
     if (r->flyer) dm_fs_history_record(&r->fs, step, r->t, &r->s, p->ncell[0], nyz);
@@ -236,15 +288,11 @@ static ms_status run_steps(dmf_run *r) {
     if (last) break;
     dmf_backup_take(r, r->t);
     if (r->t + f->dt_next > t_end) f->dt_next = t_end - r->t;
-    const double dt = f->dt_next, w0 = ms_wall_time();
-    st = dm_fin_step(f);
-    r->wall += ms_wall_time() - w0;
+    const double dt = f->dt_next, w0 = ms_wall_time(), c0 = dmp_cpu_time();
+    st = dm_fin_advance(f);
+    r->wall += ms_wall_time() - w0, r->cpu += dmp_cpu_time() - c0;
     r->t += dt;
-    if (st != MS_OK) {
-      dmf_report_unstable(r, f->bad, f->bad_what, f->bad_value, r->t);
-      r->t = r->bk.t;
-      return st;
-    }
+    if (st != MS_OK) return failed(r, st);
   }
   return MS_OK;
 }
@@ -286,7 +334,7 @@ static void report(dmf_run *r) {
            "contact - W - E0)",
            dm_fin_failed_count(f), dm_fin_broken_energy(f), dm_fin_contact_energy(f),
            dm_fin_contact_potential(f));
-  sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall;
+  sum->steps = steps, sum->t_end = r->t, sum->wall_s = r->wall, sum->cpu_s = r->cpu;
   sum->particle_steps_per_s =
       r->wall > 0 ? (double)r->nreal * (double)(steps - r->step0) / r->wall : 0;
   sum->energy_err_max =

@@ -81,6 +81,8 @@ void dmp_set_initial(dm_problem *p, dm_state *s, size_t nreal);
 double dmp_wave_speed(const dm_problem *p);
 /* The run's summary with every field that a run may leave unset as NaN. */
 void dmp_summary_reset(dm_run_summary *sum, int finite);
+/* CPU time of this process (s): the loop figures of the run summaries. */
+double dmp_cpu_time(void);
 /* response: eos (dm_problem_finite.c) */
 ms_status dmp_run_finite(ms_ctx *ctx, dm_problem *p);
 

@@ -80,6 +80,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   /* fracture's per-bond contact state (dm_fracture.c: rest lengths, dashpot) is indexed by the
    * old families' bonds: not carried over to new families (yet), so no update with fracture */
   if (f->failed) return MS_ERR_INTERNAL;
+  const ms_status fl = dm_fin_flush(f); /* at the families it is about to replace */
+  if (fl != MS_OK) return fl;
   rep->released = penalty_stored(f);
   double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
   double jmin = INFINITY, jmax = 0;
@@ -114,8 +116,6 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_model_destroy(&old);
   dm_fin_bond_penalty(f);
   rep->bonds = m->nbonds;
-  for (size_t i = 0; i < n; ++i)
-    f->J[i] = 1.0; /* J is now relative to the new reference (the
-                                                  grain test of dm_fracture.c compares with it) */
+  for (size_t i = 0; i < n; ++i) f->J[i] = 1.0; /* J is now relative to the new reference */
   return dm_fin_refresh(f);
 }
