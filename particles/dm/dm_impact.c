@@ -528,8 +528,9 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
     taylor_profile(p, f->m->s, X0, p->sum.length, p->sum.radius_at);
     ms_log(ctx, MS_LOG_INFO,
-           "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg - W_wall - "
-           "E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = %.3g; transverse "
+           "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
+           "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
+           "%.3g; transverse "
            "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
            "%.4g; %ld reference updates; %zu failed particles, broken energy %.4g kJ; body 0: "
            "length "
