@@ -299,10 +299,11 @@ typedef struct dm_fin {
    * last evaluation, econ[i] the contact energy (kJ, the pair forces' work booked with each half
    * kick's time-centred velocity), lcon [bonds] the contact's rest length of each broken bond
    * (−1 while not broken; nlcon = the model's bond count), gcon [bonds] its dashpot force of the
-   * last evaluation, dtclose[i] its closing-speed step of the last evaluation */
+   * last evaluation, dtclose[i] its closing-speed step of the last evaluation; lam_end[256]
+   * per material index: the smallest r/L at which its EOS springs are finite (0: none) */
   uint8_t *failed;
   double *broken;
-  double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose;
+  double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose, *lam_end;
   size_t nlcon;
   double dt_next;
   size_t dt_particle; /* the particle whose stable step is dt_next (smallest index of ties) */

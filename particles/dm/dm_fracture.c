@@ -72,6 +72,29 @@ static void contact_stiffness(dm_fin *f) {
   }
 }
 
+static bool pair_law_finite(const eos_t *eos, int dim, double lam);
+
+/* lam_end of each material present: the end of its EOS's range as a failed pair's r/L
+ * (mg_linear ends at ρ/ρ0 = s/(s − 1): λ = ((s − 1)/s)^(1/d), 0.63 for Al in 3D), by bisection
+ * to 1e-9; 0 when the springs are finite down to λ = 1e-3. */
+static void contact_ends(dm_fin *f) {
+  bool seen[256] = {false};
+  for (size_t i = 0; i < f->n; ++i) {
+    const uint8_t im = f->imat[i];
+    if (seen[im]) continue;
+    seen[im] = true;
+    const eos_t *eos = f->mat[im].eos;
+    double lo = 1e-3, hi = 1.0;
+    if (pair_law_finite(eos, f->dim, lo)) continue;
+    while (hi - lo > 1e-9) {
+      const double mid = 0.5 * (lo + hi);
+      if (pair_law_finite(eos, f->dim, mid)) hi = mid;
+      else lo = mid;
+    }
+    f->lam_end[im] = hi;
+  }
+}
+
 void dm_frac_alloc(dm_fin *f) {
   bool any = false;
   for (size_t i = 0; i < f->n && !any; ++i) any = f->mat[f->imat[i]].frac.model != DM_FRACTURE_NONE;
@@ -86,12 +109,14 @@ void dm_frac_alloc(dm_fin *f) {
   f->gcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
   f->dtclose = ms_calloc(n1, sizeof(double));
   for (size_t b = 0; b < f->nlcon; ++b) f->lcon[b] = -1.0; /* not broken yet */
+  f->lam_end = ms_calloc(256, sizeof(double));
   contact_stiffness(f);
+  contact_ends(f);
 }
 
 void dm_frac_free(dm_fin *f) {
   free(f->failed), free(f->broken), free(f->kcon), free(f->dtcon), free(f->fcon), free(f->econ);
-  free(f->lcon), free(f->gcon), free(f->dtclose);
+  free(f->lcon), free(f->gcon), free(f->dtclose), free(f->lam_end);
   f->failed = NULL, f->broken = NULL;
   f->kcon = f->dtcon = f->fcon = f->econ = f->lcon = f->gcon = f->dtclose = NULL;
 }
@@ -171,6 +196,11 @@ static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s
   *s = rho0 * c * c / (K * lam * lam) + (d - 1.0) * fabs(p) * pow(lam, d - 2.0) / (K * d);
 }
 
+static bool pair_law_finite(const eos_t *eos, int dim, double lam) {
+  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), rho = rho0 * pow(lam, -(double)dim);
+  return isfinite(eos_pressure(eos, rho, e0)) && isfinite(eos_sound_speed(eos, rho, e0));
+}
+
 /* The contact force on failed particle i from its broken, compressed bonds: the spring into
  * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
  * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
@@ -203,7 +233,12 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
     const double rdot = ((u[3 * k] - u[3 * i]) * y[0] + (u[3 * k + 1] - u[3 * i + 1]) * y[1] +
                          (u[3 * k + 2] - u[3 * i + 2]) * y[2]) /
                         r;
-    if (rdot < 0) closing = fmax(closing, -rdot / L);
+    /* no pair closes in one step by more than courant · L, nor by more than courant times its
+     * gap to the end of the EOS's range (r − λ_end L; λ_end = 0: no end), where the springs
+     * stiffen without bound: a pair at 6.7 km/s crossed from λ ≈ 0.9 past mg_linear's 0.63 in
+     * one step of the first rule alone (the Piekutowski perforation, docs/validation.md) */
+    const double lend = fmax(f->lam_end[f->imat[i]], f->lam_end[f->imat[k]]);
+    if (rdot < 0) closing = fmax(closing, -rdot / fmin(L, fmax(r - lend * L, 1e-300)));
     if (!(r < L)) continue;
     double gi, si, gk, sk;
     pair_law(f, i, r / L, &gi, &si);
