@@ -223,10 +223,15 @@ int cmd_run(int argc, char **argv) {
       ms_interrupts_install();
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
-      if (s == MS_INTERRUPTED)
+      if (s == MS_INTERRUPTED && app_deck_restartable(&d))
         ms_log(&ctx, MS_LOG_WARN,
                "run interrupted (outputs so far are in %s; `mscale run %s -o %s --continue` "
                "goes on from the last checkpoint)",
+               ctx.outdir, deck, ctx.outdir);
+      else if (s == MS_INTERRUPTED) /* impact, grid2d, ...: no checkpoints to continue from */
+        ms_log(&ctx, MS_LOG_WARN,
+               "run interrupted (outputs so far are in %s; this problem type writes no "
+               "checkpoints: `mscale run %s -o %s --force` starts it again)",
                ctx.outdir, deck, ctx.outdir);
       else if (s)
         ms_log(&ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
