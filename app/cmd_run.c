@@ -100,6 +100,26 @@ static ms_status open_outdir(ms_ctx *ctx, const char *outdir, bool force, bool c
   return s;
 }
 
+/* The run's last log line: completed, failed, or interrupted with how to go on (--continue from
+ * the problem's checkpoint, or --force for a problem type that writes none). */
+static void log_outcome(const ms_ctx *ctx, const app_deck *d, ms_status s, const char *deck,
+                        double wall) {
+  if (s == MS_INTERRUPTED && app_deck_restartable(d))
+    ms_log(ctx, MS_LOG_WARN,
+           "run interrupted (outputs so far are in %s; `mscale run %s -o %s --continue` "
+           "goes on from the last checkpoint)",
+           ctx->outdir, deck, ctx->outdir);
+  else if (s == MS_INTERRUPTED) /* continuum, grid2d, impact, ...: nothing to continue from */
+    ms_log(ctx, MS_LOG_WARN,
+           "run interrupted (outputs so far are in %s; this problem type writes no "
+           "checkpoints: `mscale run %s -o %s --force` starts it again)",
+           ctx->outdir, deck, ctx->outdir);
+  else if (s)
+    ms_log(ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
+           ctx->outdir);
+  else ms_log(ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx->outdir);
+}
+
 int cmd_run(int argc, char **argv) {
   /* the command line as given, for run_info.yaml (getopt_long permutes argv) */
   char **cmdline = ms_calloc((size_t)argc + 1, sizeof *cmdline);
@@ -223,20 +243,7 @@ int cmd_run(int argc, char **argv) {
       ms_interrupts_install();
       s = par_agree_status(app_deck_run(&ctx, &d));
       double wall = ms_wall_time() - ctx.wall_start;
-      if (s == MS_INTERRUPTED && app_deck_restartable(&d))
-        ms_log(&ctx, MS_LOG_WARN,
-               "run interrupted (outputs so far are in %s; `mscale run %s -o %s --continue` "
-               "goes on from the last checkpoint)",
-               ctx.outdir, deck, ctx.outdir);
-      else if (s == MS_INTERRUPTED) /* impact, grid2d, ...: no checkpoints to continue from */
-        ms_log(&ctx, MS_LOG_WARN,
-               "run interrupted (outputs so far are in %s; this problem type writes no "
-               "checkpoints: `mscale run %s -o %s --force` starts it again)",
-               ctx.outdir, deck, ctx.outdir);
-      else if (s)
-        ms_log(&ctx, MS_LOG_ERROR, "run failed: %s (outputs so far are in %s)", ms_status_str(s),
-               ctx.outdir);
-      else ms_log(&ctx, MS_LOG_INFO, "run completed in %.2f s; outputs in %s", wall, ctx.outdir);
+      log_outcome(&ctx, &d, s, deck, wall);
       if (ctx.rank == 0)
         write_run_info(&ctx, cmdline_n, cmdline, deck, sets, nsets, started, s, wall, &files);
     }
