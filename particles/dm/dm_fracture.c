@@ -72,7 +72,7 @@ static void contact_stiffness(dm_fin *f) {
   }
 }
 
-static bool pair_law_finite(const eos_t *eos, int dim, double lam);
+static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s);
 
 /* lam_end of each material present: the end of its EOS's range as a failed pair's r/L
  * (mg_linear ends at ρ/ρ0 = s/(s − 1): λ = ((s − 1)/s)^(1/d), 0.63 for Al in 3D), by bisection
@@ -83,12 +83,13 @@ static void contact_ends(dm_fin *f) {
     const uint8_t im = f->imat[i];
     if (seen[im]) continue;
     seen[im] = true;
-    const eos_t *eos = f->mat[im].eos;
-    double lo = 1e-3, hi = 1.0;
-    if (pair_law_finite(eos, f->dim, lo)) continue;
+    double lo = 1e-3, hi = 1.0, g, sl;
+    pair_law(f, i, lo, &g, &sl);
+    if (isfinite(g) && isfinite(sl)) continue;
     while (hi - lo > 1e-9) {
       const double mid = 0.5 * (lo + hi);
-      if (pair_law_finite(eos, f->dim, mid)) hi = mid;
+      pair_law(f, i, mid, &g, &sl);
+      if (isfinite(g) && isfinite(sl)) hi = mid;
       else lo = mid;
     }
     f->lam_end[im] = hi;
@@ -194,11 +195,6 @@ static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s
   const double c = eos_sound_speed(eos, rho, e0);
   *g = p * pow(lam, d - 1.0) / (K * d);
   *s = rho0 * c * c / (K * lam * lam) + (d - 1.0) * fabs(p) * pow(lam, d - 2.0) / (K * d);
-}
-
-static bool pair_law_finite(const eos_t *eos, int dim, double lam) {
-  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), rho = rho0 * pow(lam, -(double)dim);
-  return isfinite(eos_pressure(eos, rho, e0)) && isfinite(eos_sound_speed(eos, rho, e0));
 }
 
 /* The contact force on failed particle i from its broken, compressed bonds: the spring into
