@@ -47,10 +47,10 @@ static inline void poly_grad(c2d_geometry geo, const double X[4], const double Y
 
 /* Velocity gradients g = Δu/l of the edges i → i + st, i < n, with ic = 1/|g|² (g and ic 0 on
  * a degenerate or motionless edge). Restrict parameters: the loop vectorizes. */
-C2D_KERNEL_CLONES static void edge_grads(const double *restrict x, const double *restrict y,
-                                         const double *restrict u, const double *restrict v,
-                                         size_t st, size_t n, double *restrict egx,
-                                         double *restrict egy, double *restrict eic) {
+MS_KERNEL_CLONES static void edge_grads(const double *restrict x, const double *restrict y,
+                                        const double *restrict u, const double *restrict v,
+                                        size_t st, size_t n, double *restrict egx,
+                                        double *restrict egy, double *restrict eic) {
   for (size_t i = 0; i < n; ++i) {
     double dx = x[i + st] - x[i], dy = y[i + st] - y[i], l = sqrt(dx * dx + dy * dy);
     double il = l > 0.0 ? 1.0 / l : 0.0;
@@ -261,7 +261,7 @@ zone_force(const c2d_grid *g, size_t i0, size_t j0, const c2d_fstate *s, const c
  * (b); zone P, ρ, c; the limiter's edge rows (hlo, hhi along node rows j, j + 1 with pads at
  * either end; v0 across zone row j, vm and vp across rows j ∓ 1, present if hb, ht = 1; lon = 0:
  * no limiter, ψ = 0). The same arithmetic as zone_force. Flags are doubles: see psi_of. */
-C2D_KERNEL_CLONES static __attribute__((noinline)) void
+MS_KERNEL_CLONES static __attribute__((noinline)) void
 force_row_xy_k(ptrdiff_t ni, const double *restrict xa, const double *restrict xb,
                const double *restrict ya, const double *restrict yb, const double *restrict ua,
                const double *restrict ub, const double *restrict va, const double *restrict vb,

@@ -12,18 +12,10 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-/* Runtime dispatch of the zone- and node-row kernels (docs/benchmarks.md, "One binary for every
- * x86-64"), as the particle models do it (cd_impl.h, dm_impl.h): in a portable build (x86-64-v2,
- * MSCALE_NATIVE=OFF) each kernel marked C2D_KERNEL_CLONES is compiled for x86-64-v2, -v3 (AVX2)
- * and -v4 (AVX-512) and picked by CPU detection when the program loads. The build is C11 without
- * contraction (no FMA), so a clone changes the vector width only: the row sums of the energy
- * kernel may round differently from one CPU to another, never from one thread count to another. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX512F__)
-#define C2D_KERNEL_CLONES                                                                          \
-  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
-#else
-#define C2D_KERNEL_CLONES
-#endif
+/* The zone- and node-row kernels are dispatched at run time in a portable build
+ * (MS_KERNEL_CLONES, core.h). The build is C11 without contraction (no FMA), so a clone
+ * changes the vector width only: the row sums of the energy kernel may round differently from
+ * one CPU to another, never from one thread count to another. */
 
 typedef struct c2d_tagline {
   char *name;

@@ -181,7 +181,7 @@ static inline __attribute__((always_inline)) void node_update(c2d_grid *g, const
 
 /* Nodes i = 1 .. ni − 1 of an interior node row (four corners, no boundary condition), predictor:
  * û into ou, ov, x^{n+½} into ox, oy (from u, v, x, y). Restrict arrays: vectorizes. */
-C2D_KERNEL_CLONES static void
+MS_KERNEL_CLONES static void
 node_interior_pred_k(NODE_INTERIOR_ARGS, const double *restrict u, const double *restrict v,
                      const double *restrict x, const double *restrict y, double *restrict ou,
                      double *restrict ov, double *restrict ox, double *restrict oy) {
@@ -200,9 +200,9 @@ node_interior_pred_k(NODE_INTERIOR_ARGS, const double *restrict u, const double 
 }
 
 /* The same, corrector: uⁿ⁺¹ and xⁿ⁺¹ in place. */
-C2D_KERNEL_CLONES static void node_interior_corr_k(NODE_INTERIOR_ARGS, double *restrict u,
-                                                   double *restrict v, double *restrict x,
-                                                   double *restrict y) {
+MS_KERNEL_CLONES static void node_interior_corr_k(NODE_INTERIOR_ARGS, double *restrict u,
+                                                  double *restrict v, double *restrict x,
+                                                  double *restrict y) {
   for (ptrdiff_t i = 1; i < ni; ++i) {
     NODE_INTERIOR_ACCEL
     const double u0 = u[i], v0 = v[i], u1 = u0 + dt * ax, v1 = v0 + dt * ay;
@@ -271,7 +271,7 @@ static void node_row(c2d_grid *g, const sweep *sw, size_t j, const double *fa, c
 
 /* e_out = e_in − hdt Σ_c r̃ f_c·ū / m over a zone row (hdt = ½Δt predictor, Δt corrector):
  * corner forces f0..f7 (SoA), ū, v̄, r̃ of the node rows below (l*) and above (h*). */
-C2D_KERNEL_CLONES static void
+MS_KERNEL_CLONES static void
 energy_row_k(ptrdiff_t ni, double hdt, const double *restrict f0, const double *restrict f1,
              const double *restrict f2, const double *restrict f3, const double *restrict f4,
              const double *restrict f5, const double *restrict f6, const double *restrict f7,
@@ -291,10 +291,10 @@ energy_row_k(ptrdiff_t ni, double hdt, const double *restrict f0, const double *
 
 /* x–y zone volumes (areas) and densities of a row from node rows a, b. Plain loops over restrict
  * rows (they vectorize; `omp simd` reductions here did not, GCC 12), the reductions after. */
-C2D_KERNEL_CLONES static void area_row_k(ptrdiff_t ni, const double *restrict xa,
-                                         const double *restrict xb, const double *restrict ya,
-                                         const double *restrict yb, const double *restrict m,
-                                         double *restrict vol, double *restrict rho) {
+MS_KERNEL_CLONES static void area_row_k(ptrdiff_t ni, const double *restrict xa,
+                                        const double *restrict xb, const double *restrict ya,
+                                        const double *restrict yb, const double *restrict m,
+                                        double *restrict vol, double *restrict rho) {
   for (ptrdiff_t i = 0; i < ni; ++i) {
     const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
                  Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
@@ -305,11 +305,11 @@ C2D_KERNEL_CLONES static void area_row_k(ptrdiff_t ni, const double *restrict xa
 }
 
 /* The same in the corrector: also the relative volume change dv (vol holds the old volumes). */
-C2D_KERNEL_CLONES static void area_row_dv_k(ptrdiff_t ni, const double *restrict xa,
-                                            const double *restrict xb, const double *restrict ya,
-                                            const double *restrict yb, const double *restrict m,
-                                            double *restrict vol, double *restrict rho,
-                                            double *restrict dv) {
+MS_KERNEL_CLONES static void area_row_dv_k(ptrdiff_t ni, const double *restrict xa,
+                                           const double *restrict xb, const double *restrict ya,
+                                           const double *restrict yb, const double *restrict m,
+                                           double *restrict vol, double *restrict rho,
+                                           double *restrict dv) {
   for (ptrdiff_t i = 0; i < ni; ++i) {
     const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
                  Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};
@@ -321,12 +321,12 @@ C2D_KERNEL_CLONES static void area_row_dv_k(ptrdiff_t ni, const double *restrict
 }
 
 /* Courant limits of a zone row at the new state (c2d_zone_dt) into dz. */
-C2D_KERNEL_CLONES static void dt_row_k(const c2d_grid *g, ptrdiff_t ni, const double *restrict xa,
-                                       const double *restrict xb, const double *restrict ya,
-                                       const double *restrict yb, const double *restrict ua,
-                                       const double *restrict ub, const double *restrict va,
-                                       const double *restrict vb, const double *restrict c,
-                                       double *restrict dz) {
+MS_KERNEL_CLONES static void dt_row_k(const c2d_grid *g, ptrdiff_t ni, const double *restrict xa,
+                                      const double *restrict xb, const double *restrict ya,
+                                      const double *restrict yb, const double *restrict ua,
+                                      const double *restrict ub, const double *restrict va,
+                                      const double *restrict vb, const double *restrict c,
+                                      double *restrict dz) {
   for (ptrdiff_t i = 0; i < ni; ++i) {
     const double X[4] = {xa[i], xa[i + 1], xb[i + 1], xb[i]},
                  Y[4] = {ya[i], ya[i + 1], yb[i + 1], yb[i]};

@@ -23,6 +23,22 @@
 
 #define MSCALE_VERSION_STRING "0.1.0"
 
+/* Runtime dispatch of hot loops (docs/benchmarks.md, "One binary for every x86-64"): in a
+ * portable build (x86-64-v2, MSCALE_NATIVE=OFF) a function marked MS_KERNEL_CLONES is compiled
+ * for x86-64-v2, -v3 (AVX2, FMA) and -v4 (AVX-512) and the loader picks the one the CPU runs;
+ * MS_KERNEL_INLINE marks a helper to inline into each clone (left out of line, it would be
+ * compiled for the baseline). A native build for an AVX-512 CPU, clang and other targets need
+ * no clones. Used by the cluster-dynamics and finite discrete-model loops, the 2D grid's row
+ * kernels and the Mie–Grüneisen array EOS. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX512F__)
+#define MS_KERNEL_CLONES                                                                           \
+  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
+#define MS_KERNEL_INLINE __attribute__((always_inline))
+#else
+#define MS_KERNEL_CLONES
+#define MS_KERNEL_INLINE
+#endif
+
 /* ------------------------------------------------------------------------------------------ */
 /* Status codes                                                                                */
 

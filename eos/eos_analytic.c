@@ -127,8 +127,7 @@ static void mg_linear_eval(const eos_t *eos, double rho, double e, double *p, do
 
 /* Array form of mg_linear_eval: the same expressions in the same order (bitwise equal, the
  * build does not contract to FMA), with the domain test as a select so the loop vectorizes.
- * In a portable build (MSCALE_NATIVE=OFF, x86-64-v2) compiled also for x86-64-v3 and -v4 and
- * picked at load time (docs/benchmarks.md, "One binary for every x86-64"): the 2D grid's EOS. */
+ * Dispatched at run time in a portable build (MS_KERNEL_CLONES, core.h): the 2D grid's EOS. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX512F__)
 __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
 #endif

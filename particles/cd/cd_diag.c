@@ -90,7 +90,7 @@ const char *cd_sim_error(const cd_sim *s) { return s->err; }
 /* The guard's screening pass: true when no owned particle can fail it (all of x, v finite,
  * |v| Δt <= step_max, no wall axis to check). One parallel, vectorised pass; only when it
  * fails does cd_sim_guard scan particle by particle for the one to name. */
-CD_KERNEL_CLONES static bool guard_screen(const cd_sim *s, double step_max) {
+MS_KERNEL_CLONES static bool guard_screen(const cd_sim *s, double step_max) {
   const ptl_state *p = s->p;
   for (int a = 0; a < 3; a++)
     if (s->box.bc[a] == CD_BC_WALL) return false;

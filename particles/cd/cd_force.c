@@ -45,7 +45,7 @@ static inline void pair_fast(double s, double dx, double dy, double dz, double s
 /* The rest of the particle at position pos (index i, at xi, yi, zi): its plain entries from k0
  * on and its image entries, one at a time, into its partners' forces and into the force it has
  * so far (fxi, ...), which is then added to f_i. */
-CD_KERNEL_INLINE static inline void
+MS_KERNEL_INLINE static inline void
 finish_particle(const cd_neigh *nl, const int32_t *restrict lst, int k0, int32_t pos, int32_t i,
                 double xi, double yi, double zi, const double *restrict x, const double *restrict y,
                 const double *restrict z, double *restrict fx, double *restrict fy,
@@ -77,7 +77,7 @@ finish_particle(const cd_neigh *nl, const int32_t *restrict lst, int k0, int32_t
  * ~12 % faster on one core; three or four lanes were no better). Each particle's remaining
  * entries follow one at a time. The order of the f_j updates is fixed by the layout alone, so
  * results stay independent of the thread count. */
-CD_KERNEL_CLONES static void layer_forces_fast(const cd_neigh *nl, ptl_state *p,
+MS_KERNEL_CLONES static void layer_forces_fast(const cd_neigh *nl, ptl_state *p,
                                                const cd_pair_table *t, int layer) {
   const double *restrict x = p->x, *restrict y = p->y, *restrict z = p->z;
   double *restrict fx = p->fx, *restrict fy = p->fy, *restrict fz = p->fz;
@@ -136,7 +136,7 @@ static inline bool books_pair(const ptl_state *p, int32_t i, int32_t j) {
 }
 
 /* General path: several materials, bonded mode, energies and virials. */
-CD_KERNEL_CLONES static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *pw,
+MS_KERNEL_CLONES static void layer_forces_full(cd_sim *s, int layer, cd_layer_sums *sum, double *pw,
                                                bool wf) {
   const cd_neigh *nl = s->nl;
   ptl_state *p = s->p;

@@ -40,7 +40,7 @@
  * A portable build (x86-64-v2, MSCALE_NATIVE=OFF) holds the AVX2 and AVX-512 kernels too,
  * compiled for their instruction sets by `#pragma GCC target`, and picks them by CPU detection
  * (cd_kernel.c): cd_simd_level_ says which. The hot loops without intrinsics (the table-path
- * force loops, the list build) are compiled three times by CD_KERNEL_CLONES, so that fma() is
+ * force loops, the list build) are compiled three times by MS_KERNEL_CLONES, so that fma() is
  * one instruction wherever the CPU has FMA (under x86-64-v2 it would be a libm call). A native
  * build for an AVX-512 CPU needs no clones. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
@@ -49,17 +49,11 @@
 #define CD_X86_DISPATCH 0
 #endif
 #if CD_X86_DISPATCH && !defined(__AVX512F__)
-#define CD_KERNEL_CLONES                                                                           \
-  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
-/* a helper of a cloned loop that the compiler might leave out of line (then compiled for the
- * baseline, fma() a libm call): inlined into each clone */
-#define CD_KERNEL_INLINE __attribute__((always_inline))
-/* a cloned loop whose callees (the SIMD kernels of its instruction set among them) are all
+/* a cloned loop (MS_KERNEL_CLONES, core.h; its helpers MS_KERNEL_INLINE: fma() one instruction
+ * in each clone, not a libm call) whose callees (the SIMD kernels of its instruction set among them) are all
  * inlined where the clone's target allows */
 #define CD_KERNEL_FLATTEN __attribute__((flatten))
 #else
-#define CD_KERNEL_CLONES
-#define CD_KERNEL_INLINE
 #define CD_KERNEL_FLATTEN
 #endif
 enum { CD_SIMD_SCALAR = 0, CD_SIMD_AVX2 = 1, CD_SIMD_AVX512 = 2 };

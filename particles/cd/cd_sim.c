@@ -477,7 +477,7 @@ static void rkn_constrain_cd(void *user, double t, bool end) {
 
 /* RKN acceleration at the stage positions (x, y, z hold q_l): a = f/m of integrated
  * particles, 0 for driven and removed ones; records the force on the piston. */
-CD_KERNEL_CLONES static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
+MS_KERNEL_CLONES static ms_status rkn_accel_cd(void *user, double t, double *const acc[]) {
   (void)t;
   cd_sim *s = user;
   ptl_state *p = s->p;
@@ -502,7 +502,7 @@ CD_KERNEL_CLONES static ms_status rkn_accel_cd(void *user, double t, double *con
  * (rkn_reach; max|a| from the last forces, doubled for its change within the step), so the
  * lists are rebuilt before the step unless the rebuild test (neighbour.c) passes with that
  * reach added to the displacements so far. */
-CD_KERNEL_CLONES static ms_status rkn_step_cd(cd_sim *s) {
+MS_KERNEL_CLONES static ms_status rkn_step_cd(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt;
   const long n = (long)p->nlocal;
@@ -566,7 +566,7 @@ static inline double kick_drift_zero(long i, double hdt, double dt, const double
 }
 
 /* One velocity-Verlet step (the header comment). */
-CD_KERNEL_CLONES static ms_status vv_step(cd_sim *s) {
+MS_KERNEL_CLONES static ms_status vv_step(cd_sim *s) {
   ptl_state *p = s->p;
   const double dt = s->cfg.dt, hdt = 0.5 * dt;
   long n = (long)p->nlocal; /* ghosts are refreshed from their owners; MPI: changes at a build */

@@ -279,7 +279,7 @@ static int cell_stencil(const cd_neigh *nl, const bool per[3], const int ax[3], 
   return nst;
 }
 
-CD_KERNEL_CLONES CD_KERNEL_FLATTEN static size_t build_layer(cd_neigh *nl, const ptl_state *p,
+MS_KERNEL_CLONES CD_KERNEL_FLATTEN static size_t build_layer(cd_neigh *nl, const ptl_state *p,
                                                              const cd_box *box, int layer,
                                                              const int ax[3],
                                                              const int32_t *partners, float rl2) {

@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-DM_KERNEL_INLINE static inline void inv3(const double *a, double det, double *r) {
+MS_KERNEL_INLINE static inline void inv3(const double *a, double det, double *r) {
   const double id = 1.0 / det;
   r[0] = (a[4] * a[8] - a[5] * a[7]) * id;
   r[1] = (a[2] * a[7] - a[1] * a[8]) * id;
@@ -37,12 +37,12 @@ static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED;
  * particle's 3-vector and the next double (lane 3, unused): the arrays it reads (X, w, u of
  * dm_state_alloc, v̄, Q, the backup's w) carry one double of padding at their end. */
 typedef double v4d __attribute__((vector_size(32)));
-DM_KERNEL_INLINE static inline v4d ld4(const double *p) {
+MS_KERNEL_INLINE static inline v4d ld4(const double *p) {
   v4d v;
   memcpy(&v, p, sizeof v);
   return v;
 }
-DM_KERNEL_INLINE static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
+MS_KERNEL_INLINE static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
 
 /* Bond moments of one particle: Bw, Bu (stress), Bv, sv (a half kick's v̄), Bc, sc (the pending
  * closing half kick's v̄). */
@@ -59,7 +59,7 @@ typedef struct moments {
  * (lane 3 unused), updated per bond by ξ_c (broadcast) times Δa: three multiply-adds per moment,
  * no lane shuffles in the loop, independent accumulators. The flags are constants at each call
  * site, so each use compiles to its own loop; Bc and sc get the same bits in each. */
-DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, size_t i,
+MS_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, size_t i,
                                                  const double *restrict w, const double *restrict u,
                                                  const double *restrict vb,
                                                  const double *restrict vc, double dt, bool stress,
@@ -107,14 +107,14 @@ DM_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, siz
 }
 
 /* r = B A (3×3, row-major) */
-DM_KERNEL_INLINE static inline void mul33(const double *restrict B, const double *restrict A,
+MS_KERNEL_INLINE static inline void mul33(const double *restrict B, const double *restrict A,
                                           double *restrict r) {
   for (int a = 0; a < 3; ++a)
     for (int c = 0; c < 3; ++c)
       r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
 }
 
-DM_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i,
+MS_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i,
                                                    double C[9]) {
   moments M; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
   bond_moments(m, i, w, w, NULL, NULL, 0.0, true, false, false, &M);
@@ -124,7 +124,7 @@ DM_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const doub
 /* The energy increments of a half kick of length h for particle i from its moments (Bv, sv)
  * and the Q_P and F of the last force evaluation: Σ_k Δv̄·(Q_P ξ) = Q_P : Bv and
  * Σ_k Δv̄·z = sv − (F − I) : Bv (z = Δw − (F − I) ξ). Returns false if e is not finite. */
-DM_KERNEL_INLINE static inline bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv,
+MS_KERNEL_INLINE static inline bool kick_energy(dm_fin *f, size_t i, double h, const double *Bv,
                                                 double sv) {
   const double *QP = &f->QP[9 * i], *F = &f->F[9 * i];
   double pw = 0.0, ph = sv + Bv[0] + Bv[4] + Bv[8];
@@ -139,7 +139,7 @@ DM_KERNEL_INLINE static inline bool kick_energy(dm_fin *f, size_t i, double h, c
  * pending closing half kick of the last step (f->pending; then e and e_hg also into keep_e,
  * keep_ehg) and of the half kick just made (its v̄ in f->vbar); *bad_e set if e is not finite.
  * Returns the particle's stable time step, or −1 (bad state, recorded in *what). */
-DM_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e,
+MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double h, bool *bad_e,
                                           const char **what, double *val) {
   if (dm_frac_failed(f, i)) return dm_frac_failed_step(f, i); /* no F, no EOS (dm_fracture.c) */
   dm_model *m = f->m;
@@ -262,7 +262,7 @@ DM_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
  * gather_force, the same sum) = Q_i Σ_k ξ_ik + Σ_k [Q_k ξ_ik + (κ_i + κ_k) Δw_ik]. m->Q holds
  * each Q transposed (stress_one), so Q_k ξ is Σ_c ξ_c (column c of Q_k): three broadcasts times
  * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. */
-DM_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
+MS_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
                                         size_t i, double *restrict F) {
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double ki = kap[i];
@@ -286,14 +286,14 @@ DM_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double
 }
 
 /* w += dt u over n doubles: cloned like the stress pass, which forms the same w + dt u. */
-DM_KERNEL_CLONES static void drift(double *restrict w, const double *restrict u, double dt,
+MS_KERNEL_CLONES static void drift(double *restrict w, const double *restrict u, double dt,
                                    size_t n) {
   for (size_t j = 0; j < n; ++j) w[j] += dt * u[j];
 }
 
 /* The pending closing half kick's energies of particle i (dm_fin_flush); false if e is not
  * finite. */
-DM_KERNEL_CLONES static bool flush_one(dm_fin *f, size_t i) {
+MS_KERNEL_CLONES static bool flush_one(dm_fin *f, size_t i) {
   moments M;
   bond_moments(f->m, i, f->m->s->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
   return kick_energy(f, i, f->h_close, M.Bc, M.sc);

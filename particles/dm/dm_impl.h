@@ -52,22 +52,10 @@ bool dm_jc_set(const char *name, dm_sg *out);
 void dm_sg_read(dk_errors *e, dk_doc *doc, const dk_node *layer, int yield, const eos_t *eos,
                 dm_sg *out);
 
-/* Runtime dispatch of the finite-deformation model's bond loops (docs/benchmarks.md, "One binary
- * for every x86-64"), as cluster dynamics does it (cd_impl.h): in a portable build (x86-64-v2,
- * MSCALE_NATIVE=OFF) each function marked DM_KERNEL_CLONES is compiled for x86-64-v2, -v3 (AVX2,
- * FMA) and -v4 (AVX-512) and picked by CPU detection when the program loads; DM_KERNEL_INLINE
- * marks its helpers, inlined into each clone. Every path that computes the same quantity (the
- * stress pass and the flush of the closing kick; F in the stress pass and in a snapshot; the
- * drift) is cloned, so one CPU computes each with the same instructions, the same bits. A native
- * build for an AVX-512 CPU needs no clones. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX512F__)
-#define DM_KERNEL_CLONES                                                                           \
-  __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
-#define DM_KERNEL_INLINE __attribute__((always_inline))
-#else
-#define DM_KERNEL_CLONES
-#define DM_KERNEL_INLINE
-#endif
+/* The bond loops are dispatched at run time in a portable build (MS_KERNEL_CLONES, core.h).
+ * Every path that computes the same quantity (the stress pass and the flush of the closing
+ * kick; F in the stress pass and in a snapshot; the drift) is cloned, so one CPU computes each
+ * with the same instructions, the same bits. */
 
 /* det of a 3×3 matrix (row-major). */
 static inline double dm_det3(const double *a) {
