@@ -11,7 +11,9 @@
 #  3. `mscale run DECK -o cut --continue` -> impact_history.csv byte for byte, every snapshot by
 #     value (h5diff, no tolerance) and impact_summary.csv but its wall_time column equal to full/'s;
 #  4. `--restart full/impact_checkpoint.h5` (the last of the cadence) -> the same;
-#  5. a checkpoint refused (exit 2) by a different deck.
+#  5. the cadence output.checkpoint_time = t_end/4 (--set): 3 checkpoints, the same outputs, and
+#     its last checkpoint continued by the deck as it is (checkpoint_every) -> the same;
+#  6. a checkpoint refused (exit 2) by a different deck.
 # RANKS > 1 runs every step under mpirun (SIGTERM to every rank, as a batch system sends it).
 # Usage: impact_interrupt.sh MSCALE DECK RANKS REQUIRE
 set -u
@@ -78,6 +80,21 @@ same "$T/full" "$T/cut" "uninterrupted vs interrupted + --continue"
   2>> "$T/stderr" || { cat "$T/stderr"; echo "FAIL: --restart"; exit 1; }
 grep -o "restarted from .*" "$T/rs/run.log"
 same "$T/full" "$T/rs" "uninterrupted vs restart from its last checkpoint"
+
+# the cadence in simulated time, output.checkpoint_time = t_end/4: checkpoints at the first
+# steps past t_end/4, /2, 3/4; the same outputs (a checkpoint changes nothing of the run); its
+# last checkpoint continued by the deck with the other cadence (left out of the deck's hash)
+tq=$(sed -n 's/^  t_end: *\([0-9.e+-]*\).*/\1/p' "$T/deck.yaml" | awk '{print $1 / 4}')
+"${launch[@]}" "$MSCALE" run "$T/deck.yaml" -o "$T/ct" --set impact.output.checkpoint_every=0 \
+  --set "impact.output.checkpoint_time=$tq" --quiet 2>> "$T/stderr" ||
+  { cat "$T/stderr"; echo "FAIL: checkpoint_time run"; exit 1; }
+n=$(grep -c "checkpoint at step" "$T/ct/run.log")
+[ "$n" = 3 ] || { echo "FAIL: $n checkpoints with checkpoint_time = t_end/4, not 3"; fail=1; }
+same "$T/full" "$T/ct" "checkpoint_every vs checkpoint_time"
+"${launch[@]}" "$MSCALE" run "$T/deck.yaml" -o "$T/rt" --restart "$T/ct/$CKPT" --quiet \
+  2>> "$T/stderr" || { cat "$T/stderr"; echo "FAIL: --restart from checkpoint_time"; exit 1; }
+grep -o "restarted from .*" "$T/rt/run.log"
+same "$T/full" "$T/rt" "uninterrupted vs restart from a checkpoint_time checkpoint"
 
 sed -e 's/spacing: \(.*\)/spacing: \1\n  courant: 0.39/' "$T/deck.yaml" > "$T/other.yaml"
 "$MSCALE" run "$T/other.yaml" -o "$T/other" --restart "$T/full/$CKPT" --quiet 2> "$T/other.err"
