@@ -75,6 +75,8 @@ EOF
 grep -q "^status: completed" "$T/cut/run_info.yaml" || { echo "FAIL: not completed"; fail=1; }
 grep -o "restarted from .*" "$T/cut/run.log"
 same "$T/full" "$T/cut" "uninterrupted vs interrupted + --continue"
+cmp -s "$T/full/particles.xmf" "$T/cut/particles.xmf" ||
+  { echo "FAIL: the snapshot series particles.xmf differs after --continue"; fail=1; }
 
 "${launch[@]}" "$MSCALE" run "$T/deck.yaml" -o "$T/rs" --restart "$T/full/$CKPT" --quiet \
   2>> "$T/stderr" || { cat "$T/stderr"; echo "FAIL: --restart"; exit 1; }

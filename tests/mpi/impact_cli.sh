@@ -25,6 +25,8 @@ for np in 2 3; do
   mpirun $np "$mscale" run "$deck" -o "$work/np$np" --quiet
   grep -q "impact on $np ranks" "$work/np$np/run.log" || { echo "np $np: no rank count in run.log"; exit 1; }
   same "$work/serial" "$work/np$np" "serial vs $np ranks"
+  cmp -s "$work/serial/particles.xmf" "$work/np$np/particles.xmf" ||
+    { echo "FAIL: particles.xmf differs (serial vs $np ranks)"; exit 1; }
   for g in dm_fin impact; do
     h5diff -q "$work/serial/impact_checkpoint.h5" "$work/np$np/impact_checkpoint.h5" "/$g" "/$g" ||
       { echo "FAIL: the checkpoint's /$g differs (serial vs $np ranks)"; exit 1; }
