@@ -351,7 +351,7 @@ static void test_default_deck(void **state) {
       {"times: [0.02, 0.04, 0.1], xt_frames: 300", "times: [0.02], xt_frames: 20"},
       {"    width: 0.03 ", "    width: 0.0025 "},
       {"    surface: {profile: sine,", "    surface: {profile: flat}  # "},
-      {"    end: 0.3 ", "    end: 0.06 "},
+      {"    end: 0.25 ", "    end: 0.06 "},
       {"    outputs: 6 ", "    outputs: 1 "},
       {"    every: 200 ", "    every: 20 "},
       {"    end: 2.5 ", "    end: 0.2 "},
