@@ -6,7 +6,9 @@
  *     EOS); the particles' free-surface plateau must match the grid's within 1 % (issue 21's
  *     drive check), with the velocity and with the transmitting piston; the particle energy
  *     balance closes to round-off; a flat surface ejects nothing;
- *  2. deck errors of the model's section, located, through the coupled reader. */
+ *  2. deck errors of the model's section, located, through the coupled reader;
+ *  3. spall in the coupled run; 4. the default deck at CI size: the drive check and the spall
+ *     plane against the grid alone; 5. sub-cycling. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -386,6 +388,9 @@ static void test_default_deck(void **state) {
          s.fragments, count, d_part, v_scab, v_bulk, d_part, d_grid, (d_part - d_grid) / h,
          s.energy_balance);
   cpl_test_run_free(&r);
+  /* the deck's design: the releases meet inside the region, clear of the driven layers and of
+   * the surface (10 spacings each) */
+  assert_true(isfinite(t_grid) && d_grid > 10 * h && d_grid < depth - 10 * h);
   assert_true(s.check.samples >= 5);
   /* issue 21's drive check: 1 % (cluster dynamics: 7.9 %, docs/particles-cd.md). The particles
    * carry the grid's own Pb EOS; Steinberg–Guinan's Y ≤ 0.1 GPa against ~25 GPa changes the
