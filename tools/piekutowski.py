@@ -62,7 +62,43 @@ def geometry(run):
     zf = c1[2] - 0.5 * t  # the face the sphere strikes
     gap = zf - (c0[2] + float(b0["radius"]))
     return dict(h=h, delta=delta, axis=c1[:2], zc=c1[2], t=t, zf=zf, v=v, t_contact=gap / v,
-                D=2 * float(b0["radius"]))
+                D=2 * float(b0["radius"]), half=0.5 * np.array(b1["size"][:2], float))
+
+
+TEAR = 2.0  # a bond longer than twice its reference length is torn (hole_remnant)
+SECTORS = 36  # azimuthal sectors of the hole's outline (10 degrees each)
+
+
+def hole_outline(dx, dy, h, sectors=SECTORS):
+    """The hole's outline seen along the axis through a set of particles (offsets dx, dy from
+    the axis): per azimuthal sector the radius of its innermost particle less h/2 (the wall is
+    half a spacing inside the particle's centre). Returns the equal-area diameter
+    2 sqrt(mean r_in^2) (a ragged hole's diameter: the circle letting the same light through) and
+    the smallest and largest 2 r_in; nan where a sector holds no particle."""
+    r = np.hypot(dx, dy)
+    sec = np.minimum((np.arctan2(dy, dx) + np.pi) / (2 * np.pi) * sectors, sectors - 1)
+    r_in = np.full(sectors, np.inf)
+    np.minimum.at(r_in, sec.astype(int), r - 0.5 * h)
+    if not np.all(np.isfinite(r_in)):
+        return np.nan, np.nan, np.nan
+    r_in = np.maximum(r_in, 0.0)
+    return 2 * np.sqrt(np.mean(r_in ** 2)), 2 * r_in.min(), 2 * r_in.max()
+
+
+def plate_remnant(X0, x, body, failed, g):
+    """The recovered plate: the fragment of the plate (body 1) that holds its outer rim (the
+    lattice sites within h of the box's edge, where the experiment's holder clamps the bumper),
+    by bonds that are neither broken (both ends failed, dm_fracture.c) nor torn (stretched
+    beyond TEAR times their reference length: no bond of a solid survives a doubled length,
+    whatever the model's correspondence stress still says about an intact particle whose
+    neighbour has flown off). Returns the mask of its particles and the rim's mass fraction in
+    it (1: the rim is one piece)."""
+    lab = fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR)
+    d0 = np.abs(X0[:, :2] - g["axis"])
+    rim = (body == 1) & np.any(d0 >= g["half"] - g["h"], axis=1)
+    labs, counts = np.unique(lab[rim], return_counts=True)
+    keep = labs[np.argmax(counts)]
+    return (lab == keep) & (body == 1), counts.max() / counts.sum()
 
 
 def hole_radius(r, m, h, areal0):
@@ -78,9 +114,10 @@ def hole_radius(r, m, h, areal0):
     return rc[k - 1] + (0.5 - cov[k - 1]) / (cov[k] - cov[k - 1]) * (rc[k] - rc[k - 1])
 
 
-def fragments(X0, body, failed, h, delta):
+def fragments(X0, body, failed, h, delta, x=None, tear=None):
     """Fragment label of every particle: components of the unbroken bonds (|X0_i − X0_k| < δ,
-    the same body, not both failed)."""
+    the same body, not both failed). With x and tear: a bond whose length |x_i − x_k| exceeds
+    tear times its reference length |X0_i − X0_k| is torn too (see hole_remnant)."""
     n = len(body)
     label = np.arange(n)
     ii, kk = [], []
@@ -105,6 +142,9 @@ def fragments(X0, body, failed, h, delta):
             hit = skey[pos] == nk
             i, k = idx[hit], idx[order[pos[hit]]]
             ok = ~(failed[i] & failed[k])
+            if tear is not None:
+                ok &= (np.linalg.norm(x[i] - x[k], axis=1)
+                       <= tear * np.linalg.norm(X0[i] - X0[k], axis=1))
             ii.append(i[ok]), kk.append(k[ok])
     ii, kk = np.concatenate(ii), np.concatenate(kk)
     while True:  # min-label propagation with pointer jumping
@@ -143,6 +183,12 @@ def measure(outdir, snapshot=-1):
     r_h = hole_radius(r[inplate], mass[inplate], g["h"], g["t"] * rho0[1])
     r_min = r[inplate].min() - 0.5 * g["h"]  # the innermost particle still in the plate
     r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
+    # the hole in the recovered plate: the remnant that holds the plate's rim, seen along the
+    # axis (all its particles, failed ones attached to it included; and its intact ones)
+    rem, rim_frac = plate_remnant(X0, x, body, failed, g)
+    dxy = x[:, :2] - g["axis"]
+    hole_rem = hole_outline(dxy[rem, 0], dxy[rem, 1], g["h"])
+    hole_rem_intact = hole_outline(dxy[rem & ~failed, 0], dxy[rem & ~failed, 1], g["h"])
     # back-spray
     back = x[:, 2] < g["zf"] - g["h"]
     ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])
@@ -170,11 +216,16 @@ def measure(outdir, snapshot=-1):
               ("kinetic", "internal", "bond_penalty", "broken", "fracture_contact", "wall_work",
                "wall_energy", "balance")}
     energy["E0"] = float(np.asarray(hist["kinetic"], float)[0])
+    P = np.stack([np.asarray(hist[c], float) for c in ("p_x", "p_y", "p_z")], axis=1)
+    energy["dP"] = float(np.max(np.linalg.norm(P[:k + 1] - P[0], axis=1)) / np.linalg.norm(P[0]))
+    energy["balance_max"] = float(np.max(np.abs(np.asarray(hist["balance"], float)[:k + 1])))
     lab = fragments(X0, body, failed, g["h"], g["delta"])
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
     fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
-    return dict(g=g, t=t_now, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+    return dict(g=g, t=t_now, hole_rem=hole_rem[0], hole_rem_min=hole_rem[1],
+                hole_rem_max=hole_rem[2], hole_rem_intact=hole_rem_intact[0],
+                rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
                 v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
@@ -197,8 +248,12 @@ def main(argv=None):
         g = m["g"]
         big = np.sort(m["frag_mass"])[::-1]
         print(f"{d}: t {10 * m['t']:.3f} us, h {10 * g['h']:.4g} mm, {m['n']} particles "
-              f"({m['nfailed']} failed): hole {10 * m['hole']:.3f} mm "
-              f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
+              f"({m['nfailed']} failed): hole in the recovered plate {10 * m['hole_rem']:.3f} mm "
+              f"({100 * (10 * m['hole_rem'] / args.exp_hole - 1):+.1f} % vs {args.exp_hole:g}; "
+              f"sectors {10 * m['hole_rem_min']:.2f}-{10 * m['hole_rem_max']:.2f} mm, its intact "
+              f"particles {10 * m['hole_rem_intact']:.3f} mm; remnant {m['rem_mass']:.3f} g, "
+              f"rim in it {m['rim_frac']:.3f}); areal-mass hole {10 * m['hole']:.3f} mm "
+              f"({100 * (10 * m['hole'] / args.exp_hole - 1):+.1f} %; "
               f"innermost particle {10 * m['hole_min']:.3f} mm, unbroken plate "
               f"{10 * m['hole_unbroken']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
@@ -212,11 +267,12 @@ def main(argv=None):
         en = m["energy"]
         print("  energy / E0 = {:.4g} kJ: kinetic {:.4f}, internal {:.4f}, bond penalty {:.4f}, "
               "broken {:.4f}, fracture springs {:.2e}, contact stored {:.2e}, contact work {:.2e}, "
-              "balance {:.1e}".format(
+              "balance {:.1e} (max over the run so far {:.1e}), |P - P0|/|P0| <= {:.1e}".format(
                   en["E0"], *(en[c] / en["E0"] for c in ("kinetic", "internal", "bond_penalty",
                                                         "broken", "fracture_contact",
                                                         "wall_energy", "wall_work",
-                                                        "balance"))))
+                                                        "balance", "balance_max")),
+                  en["dP"]))
     if not args.output:
         return 0
     import matplotlib
