@@ -85,15 +85,14 @@ def hole_outline(dx, dy, h, sectors=SECTORS):
     return 2 * np.sqrt(np.mean(r_in ** 2)), 2 * r_in.min(), 2 * r_in.max()
 
 
-def plate_remnant(X0, x, body, failed, g):
+def plate_remnant(lab, X0, body, g):
     """The recovered plate: the fragment of the plate (body 1) that holds its outer rim (the
     lattice sites within h of the box's edge, where the experiment's holder clamps the bumper),
     by bonds that are neither broken (both ends failed, dm_fracture.c) nor torn (stretched
     beyond TEAR times their reference length: no bond of a solid survives a doubled length,
     whatever the model's correspondence stress still says about an intact particle whose
-    neighbour has flown off). Returns the mask of its particles and the rim's mass fraction in
-    it (1: the rim is one piece)."""
-    lab = fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR)
+    neighbour has flown off): lab = fragments(..., x, TEAR). Returns the mask of its particles
+    and the fraction of the rim's particles in it (1: the rim is one piece)."""
     d0 = np.abs(X0[:, :2] - g["axis"])
     rim = (body == 1) & np.any(d0 >= g["half"] - g["h"], axis=1)
     labs, counts = np.unique(lab[rim], return_counts=True)
@@ -185,7 +184,8 @@ def measure(outdir, snapshot=-1):
     r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
     # the hole in the recovered plate: the remnant that holds the plate's rim, seen along the
     # axis (all its particles, failed ones attached to it included; and its intact ones)
-    rem, rim_frac = plate_remnant(X0, x, body, failed, g)
+    lab = fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR)
+    rem, rim_frac = plate_remnant(lab, X0, body, g)
     dxy = x[:, :2] - g["axis"]
     hole_rem = hole_outline(dxy[rem, 0], dxy[rem, 1], g["h"])
     hole_rem_intact = hole_outline(dxy[rem & ~failed, 0], dxy[rem & ~failed, 1], g["h"])
@@ -219,16 +219,65 @@ def measure(outdir, snapshot=-1):
     P = np.stack([np.asarray(hist[c], float) for c in ("p_x", "p_y", "p_z")], axis=1)
     energy["dP"] = float(np.max(np.linalg.norm(P[:k + 1] - P[0], axis=1)) / np.linalg.norm(P[0]))
     energy["balance_max"] = float(np.max(np.abs(np.asarray(hist["balance"], float)[:k + 1])))
-    lab = fragments(X0, body, failed, g["h"], g["delta"])
-    _, inv = np.unique(lab, return_inverse=True)
+    # fragments (the same bonds as the remnant's): mass, particles, sphere's share, centroid
+    # velocity and position; the remnant is the plate, not debris
+    _, first, inv = np.unique(lab, return_index=True, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
-    fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
+    frag = dict(mass=fm, n=np.bincount(inv), sphere=np.bincount(inv, weights=mass * (body == 0)) / fm,
+                remnant=rem[first])
+    for c, w in (("u_z", u[:, 2]), ("u_r", ur), ("z", x[:, 2] - g["zf"]), ("r", r)):
+        frag[c] = np.bincount(inv, weights=mass * w) / fm
+    frag["speed"] = np.hypot(frag["u_z"], frag["u_r"])
+    fvz = frag["u_z"]
     return dict(g=g, t=t_now, hole_rem=hole_rem[0], hole_rem_min=hole_rem[1],
                 hole_rem_max=hole_rem[2], hole_rem_intact=hole_rem_intact[0],
                 rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
                 v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
-                frag_mass=fm, frag_vz=fvz, x=x, body=body, failed=failed, n=len(body),
+                frag_mass=fm, frag_vz=fvz, frag=frag, rem=rem, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
+
+
+def _write_atomic(path, text):
+    part = path + ".part"
+    with open(part, "w") as f:
+        f.write(text)
+    os.replace(part, path)
+
+
+VZ_BIN = 0.25  # km/s, the velocity distribution's bins
+
+
+def write_csv(prefix, d, m):
+    """PREFIX_fragments.csv (one row per fragment, the plate's remnant marked) and
+    PREFIX_velocity.csv (the debris' mass per bin of axial velocity, the remnant left out)."""
+    f, g = m["frag"], m["g"]
+    o = np.argsort(f["mass"])[::-1]
+    head = (f"# fragments of {d} at t = {10 * m['t']:.4g} us (tools/piekutowski.py): components "
+            f"of the unbroken bonds (not both failed, not stretched beyond {TEAR:g} times), mass "
+            "descending; remnant = 1: the plate's remnant (the recovered plate); u_z, u_r: "
+            "mass-mean axial and radial velocity of its particles; z: centroid beyond the struck "
+            "face, r: mass-mean distance of its particles from the axis\n")
+    rows = ["# units: mass [mg], particles [1], sphere_fraction [1], remnant [1], u_z [km/s], "
+            "u_r [km/s], speed [km/s], z [mm], r [mm]",
+            "mass,particles,sphere_fraction,remnant,u_z,u_r,speed,z,r"]
+    rows += [f"{1e3 * f['mass'][k]:.6g},{f['n'][k]},{f['sphere'][k]:.4g},{int(f['remnant'][k])},"
+             f"{f['u_z'][k]:.6g},{f['u_r'][k]:.6g},{f['speed'][k]:.6g},{10 * f['z'][k]:.6g},"
+             f"{10 * f['r'][k]:.6g}" for k in o]
+    _write_atomic(prefix + "_fragments.csv", head + "\n".join(rows) + "\n")
+    deb = ~f["remnant"]
+    lo = np.floor(f["u_z"][deb].min() / VZ_BIN) * VZ_BIN
+    edges = np.arange(lo, f["u_z"][deb].max() + VZ_BIN, VZ_BIN)
+    tot = np.histogram(f["u_z"][deb], edges, weights=f["mass"][deb])[0]
+    sph = np.histogram(f["u_z"][deb], edges, weights=(f["mass"] * f["sphere"])[deb])[0]
+    num = np.histogram(f["u_z"][deb], edges)[0]
+    rows = [f"# debris velocity distribution of {d} at t = {10 * m['t']:.4g} us: fragments other "
+            f"than the plate's remnant in bins of their axial velocity u_z ({VZ_BIN:g} km/s)",
+            "# units: u_z_lo [km/s], u_z_hi [km/s], mass [mg], sphere_mass [mg], plate_mass [mg], "
+            "fragments [1]", "u_z_lo,u_z_hi,mass,sphere_mass,plate_mass,fragments"]
+    rows += [f"{edges[k]:.4g},{edges[k + 1]:.4g},{1e3 * tot[k]:.6g},{1e3 * sph[k]:.6g},"
+             f"{1e3 * (tot[k] - sph[k]):.6g},{num[k]}" for k in range(len(tot))]
+    _write_atomic(prefix + "_velocity.csv", "\n".join(rows) + "\n")
+    print(f"wrote {prefix}_fragments.csv, {prefix}_velocity.csv")
 
 
 def main(argv=None):
@@ -237,6 +286,9 @@ def main(argv=None):
     ap.add_argument("--snapshot", type=int, default=-1,
                     help="index into the run's particle snapshots (-1: the final state)")
     ap.add_argument("-o", "--output", help="plot file (PNG); none: print only")
+    ap.add_argument("--csv", metavar="PREFIX", help="write PREFIX_fragments.csv and "
+                    "PREFIX_velocity.csv (the debris-cloud spectrum and velocity distribution) of "
+                    "the last run")
     ap.add_argument("--exp-hole", type=float, default=17.3, help="experimental hole (mm)")
     ap.add_argument("--exp-theta", type=float, default=20.67, help="experimental θ (deg)")
     ap.add_argument("--title", default="Piekutowski perforation, Al on Al", help="plot title")
@@ -273,6 +325,8 @@ def main(argv=None):
                                                         "wall_energy", "wall_work",
                                                         "balance", "balance_max")),
                   en["dP"]))
+    if args.csv:
+        write_csv(args.csv, *res[-1])
     if not args.output:
         return 0
     import matplotlib
@@ -282,8 +336,9 @@ def main(argv=None):
     d, m = res[-1]
     g = m["g"]
     sl = np.abs(m["x"][:, 1] - g["axis"][1]) < 0.75 * g["h"]  # one or two lattice rows
-    for bd, c, lab in ((1, "tab:blue", "plate"), (0, "tab:red", "sphere")):
-        s = sl & (m["body"] == bd)
+    for s, c, lab in ((sl & m["rem"], "tab:blue", "plate: remnant"),
+                      (sl & (m["body"] == 1) & ~m["rem"], "tab:cyan", "plate: debris"),
+                      (sl & (m["body"] == 0), "tab:red", "sphere")):
         axs[0].scatter(10 * m["x"][s, 0], 10 * (m["x"][s, 2] - g["zf"]), s=2, c=c, label=lab)
     rh = 0.5 * args.exp_hole  # mm
     axs[0].plot([-rh, -rh], [0, 10 * g["t"]], "k-", lw=2)
@@ -298,23 +353,26 @@ def main(argv=None):
     axs[0].set_xlabel("x (mm)")
     axs[0].set_ylabel("z − z_face (mm)")
     axs[0].set_aspect("equal")
+    axs[0].plot([-5 * m["hole_rem"], 5 * m["hole_rem"]], [-0.5, -0.5], "g-", lw=3,
+                label=f"DM hole (recovered plate) {10 * m['hole_rem']:.1f} mm")
     axs[0].legend(fontsize=7)
-    axs[0].plot([-5 * m["hole"], 5 * m["hole"]], [-0.5, -0.5], "g-", lw=3,
-                label=f"DM hole {10 * m['hole']:.1f} mm")
     axs[0].set_xlim(-30, 30)
     axs[0].set_title(f"slice |y| < 0.75 h at t = {10 * m['t']:.2f} µs")
     for d, m in res:
-        fm = np.sort(m["frag_mass"])[::-1] * 1e3
+        deb = ~m["frag"]["remnant"]  # the debris: all fragments but the plate's remnant
+        fm = np.sort(m["frag_mass"][deb])[::-1] * 1e3
         axs[1].loglog(fm, np.arange(1, len(fm) + 1), drawstyle="steps-post",
                       label=f"h = {10 * m['g']['h']:.3g} mm")
-        axs[2].hist(m["frag_vz"], bins=40, weights=m["frag_mass"] * 1e3, histtype="step",
-                    label=f"h = {10 * m['g']['h']:.3g} mm")
+        edges = np.arange(np.floor(m["frag_vz"][deb].min() / VZ_BIN) * VZ_BIN,
+                          m["frag_vz"][deb].max() + VZ_BIN, VZ_BIN)
+        axs[2].hist(m["frag_vz"][deb], bins=edges, weights=m["frag_mass"][deb] * 1e3,
+                    histtype="step", label=f"h = {10 * m['g']['h']:.3g} mm")
     axs[1].set_xlabel("fragment mass m (mg)")
     axs[1].set_ylabel("N(≥ m)")
     axs[1].legend(fontsize=7)
-    axs[1].set_title("fragment spectrum")
+    axs[1].set_title("debris fragment spectrum (remnant left out)")
     axs[2].set_xlabel("fragment axial velocity u_z (km/s)")
-    axs[2].set_ylabel("mass (mg)")
+    axs[2].set_ylabel(f"mass per {VZ_BIN:g} km/s (mg)")
     axs[2].legend(fontsize=7)
     axs[2].set_title("velocity distribution (mass-weighted)")
     fig.suptitle(args.title)
