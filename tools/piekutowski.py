@@ -157,6 +157,29 @@ def fragments(X0, body, failed, h, delta, x=None, tear=None):
         label = new
 
 
+def veil_silhouette(dz, r, m, h):
+    """The back-spray angle as a radiograph shows it: the veil's outer edge. In depth bins of h
+    behind the struck face (down to the depth above which 90 % of the back-spray's mass lies),
+    the radius that 95 % of the bin's mass lies within (the silhouette's edge, a few stray
+    grains aside); a straight line r = a + b dz fitted through them; the angle from the plate's
+    face is atan(1/b) (90°: straight back)."""
+    o = np.argsort(dz)
+    zmax = dz[o][np.searchsorted(np.cumsum(m[o]), 0.9 * m.sum())]
+    zs, rs = [], []
+    for lo in np.arange(0.0, zmax, h):
+        b = (dz >= lo) & (dz < lo + h)
+        if b.sum() < 3:
+            continue
+        ob = np.argsort(r[b])
+        cm = np.cumsum(m[b][ob])
+        rs.append(r[b][ob][min(np.searchsorted(cm, 0.95 * cm[-1]), b.sum() - 1)])
+        zs.append(lo + 0.5 * h)
+    if len(zs) < 3:
+        return np.nan
+    slope = np.polyfit(zs, rs, 1)[0]
+    return float(np.degrees(np.arctan2(1.0, slope)))
+
+
 def measure(outdir, snapshot=-1):
     run = mscale.Run(outdir)
     g = geometry(run)
@@ -193,7 +216,7 @@ def measure(outdir, snapshot=-1):
     back = x[:, 2] < g["zf"] - g["h"]
     ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])
                   / np.maximum(r, 1e-300), 0.0)
-    theta_v = theta_e = np.nan
+    theta_v = theta_e = theta_r = np.nan
     if back.sum() >= 5:
         ang = np.degrees(np.arctan2(-u[back, 2], ur[back]))
         o = np.argsort(ang)
@@ -203,6 +226,7 @@ def measure(outdir, snapshot=-1):
         far = np.hypot(dz, dr)
         sel = far >= np.quantile(far, 0.9)
         theta_e = float(np.median(np.degrees(np.arctan2(dz[sel], dr[sel]))))
+        theta_r = veil_silhouette(g["zf"] - x[back, 2], r[back], mass[back], g["h"])
     # leading edge
     zmax = x[:, 2].max()
     oz = np.argsort(x[:, 2])[::-1]  # the front of the cloud's first 1 % of the mass
@@ -231,7 +255,7 @@ def measure(outdir, snapshot=-1):
     fvz = frag["u_z"]
     return dict(g=g, t=t_now, hole_rem=hole_rem[0], hole_rem_min=hole_rem[1],
                 hole_rem_max=hole_rem[2], hole_rem_intact=hole_rem_intact[0],
-                rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, zmax=zmax,
+                rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, theta_r=theta_r, zmax=zmax,
                 v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
                 frag_mass=fm, frag_vz=fvz, frag=frag, rem=rem, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
@@ -309,8 +333,9 @@ def main(argv=None):
               f"innermost particle {10 * m['hole_min']:.3f} mm, unbroken plate "
               f"{10 * m['hole_unbroken']:.3f} mm); "
               f"theta_v {m['theta_v']:.2f} deg ({m['theta_v'] - args.exp_theta:+.2f} vs "
-              f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg (from the face; from the axis "
-              f"{90 - m['theta_v']:.2f}, {90 - m['theta_e']:.2f}); back-spray mass "
+              f"{args.exp_theta:g}), theta_e {m['theta_e']:.2f} deg, theta_r {m['theta_r']:.2f} "
+              f"deg (from the face; from the axis {90 - m['theta_v']:.2f}, {90 - m['theta_e']:.2f}"
+              f", {90 - m['theta_r']:.2f}); back-spray mass "
               f"{1e3 * m['back_mass']:.1f} mg; leading edge z {10 * (m['zmax'] - g['zf']):.2f} mm "
               f"beyond the face, {m['v_edge']:.3f} km/s (the front of 1 % of the mass "
               f"{m['v_edge01']:.3f} km/s, max u_z {m['uz_max']:.3f} km/s); "
