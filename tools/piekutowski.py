@@ -3,38 +3,45 @@
 """Hole, back-spray angle, debris-cloud leading edge and fragments of a sphere-on-plate `impact`
 run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md).
 
-  piekutowski.py OUTDIR [--snapshot K] [-o plot.png] [--exp-hole MM --exp-theta DEG]
+  piekutowski.py OUTDIR... [--snapshot K] [-o plot.png] [--csv PREFIX]
+                 [--exp-hole MM --exp-theta DEG]
 
 Body 0 is the projectile (a sphere moving along +z), body 1 the plate (a box normal to z). From
 the run's last particle snapshot (particles_NNNN.h5, the final state; or --snapshot K, an
 index into them; read through python/mscale):
 
-* hole diameter D_h: the plate particles still in the plate (|z − z_c| ≤ t, z_c the plate's
-  centre, t its thickness: the lip may bulge by up to t/2 on either side; and slower than a
-  tenth of the impact speed: a grain of debris crossing the plate's slab on its way out is not
-  part of the hole's wall), failed or not, give the plate's areal mass in rings of width h
-  about the impact axis; the hole's radius is where it first reaches half of the intact
-  plate's ρ0 t (a radiograph's or a recovered plate's edge: a few stray grains do not close a
-  hole). Failed particles count: they are material still in place (a recovered plate keeps its
-  damaged lip). Printed beside it: 2 (min r − h/2) of the innermost particle still in the plate
-  (the hole's wall is half a spacing inside it; one stray grain moves it) and the same for the
-  unbroken particles only (it grows as long as the failure spreads outwards through the
-  plate). This is the diameter of the hole
-  through the plate, what [Piekutowski1993] reports (the recovered bumper's hole; the finer
-  points of his measurement could not be read here: docs/validation.md).
+* hole in the recovered plate (compared with the experiment): the plate's remnant is the
+  fragment of the plate (components of the bonds neither broken, both ends failed, nor torn,
+  stretched beyond TEAR = 2 times their reference length) that holds its rim (the lattice sites
+  within h of the box's edge: where a holder clamps the bumper; what is recovered, or what a
+  radiograph shows edge-on). Seen along the axis, in 36 sectors, the hole's wall is h/2 inside
+  the innermost remnant particle; the diameter is the equal-area 2 sqrt(mean r_in^2), the
+  smallest and largest sector printed beside, and the same for the remnant's intact particles.
+* areal-mass hole D_h (the earlier measure, printed beside): the plate particles still in the
+  plate (|z − z_c| ≤ t, z_c the plate's centre, t its thickness) and slower than a tenth of
+  the impact speed, failed or not, give the plate's areal mass in rings of width h about the
+  impact axis; the hole's radius is where it first reaches half of the intact plate's ρ0 t.
+  Beside it: 2 (min r − h/2) of the innermost particle still in the plate and the same for the
+  unbroken particles only. [Piekutowski1993]'s measurement could not be read here
+  (docs/validation.md).
 * back-spray angle θ: the material thrown back out of the impact face (z < z_f − h, z_f the
   face the sphere struck). θ is measured from the plate's face (90° is straight back along the
   axis): θ_v = the mass-weighted median of atan2(−u_z, u_r) over the back-spray particles (the
-  direction they fly), and θ_e = the angle of the veil's envelope seen from the hole's rim, the
-  median of atan2(z_f − z, r − r_h) over the 10 % of back-spray particles farthest from the
-  rim. Both are printed; θ_v is the one compared.
-* debris-cloud leading edge: the largest z of any particle, and its speed (z_max − z_f)/(t − t_c)
-  with t_c = the time of first contact (the sphere's gap over its speed); the same for the front
+  direction they fly); θ_e = the angle of the veil's tip seen from the areal-mass hole's rim,
+  the median of atan2(z_f − z, r − r_h) over the 10 % of back-spray particles farthest from the
+  rim; θ_r = a radiograph's silhouette, the straight line through the radius holding 95 % of
+  the mass in each depth bin of h (veil_silhouette). All are printed, also from the axis.
+* debris-cloud leading edge: the largest z of any particle, and its speed
+  (z_max − z_f)/(t − t_c) with t_c = the time of first contact (the sphere's gap over its speed); the same for the front
   of the first 1 % of the total mass (a few fast grains aside), and the largest u_z.
 * fragments: connected components of the bond graph: particles i, k of one body are bonded when
   their lattice sites are closer than the horizon δ (the families of dm_family.c, built once),
-  and a bond is broken when both particles have failed (dm_fracture.c). Fragment mass spectrum
-  (cumulative number N(> m)) and mass-weighted axial velocity distribution.
+  and a bond is broken when both particles have failed (dm_fracture.c) or torn (above). The
+  debris is every fragment but the remnant: its mass spectrum (cumulative number N(≥ m)) and
+  mass-weighted axial velocity distribution are plotted (-o) and written (--csv PREFIX:
+  PREFIX_fragments.csv, PREFIX_velocity.csv, units in their headers).
+* energy as fractions of E0 at the snapshot's time, the balance's largest value so far, and
+  the momentum's largest drift |P − P0|/|P0| (impact_history.csv).
 
 Units: cm, km/s and 10 µs in the files; mm, km/s and µs in the printout and plot. Run with
 Debian's python (/usr/bin/python3: numpy, matplotlib, yaml).
@@ -247,17 +254,19 @@ def measure(outdir, snapshot=-1):
     # velocity and position; the remnant is the plate, not debris
     _, first, inv = np.unique(lab, return_index=True, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
-    frag = dict(mass=fm, n=np.bincount(inv), sphere=np.bincount(inv, weights=mass * (body == 0)) / fm,
-                remnant=rem[first])
+    frag = dict(mass=fm, n=np.bincount(inv),
+                sphere=np.bincount(inv, weights=mass * (body == 0)) / fm, remnant=rem[first])
     for c, w in (("u_z", u[:, 2]), ("u_r", ur), ("z", x[:, 2] - g["zf"]), ("r", r)):
         frag[c] = np.bincount(inv, weights=mass * w) / fm
     frag["speed"] = np.hypot(frag["u_z"], frag["u_r"])
     fvz = frag["u_z"]
     return dict(g=g, t=t_now, hole_rem=hole_rem[0], hole_rem_min=hole_rem[1],
                 hole_rem_max=hole_rem[2], hole_rem_intact=hole_rem_intact[0],
-                rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min, hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e, theta_r=theta_r, zmax=zmax,
-                v_edge=v_edge, v_edge01=v_edge01, uz_max=u[:, 2].max(), back_mass=mass[back].sum(),
-                frag_mass=fm, frag_vz=fvz, frag=frag, rem=rem, x=x, body=body, failed=failed, n=len(body),
+                rem_mass=mass[rem].sum(), rim_frac=rim_frac, hole=2 * r_h, hole_min=2 * r_min,
+                hole_unbroken=2 * r_h_unbroken, theta_v=theta_v, theta_e=theta_e,
+                theta_r=theta_r, zmax=zmax, v_edge=v_edge, v_edge01=v_edge01,
+                uz_max=u[:, 2].max(), back_mass=mass[back].sum(), frag_mass=fm, frag_vz=fvz,
+                frag=frag, rem=rem, x=x, body=body, failed=failed, n=len(body),
                 nfailed=int(failed.sum()), rho=rho, energy=energy)
 
 
@@ -274,7 +283,7 @@ VZ_BIN = 0.25  # km/s, the velocity distribution's bins
 def write_csv(prefix, d, m):
     """PREFIX_fragments.csv (one row per fragment, the plate's remnant marked) and
     PREFIX_velocity.csv (the debris' mass per bin of axial velocity, the remnant left out)."""
-    f, g = m["frag"], m["g"]
+    f = m["frag"]
     o = np.argsort(f["mass"])[::-1]
     head = (f"# fragments of {d} at t = {10 * m['t']:.4g} us (tools/piekutowski.py): components "
             f"of the unbroken bonds (not both failed, not stretched beyond {TEAR:g} times), mass "
@@ -367,7 +376,8 @@ def main(argv=None):
         axs[0].scatter(10 * m["x"][s, 0], 10 * (m["x"][s, 2] - g["zf"]), s=2, c=c, label=lab)
     rh = 0.5 * args.exp_hole  # mm
     axs[0].plot([-rh, -rh], [0, 10 * g["t"]], "k-", lw=2)
-    axs[0].plot([rh, rh], [0, 10 * g["t"]], "k-", lw=2, label=f"experiment: hole {args.exp_hole} mm")
+    axs[0].plot([rh, rh], [0, 10 * g["t"]], "k-", lw=2,
+                label=f"experiment: hole {args.exp_hole} mm")
     L = 25.0
     th = np.radians(args.exp_theta)
     for sgn in (-1, 1):
