@@ -14,9 +14,10 @@ index into them; read through python/mscale):
   fragment of the plate (components of the bonds neither broken, both ends failed, nor torn,
   stretched beyond TEAR = 2 times their reference length) that holds its rim (the lattice sites
   within h of the box's edge: where a holder clamps the bumper; what is recovered, or what a
-  radiograph shows edge-on). Seen along the axis, in 36 sectors, the hole's wall is h/2 inside
-  the innermost remnant particle; the diameter is the equal-area 2 sqrt(mean r_in^2), the
-  smallest and largest sector printed beside, and the same for the remnant's intact particles.
+  radiograph shows edge-on). Seen along the axis, in 36 sectors, the hole's wall is at the
+  innermost remnant particle (hole_outline); the diameter is the equal-area
+  2 sqrt(mean r_in^2), the smallest and largest sector printed beside, and the same for the
+  remnant's intact particles.
 * areal-mass hole D_h (the earlier measure, printed beside): the plate particles still in the
   plate (|z − z_c| ≤ t, z_c the plate's centre, t its thickness) and slower than a tenth of
   the impact speed, failed or not, give the plate's areal mass in rings of width h about the
@@ -76,16 +77,19 @@ TEAR = 2.0  # a bond longer than twice its reference length is torn (hole_remnan
 SECTORS = 36  # azimuthal sectors of the hole's outline (10 degrees each)
 
 
-def hole_outline(dx, dy, h, sectors=SECTORS):
+def hole_outline(dx, dy, wall=0.0, sectors=SECTORS):
     """The hole's outline seen along the axis through a set of particles (offsets dx, dy from
-    the axis): per azimuthal sector the radius of its innermost particle less h/2 (the wall is
-    half a spacing inside the particle's centre). Returns the equal-area diameter
-    2 sqrt(mean r_in^2) (a ragged hole's diameter: the circle letting the same light through) and
-    the smallest and largest 2 r_in; nan where a sector holds no particle."""
+    the axis): per azimuthal sector the radius of its innermost particle, less `wall`. Returns
+    the equal-area diameter 2 sqrt(mean r_in^2) (a ragged hole's diameter: the circle letting
+    the same light through) and the smallest and largest 2 r_in; nan where a sector holds no
+    particle. wall = 0: the hole's edge at the innermost particle's centre, which is the
+    lattice's own (mass-equivalent) edge when a sector spans several spacings: a lattice
+    punched at radius R gives 2R + 0.15 h (test_piekutowski_hole); taking the wall h/2 inside
+    the particle, as for a straight lattice row, reads 0.85 h low there."""
     r = np.hypot(dx, dy)
     sec = np.minimum((np.arctan2(dy, dx) + np.pi) / (2 * np.pi) * sectors, sectors - 1)
     r_in = np.full(sectors, np.inf)
-    np.minimum.at(r_in, sec.astype(int), r - 0.5 * h)
+    np.minimum.at(r_in, sec.astype(int), r - wall)
     if not np.all(np.isfinite(r_in)):
         return np.nan, np.nan, np.nan
     r_in = np.maximum(r_in, 0.0)
@@ -217,8 +221,8 @@ def measure(outdir, snapshot=-1):
     lab = fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR)
     rem, rim_frac = plate_remnant(lab, X0, body, g)
     dxy = x[:, :2] - g["axis"]
-    hole_rem = hole_outline(dxy[rem, 0], dxy[rem, 1], g["h"])
-    hole_rem_intact = hole_outline(dxy[rem & ~failed, 0], dxy[rem & ~failed, 1], g["h"])
+    hole_rem = hole_outline(dxy[rem, 0], dxy[rem, 1])
+    hole_rem_intact = hole_outline(dxy[rem & ~failed, 0], dxy[rem & ~failed, 1])
     # back-spray
     back = x[:, 2] < g["zf"] - g["h"]
     ur = np.where(r > 0, ((x[:, 0] - g["axis"][0]) * u[:, 0] + (x[:, 1] - g["axis"][1]) * u[:, 1])

@@ -76,17 +76,19 @@ checks = [
     (abs(hole / EXP_HOLE - 1) < 0.17, f"hole {hole:.2f} mm within 17 % of {EXP_HOLE}"),
     # LOOSE BOUND, the same two lattice spacings of diameter (17 %) for the hole in the
     # recovered plate (the remnant holding the plate's rim by unbroken, untorn bonds, seen along
-    # the axis: tools/piekutowski.py): measured 18.73 mm (+8.3 %) here at 4 µs; it fails a plate
-    # that is not perforated or one that falls apart (no remnant hole, or all of it)
+    # the axis: tools/piekutowski.py): measured 19.47 mm (+12.6 %) here at 4 µs, 19.28 and
+    # 19.26 mm at t/4 and t/6 (the model's hole is itself 11 % above the experiment); it fails
+    # a plate that is not perforated or one whose bonds never break (6.9 mm)
     (abs(hole_rem / EXP_HOLE - 1) < 0.17, f"recovered plate's hole {hole_rem:.2f} mm within 17 % "
      f"of {EXP_HOLE}"),
     # the remnant is the holed plate: its rim in one piece, and its mass at least the lattice
-    # outside its equal-area hole (4.36 g) and at most 10 % more: measured +5.1 % (4.58 g, the
-    # lip's material pushed outwards and still attached); a remnant that keeps the failed lip
-    # (failed-failed bonds left unbroken: +16 %, 5.44 g, hole 16.5 mm) or the whole plate
-    # (6.0 g), or misses a torn-off part, falls outside
-    (m["rim_frac"] == 1.0 and holed < m["rem_mass"] < 1.10 * holed,
-     f"remnant {m['rem_mass']:.4f} g within 0-10 % above the holed plate {holed:.4f} g "
+    # outside its equal-area hole (4.20 g) and at most 14 % more: measured +9.0 % (4.58 g, the
+    # lip's material pushed outwards beyond the hole's radius and still attached: the hole is
+    # measured at its innermost particles, the lip's mass lies outside them); a remnant that
+    # keeps the failed lip (failed-failed bonds left unbroken: +18 %, 5.44 g, hole 17.2 mm) or
+    # the whole plate (6.0 g), or misses a torn-off part, falls outside
+    (m["rim_frac"] == 1.0 and holed < m["rem_mass"] < 1.14 * holed,
+     f"remnant {m['rem_mass']:.4f} g within 0-14 % above the holed plate {holed:.4f} g "
      f"(the plate {plate:.4f} g), rim in one piece"),
     # the debris cloud's front (its fastest particle): the projectile's rear loses little speed
     # through a plate of t/D = 0.23 (measured 6.63 km/s = 0.99 v here, 7.9 km/s = 1.18 v at
