@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: MIT
 """Hole, back-spray angle, debris-cloud leading edge and fragments of a sphere-on-plate `impact`
-run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md).
+run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md), or of a
+`cluster_dynamics` run whose regions 0 and 1 are the sphere and the plate (tools/cd_impact.py:
+h = (r0³/√2)^(1/3), the edge of a cluster's volume; fragments: pairs closer than R_c).
 
   piekutowski.py OUTDIR [--snapshot K] [-o plot.png] [--exp-hole MM --exp-theta DEG]
 
@@ -47,6 +49,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+import cd_impact  # noqa: E402  (a cluster_dynamics run seen as an impact run)
 
 
 def geometry(run):
@@ -119,7 +122,7 @@ def fragments(X0, body, failed, h, delta):
 
 
 def measure(outdir, snapshot=-1):
-    run = mscale.Run(outdir)
+    run = cd_impact.as_impact(mscale.Run(outdir), "volume")  # CD: ρ0 h³ = a cluster's mass
     g = geometry(run)
     if not run.snapshots:
         raise SystemExit(f"{run.path}: no particle snapshots (particles_NNNN.h5)")
@@ -170,7 +173,8 @@ def measure(outdir, snapshot=-1):
               ("kinetic", "internal", "bond_penalty", "broken", "fracture_contact", "wall_work",
                "wall_energy", "balance")}
     energy["E0"] = float(np.asarray(hist["kinetic"], float)[0])
-    lab = fragments(X0, body, failed, g["h"], g["delta"])
+    lab = (run.cd_fragments(x) if hasattr(run, "cd_fragments")  # CD: pairs closer than R_c
+           else fragments(X0, body, failed, g["h"], g["delta"]))
     _, inv = np.unique(lab, return_inverse=True)
     fm = np.bincount(inv, weights=mass)
     fvz = np.bincount(inv, weights=mass * u[:, 2]) / fm
