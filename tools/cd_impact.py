@@ -156,3 +156,55 @@ class CdAsImpact:
             if np.array_equal(new, label):
                 return label
             label = new
+
+
+def balance(outdir, snapshot=-1):
+    """Energy and momentum balance of a cluster-dynamics impact run at a snapshot (the final
+    state by default), as fractions of E0 = the kinetic energy at t = 0 and of |P0|: kinetic
+    (and its part in the bodies' bulk motion, Σ_b |P_b|²/2M_b over the regions; the rest is the
+    clusters' motion relative to their body's centre of mass: heat, and the debris' spread), potential, broken, dissipated, balance = total − total(0);
+    the momentum change."""
+    import mscale
+    run = as_impact(mscale.Run(outdir))
+    h = run.table("impact_history")
+    snap = run.snapshots[snapshot]
+    t = np.asarray(h["t"], float)
+    k = int(np.argmin(np.abs(t - snap.time)))
+    E0 = float(h["kinetic"][0])
+    P = np.stack([np.asarray(h[c], float) for c in ("px", "py", "pz")], axis=1)
+    m, v, body = np.asarray(snap["mass"], float), np.asarray(snap["v"], float), snap["body"]
+    kcm = 0.0
+    for b in np.unique(body):
+        s = body == b
+        pb = (m[s, None] * v[s]).sum(axis=0)
+        kcm += 0.5 * pb @ pb / m[s].sum()
+    out = dict(t=float(t[k]), E0=E0, kinetic=float(h["kinetic"][k]) / E0, bulk=kcm / E0,
+               potential=float(h["internal"][k] - h["internal"][0]) / E0, broken=float(h["broken"][k]) / E0,
+               dissipated=float(h["dissipated"][k]) / E0,
+               balance=float(np.max(np.abs(h["balance"][:k + 1]))) / E0,
+               P0=P[0], P=P[k], dP=float(np.linalg.norm(P[k] - P[0]) / np.linalg.norm(P[0])))
+    return out
+
+
+def main(argv=None):
+    import argparse
+    ap = argparse.ArgumentParser(description="energy and momentum balance of cluster-dynamics "
+                                 "impact runs (fractions of E0 = K(0) and |P0|)")
+    ap.add_argument("dirs", nargs="+")
+    ap.add_argument("--snapshot", type=int, default=-1)
+    args = ap.parse_args(argv)
+    for d in args.dirs:
+        b = balance(d, args.snapshot)
+        print(f"{d}: t {b['t']:.3f} us, E0 {b['E0']:.5g} g(km/s)^2: kinetic {b['kinetic']:.4f} "
+              f"(each body's bulk motion {b['bulk']:.4f}, the rest: heat and the debris' spread {b['kinetic'] - b['bulk']:.4f}), potential "
+              f"change {b['potential']:+.4f}, broken {b['broken']:.4f}, dissipated {b['dissipated']:.4f}; "
+              f"max |balance| {b['balance']:.2e}; P0 {np.array2string(b['P0'], precision=5)}, "
+              f"P {np.array2string(b['P'], precision=5)}, |P - P0|/|P0| {b['dP']:.3g}")
+    return 0
+
+
+if __name__ == "__main__":
+    import os
+    import sys
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+    sys.exit(main())
