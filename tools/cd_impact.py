@@ -162,8 +162,9 @@ def balance(outdir, snapshot=-1):
     """Energy and momentum balance of a cluster-dynamics impact run at a snapshot (the final
     state by default), as fractions of E0 = the kinetic energy at t = 0 and of |P0|: kinetic
     (and its part in the bodies' bulk motion, Σ_b |P_b|²/2M_b over the regions; the rest is the
-    clusters' motion relative to their body's centre of mass: heat, and the debris' spread), potential, broken, dissipated, balance = total − total(0);
-    the momentum change."""
+    clusters' motion relative to their body's centre of mass: heat, and the debris' spread),
+    the potential energy's change since t = 0 (a relaxed polycrystal starts with some), broken,
+    dissipated, the largest |total − total(0)| so far; the momentum change."""
     import mscale
     run = as_impact(mscale.Run(outdir))
     h = run.table("impact_history")
@@ -179,7 +180,8 @@ def balance(outdir, snapshot=-1):
         pb = (m[s, None] * v[s]).sum(axis=0)
         kcm += 0.5 * pb @ pb / m[s].sum()
     out = dict(t=float(t[k]), E0=E0, kinetic=float(h["kinetic"][k]) / E0, bulk=kcm / E0,
-               potential=float(h["internal"][k] - h["internal"][0]) / E0, broken=float(h["broken"][k]) / E0,
+               potential=float(h["internal"][k] - h["internal"][0]) / E0,
+               broken=float(h["broken"][k]) / E0,
                dissipated=float(h["dissipated"][k]) / E0,
                balance=float(np.max(np.abs(h["balance"][:k + 1]))) / E0,
                P0=P[0], P=P[k], dP=float(np.linalg.norm(P[k] - P[0]) / np.linalg.norm(P[0])))
@@ -196,8 +198,9 @@ def main(argv=None):
     for d in args.dirs:
         b = balance(d, args.snapshot)
         print(f"{d}: t {b['t']:.3f} us, E0 {b['E0']:.5g} g(km/s)^2: kinetic {b['kinetic']:.4f} "
-              f"(each body's bulk motion {b['bulk']:.4f}, the rest: heat and the debris' spread {b['kinetic'] - b['bulk']:.4f}), potential "
-              f"change {b['potential']:+.4f}, broken {b['broken']:.4f}, dissipated {b['dissipated']:.4f}; "
+              f"(each body's bulk motion {b['bulk']:.4f}, the rest: heat and the debris' spread "
+              f"{b['kinetic'] - b['bulk']:.4f}), potential change {b['potential']:+.4f}, broken "
+              f"{b['broken']:.4f}, dissipated {b['dissipated']:.4f}; "
               f"max |balance| {b['balance']:.2e}; P0 {np.array2string(b['P0'], precision=5)}, "
               f"P {np.array2string(b['P'], precision=5)}, |P - P0|/|P0| {b['dP']:.3g}")
     return 0

@@ -342,10 +342,10 @@ static void test_example_decks(void **state) {
   (void)state;
   const char *src = getenv("MSCALE_SOURCE_DIR");
   static const char *const names[] = {
-      "cd-piston-al.yaml",        "cd-piston-history.yaml",    "cd-dusting.yaml",
-      "cd-grooves-2d.yaml",       "cd-heterogeneous.yaml",     "cd-poly-al.yaml",
-      "cd-rz80-polycrystal.yaml", "cd-taylor-cu.yaml",         "cd-taylor-cu-coarse.yaml",
-      "cd-piekutowski.yaml",      "cd-piekutowski-coarse.yaml"};
+      "cd-piston-al.yaml",        "cd-piston-history.yaml",     "cd-dusting.yaml",
+      "cd-grooves-2d.yaml",       "cd-heterogeneous.yaml",      "cd-poly-al.yaml",
+      "cd-rz80-polycrystal.yaml", "cd-taylor-cu.yaml",          "cd-taylor-cu-coarse.yaml",
+      "cd-piekutowski.yaml",      "cd-piekutowski-coarse.yaml", "cd-piekutowski-poly.yaml"};
   for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
     char path[4096];
     snprintf(path, sizeof path, "%s/inputs/%s", src ? src : "../..", names[k]);

@@ -6,9 +6,10 @@ to the experiments — these checks are physics any run must satisfy.
     /usr/bin/python3 tests/python/test_cd_impact.py MSCALE_BINARY SOURCE_DIR WORKDIR {piek|taylor}
 
 piek: inputs/cd-piekutowski-coarse.yaml (7847 clusters, 4 µs, ~5 s of CPU) measured with
-tools/piekutowski.py; taylor: inputs/cd-taylor-cu-coarse.yaml cut to 30 µs (the rod is still
-on the wall, ~8 s of CPU) measured with tools/taylor_profile.py. CD_IMPACT_PRINT=1 prints the
-numbers.
+tools/piekutowski.py; taylor: inputs/cd-taylor-cu-coarse.yaml cut to 30 µs (~8 s of CPU)
+measured with tools/taylor_profile.py. Shown to fail: without the broken-bond energy in the
+balance (piek: 0.10 E0), and with the rod left at rest (taylor: length, balance).
+CD_IMPACT_PRINT=1 prints the numbers.
 """
 import os
 import subprocess
@@ -83,13 +84,14 @@ elif case == "taylor":
         # the wall pushes along z only: the lateral momentum stays at round-off (measured 5e-17
         # of |P0|)
         (dPxy < 1e-12, f"lateral momentum {dPxy:.2e} |P0|"),
-        # the impact shortens the rod and widens its foot, by more than one layer spacing and
-        # one percent of D0 (the lattice resolution: a rod that only bounces elastically comes
-        # back to its length within a fraction of a layer); measured L 23.96 -> 22.8 mm
+        # the impact shortens the rod by more than one layer spacing (the lattice resolution: a
+        # rod at rest keeps its length within a fraction of a layer, 23.961 -> 23.975 mm in
+        # 30 µs; an elastic rod is back at its length after its rebound at ~15 µs); measured
+        # 23.961 -> 22.411 mm
         (m["length"] < m0["length"] - m["h"], f"length {10 * m0['length']:.3f} -> "
          f"{10 * m['length']:.3f} mm"),
-        (m["footprint"] > 1.01 * m0["footprint"], f"footprint {10 * m0['footprint']:.3f} -> "
-         f"{10 * m['footprint']:.3f} mm"),
+        # (the footprint is not asserted: the plain-cutoff packing heats itself, and its surface
+        # clusters drift outward even in a rod at rest: D0 max r/r0 grows by 13 % in 30 µs)
     ], f"balance {balance:.3g} E0, lateral momentum {dPxy:.3g} |P0|, length "
        f"{10 * m0['length']:.3f} -> {10 * m['length']:.3f} mm, footprint "
        f"{10 * m0['footprint']:.3f} -> {10 * m['footprint']:.3f} mm")
