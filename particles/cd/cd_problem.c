@@ -533,6 +533,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   if (st == MS_OK) st = sim_init(&r);
   if (st == MS_OK) {
     log_setup(&r);
+    r.out.with_vfs = p->piston.n > 0; /* the free-surface layer is tagged in piston runs only */
     st = cd_outputs_open(ctx, &r.out, r.rs != NULL);
   }
   if (st == MS_OK) {

@@ -90,6 +90,7 @@ typedef struct cd_outputs {
   double *prof;                   /* profile_bins × CD_PROFILE_NCOL */
   double front[2 * CD_MAX_FRONT]; /* (t, z) of the front fit */
   int nf;
+  bool with_vfs; /* cd_energy.csv has the v_free_surface column (a piston run) */
 } cd_outputs;
 
 /* Opens the three CSV files on rank 0 (a restart fills them from the checkpoint, else they get
