@@ -208,10 +208,10 @@ ms_status cd_rebuild_lists(cd_sim *s, bool reorder) {
     snprintf(s->err, sizeof s->err,
              "unstable at step %ld, t = %.9g %s: a particle has too many list candidates in "
              "its link cells: particles piled on top of each other, or the particles spread "
-             "so far that the cell grid (at most 2n + 64 cells over their extent: %d x %d x "
+             "so far that the cell grid (at most %d n + 64 cells over their extent: %d x %d x "
              "%d cells of %.3g x %.3g x %.3g cm) is too coarse",
-             s->step, ms_out_time(s->t), ms_out_time_label(), nl->ncell[0], nl->ncell[1],
-             nl->ncell[2], 1.0 / nl->cell_inv_w[0], 1.0 / nl->cell_inv_w[1],
+             s->step, ms_out_time(s->t), ms_out_time_label(), nl->cell_factor, nl->ncell[0],
+             nl->ncell[1], nl->ncell[2], 1.0 / nl->cell_inv_w[0], 1.0 / nl->cell_inv_w[1],
              1.0 / nl->cell_inv_w[2]);
   }
   if (st != MS_OK) return st;

@@ -310,6 +310,35 @@ static void test_bodies(void **state) {
   free(text);
 }
 
+/* A dense block of ~1400 clusters and a few clusters 95 r0 away (a debris cloud's spread): the
+ * link cells, capped at 2n + 64 over the particles' extent, are ~8 r0 wide and one row of them
+ * holds more than the list build's 510 candidates; the build raises the cap (neighbour.c) and
+ * the run goes on (without it: MS_ERR_UNSTABLE at the first build). */
+static void test_spread_cells(void **state) {
+  (void)state;
+  char *text = malloc(8192);
+  int n = snprintf(text, 8192, "%s", mats);
+  snprintf(text + n, 8192 - n,
+           "cluster_dynamics:\n"
+           "  r0: 1.0e-3\n"
+           "  t_end: 2.0e-5\n"
+           "  box: {lo: [0, 0, 0], hi: [0.1, 0.1, 0.1], boundary: [free, free, free]}\n"
+           "  regions:\n"
+           "    - {material: al, lo: [0, 0, 0], hi: [0.01, 0.01, 0.01]}\n"
+           "    - {shape: sphere, material: al, center: [0.0955, 0.0955, 0.0955], radius: "
+           "1.5e-3}\n"
+           "  output: {every: 5}\n");
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  eos_materials *m;
+  char dir[] = "/tmp/cd_spread_test_XXXXXX";
+  cd_problem *p = run_deck(text, dir, &e, &doc, &m);
+  remove_run_dir(dir);
+  free_deck(p, m, doc, &e);
+  free(text);
+}
+
 /* Bodies: a region outside the box, a first step beyond 0.5 r0, a polycrystal half-space. */
 static void test_bodies_bad(void **state) {
   (void)state;
@@ -371,6 +400,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_good_deck_runs),       cmocka_unit_test(test_bad_input),
       cmocka_unit_test(test_polycrystal_profiled), cmocka_unit_test(test_bodies),
-      cmocka_unit_test(test_bodies_bad),           cmocka_unit_test(test_example_decks)};
+      cmocka_unit_test(test_bodies_bad),           cmocka_unit_test(test_spread_cells),
+      cmocka_unit_test(test_example_decks)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
