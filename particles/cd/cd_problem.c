@@ -366,6 +366,8 @@ static ms_status sim_init(cd_run *r) {
     if (st == MS_OK && p->relax_on)
       st = relax_sample(ctx, p, r->s, r->c0max, r->nglobal, r->region_of);
   }
+  if (st != MS_OK && cd_sim_error(r->s)[0]) /* the guard's or the list build's finding */
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: %s", cd_sim_error(r->s));
   if (st != MS_OK)
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
   return st;
