@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: MIT
 """Hole, back-spray angle, debris-cloud leading edge and fragments of a sphere-on-plate `impact`
-run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md).
+run (docs/validation.md, "Piekutowski perforation"; docs/input-impact.md), or of a
+`cluster_dynamics` run whose regions 0 and 1 are the sphere and the plate (tools/cd_impact.py:
+h = (r0³/√2)^(1/3), the edge of a cluster's volume; fragments: pairs closer than R_c).
 
   piekutowski.py OUTDIR... [--snapshot K] [-o plot.png] [--csv PREFIX]
                  [--exp-hole MM --exp-theta DEG]
@@ -55,6 +57,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+import cd_impact  # noqa: E402  (a cluster_dynamics run seen as an impact run)
 
 
 def geometry(run):
@@ -192,7 +195,7 @@ def veil_silhouette(dz, r, m, h):
 
 
 def measure(outdir, snapshot=-1):
-    run = mscale.Run(outdir)
+    run = cd_impact.as_impact(mscale.Run(outdir), "volume")  # CD: ρ0 h³ = a cluster's mass
     g = geometry(run)
     if not run.snapshots:
         raise SystemExit(f"{run.path}: no particle snapshots (particles_NNNN.h5)")
@@ -218,7 +221,8 @@ def measure(outdir, snapshot=-1):
     r_h_unbroken = r[inplate & ~failed].min() - 0.5 * g["h"]  # the unbroken plate only
     # the hole in the recovered plate: the remnant that holds the plate's rim, seen along the
     # axis (all its particles, failed ones attached to it included; and its intact ones)
-    lab = fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR)
+    lab = (run.cd_fragments(x) if hasattr(run, "cd_fragments")  # CD: pairs closer than R_c
+           else fragments(X0, body, failed, g["h"], g["delta"], x=x, tear=TEAR))
     rem, rim_frac = plate_remnant(lab, X0, body, g)
     dxy = x[:, :2] - g["axis"]
     hole_rem = hole_outline(dxy[rem, 0], dxy[rem, 1])
