@@ -134,6 +134,15 @@ def split(run, margin=0.1):
     dist = np.abs((y - lo - y0 + 0.5 * lam) % lam - 0.5 * lam)
     out["ahead_valley"] = m[(where == "ahead") & (dist < 0.25 * lam)].sum() / area
     out["ahead_crest"] = out["ahead"] - out["ahead_valley"]
+    # depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
+    # the foremost layer's particles, below the initial crest tops
+    first = r.snapshots[0]
+    x0 = dict(zip(first["gid"], first["x"][:, 0]))
+    top = max(first["x"][:, 0])
+    out["spall_depth"] = np.nan
+    if layers:
+        front_layer = max(layers, key=lambda k: level(fid == k))
+        out["spall_depth"] = top - min(x0[g] for g in snap["gid"][fid == front_layer])
     out["n_layers"] = len(layers)
     return out, ((y - lo) % period, x, where, t)
 
@@ -167,7 +176,7 @@ def main():
     ap.add_argument("--png", help="draw the last snapshots coloured by class")
     a = ap.parse_args()
     pics = []
-    print("run,t_us,u_ref,run_bulk,jets(n),slow(n),bulk,ahead(valley/crest),layers(n),behind,x_level_um,v_max"
+    print("run,t_us,u_ref,run_bulk,jets(n),slow(n),bulk,ahead(valley/crest),layers(n),behind,x_level_um,spall_depth_um,v_max"
           "  [g/cm^2, km/s]")
     for run in a.runs:
         o, pic = split(run, a.margin)
@@ -176,7 +185,7 @@ def main():
               f"{o['jets']:.3g}({o['n_jets']}),{o['slow']:.3g}({o['n_slow']}),"
               f"{o['bulk']:.3g},{o['ahead']:.3g}({o['ahead_valley']:.3g}/{o['ahead_crest']:.3g}),"
               f"{o['layer']:.3g}({o['n_layers']}),{o['behind']:.3g},"
-              f"{o['x_l'] * 1e4:.0f},{o['v_max']:.3f}")
+              f"{o['x_l'] * 1e4:.0f},{o['spall_depth'] * 1e4:.0f},{o['v_max']:.3f}")
     if a.png:
         draw(a.png, a.runs, pics)
 
