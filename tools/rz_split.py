@@ -154,8 +154,12 @@ def draw(png, runs, pics):
     import matplotlib.pyplot as plt
 
     colour = {"bulk": "0.6", "layer": "tab:blue", "behind": "tab:orange", "ahead": "tab:red"}
-    fig, axes = plt.subplots(1, len(runs), figsize=(3.2 * len(runs), 6), squeeze=False)
-    for ax, run, (y, x, where, t) in zip(axes[0], runs, pics):
+    ncol = min(4, len(runs))
+    nrow = -(-len(runs) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 5 * nrow), squeeze=False)
+    for ax in axes.flat[len(runs):]:
+        ax.axis("off")
+    for ax, run, (y, x, where, t) in zip(axes.flat, runs, pics):
         for key, c in colour.items():
             s = where == key
             ax.scatter(y[s] * 1e4, x[s] * 1e4, c=c, s=0.3, linewidths=0)
@@ -165,8 +169,8 @@ def draw(png, runs, pics):
         ax.set_aspect("equal")
     handles = [plt.Line2D([], [], marker="o", ls="", color=c, label=k) for k, c in colour.items()]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
-    fig.tight_layout(rect=(0, 0.05, 1, 1))
-    fig.savefig(png, dpi=110)
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    fig.savefig(png, dpi=80)
 
 
 def main():
