@@ -4,18 +4,24 @@
 
     /usr/bin/python3 tools/rz_split.py [--png FILE] OUT [OUT ...]
 
-Two splits of the detached material (everything but the bulk, the fragment holding the deepest
-particle, as cpl_ejecta_classify chooses it), per unit surface area (g/cm^2; the cross-section
-is the periodic width times the plane-strain thickness: 1 cm for the discrete model, a for
-cluster dynamics):
+Two splits of the detached material, per unit surface area (g/cm^2; the cross-section is the
+periodic width times the plane-strain thickness: 1 cm for the discrete model, a for cluster
+dynamics):
 
-* by velocity, the run's own (cpl_ejecta_classify, fragments.jet_margin): a fragment is a jet
-  when its centre-of-mass velocity exceeds (1 + margin) u_ref, else slow;
-* by shape: a detached fragment is a layer when its particles occupy at least 90 % of the
-  lateral bins of width a across the period (a spalled layer spans the periodic width; an
-  intact layer leaves no bin empty, a torn one may leave a few); the other detached fragments
-  are pieces, counted as "ahead" (jets and their debris) when their centre of mass lies beyond
-  the front of the foremost layer (or of the bulk, without layers), else "behind".
+* by velocity, the run's own (cpl_ejecta_classify, fragments.jet_margin): every fragment but
+  the one holding the deepest particle is a jet when its centre-of-mass velocity exceeds
+  (1 + margin) u_ref, else slow;
+* by shape: a fragment is full-width when its particles occupy at least 90 % of the lateral
+  bins of width a across the period (a spalled layer spans the periodic width; an intact layer
+  leaves no bin empty, a torn one may leave a few). The deepest full-width fragment is the bulk
+  (a lone failed particle at the piston, the run's bulk then, does not make the slab a layer);
+  the other full-width fragments are layers. The level is the median over the lateral bins of
+  the foremost layer's (without layers, the bulk's) front particle. Detached particles beyond
+  the level are "ahead" (jets and the debris in front of the layers), split into those within
+  a quarter groove period of a valley's axis (found in the first snapshot, before breakout)
+  and the rest (crest debris); detached particles below it are "layer" or "behind" (pieces).
+  The depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
+  the foremost layer's particles below the initial crest tops.
 
 With --png, the last snapshot of each run is drawn coloured by that class.
 """
@@ -88,16 +94,16 @@ def split(run, margin=0.1):
         s = fid == k
         mk = m[s].sum()
         vk = (m[s] * v[s]).sum() / mk
-        xc = (m[s] * x[s]).sum() / mk
         bins = np.unique(np.floor(((y[s] - lo) % period) / period * nbin).astype(int))
-        info[k] = (mk, vk, xc, x[s].max(), x[s].min())
+        info[k] = (mk, vk, x[s].min())
         cls[k] = "layer" if bins.size >= COVER * nbin else "piece"
     # the shape split's bulk: the deepest full-width fragment (what stays on the piston; a lone
     # failed particle next to the piston, the run's bulk then, does not make the slab a layer)
     full = [k for k in ids if cls[k] == "layer"]
-    bulk = min(full, key=lambda k: info[k][4]) if full else run_bulk
+    bulk = min(full, key=lambda k: info[k][2]) if full else run_bulk
     cls[bulk] = "bulk"
-    # the level of the foremost layer: the median over the lateral bins of its front particle
+
+    # the level of a full-width fragment: the median over the lateral bins of its front particle
     def level(sel):
         b = np.floor(((y[sel] - lo) % period) / period * nbin).astype(int)
         front = np.full(nbin, -np.inf)
