@@ -66,7 +66,16 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
   c->stored = 0, c->in_contact = 0;
   if (!c->on) return INFINITY;
   const dm_state *s = f->m->s;
-  const size_t n = c->n;
+  /* with symmetry planes the mirror ghosts (rows f->n .. f->nall) are in the cell list as
+   * partners of the real particles, which alone take forces: the cell list of each evaluation
+   * (its arrays grown when a reference update added ghosts) */
+  const size_t n = f->nall, nown = f->n;
+  if (n > c->n) {
+    c->next = ms_realloc(c->next, n, sizeof(long)),
+    c->cidx = ms_realloc(c->cidx, 3 * n, sizeof(long));
+    c->n = n;
+  }
+  const uint8_t *imat = f->imat; /* with the ghosts' rows */
   const double *X = s->X, *w = s->w, *u = s->u, *mass = s->mass;
   /* the cell list (serial counting into linked lists: O(n)) and the velocity spread */
   for (size_t q = 0; q < c->ncell; ++q) c->head[q] = -1;
@@ -86,7 +95,7 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
   double E = 0, vapp = 0;
   long nc = 0;
 #pragma omp parallel for schedule(static) reduction(+ : E, nc) reduction(max : vapp)
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < nown; ++i) {
     double xi[3], fi[3] = {0, 0, 0};
     long idx[3];
     for (int a = 0; a < 3; ++a) xi[a] = X[3 * i + a] + w[3 * i + a];
@@ -99,7 +108,7 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
           for (long j = c->head[bucket(c, cx, cy, cz)]; j >= 0; j = c->next[j]) {
             const long *cj = &c->cidx[3 * j]; /* only the cell's own particles: no other cell
                                                  sharing its bucket, none twice */
-            if (c->imat[j] == c->imat[i] || cj[0] != cx || cj[1] != cy || cj[2] != cz) continue;
+            if (imat[j] == imat[i] || cj[0] != cx || cj[1] != cy || cj[2] != cz) continue;
             double d[3], r2 = 0;
             for (int a = 0; a < 3; ++a) {
               d[a] = xi[a] - (X[3 * j + a] + w[3 * j + a]);
@@ -111,11 +120,14 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
             for (int a = 0; a < 3; ++a) ur -= d[a] * (u[3 * i + a] - u[3 * j + a]) / r;
             vapp = fmax(vapp, ur);
             if (r >= h) continue;
-            const double k = 2.0 * c->k[i] * c->k[(size_t)j] / (c->k[i] + c->k[(size_t)j]);
+            const double kj = c->k[(size_t)j < nown ? (size_t)j : s->partner[j]];
+            const double k = 2.0 * c->k[i] * kj / (c->k[i] + kj);
             const double pen = h - r;
             for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
-            E += 0.25 * k * pen * pen; /* each pair is visited from both sides */
-            touching = 1;
+            /* each pair is visited from both sides; a real particle stands for its orbit of
+             * fold particles (dm_symmetry.c), whose visits are all alike */
+            E += 0.25 * dm_fin_fold(f, i) * k * pen * pen;
+            touching = (int)dm_fin_fold(f, i);
           }
         }
     for (int a = 0; a < 3; ++a) fext[3 * i + a] += fi[a];
@@ -128,7 +140,7 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
    * lightest mass (computed once, the first time) */
   if (!isfinite(c->dt_k)) {
     double kmax = 0, mmin = INFINITY;
-    for (size_t i = 0; i < n; ++i) kmax = fmax(kmax, c->k[i]), mmin = fmin(mmin, mass[i]);
+    for (size_t i = 0; i < nown; ++i) kmax = fmax(kmax, c->k[i]), mmin = fmin(mmin, mass[i]);
     c->dt_k = c->courant / sqrt(2.0 * kmax / mmin);
   }
   double dt = c->dt_k;
