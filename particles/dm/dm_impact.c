@@ -524,10 +524,11 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     p->sum.particles = f->n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
     taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
     ms_log(ctx, MS_LOG_INFO,
-           "impact: %zu particles in %zu bodies, %zu bonds, h %g cm, first dt %.6g, E0 %.6g kJ, "
-           "wall %s, contact between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
-           s.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0, p->has_wall ? "on" : "off",
-           ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
+           "impact: %zu particles (+ %zu mirror ghosts, %d symmetry planes) in %zu bodies, %zu "
+           "bonds, h %g cm, first dt %.6g, E0 %.6g kJ (the full body's), wall %s, contact "
+           "between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
+           f->n, f->nall - f->n, p->sym.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0,
+           p->has_wall ? "on" : "off", ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
     st = time_loop(&r, ctx, imat);
     double K1, U1, H1;
     dm_fin_energies(f, &K1, &U1, &H1);
