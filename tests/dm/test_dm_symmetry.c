@@ -263,8 +263,66 @@ static void test_half_space_uniform(void **state) {
   eos_destroy(&eos);
 }
 
+/* The deck's symmetry errors (dm_impact_sym.c), each located: a body on one side of a plane,
+ * a plane through a body off its symmetry, a velocity through a plane, a plane whose normal is
+ * the wall's. */
+static void test_deck_errors(void **state) {
+  (void)state;
+  const char *text =
+      "problem: impact\n"
+      "materials:\n"
+      "  - name: al\n"
+      "    eos: {type: mg_linear, rho0: 2.703, c0: 5.35, s: 1.34, gamma0: 2.0}\n"
+      "impact:\n"
+      "  spacing: 0.1\n"
+      "  domain: {lo: [-2, -2, 0], hi: [2, 2, 3]}\n"
+      "  bodies:\n"
+      "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.6, 0.6, 0.6],\n"
+      "       velocity: [0.1, 0, -0.1]}\n" /* through x = 0 */
+      "    - {shape: sphere, material: al, center: [1.2, 0, 1.5], radius: 0.3}\n"
+      "    - {shape: sphere, material: al, center: [0, 0.05, 2.4], radius: 0.3}\n"
+      "  wall: {axis: z, position: 0}\n"
+      "  symmetry: {x: 0, y: 0, z: 1.0}\n"
+      "  t_end: 1\n";
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc = dk_load_string(text, "deck.yaml", &e);
+  assert_non_null(doc);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  eos_materials *mats = eos_materials_read(doc, &e);
+  dm_impact *p = dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e);
+  assert_null(p);
+  dk_errors_print(&e, stderr);
+  assert_true(has_error(&e, "deck.yaml:14:29: impact.symmetry.z: the wall's normal is z too"));
+  dk_errors_free(&e);
+  dk_errors_init(&e); /* without the plane along the wall's normal: the body checks */
+  dk_free(doc);
+  eos_materials_destroy(&mats);
+  char t2[2048];
+  snprintf(t2, sizeof t2, "%.*s  symmetry: {x: 0, y: 0}\n  t_end: 1\n",
+           (int)(strstr(text, "  symmetry") - text), text);
+  doc = dk_load_string(t2, "deck.yaml", &e);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  mats = eos_materials_read(doc, &e);
+  p = dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e);
+  assert_null(p);
+  dk_errors_print(&e, stderr);
+  assert_true(has_error(&e, "deck.yaml:10:18: impact.bodies[0].velocity: a component 0.1 km/s "
+                            "through the symmetry plane x = 0"));
+  assert_true(has_error(&e, "deck.yaml:11:45: impact.bodies[1]: lies on one side of the "
+                            "symmetry plane x = 0"));
+  assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0 passes "
+                            "through the body off its symmetry"));
+  dk_free(doc);
+  eos_materials_destroy(&mats);
+  dk_errors_free(&e);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_deck_errors),
       cmocka_unit_test(test_half_space_uniform),
       cmocka_unit_test(test_quarter_cylinder),
       cmocka_unit_test(test_quarter_box_on_planes),
