@@ -122,6 +122,7 @@ ms_status dm_sym_init(dm_fin *f, const dm_sym_planes *pl, const uint8_t *imat) {
     f->fold[i] = 1.0;
     for (int j = 0; j < pl->n; ++j) {
       const int a = pl->axis[j];
+      if (s->X[3 * i + a] < pl->pos[j]) return MS_ERR_INPUT; /* a real particle on the − side */
       if (s->X[3 * i + a] != pl->pos[j]) { /* dm_sym_ghosts put the ones on it exactly on it */
         f->fold[i] *= 2.0;
         continue;
