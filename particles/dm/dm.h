@@ -422,7 +422,8 @@ size_t dm_fin_failed_count(const dm_fin *f);
 static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
   return f->failed && f->failed[i] && f->failed[k];
 }
-/* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under
+/* Checkpoints (dm_fin_checkpoint.c): every array a step reads (the external force and its work
+ * too, when one is installed) and the state's w, u, under
  * `group` of a checkpoint file (serial or collective; on ranks every rank calls it, `owner`
  * on the one rank whose rows are written), and back into a model built for the same particles
  * (same n; a mismatch is an error in e). */
@@ -499,7 +500,8 @@ ms_status dm_flyer_run(const dm_flyer_spec *spec, const ms_ctx *ctx, dm_flyer_re
  * box) of the finite-deformation model with their own materials and initial velocities onto a
  * rigid frictionless wall (a penalty on the particles crossing its contact plane), free
  * surfaces, optional reference-configuration updates; energy and momentum balance, the length
- * and footprint of a cylinder standing on the wall (the Taylor anvil test). One rank. */
+ * and footprint of a cylinder standing on the wall (the Taylor anvil test); checkpoints and
+ * restart (dm_impact_checkpoint.c); replicated on MPI ranks (dm_impact_run.h). */
 typedef struct dm_impact dm_impact;
 dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                                   dk_errors *e);

@@ -17,7 +17,7 @@ typedef struct fin_array {
 } fin_array;
 
 /* Every per-particle array of dm_fin; a field added to dm_fin that a step reads belongs here. */
-static size_t fin_arrays(const dm_fin *f, fin_array a[16]) {
+static size_t fin_arrays(const dm_fin *f, fin_array a[17]) {
   size_t k = 0;
   a[k++] = (fin_array){"e", "kJ/g", 1, f->e};
   a[k++] = (fin_array){"rho", "g/cm^3", 1, f->rho};
@@ -37,6 +37,8 @@ static size_t fin_arrays(const dm_fin *f, fin_array a[16]) {
     a[k++] = (fin_array){"contact_energy", "kJ", 1, f->econ};
     a[k++] = (fin_array){"contact_force", "g cm/(10 us)^2", 3, f->fcon};
   }
+  if (f->fext) /* an external force (dm_impact.c's wall): the next half kick books its work */
+    a[k++] = (fin_array){"external_force", "g cm/(10 us)^2", 3, f->fext};
   return k;
 }
 
@@ -47,7 +49,7 @@ static void path(char *buf, size_t len, const char *group, const char *name) {
 ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group,
                                   bool owner) {
   const size_t n = owner ? f->n : 0; /* rows this rank adds (a replicated model: the owner's) */
-  fin_array a[16];
+  fin_array a[17];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -76,6 +78,7 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "work", f->work);
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "dt_next", f->dt_next);
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "step", (double)f->step);
+  if (st == MS_OK && f->fext) st = ms_h5_attr_double(h, name, "external_work", f->ext_work);
   return st;
 }
 
@@ -98,7 +101,7 @@ static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, 
 
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e) {
-  fin_array a[16];
+  fin_array a[17];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -127,6 +130,8 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "work", &f->work, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "dt_next", &f->dt_next, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "step", &step, e);
+  if (st == MS_OK && f->fext)
+    st = ms_h5_read_attr_double(h, name, "external_work", &f->ext_work, e);
   f->step = (long)step;
   return st;
 }

@@ -145,6 +145,11 @@ void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, do
   if (!f->failed[i]) {
     const dm_fracture *fr = &mt->frac;
     if (fr->model == DM_FRACTURE_NONE) return;
+    /* a driven particle (a piston's prescribed or a fixed layer) never fails: its motion is
+     * given, and in the coupled region it stands for the grid, which has no spall model — the
+     * material fails above it, not in it (docs/particles-dm.md "Fracture") */
+    const uint8_t bc = f->m->s->bc[i];
+    if (bc == DM_PRESCRIBED || bc == DM_FIXED) return;
     const double tension = fr->model == DM_FRACTURE_PRINCIPAL_STRESS
                                ? dm_frac_max_principal(sig)
                                : (sig[0] + sig[4] + sig[8]) / 3.0;

@@ -14,27 +14,14 @@
  * is constant to round-off; the stored penalty energy E_wall = Σ k d²/2 equals −W_wall up to
  * the time discretisation (reported). Time step: ω_w Δt ≤ 2·courant (ω_w = √(k/m)), and a
  * particle approaching the wall moves at most 0.1 h per step. */
-#include "dm_impact_impl.h"
+#include "dm_impact_run.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct wall {
-  int axis, side;
-  double contact; /* plane of the particle centres: x_wall + side·h/2 */
-  double h;
-  double *k;       /* [n] penalty stiffness */
-  double dt_k;     /* courant·2/max ω_w */
-  double courant;  /* for the approach limit */
-  double stored;   /* Σ k d²/2 at the last evaluation (kJ): wall and contact */
-  long in_contact; /* particles beyond the contact plane */
-  int on;          /* a wall in the deck */
-  dmi_contact *ct; /* contact between bodies (dm_impact_contact.c) */
-} wall;
-
 static double wall_force(void *user, const dm_fin *f, double *fext) {
-  wall *w = user;
+  dmi_wall *w = user;
   const dm_state *s = f->m->s;
   const int a = w->axis;
   double E = 0, vmax = 0;
@@ -236,18 +223,7 @@ static double body0_momentum(const dm_impact *p, const dm_fin *f) {
   return P;
 }
 
-typedef struct run_state {
-  dm_impact *p;
-  dm_fin *f;
-  wall *wl;
-  const double *X0;
-  double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
-  double Pabs0;             /* Σ m |u(0)| */
-  double *hist;             /* [nhmax][NHIST] */
-  size_t nh, nhmax;
-} run_state;
-
-static void record(run_state *r) {
+static void record(dmi_run *r) {
   const dm_fin *f = r->f;
   const dm_state *s = f->m->s;
   double K, U, H, P[3] = {0, 0, 0}, L, D;
@@ -299,7 +275,7 @@ static void record(run_state *r) {
   memcpy(&r->hist[NHIST * r->nh++], row, sizeof row);
 }
 
-static void write_outputs(const ms_ctx *ctx, const run_state *r) {
+static void write_outputs(const ms_ctx *ctx, const dmi_run *r) {
   const char *nm[] = {
       "t",        "kinetic", "internal", "bond_penalty",  "wall_work",       "wall_energy",
       "balance",  "p_x",     "p_y",      "p_z",           "length",          "footprint",
@@ -357,7 +333,7 @@ static long outside_box(const dm_impact *p, const dm_state *s, size_t n) {
 }
 
 /* The reference update when a bond stretch passes 1 + threshold (dm_refamily.c). */
-static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
+static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   dm_impact *p = r->p;
   if (!(p->ref_threshold > 0)) return MS_OK;
   size_t at = 0;
@@ -389,17 +365,28 @@ static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
  * per particle), since a step that fails (dm_fin_step) changes them before it can fail: the
  * last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
  * discrete_model problem does (dm_fin_output.c). */
-static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat) {
+static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   dm_impact *p = r->p;
   dm_fin *f = r->f;
   ms_status st = MS_OK;
-  size_t next_out = 0;
+  size_t next_out = r->next_out;
   double wall_time = 0;
   double *live[NFIELD], *good[NFIELD], *buf = ms_calloc(FIELD_DOUBLES * f->n + 1, sizeof(double));
   copy_fields(buf, f->n, good);
-  for (long step = 0;; ++step) {
+  for (long step = r->step0;; ++step) {
     live_fields(f, live);
     const int last = r->t >= p->t_end * (1 - 1e-12);
+    /* a checkpoint of the cadence, or the interrupted run's last: the state at the top of this
+     * step, before anything of it is recorded (dm_impact_checkpoint.c) */
+    r->next_out = next_out;
+    if (!last && (dmi_checkpoint_due(r) || r->stopping)) {
+      st = dmi_checkpoint_write(r);
+      if (st == MS_OK && r->stopping) {
+        ms_log(ctx, MS_LOG_WARN, "impact: interrupted; checkpoint at step %ld written", f->step);
+        st = MS_INTERRUPTED;
+      }
+      if (st != MS_OK) break;
+    }
     if (step % p->energy_every == 0 || last) record(r);
     /* particles_NNNN.h5 at output.particle_times, and the final state always the last one */
     const size_t first_now = next_out;
@@ -438,13 +425,9 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
       }
       break;
     }
-    if (ms_interrupt_agreed(ctx)) { /* SIGINT/SIGTERM (docs/reliability.md): no checkpoints
-                                       here, so stop with the outputs so far */
-      ms_log(ctx, MS_LOG_ERROR, "impact: interrupted at step %ld, t = %.9g", f->step, r->t);
-      st = MS_INTERRUPTED;
-      break;
-    }
-    const long out = outside_box(p, f->m->s, f->n);
+    /* SIGINT/SIGTERM (docs/reliability.md): checkpoint at the top of the next step, stop */
+    if (ms_interrupt_agreed(ctx)) r->stopping = true;
+    const long out = outside_box(p, f->m->s, f->n); /* real particles (not mirror ghosts) */
     if (out >= 0) { /* a finite state: the one that left the domain */
       ms_log(ctx, MS_LOG_ERROR,
              "impact: step %ld, t = %.9g %s: particle %ld left the domain; its state is "
@@ -461,11 +444,35 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
   return st;
 }
 
+/* After the time loop: the summary of the state reached (also the last good one of a run that
+ * stopped), the log line and the outputs. */
+static void report(const ms_ctx *ctx, dmi_run *r) {
+  dm_impact *p = r->p;
+  const dm_fin *f = r->f;
+  double K1, U1, H1;
+  dm_fin_energies(f, &K1, &U1, &H1);
+  p->sum.steps = f->step, p->sum.t_end = r->t, p->sum.hg_ratio = H1 / r->E0;
+  p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
+  p->sum.p_body0 = body0_momentum(p, f);
+  taylor_measures(p, f->m->s, r->X0, &p->sum.length, &p->sum.footprint);
+  taylor_profile(p, f->m->s, r->X0, p->sum.length, p->sum.radius_at);
+  ms_log(ctx, MS_LOG_INFO,
+         "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
+         "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
+         "%.3g; transverse momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], "
+         "bond stretch <= %.4g; %ld reference updates; %zu failed particles, broken energy %.4g "
+         "kJ; body 0: length %.5g cm (L/L0 %.4f), footprint %.5g cm (D/D0 %.4f)",
+         f->step, r->t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
+         p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
+         p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
+         p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
+  write_outputs(ctx, r);
+}
+
 ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
-  if (ctx->size > 1 || ctx->restart) {
-    ms_log(ctx, MS_LOG_ERROR, "impact: runs on one rank, without restart");
-    return MS_ERR_INPUT;
-  }
+  static char no_outdir[1] = "";
+  ms_ctx octx = *ctx; /* the files: rank 0 writes them (replicated on ranks: dm_impact_run.h) */
+  if (ctx->rank != 0) octx.outdir = no_outdir;
   memset(&p->sum, 0, sizeof p->sum);
   p->sum.J_min = INFINITY, p->sum.J_max = -INFINITY;
   const long energy_every = p->energy_every;
@@ -488,12 +495,12 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par, .sym = p->sym},
                        &f);
   dmi_contact ct;
-  wall wl = {.axis = p->wall_axis,
-             .side = p->wall_side,
-             .h = p->h,
-             .courant = p->courant,
-             .on = p->has_wall,
-             .ct = &ct};
+  dmi_wall wl = {.axis = p->wall_axis,
+                 .side = p->wall_side,
+                 .h = p->h,
+                 .courant = p->courant,
+                 .on = p->has_wall,
+                 .ct = &ct};
   wl.contact = p->wall_pos + p->wall_side * 0.5 * p->h;
   wl.k = ms_calloc(s.n, sizeof(double));
   wl.dt_k = INFINITY;
@@ -508,7 +515,14 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
   dmi_contact_init(&ct, p, s.n, imat, M);
   free(M);
   if (st == MS_OK && (p->has_wall || ct.on)) st = dm_fin_set_external(f, wall_force, &wl);
-  run_state r = {.p = p, .f = f, .wl = &wl, .X0 = X0, .nhmax = 4096};
+  dmi_run r = {.p = p,
+               .f = f,
+               .wl = &wl,
+               .X0 = X0,
+               .nhmax = 4096,
+               .ncol = NHIST,
+               .ctx = ctx,
+               .ckpt_next = p->checkpoint_time};
   if (st == MS_OK) {
     double K, U, H, P[3] = {0, 0, 0};
     dm_fin_energies(f, &K, &U, &H);
@@ -529,28 +543,15 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
            "between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
            f->n, f->nall - f->n, p->sym.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0,
            p->has_wall ? "on" : "off", ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
-    st = time_loop(&r, ctx, imat);
-    double K1, U1, H1;
-    dm_fin_energies(f, &K1, &U1, &H1);
-    p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
-    p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
-    p->sum.p_body0 = body0_momentum(p, f);
-    taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
-    taylor_profile(p, f->m->s, X0, p->sum.length, p->sum.radius_at);
-    ms_log(ctx, MS_LOG_INFO,
-           "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
-           "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
-           "%.3g; transverse "
-           "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
-           "%.4g; %ld reference updates; %zu failed particles, broken energy %.4g kJ; body 0: "
-           "length "
-           "%.5g cm (L/L0 %.4f), "
-           "footprint %.5g cm (D/D0 %.4f)",
-           f->step, r.t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
-           p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
-           p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
-           p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
-    write_outputs(ctx, &r);
+    if (ctx->size > 1)
+      ms_log(ctx, MS_LOG_INFO,
+             "impact on %d ranks: replicated (every rank steps all %zu particles; rank 0 writes)",
+             ctx->size, f->nall);
+    if (ctx->restart) st = dmi_restart(&r);
+    if (st == MS_OK) {
+      st = time_loop(&r, &octx, imat);
+      report(&octx, &r);
+    }
   } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
   p->energy_every = energy_every;
   if (f) m = f->m; /* a reference update replaces the model */

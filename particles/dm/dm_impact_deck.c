@@ -307,6 +307,8 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
   p->energy_every = 20;
   if (out && dk_expect_map(e, doc, out, "impact.output")) {
     dk_read_int(e, doc, out, "energy_every", false, 20, 1, LONG_MAX, &p->energy_every);
+    dk_read_checkpoint_interval(e, doc, out, "impact.output.", "steps", &p->checkpoint_every,
+                                &p->checkpoint_time);
     if (dk_get(out, "particle_times"))
       dk_read_double_list(e, doc, out, "particle_times", MS_DIM_TIME, true, &p->particle_times,
                           &p->nparticle_times);
@@ -355,6 +357,11 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
     dm_impact_problem_destroy(&p);
     return NULL;
   }
+  /* a restart may run to another end and change the cadence (a checkpoint changes nothing of
+   * the run: dm_impact_checkpoint.c); anything else must be the deck that wrote it */
+  static const char *const hash_skip[] = {"impact.t_end", "impact.output.checkpoint_every",
+                                          "impact.output.checkpoint_time", NULL};
+  p->deck_hash = dk_hash(doc, hash_skip);
   return p;
 }
 

@@ -34,6 +34,9 @@ struct dm_impact {
   long energy_every;
   double *particle_times;
   size_t nparticle_times;
+  long checkpoint_every;  /* output.checkpoint_every (steps; 0: off) */
+  double checkpoint_time; /* output.checkpoint_time (0: off) */
+  uint64_t deck_hash;     /* of the resolved deck but t_end and the checkpoint cadence */
   dm_impact_summary sum;
 };
 
