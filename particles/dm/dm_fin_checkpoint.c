@@ -109,8 +109,8 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
     path(name, sizeof name, group, a[k].name);
     st = read_into(h, name, f->n, a[k].ncomp, a[k].data, e);
   }
-  if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, s->n, 3, s->w, e);
-  if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, s->n, 3, s->u, e);
+  if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, f->n, 3, s->w, e);
+  if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, f->n, 3, s->u, e);
   if (st == MS_OK && f->failed) { /* a failed particle's bond penalty is off (dm_fracture.c) */
     double *fl = ms_calloc(f->n + 1, sizeof *fl);
     path(name, sizeof name, group, "failed");
@@ -133,5 +133,8 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
   if (st == MS_OK && f->fext)
     st = ms_h5_read_attr_double(h, name, "external_work", &f->ext_work, e);
   f->step = (long)step;
+  /* symmetry planes: the checkpoint holds the real particles; the mirror ghosts' rows (w, u, v̄,
+   * M Q M, κ, failed) from their partners, as every step leaves them (kick_velocities) */
+  if (st == MS_OK && f->sym.n) dm_sym_sync(f);
   return st;
 }

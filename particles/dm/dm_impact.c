@@ -32,8 +32,8 @@ static double wall_force(void *user, const dm_fin *f, double *fext) {
     const double d = w->side * (w->contact - x); /* > 0: beyond the contact plane */
     if (d > 0) {
       fext[3 * i + a] = w->side * w->k[i] * d;
-      E += 0.5 * w->k[i] * d * d;
-      ++nc;
+      E += 0.5 * dm_fin_fold(f, i) * w->k[i] * d * d; /* the full body's (symmetry planes) */
+      nc += (long)dm_fin_fold(f, i);
     }
     vmax = fmax(vmax, -w->side * s->u[3 * i + a]); /* approach speed */
   }
@@ -198,6 +198,10 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   ptl_snapshot_attr_add(&snap, "time", t);
   ptl_snapshot_attr_add(&snap, "step", (double)step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
+  for (int j = 0; j < p->sym.n; ++j) /* the + side of these planes only (dm_impact_sym.c) */
+    ptl_snapshot_attr_add(
+        &snap, (const char *[]){"symmetry_x", "symmetry_y", "symmetry_z"}[p->sym.axis[j]],
+        p->sym.pos[j]);
   char *path = ms_out_path(ctx, name);
   if (ptl_write_snapshot(path, &snap) != MS_OK)
     ms_log(ctx, MS_LOG_WARN, "impact: could not write %s", path);
@@ -206,13 +210,16 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
 
 enum { NHIST = 17 }; /* columns of impact_history.csv */
 
-/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest). */
-static double body0_momentum(const dm_impact *p, const dm_state *s) {
+/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest; the full
+ * body's with symmetry planes: its velocity has no component through them). */
+static double body0_momentum(const dm_impact *p, const dm_fin *f) {
   const dmi_body *b = &p->bodies[0];
+  const dm_state *s = f->m->s;
   const double v = hypot(hypot(b->velocity[0], b->velocity[1]), b->velocity[2]);
   double P = 0;
   for (size_t i = b->first; v > 0 && i < b->first + b->count; ++i)
-    for (int a = 0; a < 3; ++a) P += s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
+    for (int a = 0; a < 3; ++a)
+      P += dm_fin_fold(f, i) * s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
   return P;
 }
 
@@ -221,8 +228,7 @@ static void record(dmi_run *r) {
   const dm_state *s = f->m->s;
   double K, U, H, P[3] = {0, 0, 0}, L, D;
   dm_fin_energies(f, &K, &U, &H);
-  for (size_t i = 0; i < f->n; ++i)
-    for (int a = 0; a < 3; ++a) P[a] += s->mass[i] * s->u[3 * i + a];
+  dm_fin_momentum(f, P); /* the full body's (symmetry planes) */
   taylor_measures(r->p, s, r->X0, &L, &D);
   dm_impact_summary *sum = &r->p->sum;
   const double B = dm_fin_broken_energy(f);  /* booked out of E_hg at failures (dm_fracture.c) */
@@ -317,8 +323,8 @@ static void write_outputs(const ms_ctx *ctx, const dmi_run *r) {
 }
 
 /* A particle outside the domain stops the run (the box bounds the problem). */
-static long outside_box(const dm_impact *p, const dm_state *s) {
-  for (size_t i = 0; i < s->n; ++i)
+static long outside_box(const dm_impact *p, const dm_state *s, size_t n) {
+  for (size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) {
       const double x = s->X[3 * i + a] + s->w[3 * i + a];
       if (!(x >= p->lo[a] && x <= p->hi[a])) return (long)i;
@@ -421,7 +427,7 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
     }
     /* SIGINT/SIGTERM (docs/reliability.md): checkpoint at the top of the next step, stop */
     if (ms_interrupt_agreed(ctx)) r->stopping = true;
-    const long out = outside_box(p, f->m->s);
+    const long out = outside_box(p, f->m->s, f->n); /* real particles (not mirror ghosts) */
     if (out >= 0) { /* a finite state: the one that left the domain */
       ms_log(ctx, MS_LOG_ERROR,
              "impact: step %ld, t = %.9g %s: particle %ld left the domain; its state is "
@@ -447,7 +453,7 @@ static void report(const ms_ctx *ctx, dmi_run *r) {
   dm_fin_energies(f, &K1, &U1, &H1);
   p->sum.steps = f->step, p->sum.t_end = r->t, p->sum.hg_ratio = H1 / r->E0;
   p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
-  p->sum.p_body0 = body0_momentum(p, f->m->s);
+  p->sum.p_body0 = body0_momentum(p, f);
   taylor_measures(p, f->m->s, r->X0, &p->sum.length, &p->sum.footprint);
   taylor_profile(p, f->m->s, r->X0, p->sum.length, p->sum.radius_at);
   ms_log(ctx, MS_LOG_INFO,
@@ -473,9 +479,11 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
   dm_state s;
   uint8_t *imat = NULL;
   build_state(p, &s, &imat);
+  if (p->sym.n) dmi_sym_reduce(p, &s, &imat); /* the + side and its mirror ghosts */
   double *X0 = ms_calloc(3 * s.n, sizeof(double));
   memcpy(X0, s.X, 3 * s.n * sizeof(double));
-  dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max};
+  dm_options opt = {
+      .horizon = p->horizon * p->h, .cond_max = p->cond_max, .ghost_rows = p->sym.n > 0};
   dm_model *m = NULL;
   ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
   dm_fin_material *mat = ms_calloc(p->nbodies, sizeof *mat);
@@ -484,7 +492,8 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
   dm_fin_params par = {
       .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
   if (st == MS_OK)
-    st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
+    st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par, .sym = p->sym},
+                       &f);
   dmi_contact ct;
   dmi_wall wl = {.axis = p->wall_axis,
                  .side = p->wall_side,
@@ -518,25 +527,26 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     double K, U, H, P[3] = {0, 0, 0};
     dm_fin_energies(f, &K, &U, &H);
     r.E0 = K + U + H;
-    for (size_t i = 0; i < s.n; ++i)
-      for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
+    dm_fin_momentum(f, P);
     r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
-    for (size_t i = 0; i < s.n; ++i)
-      r.Pabs0 += s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
-    p->sum.p0_body0 = body0_momentum(p, &s);
+    for (size_t i = 0; i < f->n; ++i)
+      r.Pabs0 +=
+          dm_fin_fold(f, i) * s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
+    p->sum.p0_body0 = body0_momentum(p, f);
     for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
     r.hist = ms_calloc(NHIST * r.nhmax, sizeof(double));
-    p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
+    p->sum.particles = f->n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
     taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
     ms_log(ctx, MS_LOG_INFO,
-           "impact: %zu particles in %zu bodies, %zu bonds, h %g cm, first dt %.6g, E0 %.6g kJ, "
-           "wall %s, contact between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
-           s.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0, p->has_wall ? "on" : "off",
-           ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
+           "impact: %zu particles (+ %zu mirror ghosts, %d symmetry planes) in %zu bodies, %zu "
+           "bonds, h %g cm, first dt %.6g, E0 %.6g kJ (the full body's), wall %s, contact "
+           "between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
+           f->n, f->nall - f->n, p->sym.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0,
+           p->has_wall ? "on" : "off", ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
     if (ctx->size > 1)
       ms_log(ctx, MS_LOG_INFO,
              "impact on %d ranks: replicated (every rank steps all %zu particles; rank 0 writes)",
-             ctx->size, s.n);
+             ctx->size, f->nall);
     if (ctx->restart) st = dmi_restart(&r);
     if (st == MS_OK) {
       st = time_loop(&r, &octx, imat);

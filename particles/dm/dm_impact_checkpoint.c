@@ -10,6 +10,10 @@
  *  - /impact/X, /impact/volume: the reference configuration, which a reference update moves
  *    (X ← x, V ← J V): a restart rebuilds the families on it, as the update did (the same
  *    dm_model_create on the same bits gives the same families, A⁻¹ and bond-penalty κ);
+ *    with symmetry planes the real particles' rows only (everything in the file is the real
+ *    particles'): the update changes which lie within a horizon of a plane, so a restart
+ *    rebuilds the mirror ghosts on the checkpoint's reference (dm_sym_ghosts) and fills their
+ *    rows from their partners (dm_sym_sync);
  *  - /impact/history: the rows of impact_history.csv so far, with the run's scalars as its
  *    attributes: time, the history's stride (energy_every, doubled when thinned), snapshots
  *    written, the next checkpoint time, the wall's and the contact's stored energy and contact
@@ -77,9 +81,11 @@ ms_status dmi_checkpoint_write(dmi_run *r) {
   ms_h5 *h = ms_ckpt_create(ctx, DMI_CHECKPOINT_NAME, DMI_CHECKPOINT_FORMAT, r->p->deck_hash);
   if (!h) return par_agree_status(MS_ERR_IO);
   ms_status st = dm_fin_checkpoint_write(r->f, s, h, "/dm_fin", owner);
-  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/impact/X", owner ? s->n : 0, 3, s->X, "cm");
-  if (st == MS_OK)
-    st = ms_h5_write_doubles_dist(h, "/impact/volume", owner ? s->n : 0, 1, s->vol, "cm^3");
+  /* the real particles' rows (with symmetry planes the mirror ghosts follow them: rebuilt on
+   * restart, their number changes with reference updates) */
+  const size_t n = owner ? r->f->n : 0;
+  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/impact/X", n, 3, s->X, "cm");
+  if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/impact/volume", n, 1, s->vol, "cm^3");
   if (st == MS_OK) /* at least the row of step 0 (recorded before any checkpoint) */
     st = ms_h5_write_doubles_dist(h, "/impact/history", owner ? r->nh : 0, r->ncol, r->hist,
                                   "impact_history.csv");
@@ -110,24 +116,29 @@ static ms_status read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax
   return st;
 }
 
-/* The reference configuration of the checkpoint; the families rebuilt on it when a reference
- * update had moved it (dm_refamily.c's dm_model_create on the same X and V, then κ). */
+/* The reference configuration of the checkpoint (its real particles); the families rebuilt on
+ * it when a reference update had moved it, as dm_refamily.c's update did: with symmetry planes
+ * the mirror ghosts of the new reference first (dm_sym_ghosts: which particles lie within a
+ * horizon of a plane has changed), then dm_model_create on the same X and V, the ghosts' rows
+ * (dm_sym_resize), κ. */
 static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
   dm_fin *f = r->f;
   dm_state *s = f->m->s;
-  const size_t n = s->n;
+  const size_t n = f->n;
   double *X = ms_calloc(3 * n + 1, sizeof *X), *V = ms_calloc(n + 1, sizeof *V);
   size_t nr = 0;
   ms_status st = read_rows(h, "/impact/X", 3, n, true, X, &nr, e);
   if (st == MS_OK) st = read_rows(h, "/impact/volume", 1, n, true, V, &nr, e);
   if (st == MS_OK && (memcmp(X, s->X, 3 * n * sizeof *X) || memcmp(V, s->vol, n * sizeof *V))) {
     memcpy(s->X, X, 3 * n * sizeof *X), memcpy(s->vol, V, n * sizeof *V);
+    if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, f->m->opt.horizon, f->par.ell);
     dm_model *m = NULL;
     st = dm_model_create(&(dm_model_params){.state = s, .opt = f->m->opt, .ctx = r->ctx}, &m);
     if (st == MS_OK) {
       dm_model *old = f->m;
       f->m = m;
       dm_model_destroy(&old);
+      if (f->sym.n) dm_sym_resize(f, f->imat_all); /* v̄, v_close, materials of the ghosts */
       dm_fin_bond_penalty(f);
     } else {
       dk_error_at(e, "checkpoint", 0, 0,

@@ -336,6 +336,7 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   read_controls(p, doc, sec, e);
   read_bodies(p, doc, sec, mats, e);
   read_wall(p, doc, sec, e);
+  dmi_sym_read(p, doc, sec, e);
   if (e->n == nerr0 && p->nbodies) { /* geometry checks need a valid deck so far */
     const dk_node *L = dk_get(sec, "bodies");
     size_t n = 0;
@@ -349,6 +350,7 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
     if (e->n == nerr0) {
       check_body_placement(p, doc, L, e);
       check_body_pairs(p, doc, L, e);
+      dmi_sym_check(p, doc, sec, e);
     }
   }
   if (e->n > nerr0) {
