@@ -125,11 +125,19 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   return dm_fin_refresh(f);
 }
 
+/* The bond lists of a model (CSR), kept to restore a refused update. */
+typedef struct bond_lists {
+  size_t *start, nbonds;
+  uint32_t *nbr;
+  uint8_t *img;
+} bond_lists;
+
 /* Adds to each family the particles now within the horizon of the current configuration (X
  * already moved to x): the union of two symmetric neighbour relations is symmetric, and the
  * old members keep the family as well conditioned as F A Fᵀ. Both lists are sorted by
- * (neighbour, image), so a merge keeps dm_family.c's fixed summation order. */
-static ms_status merge_families(dm_model *m, const ms_ctx *ctx) {
+ * (neighbour, image), so a merge keeps dm_family.c's fixed summation order. The old lists go
+ * to *old (the caller frees or restores them). */
+static ms_status merge_families(dm_model *m, const ms_ctx *ctx, bond_lists *old) {
   dm_model t = {.s = m->s, .opt = m->opt};
   const ms_status st = dm_build_families(&t, ctx);
   if (st != MS_OK) {
@@ -155,7 +163,7 @@ static ms_status merge_families(dm_model *m, const ms_ctx *ctx) {
     start[i + 1] = c;
   }
   free(t.start), free(t.nbr), free(t.img);
-  free(m->start), free(m->nbr), free(m->img);
+  *old = (bond_lists){.start = m->start, .nbonds = m->nbonds, .nbr = m->nbr, .img = m->img};
   m->start = start, m->nbr = nbr, m->img = img, m->nbonds = c;
   return MS_OK;
 }
@@ -168,14 +176,11 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
   if (f->failed) return MS_ERR_INTERNAL; /* as dm_fin_reference_update */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;
-  /* the penalty's stored energy of each family becomes the particle's heat: K + U + E_hg is
-   * unchanged, E_hg drops by what it releases */
-  double released = 0, jmin = INFINITY, jmax = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double E = penalty_stored_one(f, i);
-    f->e[i] += E / s->mass[i], f->ehg[i] -= E, released += E;
-  }
-  double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
+  /* keep: X, w (6n), V (n) to restore on refusal, and each family's stored penalty energy (n),
+   * measured at the old reference */
+  double *keep = ms_calloc(8 * (n ? n : 1), sizeof(double)), *Ehg = keep + 7 * n;
+  double jmin = INFINITY, jmax = 0;
+  for (size_t i = 0; i < n; ++i) Ehg[i] = penalty_stored_one(f, i);
   for (size_t i = 0; i < n; ++i) {
     for (int a = 0; a < 3; ++a) {
       keep[6 * i + a] = s->X[3 * i + a], keep[6 * i + 3 + a] = s->w[3 * i + a];
@@ -186,26 +191,33 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
     s->vol[i] *= f->J[i];
     jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
   }
-  rep->released = released, rep->jmin = jmin, rep->jmax = jmax;
+  rep->jmin = jmin, rep->jmax = jmax;
   size_t bad = (size_t)-1;
-  ms_status st = merge ? merge_families(m, ctx) : MS_OK;
+  bond_lists old = {0};
+  ms_status st = merge ? merge_families(m, ctx, &old) : MS_OK;
   rep->bonds = m->nbonds;
-  if (st != MS_OK) {
-    free(keep);
-    return st;
-  }
-  if (dm_build_shape(m, ctx, &bad) != MS_OK) { /* cond F A Fᵀ > cond_max: refused */
+  if (st == MS_OK && dm_build_shape(m, ctx, &bad) != MS_OK) st = MS_ERR_UNSTABLE;
+  if (st != MS_OK) { /* refused (cond F A Fᵀ > cond_max): the old reference and families */
     for (size_t i = 0; i < n; ++i) {
       for (int a = 0; a < 3; ++a)
         s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
       s->vol[i] = keep[6 * n + i];
     }
+    if (old.start) {
+      free(m->start), free(m->nbr), free(m->img);
+      m->start = old.start, m->nbr = old.nbr, m->img = old.img, m->nbonds = old.nbonds;
+    }
     free(keep);
     dm_build_shape(m, ctx, NULL);
     dm_fin_bond_penalty(f);
     rep->bad = bad;
-    return MS_ERR_UNSTABLE;
+    return st;
   }
+  free(old.start), free(old.nbr), free(old.img);
+  /* the penalty's stored energy of each family becomes the particle's heat: K + U + E_hg is
+   * unchanged, E_hg drops by what it releases */
+  for (size_t i = 0; i < n; ++i)
+    f->e[i] += Ehg[i] / s->mass[i], f->ehg[i] -= Ehg[i], rep->released += Ehg[i];
   free(keep);
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0;

@@ -202,11 +202,39 @@ static void test_merge_symmetric(void **state) {
   block_free(&b);
 }
 
+/* A refused update (a new shape matrix above cond_max: here cond_max lowered to 3 before an
+ * update of a block compressed to half along x, cond F A Fᵀ ≈ 4 in the interior) restores the
+ * old reference, volumes and families — also the merged ones — and moves no energy. */
+static void test_refused(void **state) {
+  (void)state;
+  const double E[9] = {-0.5, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (int merge = 0; merge < 2; ++merge) {
+    block b;
+    block_make(&b, E, 0.01, 1.0);
+    dm_model *m = b.f->m;
+    const size_t nb = m->nbonds, n = b.s.n;
+    double *X = malloc(3 * n * sizeof(double)), *w = malloc(3 * n * sizeof(double));
+    memcpy(X, b.s.X, 3 * n * sizeof(double)), memcpy(w, b.s.w, 3 * n * sizeof(double));
+    const double e5 = b.f->e[5], V5 = b.s.vol[5];
+    m->opt.cond_max = 3.0;
+    dm_refamily_report rep;
+    assert_int_equal(dm_fin_rebase(b.f, &b.ctx, merge, &rep), MS_ERR_UNSTABLE);
+    assert_true(rep.bad < n);
+    assert_true(b.f->m == m && m->nbonds == nb);
+    assert_memory_equal(X, b.s.X, 3 * n * sizeof(double));
+    assert_memory_equal(w, b.s.w, 3 * n * sizeof(double));
+    assert_true(b.f->e[5] == e5 && b.s.vol[5] == V5);
+    free(X), free(w);
+    block_free(&b);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_patch),
       cmocka_unit_test(test_energy_to_heat),
       cmocka_unit_test(test_merge_symmetric),
+      cmocka_unit_test(test_refused),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
