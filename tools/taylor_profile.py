@@ -70,7 +70,10 @@ def measure(outdir, snapshot=-1):
             zc.append(0.5 * (a + b))
             rc.append(stretch[m].max())
     cs = float(run.deck["impact"].get("hourglass", 1.0))
-    return dict(h=h, L0=L0, D0=2 * R0, length=length, footprint=footprint, cs=cs,
+    ru = run.deck["impact"].get("reference_update") or {}
+    update = (f"{ru.get('families', 'rebuild')} {float(ru['threshold']):g}"
+              if "threshold" in ru else "no update")
+    return dict(h=h, L0=L0, D0=2 * R0, length=length, footprint=footprint, cs=cs, update=update,
                 model="CD" if cd_impact.is_cd(run) else "DM",
                 z=np.array(zc) - (z.min() - 0.5 * h), r=np.array(rc), particles=int(sel.sum()))
 
@@ -114,7 +117,8 @@ def main(argv=None):
     ax.plot([-R0, -R0, R0, R0], [0, L0, L0, 0], "k:", lw=1, label="initial rod")
     for d, m in results:
         zz, rr = 10 * m["z"], 10 * m["r"]
-        lab = f"DM, h = {10 * m['h']:.3g} mm ({m['particles']} particles), c_s {m['cs']:g}"
+        lab = (f"DM, h = {10 * m['h']:.3g} mm ({m['particles']} particles), c_s {m['cs']:g}, "
+               f"{m['update']}")
         if m["model"] == "CD":
             lab = f"CD, layers {10 * m['h']:.3g} mm apart ({m['particles']} particles)"
         (ln,) = ax.plot(rr, zz, lw=1.5, label=lab)

@@ -391,6 +391,13 @@ typedef struct dm_refamily_report {
 } dm_refamily_report;
 double dm_fin_max_stretch(const dm_fin *f, size_t *where);
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
+/* The reference update with the families kept (dm_refamily.c, docs/particles-dm.md "Reference
+ * update"): X ← x, w ← 0, V ← J V and A⁻¹, κ from the same bonds' current vectors, so the bond
+ * penalty's mismatch z restarts from 0; its stored energy Σ κ|z|²/2 moves into each particle's
+ * e (rep->released). Never degenerate while J > 0 unless cond(F A Fᵀ) > cond_max (then refused
+ * as above). merge: each family also gains the particles now within the horizon (the union
+ * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL. */
+ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_report *rep);
 /* Symmetry planes (dm_symmetry.c): dm_sym_ghosts (re)builds the mirror ghosts of a state whose
  * first nreal rows are the real particles (on the + side of every plane or on it): the images
  * under every product of the planes' reflections of the real particles within `reach` of each

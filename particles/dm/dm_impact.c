@@ -340,7 +340,8 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   const double lam = dm_fin_max_stretch(r->f, &at);
   if (lam <= 1.0 + p->ref_threshold) return MS_OK;
   dm_refamily_report rep;
-  const ms_status st = dm_fin_reference_update(r->f, ctx, &rep);
+  const ms_status st = p->ref_keep ? dm_fin_rebase(r->f, ctx, p->ref_keep == 2, &rep)
+                                   : dm_fin_reference_update(r->f, ctx, &rep);
   const dm_state *s = r->f->m->s;
   if (st != MS_OK) {
     const size_t b = rep.bad < s->n ? rep.bad : at;

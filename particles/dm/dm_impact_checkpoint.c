@@ -129,7 +129,16 @@ static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
   size_t nr = 0;
   ms_status st = read_rows(h, "/impact/X", 3, n, true, X, &nr, e);
   if (st == MS_OK) st = read_rows(h, "/impact/volume", 1, n, true, V, &nr, e);
-  if (st == MS_OK && (memcmp(X, s->X, 3 * n * sizeof *X) || memcmp(V, s->vol, n * sizeof *V))) {
+  const bool moved =
+      st == MS_OK && (memcmp(X, s->X, 3 * n * sizeof *X) || memcmp(V, s->vol, n * sizeof *V));
+  if (moved && r->p->ref_keep) { /* kept or merged families are not a function of X alone */
+    dk_error_at(e, "checkpoint", 0, 0,
+                "the checkpoint lies after a reference update with impact.reference_update."
+                "families: %s, whose families it does not store (they cannot be rebuilt from the "
+                "positions): run the deck again from the start (--force)",
+                r->p->ref_keep == 2 ? "merge" : "keep");
+    st = MS_ERR_INPUT;
+  } else if (moved) {
     memcpy(s->X, X, 3 * n * sizeof *X), memcpy(s->vol, V, n * sizeof *V);
     if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, f->m->opt.horizon, f->par.ell);
     dm_model *m = NULL;

@@ -301,8 +301,16 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
     dk_read_double(e, doc, ct, "stiffness", MS_DIM_NONE, false, 10.0, 0.0, 1000.0,
                    &p->contact_stiffness);
   const dk_node *ru = dk_get(sec, "reference_update");
-  if (ru && dk_expect_map(e, doc, ru, "impact.reference_update"))
+  if (ru && dk_expect_map(e, doc, ru, "impact.reference_update")) {
+    static const char *const family_names[] = {"rebuild", "keep", "merge", NULL};
     dk_read_double(e, doc, ru, "threshold", MS_DIM_NONE, true, 0, 1e-3, 10.0, &p->ref_threshold);
+    dk_read_enum(e, doc, ru, "families", false, 0, family_names, &p->ref_keep);
+    if (p->ref_keep && dk_get(sec, "symmetry"))
+      dk_error(e, doc, dk_get(ru, "families"),
+               "impact.reference_update.families: %s is not available with symmetry planes yet "
+               "(the mirror ghosts would need the kept families too): use rebuild or the full body",
+               p->ref_keep == 2 ? "merge" : "keep");
+  }
   const dk_node *out = dk_get(sec, "output");
   p->energy_every = 20;
   if (out && dk_expect_map(e, doc, out, "impact.output")) {

@@ -29,6 +29,7 @@ struct dm_impact {
   double wall_pos, wall_stiffness;    /* plane x_axis = pos; penalty coefficient c_w */
   double t_end, courant, cq, cl, hourglass, cond_max;
   double ref_threshold;     /* reference update when a bond stretch exceeds 1 + this (0: off) */
+  int ref_keep;             /* 1: the update keeps the families (dm_fin_rebase), 0: rebuilds */
   double contact_stiffness; /* c_c of the body–body contact (dm_impact_contact.c; 0: off) */
   dm_sym_planes sym;        /* symmetry planes (dm_impact_sym.c; sym.n = 0: none) */
   long energy_every;

@@ -49,12 +49,11 @@ double dm_fin_max_stretch(const dm_fin *f, size_t *where) {
   return lmax;
 }
 
-/* Σ_i κ_i/2 Σ_k |z_ik|², z_ik = (x_k − x_i) − F_i ξ_ik, with F of the last force evaluation. */
-static double penalty_stored(const dm_fin *f) {
+/* κ_i/2 Σ_k |z_ik|², z_ik = (x_k − x_i) − F_i ξ_ik, with F of the last force evaluation. */
+static double penalty_stored_one(const dm_fin *f, size_t i) {
   const dm_model *m = f->m;
   const double *w = m->s->w;
-  double E = 0;
-  for (size_t i = 0; i < f->n; ++i) {
+  {
     const double *F = &f->F[9 * i];
     double zz = 0;
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
@@ -67,8 +66,14 @@ static double penalty_stored(const dm_fin *f) {
         zz += z * z;
       }
     }
-    E += dm_fin_fold(f, i) * 0.5 * m->kappa[i] * zz;
+    return 0.5 * m->kappa[i] * zz;
   }
+}
+
+/* Σ_i κ_i/2 Σ_k |z_ik|², of the full body with symmetry planes (dm_fin_fold) */
+static double penalty_stored(const dm_fin *f) {
+  double E = 0;
+  for (size_t i = 0; i < f->n; ++i) E += dm_fin_fold(f, i) * penalty_stored_one(f, i);
   return E;
 }
 
@@ -123,5 +128,104 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_fin_bond_penalty(f);
   rep->bonds = m->nbonds;
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0; /* J is now relative to the new reference */
+  return dm_fin_refresh(f);
+}
+
+/* The bond lists of a model (CSR), kept to restore a refused update. */
+typedef struct bond_lists {
+  size_t *start, nbonds;
+  uint32_t *nbr;
+  uint8_t *img;
+} bond_lists;
+
+/* Adds to each family the particles now within the horizon of the current configuration (X
+ * already moved to x): the union of two symmetric neighbour relations is symmetric, and the
+ * old members keep the family as well conditioned as F A Fᵀ. Both lists are sorted by
+ * (neighbour, image), so a merge keeps dm_family.c's fixed summation order. The old lists go
+ * to *old (the caller frees or restores them). */
+static ms_status merge_families(dm_model *m, const ms_ctx *ctx, bond_lists *old) {
+  dm_model t = {.s = m->s, .opt = m->opt};
+  const ms_status st = dm_build_families(&t, ctx);
+  if (st != MS_OK) {
+    free(t.start), free(t.nbr), free(t.img);
+    return st;
+  }
+  const size_t n = m->s->n;
+  size_t *start = ms_calloc(n + 1, sizeof(size_t));
+  uint32_t *nbr = ms_calloc(m->nbonds + t.nbonds + 1, sizeof(uint32_t));
+  uint8_t *img = ms_calloc(m->nbonds + t.nbonds + 1, sizeof(uint8_t));
+  size_t c = 0;
+  for (size_t i = 0; i < n; ++i) {
+    size_t a = m->start[i], b = t.start[i];
+    const size_t ae = m->start[i + 1], be = t.start[i + 1];
+    while (a < ae || b < be) {
+      const uint64_t ka = a < ae ? ((uint64_t)m->nbr[a] << 8 | m->img[a]) : UINT64_MAX;
+      const uint64_t kb = b < be ? ((uint64_t)t.nbr[b] << 8 | t.img[b]) : UINT64_MAX;
+      const uint64_t k = ka < kb ? ka : kb;
+      nbr[c] = (uint32_t)(k >> 8), img[c] = (uint8_t)(k & 0xff), ++c;
+      if (ka == k) ++a;
+      if (kb == k) ++b;
+    }
+    start[i + 1] = c;
+  }
+  free(t.start), free(t.nbr), free(t.img);
+  *old = (bond_lists){.start = m->start, .nbonds = m->nbonds, .nbr = m->nbr, .img = m->img};
+  m->start = start, m->nbr = nbr, m->img = img, m->nbonds = c;
+  return MS_OK;
+}
+
+ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_report *rep) {
+  dm_model *m = f->m;
+  dm_state *s = m->s;
+  const size_t n = f->n;
+  memset(rep, 0, sizeof *rep);
+  if (f->failed) return MS_ERR_INTERNAL; /* as dm_fin_reference_update */
+  const ms_status fl = dm_fin_flush(f);
+  if (fl != MS_OK) return fl;
+  /* keep: X, w (6n), V (n) to restore on refusal, and each family's stored penalty energy (n),
+   * measured at the old reference */
+  double *keep = ms_calloc(8 * (n ? n : 1), sizeof(double)), *Ehg = keep + 7 * n;
+  double jmin = INFINITY, jmax = 0;
+  for (size_t i = 0; i < n; ++i) Ehg[i] = penalty_stored_one(f, i);
+  for (size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      keep[6 * i + a] = s->X[3 * i + a], keep[6 * i + 3 + a] = s->w[3 * i + a];
+      s->X[3 * i + a] += s->w[3 * i + a];
+      s->w[3 * i + a] = 0.0;
+    }
+    keep[6 * n + i] = s->vol[i];
+    s->vol[i] *= f->J[i];
+    jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
+  }
+  rep->jmin = jmin, rep->jmax = jmax;
+  size_t bad = (size_t)-1;
+  bond_lists old = {0};
+  ms_status st = merge ? merge_families(m, ctx, &old) : MS_OK;
+  rep->bonds = m->nbonds;
+  if (st == MS_OK && dm_build_shape(m, ctx, &bad) != MS_OK) st = MS_ERR_UNSTABLE;
+  if (st != MS_OK) { /* refused (cond F A Fᵀ > cond_max): the old reference and families */
+    for (size_t i = 0; i < n; ++i) {
+      for (int a = 0; a < 3; ++a)
+        s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
+      s->vol[i] = keep[6 * n + i];
+    }
+    if (old.start) {
+      free(m->start), free(m->nbr), free(m->img);
+      m->start = old.start, m->nbr = old.nbr, m->img = old.img, m->nbonds = old.nbonds;
+    }
+    free(keep);
+    dm_build_shape(m, ctx, NULL);
+    dm_fin_bond_penalty(f);
+    rep->bad = bad;
+    return st;
+  }
+  free(old.start), free(old.nbr), free(old.img);
+  /* the penalty's stored energy of each family becomes the particle's heat: K + U + E_hg is
+   * unchanged, E_hg drops by what it releases */
+  for (size_t i = 0; i < n; ++i)
+    f->e[i] += Ehg[i] / s->mass[i], f->ehg[i] -= Ehg[i], rep->released += Ehg[i];
+  free(keep);
+  dm_fin_bond_penalty(f);
+  for (size_t i = 0; i < n; ++i) f->J[i] = 1.0;
   return dm_fin_refresh(f);
 }

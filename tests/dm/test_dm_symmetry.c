@@ -265,7 +265,7 @@ static void test_half_space_uniform(void **state) {
 
 /* The deck's symmetry errors (dm_impact_sym.c), each located: a body on one side of a plane,
  * a plane through a body off its symmetry, a velocity through a plane, a plane whose normal is
- * the wall's. */
+ * the wall's, merged families with planes. */
 static void test_deck_errors(void **state) {
   (void)state;
   const char *text =
@@ -315,6 +315,21 @@ static void test_deck_errors(void **state) {
                             "symmetry plane x = 0"));
   assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0 passes "
                             "through the body off its symmetry"));
+  dk_free(doc);
+  eos_materials_destroy(&mats);
+  dk_errors_free(&e);
+  dk_errors_init(&e); /* merged families with the planes (the bodies' errors above kept) */
+  snprintf(t2, sizeof t2,
+           "%.*s  symmetry: {x: 0, y: 0}\n"
+           "  reference_update: {threshold: 0.1, families: merge}\n  t_end: 1\n",
+           (int)(strstr(text, "  symmetry") - text), text);
+  doc = dk_load_string(t2, "deck.yaml", &e);
+  dk_read_units(doc, &e);
+  dk_get(dk_root(doc), "problem");
+  mats = eos_materials_read(doc, &e);
+  assert_null(dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e));
+  assert_true(has_error(&e, "deck.yaml:15:48: impact.reference_update.families: merge is not "
+                            "available with symmetry planes"));
   dk_free(doc);
   eos_materials_destroy(&mats);
   dk_errors_free(&e);
