@@ -270,6 +270,11 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
   dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, p->finite ? 1.0 : 0.0, 0.0, 100.0,
                  &p->hourglass);
   if (p->finite && !courant_given) p->courant = 0.4;
+  if (!p->finite && dk_get(sec, "contact_distance"))
+    dk_error(e, doc, dk_get(sec, "contact_distance"),
+             "discrete_model.contact_distance: needs response: eos");
+  dk_read_double(e, doc, sec, "contact_distance", MS_DIM_NONE, false,
+                 p->finite ? DM_CONTACT_DEFAULT : 0.0, 0.0, DM_CONTACT_MAX, &p->contact);
   if (p->finite && dk_get(sec, "dt"))
     dk_error(e, doc, dk_get(sec, "dt"),
              "discrete_model.dt: response: eos takes its step from the sound speed (give courant)");
