@@ -12,7 +12,7 @@
  * pairs carries its EOS pressure; and a dashpot η ṙ while the pair approaches,
  * η = C_l √(κ s √(m_i m_k)) (s the spring's current stiffness over κ).
  *
- * The cell list (dm_cells): cells of a given size, hashed into 2n + 1 buckets ([Teschner2003]:
+ * The cell list (dm_cells): cells of a given size, hashed into 2n + 1 or more buckets (a power of two) ([Teschner2003]:
  * memory O(n) however far the particles fly; two cells sharing a bucket only add candidates,
  * which the cell-index test drops), periodic axes wrapped (a whole number of cells along the
  * box), rebuilt at every force evaluation into arrays allocated once.
@@ -37,21 +37,22 @@
  * those without the contact). */
 #include "dm_impl.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* ---- the pair law ---- */
 
-void dm_pair_stiffness(const dm_fin *f, double *kc) {
+void dm_pair_stiffness(const dm_fin *f, double *kc, double ell) {
   const dm_model *m = f->m;
   const dm_state *st = m->s;
   const double d = f->dim;
   for (size_t i = 0; i < f->n; ++i) {
     const dm_fin_material *mt = &f->mat[f->imat[i]];
     const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
-    double trA = 0.0;
-    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+    double trA = ell * ell;
+    for (size_t b = m->start[i]; ell == 0 && b < m->start[i + 1]; ++b) {
       double xi[3];
       dm_bond_vector(m, i, b, xi);
       trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
@@ -110,8 +111,9 @@ ms_status dm_cells_init(dm_cells *c, size_t n, int dim, double size, const doubl
       c->size[a] = c->box[a] / (double)c->nper[a];
     }
   }
-  c->n = n, c->nbucket = 2 * n + 1;
-  c->head = ms_calloc(c->nbucket, sizeof(long));
+  c->n = n, c->nbucket = 1; /* a power of two ≥ 2n + 1: the bucket is a mask, not a division */
+  while (c->nbucket < 2 * n + 1) c->nbucket *= 2;
+  c->head = ms_calloc(c->nbucket + 1, sizeof(long)); /* + the always empty one */
   c->next = ms_calloc(n ? n : 1, sizeof(long));
   c->cidx = ms_calloc(3 * (n ? n : 1), sizeof(long));
   return MS_OK;
@@ -123,13 +125,24 @@ void dm_cells_free(dm_cells *c) {
 }
 
 void dm_cells_build(dm_cells *c, const double *X, const double *w) {
-  for (size_t q = 0; q < c->nbucket; ++q) c->head[q] = -1;
-  for (size_t i = 0; i < c->n; ++i) { /* serial: the lists' order is thread-count independent */
+  for (size_t q = 0; q <= c->nbucket; ++q) c->head[q] = -1;
+  long lo[3] = {LONG_MAX, LONG_MAX, LONG_MAX}, hi[3] = {LONG_MIN, LONG_MIN, LONG_MIN};
+  for (size_t i = 0; i < c->n; ++i) {
     double x[3];
     for (int a = 0; a < 3; ++a) x[a] = X[3 * i + a] + w[3 * i + a];
     long *idx = &c->cidx[3 * i];
     dm_cells_of(c, x, idx);
-    const size_t q = dm_cells_bucket(c, idx);
+    for (int a = 0; a < 3; ++a)
+      lo[a] = idx[a] < lo[a] ? idx[a] : lo[a], hi[a] = idx[a] > hi[a] ? idx[a] : hi[a];
+  }
+  double cells = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    c->base[a] = c->n ? lo[a] : 0, c->ext[a] = c->n ? hi[a] - lo[a] + 1 : 1;
+    cells *= (double)c->ext[a];
+  }
+  c->dense = cells <= (double)c->nbucket;
+  for (size_t i = 0; i < c->n; ++i) { /* serial: the lists' order is thread-count independent */
+    const size_t q = dm_cells_bucket(c, &c->cidx[3 * i]);
     c->next[i] = c->head[q], c->head[q] = (long)i;
   }
 }
@@ -150,7 +163,7 @@ ms_status dm_contact_alloc(dm_fin *f) {
   c->energy = ms_calloc(n1, sizeof(double));
   c->dt = ms_calloc(n1, sizeof(double));
   c->touch = ms_calloc(n1, 1);
-  dm_pair_stiffness(f, c->kc);
+  dm_pair_stiffness(f, c->kc, f->par.ell); /* one pair as stiff as a whole family (head) */
   dm_pair_ends(f, c->lam_end);
   f->sr = c;
   return MS_OK;
@@ -243,7 +256,7 @@ static double contact_one(const dm_fin *f, dm_contact *c, size_t i) {
   /* the stiffness limit with the dashpot's lowering (dm_fracture.c contact_stiffness) */
   const double zeta = f->par.cl / sqrt(2.0), damped = sqrt(1.0 + zeta * zeta) - zeta;
   double dt = closing > 0 ? f->par.courant / closing : INFINITY;
-  if (sk > 0) dt = fmin(dt, f->par.courant * 2.0 * damped / sqrt(2.0 * sk / mass[i]));
+  if (sk > 0) dt = fmin(dt, f->par.courant * damped / sqrt(2.0 * sk / mass[i]));
   c->dt[i] = dt;
   return lmin;
 }

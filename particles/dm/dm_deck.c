@@ -273,8 +273,9 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
   if (!p->finite && dk_get(sec, "contact_distance"))
     dk_error(e, doc, dk_get(sec, "contact_distance"),
              "discrete_model.contact_distance: needs response: eos");
-  dk_read_double(e, doc, sec, "contact_distance", MS_DIM_NONE, false,
-                 p->finite ? DM_CONTACT_DEFAULT : 0.0, 0.0, DM_CONTACT_MAX, &p->contact);
+  /* off by default here: it costs 70 % on the finite benchmark (docs/benchmarks.md) */
+  dk_read_double(e, doc, sec, "contact_distance", MS_DIM_NONE, false, 0.0, 0.0, DM_CONTACT_MAX,
+                 &p->contact);
   if (p->finite && dk_get(sec, "dt"))
     dk_error(e, doc, dk_get(sec, "dt"),
              "discrete_model.dt: response: eos takes its step from the sound speed (give courant)");

@@ -50,7 +50,7 @@
 static void contact_stiffness(dm_fin *f) {
   const dm_model *m = f->m;
   const dm_state *st = m->s;
-  dm_pair_stiffness(f, f->kcon); /* dm_contact.c */
+  dm_pair_stiffness(f, f->kcon, 0.0); /* dm_contact.c */
   /* the dashpot (η = C_l √(κ √(m_i m_k)), damping ratio ζ = C_l/√2 for equal masses) lowers
    * the explicit limit to (2/ω)(√(1 + ζ²) − ζ) */
   const double zeta = f->par.cl / sqrt(2.0), damped = sqrt(1.0 + zeta * zeta) - zeta;

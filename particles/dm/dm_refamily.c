@@ -115,7 +115,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   f->m = m;
   dm_model_destroy(&old);
   dm_fin_bond_penalty(f);
-  if (f->sr) dm_pair_stiffness(f, f->sr->kc); /* the short-range contact's κc, new families */
+  if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell);
+  /* V changed */ /* the short-range contact's κc, new families */
   rep->bonds = m->nbonds;
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0; /* J is now relative to the new reference */
   return dm_fin_refresh(f);
