@@ -27,10 +27,18 @@
  * 0.72 ℓ), while acting before two particles pass through each other. The default c = 0.5 (the
  * particle's radius: two particles overlap by half a spacing) needs ρ/ρ0 = 2 of uniaxial
  * compression to reach a lattice neighbour (~200 GPa in Pb); docs/particles-dm.md "Contact".
+ * Its stiffness: κc_i = K d² V_i / ℓ², the calibration above with the family replaced by one
+ * bond of length ℓ — across a contact a particle meets one or two particles of the other side
+ * where inside the lattice its whole family carries the load, so one pair is as stiff as the
+ * family (with the family's κc an intact particle of a Rz80 jet pushed a failed one to 0.25 ℓ:
+ * the stop of the first version); at small penetration a pair carries 2 d² (d_c/ℓ) K (1 − r/d_c)
+ * over the face ℓ^(d−1): K at a penetration of an eighth of d_c in 2D.
  * The spring's and dashpot's work, −h Σ f·v̄ over each half kick, is booked in energy[i] (the
  * dashpot's heat stays there: the contact's energy is the spring's potential plus the heat it
- * made), so K + U + E_hg + broken + contact − W = const to round-off. Step: the stiffness
- * (Gershgorin over the particle's pairs in contact, as dm_fracture.c), and no pair within the
+ * made), so K + U + E_hg + broken + contact − W = const to round-off. Step: the stiffness,
+ * ω dt ≤ courant (√(1 + ζ²) − ζ), ω² = 2 Σ κ s/m over the particle's pairs in contact
+ * (Gershgorin, as dm_fracture.c; half the stability limit, as the impact's contact, to resolve
+ * the stiff pair), and no pair within the
  * seeing distance d_c + ℓ/2 closes by more than courant times its gap to d_c·λ_end (and to L
  * inside) in a step; pairs further out reach d_c only faster than (ℓ/2)/dt ≈ 1.25 c_L. A run in
  * which no outside pair comes within d_c + ℓ/2 keeps its bits (the forces and step are then
