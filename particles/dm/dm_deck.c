@@ -273,7 +273,7 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
   if (!p->finite && dk_get(sec, "contact_distance"))
     dk_error(e, doc, dk_get(sec, "contact_distance"),
              "discrete_model.contact_distance: needs response: eos");
-  /* off by default here: it costs 70 % on the finite benchmark (docs/benchmarks.md) */
+  /* off by default here: it costs 65 % on the finite benchmark (docs/benchmarks.md) */
   dk_read_double(e, doc, sec, "contact_distance", MS_DIM_NONE, false, 0.0, 0.0, DM_CONTACT_MAX,
                  &p->contact);
   if (p->finite && dk_get(sec, "dt"))
