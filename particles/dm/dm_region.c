@@ -152,6 +152,15 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
   dk_read_double(e, doc, P, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
   dk_read_double(e, doc, P, "contact_distance", MS_DIM_NONE, false, DM_CONTACT_DEFAULT, 0.0,
                  DM_CONTACT_MAX, &p->contact); /* dm_contact.c */
+  /* its cells: at least 3 seeing distances (d_c + h/2) across a periodic width */
+  const double see = (p->contact + 0.5) * p->h;
+  if (p->contact > 0 && p->h > 0 &&
+      ((p->width > 0 && p->width < 3.0 * see * (1 + 1e-9)) ||
+       (p->dim == 3 && p->width_z < 3.0 * see * (1 + 1e-9))))
+    dk_error(e, doc, dk_get(P, "contact_distance") ? dk_get(P, "contact_distance") : P,
+             "particles.contact_distance: the periodic width must hold 3 seeing distances "
+             "(d_c + r0/2 = %g cm): give a smaller contact_distance or a wider region",
+             see);
   const dk_node *S = dk_get(P, "surface");
   p->surface = SURF_FLAT;
   if (S && dk_expect_map(e, doc, S, "particles.surface")) read_surface(p, doc, S, e);
