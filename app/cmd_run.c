@@ -19,7 +19,7 @@ static void run_usage(FILE *f) {
           "  --quiet              no progress line\n"
           "  --verbose            debug messages in the log\n"
           "  --restart=FILE       continue from a checkpoint the same deck wrote (discrete_model,\n"
-          "                       cluster_dynamics, coupled; docs/mpi.md)\n"
+          "                       cluster_dynamics, impact, coupled; docs/mpi.md)\n"
           "  --continue           continue in OUTDIR from its own last checkpoint (after an\n"
           "                       interrupt or a wall-time limit; docs/reliability.md)\n"
           "  --set PATH=VALUE     override a deck value before the deck is checked, e.g.\n"
@@ -109,7 +109,7 @@ static void log_outcome(const ms_ctx *ctx, const app_deck *d, ms_status s, const
            "run interrupted (outputs so far are in %s; `mscale run %s -o %s --continue` "
            "goes on from the last checkpoint)",
            ctx->outdir, deck, ctx->outdir);
-  else if (s == MS_INTERRUPTED) /* continuum, grid2d, impact, ...: nothing to continue from */
+  else if (s == MS_INTERRUPTED) /* continuum, grid2d, ...: nothing to continue from */
     ms_log(ctx, MS_LOG_WARN,
            "run interrupted (outputs so far are in %s; this problem type writes no "
            "checkpoints: `mscale run %s -o %s --force` starts it again)",
@@ -208,7 +208,7 @@ int cmd_run(int argc, char **argv) {
   } else if ((restart || cont) && !app_deck_restartable(&d)) {
     if (ctx.rank == 0)
       fprintf(stderr, "mscale run: --restart is not available for this deck's problem type "
-                      "(discrete_model, cluster_dynamics and coupled write checkpoints)\n");
+                      "(discrete_model, cluster_dynamics, impact and coupled write checkpoints)\n");
     s = MS_ERR_INPUT;
   } else {
     char *outdir = outdir_arg ? ms_strdup(outdir_arg) : default_outdir(deck);

@@ -45,7 +45,7 @@ static const problem_type problem_types[] = {
      (problem_read_fn)dm_problem_read, (problem_run_fn)dm_problem_run,
      (problem_destroy_fn)dm_problem_destroy},
     {"impact", "bodies of the finite-deformation discrete model onto a rigid wall (Taylor test)",
-     false, (problem_read_fn)dm_impact_problem_read, (problem_run_fn)dm_impact_problem_run,
+     true, (problem_read_fn)dm_impact_problem_read, (problem_run_fn)dm_impact_problem_run,
      (problem_destroy_fn)dm_impact_problem_destroy},
     {"coupled", "grid-driven particles: ejecta, fragment spectra, drag and transport", true,
      (problem_read_fn)cpl_problem_read, (problem_run_fn)cpl_problem_run,
@@ -134,6 +134,7 @@ const char *app_deck_checkpoint_name(const app_deck *d) {
   /* the names the problems write (docs/mpi.md "Checkpoint / restart") */
   static const char *const names[][2] = {{"cluster_dynamics", "cd_checkpoint.h5"},
                                          {"discrete_model", "dm_checkpoint.h5"},
+                                         {"impact", "impact_checkpoint.h5"},
                                          {"coupled", "coupled_checkpoint.h5"}};
   if (d->problem_kind < 0) return NULL;
   for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)

@@ -119,6 +119,9 @@ def plot_snapshot(path, out):
     period = snap.attrs.get("period_y", 0.0)
     f_r0 = snap.attrs.get("r0", 0.0)
     ids, inv, m, cx, cy, vx = fragment_table(x, v, mass, frag)
+    if period > 0:  # failed particles leave the strip: back into one period for the picture
+        x = x.copy()
+        x[:, 1] = np.mod(x[:, 1], period)
     bulk = ids[np.argmax(m)] if len(ids) else -2
     in_bulk = frag == bulk
     ymin, ymax = x[:, 1].min(), x[:, 1].max()
@@ -167,7 +170,7 @@ def plot_snapshot(path, out):
             axis_fmt(FormatStrFormatter("%.3g"))
         vb = vx[ids == bulk]
         if len(vb):
-            a2.axhline(vb[0], color="0.5", ls="--", lw=1, label=f"bulk c.o.m. {vb[0]:.3g} km/s")
+            a2.axhline(vb[0], color="0.5", ls="--", lw=1, label=f"largest fragment c.o.m. {vb[0]:.3g} km/s")
             a2.legend(loc="lower right", fontsize=8)
     else:
         a2.text(0.5, 0.5, "no detached fragments yet", ha="center", transform=a2.transAxes)

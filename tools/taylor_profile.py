@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: MIT
 """Final length, footprint and profile of a Taylor rod from an `impact` run (docs/validation.md,
-"Taylor anvil test"; docs/input-impact.md).
+"Taylor anvil test"; docs/input-impact.md), or from a `cluster_dynamics` run (its first region
+is the rod; tools/cd_impact.py; h is then the spacing of the fcc layers, r0/√2).
 
   taylor_profile.py OUTDIR [OUTDIR2 ...] [-o taylor.png] [--exp-length MM --exp-footprint MM]
 
@@ -27,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+import cd_impact  # noqa: E402  (a cluster_dynamics run seen as an impact run)
 
 
 def rod_geometry(run):
@@ -44,7 +46,7 @@ def measure(outdir, snapshot=-1):
     """Length, footprint (cm), the profile (z, r) and the initial geometry of body 0 in the
     run's particle snapshot number `snapshot` (an index into Run.snapshots; -1: the final
     state)."""
-    run = mscale.Run(outdir)
+    run = cd_impact.as_impact(mscale.Run(outdir), "layer")  # CD: h = the fcc layer spacing
     h, R0, L0, axis, centre = rod_geometry(run)
     if not run.snapshots:
         raise SystemExit(f"{run.path}: no particle snapshots (particles_NNNN.h5)")
@@ -69,6 +71,7 @@ def measure(outdir, snapshot=-1):
             rc.append(stretch[m].max())
     cs = float(run.deck["impact"].get("hourglass", 1.0))
     return dict(h=h, L0=L0, D0=2 * R0, length=length, footprint=footprint, cs=cs,
+                model="CD" if cd_impact.is_cd(run) else "DM",
                 z=np.array(zc) - (z.min() - 0.5 * h), r=np.array(rc), particles=int(sel.sum()))
 
 
@@ -112,6 +115,8 @@ def main(argv=None):
     for d, m in results:
         zz, rr = 10 * m["z"], 10 * m["r"]
         lab = f"DM, h = {10 * m['h']:.3g} mm ({m['particles']} particles), c_s {m['cs']:g}"
+        if m["model"] == "CD":
+            lab = f"CD, layers {10 * m['h']:.3g} mm apart ({m['particles']} particles)"
         (ln,) = ax.plot(rr, zz, lw=1.5, label=lab)
         ax.plot(-rr, zz, lw=1.5, color=ln.get_color())
     if args.exp_length:

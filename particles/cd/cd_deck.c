@@ -142,7 +142,8 @@ static void read_region(cd_problem *p, const eos_materials *mats, dk_doc *doc, c
     dk_read_double(e, doc, gn, "min_distance", MS_DIM_NONE, false, 0.8, 0.1, 1.0, &r->dmin);
     r->ngrains = (int)ng;
     r->grain_seed = (uint64_t)seed;
-    if (r->shape != SHAPE_BOX) dk_error(e, doc, gn, "a polycrystal fills a box region");
+    if (r->shape == SHAPE_HALFSPACE)
+      dk_error(e, doc, gn, "a polycrystal fills a box, sphere or cylinder region");
     const dk_node *ml = dk_get(gn, "materials");
     if (ml && dk_expect_seq(e, doc, ml, "polycrystal materials")) {
       double *fr = NULL;
@@ -214,6 +215,32 @@ bool cd_deck_region_contains(const cd_deck_region *r, const double x[3], int dim
     return x[r->axis] < r->plane;
   }
   return false;
+}
+
+/* The region's bounding box, clipped to the problem's box if `clip` (a polycrystal's grain
+ * seeds lie in the clipped one); a cylinder without lo/hi along its axis spans the box there. */
+void cd_deck_region_bounds(const cd_problem *p, const cd_deck_region *r, bool clip, double lo[3],
+                           double hi[3]) {
+  for (int a = 0; a < 3; a++) {
+    double l = p->box.lo[a], h = p->box.hi[a];
+    switch (r->shape) {
+    case SHAPE_BOX:
+      l = r->lo[a], h = r->hi[a];
+      break;
+    case SHAPE_SPHERE:
+      l = r->center[a] - r->radius, h = r->center[a] + r->radius;
+      break;
+    case SHAPE_CYLINDER:
+      if (a == r->axis) l = r->lo[a], h = r->hi[a];
+      else l = r->center[a] - r->radius, h = r->center[a] + r->radius;
+      break;
+    case SHAPE_HALFSPACE:
+      if (a == r->axis) h = r->plane;
+      break;
+    }
+    lo[a] = a >= p->dim ? 0.0 : clip ? fmax(l, p->box.lo[a]) : l;
+    hi[a] = a >= p->dim ? 0.0 : clip ? fmin(h, p->box.hi[a]) : h;
+  }
 }
 
 /* lattice period along each axis: fcc cubic constant a = √2 r0; triangular r0 × √3 r0 */
@@ -495,8 +522,10 @@ static void read_mpi(cd_problem *p, dk_doc *doc, const dk_node *sec, dk_errors *
   }
 }
 
-/* overlapping regions of different materials: some lattice site inside both */
-static void check_overlaps(const cd_problem *p, dk_doc *doc, dk_errors *e) {
+/* Overlapping regions of different materials (some lattice site inside both), and a region
+ * that holds no lattice site inside the box (a body outside the box, or smaller than a site). */
+static void check_sites(const cd_problem *p, dk_doc *doc, dk_errors *e) {
+  long sites[CD_MAX_REGIONS] = {0};
   double per[3];
   cd_deck_lattice_period(p, per);
   long ncell[3] = {1, 1, 1};
@@ -513,12 +542,15 @@ static void check_overlaps(const cd_problem *p, dk_doc *doc, dk_errors *e) {
           const double *bs = p->dim == 3 ? fcc[b] : tri[b];
           double x[3] = {p->origin[0] + (ix + bs[0]) * per[0], p->origin[1] + (iy + bs[1]) * per[1],
                          p->dim == 3 ? p->origin[2] + (iz + bs[2]) * per[2] : 0.0};
+          bool inside = true; /* the lattice fill keeps the sites inside the box only */
+          for (int a = 0; a < p->dim; a++) inside &= x[a] >= p->box.lo[a] && x[a] < p->box.hi[a];
           int first = -1;
           for (int k = 0; k < p->nreg; k++) {
             /* a region whose material has errors of its own (mat < 0) is not compared */
             if (p->reg[k].matrix || p->reg[k].mat < 0 ||
                 !cd_deck_region_contains(&p->reg[k], x, p->dim))
               continue;
+            sites[k] += inside;
             if (first < 0) {
               first = k;
               continue;
@@ -534,6 +566,30 @@ static void check_overlaps(const cd_problem *p, dk_doc *doc, dk_errors *e) {
             }
           }
         }
+  for (int k = 0; k < p->nreg; k++)
+    if (!p->reg[k].matrix && p->reg[k].mat >= 0 && sites[k] == 0)
+      dk_error(e, doc, p->reg[k].node,
+               "region %d holds no lattice site inside the box (lo %g %g %g, hi %g %g %g): it "
+               "lies outside the box or is smaller than one site (r0 = %g)",
+               k + 1, p->box.lo[0], p->box.lo[1], p->box.lo[2], p->box.hi[0], p->box.hi[1],
+               p->box.hi[2], p->r0);
+}
+
+/* A region velocity that would carry a particle half a cluster size in the first step: the
+ * run's instability guard stops there (docs/reliability.md §6), so say it at the velocity. */
+static void check_velocities(const cd_problem *p, dk_doc *doc, dk_errors *e) {
+  double c0max = 0.0;
+  for (int k = 0; k < p->nmat; k++) c0max = fmax(c0max, eos_c0(p->mat[k]->eos));
+  const double dt = p->dt > 0 ? p->dt : p->courant * p->r0 / c0max;
+  for (int k = 0; k < p->nreg; k++) {
+    const double *v = p->reg[k].velocity;
+    const double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (c0max > 0 && speed * dt >= 0.5 * p->r0)
+      dk_error(e, doc, dk_get(p->reg[k].node, "velocity"),
+               "region %d: speed %g km/s moves a particle %.3g r0 in one time step (dt = %g): "
+               "more than the 0.5 r0 per step the run allows; lower dt or courant",
+               k + 1, speed, speed * dt / p->r0, dt);
+  }
 }
 
 cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials *mats,
@@ -571,7 +627,8 @@ cd_problem *cd_problem_read(dk_doc *doc, const dk_node *sec, const eos_materials
   /* refuse what cannot fit before anything is allocated (also said for a box of too many
    * sites: the estimate tells how far off the deck is) */
   if (e->n == nerr0 + too_big) memory_check(p, doc, sec, e);
-  if (e->n == nerr0 && p->nreg > 1) check_overlaps(p, doc, e);
+  if (e->n == nerr0) check_sites(p, doc, e);
+  if (e->n == nerr0) check_velocities(p, doc, e);
   if (e->n > nerr0) {
     cd_problem_destroy(&p);
     return NULL;

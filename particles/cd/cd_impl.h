@@ -132,11 +132,12 @@ struct cd_neigh {
                         * block, also the renumbering scratch) */
   double shift[27][3];
   long nbuild;
-  size_t n;      /* particles when built */
-  bool colour;   /* layers are processed in parallel phases */
-  bool full;     /* full lists: every pair under both particles (the fast path's;
+  size_t n;        /* particles when built */
+  bool colour;     /* layers are processed in parallel phases */
+  bool full;       /* full lists: every pair under both particles (the fast path's;
                         * cd_half_pair picks the half list out of them) */
-  bool overfull; /* some particle had more than CD_MAX_CAND candidates */
+  bool overfull;   /* some particle had more than CD_MAX_CAND candidates */
+  int cell_factor; /* cell-count cap factor (cells <= factor n + 64; 0 = 2): raised on overfull */
 };
 
 /* Entry k of a list row that starts at `row` with np plain entries, then its image pairs (see

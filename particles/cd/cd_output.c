@@ -8,14 +8,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, double vfs) {
+/* The energy row; v_free_surface only in a run with a free-surface layer (a piston run: the
+ * layer is tagged opposite the piston), so that no row holds NaN. */
+static void write_energy_row(FILE *f, const cd_sim *s, const cd_energy *e, double vfs, bool with) {
   double row[11] = {s->t,           e->kinetic,     e->potential, e->dissipated,
                     e->broken,      e->piston_work, e->total,     e->momentum[0],
                     e->momentum[1], e->momentum[2], vfs};
-  ms_csv_row(f, 11, row);
+  ms_csv_row(f, with ? 11 : 10, row);
 }
 
-static void write_headers(FILE *fe, FILE *fp, FILE *ff) {
+static void write_headers(FILE *fe, FILE *fp, FILE *ff, bool with_vfs) {
   static const char *const ecol[] = {"t",      "kinetic",     "potential",     "dissipated",
                                      "broken", "piston_work", "total",         "px",
                                      "py",     "pz",          "v_free_surface"};
@@ -25,7 +27,7 @@ static void write_headers(FILE *fe, FILE *fp, FILE *ff) {
   ms_csv_header(fe,
                 "cluster dynamics energy balance (total = kinetic + potential + dissipated "
                 "+ broken - piston_work)",
-                11, ecol, eunit);
+                with_vfs ? 11 : 10, ecol, eunit);
   const char *pcol[CD_PROFILE_NCOL + 1] = {"t"};
   const char *punit[CD_PROFILE_NCOL + 1] = {"10us", "cm",  "-",   "g/cm^3", "km/s", "km/s", "km/s",
                                             "GPa",  "GPa", "GPa", "GPa",    "GPa",  "GPa",  "GPa"};
@@ -108,7 +110,7 @@ ms_status cd_outputs_open(ms_ctx *ctx, cd_outputs *o, bool restart) {
     return st;
   }
   /* a restart writes back the text so far */
-  if (!restart && root) write_headers(o->fe.f, o->fp.f, o->ff.f);
+  if (!restart && root) write_headers(o->fe.f, o->fp.f, o->ff.f, o->with_vfs);
   return MS_OK;
 }
 
@@ -134,7 +136,7 @@ void cd_outputs_write(ms_ctx *ctx, const cd_problem *p, cd_sim *s, cd_outputs *o
   cd_energy en;
   cd_sim_energy(s, &en);
   const double vfs = cd_free_surface_velocity(s, axis);
-  if (root) write_energy_row(o->fe.f, s, &en, vfs);
+  if (root) write_energy_row(o->fe.f, s, &en, vfs, o->with_vfs);
   cd_profile(s, axis, o->lo, o->hi, p->profile_bins, o->area, o->prof);
   for (int b = 0; b < p->profile_bins; b++) {
     double row[CD_PROFILE_NCOL + 1];

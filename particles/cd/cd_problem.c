@@ -9,12 +9,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* seeds and materials of a region's grains (the seeds are those of cd_polycrystal) */
-static void grain_seed(const cd_deck_region *r, int dim, int g, double x[3]) {
+/* seeds and materials of a region's grains (the seeds are those of cd_polycrystal): uniform in
+ * a box region, in the bounding box of a sphere or cylinder (clipped to the problem's box) */
+static void grain_seed(const cd_problem *p, const cd_deck_region *r, int g, double x[3]) {
+  double lo[3], hi[3];
+  if (r->shape == SHAPE_BOX) memcpy(lo, r->lo, sizeof lo), memcpy(hi, r->hi, sizeof hi);
+  else cd_deck_region_bounds(p, r, true, lo, hi);
   for (int a = 0; a < 3; a++)
-    x[a] = a < dim ? r->lo[a] + (r->hi[a] - r->lo[a]) *
+    x[a] = a < p->dim ? lo[a] + (hi[a] - lo[a]) *
                                     ptl_splitmix64_uniform(r->grain_seed, 3 * (uint64_t)g + a)
-                   : 0.0;
+                      : 0.0;
 }
 static int grain_material(const cd_deck_region *r, int g) {
   if (r->ngmat == 0) return r->mat;
@@ -25,13 +29,13 @@ static int grain_material(const cd_deck_region *r, int g) {
   }
   return r->gmat[r->ngmat - 1];
 }
-static int nearest_grain(const cd_deck_region *r, int dim, const double x[3]) {
+static int nearest_grain(const cd_problem *p, const cd_deck_region *r, const double x[3]) {
   int best = 0;
   double bd = INFINITY;
   for (int g = 0; g < r->ngrains; g++) {
     double s[3], d2 = 0;
-    grain_seed(r, dim, g, s);
-    for (int a = 0; a < dim; a++) d2 += (x[a] - s[a]) * (x[a] - s[a]);
+    grain_seed(p, r, g, s);
+    for (int a = 0; a < p->dim; a++) d2 += (x[a] - s[a]) * (x[a] - s[a]);
     if (d2 < bd) {
       bd = d2;
       best = g;
@@ -80,7 +84,9 @@ static bool owned_by(void *user, const double x[3]) {
   return owner_region(f->p, x) == f->reg;
 }
 
-static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
+/* The particles of the regions; *region_of: each particle's region (index = its gid). */
+static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx, int **region_of) {
+  size_t lattice_sites[CD_MAX_REGIONS] = {0}; /* sites a rotated polycrystal region replaces */
   double per[3];
   cd_deck_lattice_period(p, per);
   long ncell[3] = {1, 1, 1};
@@ -105,36 +111,42 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
           int k = owner_region(p, x);
           if (k < 0) continue;
           const cd_deck_region *r = &p->reg[k];
-          if (r->ngrains > 0 && r->rotate) continue; /* filled below */
-          int mat = r->ngrains > 0 ? grain_material(r, nearest_grain(r, p->dim, x)) : r->mat;
+          if (r->ngrains > 0 && r->rotate) { /* filled below */
+            lattice_sites[k]++;
+            continue;
+          }
+          int mat = r->ngrains > 0 ? grain_material(r, nearest_grain(p, r, x)) : r->mat;
           site_add(&l, x, k, mat);
         }
   for (int k = 0; k < p->nreg; k++) {
     const cd_deck_region *r = &p->reg[k];
     if (r->ngrains == 0 || !r->rotate) continue;
-    double lo[3], hi[3], *xyz = NULL, por = 0;
+    double lo[3], hi[3], ulo[3], uhi[3], *xyz = NULL, por = 0;
     int32_t *grain = NULL;
     /* a profiled face reaches up to `amplitude` beyond hi: grains fill that box and the owner
      * filter cuts the profile; the sine and random profiles average zero over the periodic
      * extent, so the region's volume is that of the flat box (the porosity's reference) */
     double vbox = 1.0;
-    for (int a = 0; a < 3; a++) {
-      lo[a] = a < p->dim ? fmax(r->lo[a], p->box.lo[a]) : 0.0;
-      hi[a] = a < p->dim ? fmin(r->hi[a], p->box.hi[a]) : 0.0;
-      if (a < p->dim) vbox *= hi[a] - lo[a];
+    cd_deck_region_bounds(p, r, true, lo, hi);
+    cd_deck_region_bounds(p, r, false, ulo, uhi);
+    for (int a = 0; a < p->dim; a++) {
+      vbox *= hi[a] - lo[a];
       if (r->surface != SURF_FLAT && a == r->surface_axis)
         hi[a] = fmin(r->hi[a] + r->amplitude, p->box.hi[a]);
     }
     /* grains wrap along a periodic axis that the region spans */
     bool per[3] = {false, false, false};
     for (int a = 0; a < p->dim; a++)
-      per[a] =
-          p->box.bc[a] == CD_BC_PERIODIC && r->lo[a] <= p->box.lo[a] && r->hi[a] >= p->box.hi[a];
+      per[a] = p->box.bc[a] == CD_BC_PERIODIC && ulo[a] <= p->box.lo[a] && uhi[a] >= p->box.hi[a];
     owner_filter f = {p, k};
     size_t n = cd_polycrystal(p->dim, p->r0, p->thickness, lo, hi, per, r->ngrains, r->grain_seed,
                               r->dmin, owned_by, &f, &xyz, &grain, &por);
     if (r->surface != SURF_FLAT)
       por = 1.0 - (double)n * vol / (p->dim == 2 ? vbox * p->thickness : vbox);
+    /* a sphere or cylinder fills part of its bounding box: its porosity is relative to the
+     * sites of the single-crystal lattice it replaces (the same shape's volume) */
+    if (r->shape != SHAPE_BOX)
+      por = lattice_sites[k] ? 1.0 - (double)n / (double)lattice_sites[k] : 0.0;
     for (size_t i = 0; i < n; i++) site_add(&l, xyz + 3 * i, k, grain_material(r, grain[i]));
     ms_log(ctx, MS_LOG_INFO,
            "cluster_dynamics: region %d: polycrystal of %d grains, %zu particles, "
@@ -145,6 +157,7 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
   }
   ptl_state *s = NULL;
   ms_must(ptl_state_create(&(ptl_state_params){.cap = l.n, .dim = p->dim}, &s), "ptl_state_create");
+  *region_of = l.reg; /* gid q is site q */
   for (size_t q = 0; q < l.n; q++) {
     const cd_deck_region *r = &p->reg[l.reg[q]];
     const double *x = l.x + 3 * q;
@@ -155,7 +168,6 @@ static ptl_state *build_particles(const cd_problem *p, ms_ctx *ctx) {
     if (r->piston) s->flags[i] |= PTL_DRIVEN;
   }
   free(l.x);
-  free(l.reg);
   free(l.mat);
   return s;
 }
@@ -182,10 +194,20 @@ static void add_thermal(const cd_problem *p, ptl_state *ps, bool dist) {
       for (int c = 0; c < p->dim; c++) v[c][i] -= mean[c] / (mean[3] > 0 ? mean[3] : 1.0);
 }
 
+/* Each particle's velocity: that of its region (region_of: by gid). */
+static void set_region_velocities(const cd_problem *p, ptl_state *ps, const int *region_of) {
+  for (size_t i = 0; i < ps->nlocal; i++) {
+    const double *v = p->reg[region_of[ps->gid[i]]].velocity;
+    ps->vx[i] = v[0], ps->vy[i] = v[1], ps->vz[i] = v[2];
+  }
+}
+
 /* The relaxation stage (`relax:`): damped dynamics with the box rescaled toward zero mean
- * normal stress, then at rest with the bonds of the relaxed packing; logged. */
+ * normal stress, then at rest with the bonds of the relaxed packing; logged. The regions'
+ * velocities are set aside for it (bodies relax at rest, where they were built) and given
+ * back after it. */
 static ms_status relax_sample(ms_ctx *ctx, const cd_problem *p, cd_sim *s, double c0max,
-                              size_t nglobal) {
+                              size_t nglobal, const int *region_of) {
   cd_relax_config rc = p->relax;
   double rho0 = 0.0; /* stiffness scale of the box rescale: largest ρ0 times largest c0² */
   for (int k = 0; k < p->nmat; k++) rho0 = fmax(rho0, eos_rho0(p->mat[k]->eos));
@@ -193,8 +215,11 @@ static ms_status relax_sample(ms_ctx *ctx, const cd_problem *p, cd_sim *s, doubl
   rc.tau = p->relax_tau * p->r0 / c0max;
   rc.modulus = rho0 * c0max * c0max;
   cd_relax_result r;
+  ptl_state *ps = s->p;
+  for (size_t i = 0; i < ps->nlocal; i++) ps->vx[i] = ps->vy[i] = ps->vz[i] = 0.0;
   ms_status st = cd_sim_relax(s, &rc, &r);
   if (st != MS_OK) return st;
+  set_region_velocities(p, ps, region_of);
   const double vsolid = (double)nglobal * cd_cluster_volume(p->lattice, p->r0, p->thickness);
   ms_log(ctx, MS_LOG_INFO,
          "cluster_dynamics: relaxation: %ld steps; mean stress xx yy zz %.4g "
@@ -215,7 +240,8 @@ typedef struct cd_run {
   const cd_problem *p;
   cd_restart *rs; /* a restart: the checkpoint read (until its outputs are restored) */
   ms_h5r *rh;
-  ptl_state *ps; /* owned until cd_sim_create takes it */
+  ptl_state *ps;  /* owned until cd_sim_create takes it */
+  int *region_of; /* each particle's region, by gid (a built lattice, not a restart) */
   cd_sim *s;
   cd_config cfg;
   double c0max, dir[3];
@@ -243,7 +269,7 @@ static ms_status run_particles(cd_run *r) {
     dk_errors_free(&e);
     if (st != MS_OK) return st;
   } else {
-    r->ps = build_particles(p, ctx);
+    r->ps = build_particles(p, ctx, &r->region_of);
   }
   ptl_state *ps = r->ps;
   if (!ps || ps->n == 0) {
@@ -337,8 +363,11 @@ static ms_status sim_init(cd_run *r) {
     dk_errors_free(&e);
   } else {
     st = cd_sim_init(r->s);
-    if (st == MS_OK && p->relax_on) st = relax_sample(ctx, p, r->s, r->c0max, r->nglobal);
+    if (st == MS_OK && p->relax_on)
+      st = relax_sample(ctx, p, r->s, r->c0max, r->nglobal, r->region_of);
   }
+  if (st != MS_OK && cd_sim_error(r->s)[0]) /* the guard's or the list build's finding */
+    ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: %s", cd_sim_error(r->s));
   if (st != MS_OK)
     ms_log(ctx, MS_LOG_ERROR, "cluster_dynamics: set-up failed (%s)", ms_status_str(st));
   return st;
@@ -491,6 +520,7 @@ static void log_summary(const cd_run *r) {
 
 static void run_cleanup(cd_run *r) {
   cd_outputs_free(&r->out);
+  free(r->region_of);
   if (!r->s) ptl_state_destroy(&r->ps); /* else the simulation owns them */
   cd_sim_destroy(&r->s);
   cd_restart_destroy(&r->rs);
@@ -505,6 +535,7 @@ ms_status cd_problem_run(ms_ctx *ctx, cd_problem *p) {
   if (st == MS_OK) st = sim_init(&r);
   if (st == MS_OK) {
     log_setup(&r);
+    r.out.with_vfs = p->piston.n > 0; /* the free-surface layer is tagged in piston runs only */
     st = cd_outputs_open(ctx, &r.out, r.rs != NULL);
   }
   if (st == MS_OK) {

@@ -25,7 +25,7 @@ typedef struct cd_deck_region {
   double velocity[3];
   bool piston;
   bool matrix; /* fills only the sites no other region takes (no overlap check) */
-  int ngrains; /* polycrystal / grain structure (box regions; 0 = single crystal) */
+  int ngrains; /* polycrystal / grain structure (box, sphere, cylinder; 0 = single crystal) */
   uint64_t grain_seed;
   bool rotate; /* random lattice orientation per grain */
   double dmin; /* overlap removal distance / r0 */
@@ -73,6 +73,9 @@ struct cd_problem {
 /* lattice period along each axis: fcc cubic constant a = √2 r0; triangular r0 × √3 r0 */
 void cd_deck_lattice_period(const cd_problem *p, double per[3]);
 bool cd_deck_region_contains(const cd_deck_region *r, const double x[3], int dim);
+/* the region's bounding box (clipped to the problem's box if `clip`) */
+void cd_deck_region_bounds(const cd_problem *p, const cd_deck_region *r, bool clip, double lo[3],
+                           double hi[3]);
 
 /* ---- output files (cd_output.c) ---- */
 #define CD_CHECKPOINT_FORMAT "mscale cluster_dynamics checkpoint 1"
@@ -87,6 +90,7 @@ typedef struct cd_outputs {
   double *prof;                   /* profile_bins × CD_PROFILE_NCOL */
   double front[2 * CD_MAX_FRONT]; /* (t, z) of the front fit */
   int nf;
+  bool with_vfs; /* cd_energy.csv has the v_free_surface column (a piston run) */
 } cd_outputs;
 
 /* Opens the three CSV files on rank 0 (a restart fills them from the checkpoint, else they get

@@ -203,6 +203,17 @@ ms_status cd_rebuild_lists(cd_sim *s, bool reorder) {
   }
   s->wall_time_neigh += ms_wall_time() - t0;
   s->disp_bound = 0.0;
+  if (st == MS_ERR_UNSTABLE && !s->err[0]) { /* the list build's diagnostic (neighbour.c) */
+    const cd_neigh *nl = s->nl;
+    snprintf(s->err, sizeof s->err,
+             "unstable at step %ld, t = %.9g %s: a particle has too many list candidates in "
+             "its link cells: particles piled on top of each other, or the particles spread "
+             "so far that the cell grid (at most %d n + 64 cells over their extent: %d x %d x "
+             "%d cells of %.3g x %.3g x %.3g cm) is too coarse",
+             s->step, ms_out_time(s->t), ms_out_time_label(), nl->cell_factor, nl->ncell[0],
+             nl->ncell[1], nl->ncell[2], 1.0 / nl->cell_inv_w[0], 1.0 / nl->cell_inv_w[1],
+             1.0 / nl->cell_inv_w[2]);
+  }
   if (st != MS_OK) return st;
   ensure_sums(s);
   if ((reorder || s->dd) && s->driven) { /* indices changed: refresh the driven list */

@@ -422,7 +422,8 @@ static void reorder_particles(cd_neigh *nl, ptl_state *p, int32_t *partners, int
 }
 
 /* The cell grid of a build: along a periodic axis the box (positions wrapped into it), else the
- * extent of the particles; about r_list wide cells, at most ~2 n + 64 of them; the image
+ * extent of the particles; about r_list wide cells, at most ~f n + 64 of them (f =
+ * nl->cell_factor, 2 unless a build overflowed); the image
  * shifts. MS_ERR_INPUT: a periodic axis shorter than 2 r_list. */
 static ms_status grid_extent(cd_neigh *nl, ptl_state *p, const cd_box *box, double L[3],
                              double lo[3], int nc[3]) {
@@ -459,10 +460,12 @@ static ms_status grid_extent(cd_neigh *nl, ptl_state *p, const cd_box *box, doub
       if (nc[a] < 1) nc[a] = 1;
     }
   }
-  /* Cap the cell count (a few far-flung particles must not create millions of empty cells). */
+  /* Cap the cell count (a few far-flung particles must not create millions of empty cells);
+   * cd_neigh_build raises the factor when the capped cells hold too many particles. */
+  const double factor = nl->cell_factor > 0 ? nl->cell_factor : 2;
   for (;;) {
     double tot = (double)nc[0] * nc[1] * nc[2];
-    if (tot <= 2.0 * (double)n + 64.0) break;
+    if (tot <= factor * (double)n + 64.0) break;
     int big = 0;
     for (int a = 1; a < 3; a++)
       if (nc[a] > nc[big]) big = a;
@@ -531,8 +534,27 @@ static void set_colouring(cd_neigh *nl, int n0, bool per0) {
   }
 }
 
+static ms_status neigh_build_once(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
+                                  bool reorder);
+
+/* A build; when a capped cell grid is too coarse (a debris cloud spread far: some particle's
+ * cell rows hold more than CD_MAX_CAND candidates), the cap is raised fourfold, up to 128 n
+ * cells, and the build redone (the lists are then complete); the raised cap stays for later
+ * builds. A run whose grid never overflows builds exactly as with the cap 2 n + 64. */
 ms_status cd_neigh_build(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
                          bool reorder) {
+  if (nl->cell_factor <= 0) nl->cell_factor = 2;
+  ms_status st = neigh_build_once(nl, p, box, partners, reorder);
+  while (st == MS_ERR_UNSTABLE && nl->overfull && nl->cell_factor < 128) {
+    nl->cell_factor *= 4;
+    nl->nbuild--; /* the same build, redone */
+    st = neigh_build_once(nl, p, box, partners, false);
+  }
+  return st;
+}
+
+static ms_status neigh_build_once(cd_neigh *nl, ptl_state *p, const cd_box *box, int32_t *partners,
+                                  bool reorder) {
   const size_t n = p->n;
   double *pos[3] = {p->x, p->y, p->z};
   double L[3] = {0, 0, 0}, lo[3] = {0, 0, 0};

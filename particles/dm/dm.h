@@ -46,6 +46,8 @@ typedef struct dm_options {
   double box[3];  /* periodic length per axis, 0 = not periodic (X must lie in [0, box)) */
   double cond_max;  /* largest accepted condition number of A_i (0 → default 1e8) */
   double hourglass; /* stabilisation coefficient c_s (0 = off; docs/particles-dm.md) */
+  bool ghost_rows;  /* mirror ghosts (DM_MIRROR) get no family and no shape matrix of their own:
+                     * rows that the finite model fills from their partners (dm_symmetry.c) */
 } dm_options;
 
 /* Prescribed displacement: fill w (3 components) of particle i at time t. */
@@ -263,6 +265,14 @@ typedef struct dm_fin_material {
   const dm_sg *sg;  /* steinberg_guinan, johnson_cook: its parameters (not owned), else NULL */
   dm_fracture frac; /* zero: no fracture */
 } dm_fin_material;
+/* Symmetry planes of the finite-deformation model (dm_symmetry.c, docs/particles-dm.md
+ * "Symmetry planes"): x_axis[j] = pos[j], j < n, distinct axes; the model holds the particles on
+ * the + side of every plane (and on the planes) and mirror ghosts of those within the horizon. */
+typedef struct dm_sym_planes {
+  int n;
+  int axis[3];
+  double pos[3];
+} dm_sym_planes;
 typedef struct dm_fin_params {
   double cq, cl;    /* quadratic and linear viscosity coefficients */
   double courant;   /* dt = courant · min_i ℓ_i / (c_L + 2 ν_q / ℓ_i) */
@@ -321,6 +331,18 @@ typedef struct dm_fin {
   void *ext_user;
   double *fext; /* [n][3] the external force of the last evaluation (NULL without one) */
   double ext_work;
+  /* symmetry planes (dm_symmetry.c; sym.n = 0: none): the state holds the n real particles,
+   * then mirror ghosts up to nall = m->s->n, filled from their partners at every evaluation
+   * (w, u, v̄ by the reflection M, Q by M Q M, κ, failed); fold[i] the size of particle i's
+   * orbit (2 per plane it is off, 1 per plane it lies on), the weight that makes every sum over
+   * the real particles a sum over the full body (energies, works, momenta); onplane [nonplane]:
+   * 3 i + axis of each particle component held on a plane (u_axis = 0, its force dropped);
+   * imat_all [nall]: the materials with the ghosts' rows (f->imat points to it) */
+  dm_sym_planes sym;
+  size_t nall, nonplane;
+  double *fold;
+  size_t *onplane;
+  uint8_t *imat_all;
 } dm_fin;
 /* What a finite-deformation model is built from (dm_fin_create). */
 typedef struct dm_fin_setup {
@@ -328,9 +350,12 @@ typedef struct dm_fin_setup {
   const dm_fin_material *mat; /* not owned */
   const uint8_t *imat;        /* [n] material of each particle (not owned) */
   dm_fin_params par;
+  dm_sym_planes sym; /* symmetry planes (n = 0: none); the state's mirror ghosts, from
+                      * dm_sym_ghosts, follow its real particles */
 } dm_fin_setup;
-/* Driven particles (DM_PRESCRIBED, DM_FIXED) keep their velocity u; mirror ghosts and bad
- * parameters are not accepted (MS_ERR_INPUT). e starts at eos_e0. Computes the first forces
+/* Driven particles (DM_PRESCRIBED, DM_FIXED) keep their velocity u; mirror ghosts without
+ * symmetry planes (or not after the real particles, or with a velocity normal to a plane they lie
+ * on) and bad parameters are not accepted (MS_ERR_INPUT). e starts at eos_e0. Computes the first forces
  * and dt_next (their status on failure). *out is NULL on failure. */
 ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out);
 void dm_fin_destroy(dm_fin **f); /* null-safe; *f = NULL */
@@ -369,7 +394,23 @@ typedef struct dm_refamily_report {
 } dm_refamily_report;
 double dm_fin_max_stretch(const dm_fin *f, size_t *where);
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
-/* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ). */
+/* Symmetry planes (dm_symmetry.c): dm_sym_ghosts (re)builds the mirror ghosts of a state whose
+ * first nreal rows are the real particles (on the + side of every plane or on it): the images
+ * under every product of the planes' reflections of the real particles within `reach` of each
+ * plane involved (none for a particle on such a plane: it is its own image), appended after the
+ * real rows (the arrays reallocated; bc = DM_MIRROR, partner, msign, X = the mirrored X, mass,
+ * vol, K, G copied; w, u filled by dm_sym_sync). Returns the ghost count. dm_sym_on_plane: is
+ * coordinate x on the plane at pos (within 1e-9 of the spacing ell)? dm_fin_fold: particle i's
+ * weight in a full-body sum. dm_fin_momentum: the full body's Σ m u (components normal to a plane
+ * 0: the orbits cancel them). dm_sym_sync: the ghost rows from their partners (w, u, v̄, v_close,
+ * Q, κ, failed). */
+size_t dm_sym_ghosts(dm_state *s, size_t nreal, const dm_sym_planes *pl, double reach, double ell);
+bool dm_sym_on_plane(double x, double pos, double ell);
+static inline double dm_fin_fold(const dm_fin *f, size_t i) { return f->fold ? f->fold[i] : 1.0; }
+void dm_fin_momentum(const dm_fin *f, double P[3]);
+void dm_sym_sync(dm_fin *f);
+/* Energies: kinetic of free particles, internal Σ m e, the bond penalty's (kJ); with symmetry
+ * planes of the full body (dm_fin_fold). */
 void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double *hourglass);
 /* Fracture (dm_fracture.c): the energy booked as broken (Σ broken[i], kJ), the contact energy
  * of failed particles (Σ econ[i], kJ; the accumulated work of the pair forces) and the contact
@@ -384,7 +425,8 @@ size_t dm_fin_failed_count(const dm_fin *f);
 static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
   return f->failed && f->failed[i] && f->failed[k];
 }
-/* Checkpoints (dm_fin_checkpoint.c): every array a step reads and the state's w, u, under
+/* Checkpoints (dm_fin_checkpoint.c): every array a step reads (the external force and its work
+ * too, when one is installed) and the state's w, u, under
  * `group` of a checkpoint file (serial or collective; on ranks every rank calls it, `owner`
  * on the one rank whose rows are written), and back into a model built for the same particles
  * (same n; a mismatch is an error in e). */
@@ -461,7 +503,8 @@ ms_status dm_flyer_run(const dm_flyer_spec *spec, const ms_ctx *ctx, dm_flyer_re
  * box) of the finite-deformation model with their own materials and initial velocities onto a
  * rigid frictionless wall (a penalty on the particles crossing its contact plane), free
  * surfaces, optional reference-configuration updates; energy and momentum balance, the length
- * and footprint of a cylinder standing on the wall (the Taylor anvil test). One rank. */
+ * and footprint of a cylinder standing on the wall (the Taylor anvil test); checkpoints and
+ * restart (dm_impact_checkpoint.c); replicated on MPI ranks (dm_impact_run.h). */
 typedef struct dm_impact dm_impact;
 dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *section, const eos_materials *mats,
                                   dk_errors *e);

@@ -309,6 +309,6 @@ void dm_contact_work(dm_fin *f, double h, const double *vb) {
 double dm_contact_energy(const dm_fin *f) {
   double e = 0.0;
   if (f->sr)
-    for (size_t i = 0; i < f->n; ++i) e += f->sr->energy[i];
+    for (size_t i = 0; i < f->n; ++i) e += dm_fin_fold(f, i) * f->sr->energy[i];
   return e;
 }

@@ -148,6 +148,7 @@ static ms_status grid_build(cell_grid *g, const dm_state *s, const dm_options *o
 /* Visit the neighbours of particle i: count (out == NULL) or write them. */
 static size_t visit_family(const cell_grid *g, const dm_state *s, const dm_model *m, size_t i,
                            uint32_t *nbr, uint8_t *img) {
+  if (m->opt.ghost_rows && s->bc[i] == DM_MIRROR) return 0; /* rows filled by the model */
   const double h2 = m->opt.horizon * m->opt.horizon;
   const double *xi = &s->X[3 * i];
   int ci[3];
@@ -256,6 +257,11 @@ ms_status dm_build_shape(dm_model *m, const ms_ctx *ctx, size_t *first_bad) {
   double cmax = m->opt.cond_max > 0 ? m->opt.cond_max : 1e8;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
+    if (m->opt.ghost_rows && s->bc[i] == DM_MIRROR) { /* no shape of its own */
+      memset(&m->Ainv[9 * i], 0, 9 * sizeof(double));
+      m->cond[i] = 1.0, m->kappa[i] = 0.0;
+      continue;
+    }
     double A[9] = {0};
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
       double xi[3];

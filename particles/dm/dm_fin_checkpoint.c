@@ -17,7 +17,7 @@ typedef struct fin_array {
 } fin_array;
 
 /* Every per-particle array of dm_fin; a field added to dm_fin that a step reads belongs here. */
-static size_t fin_arrays(const dm_fin *f, fin_array a[20]) {
+static size_t fin_arrays(const dm_fin *f, fin_array a[21]) {
   size_t k = 0;
   a[k++] = (fin_array){"e", "kJ/g", 1, f->e};
   a[k++] = (fin_array){"rho", "g/cm^3", 1, f->rho};
@@ -42,6 +42,8 @@ static size_t fin_arrays(const dm_fin *f, fin_array a[20]) {
     a[k++] = (fin_array){"short_range_force", "g cm/(10 us)^2", 3, f->sr->force};
     a[k++] = (fin_array){"short_range_step", "10 us", 1, f->sr->dt};
   }
+  if (f->fext) /* an external force (dm_impact.c's wall): the next half kick books its work */
+    a[k++] = (fin_array){"external_force", "g cm/(10 us)^2", 3, f->fext};
   return k;
 }
 
@@ -52,7 +54,7 @@ static void path(char *buf, size_t len, const char *group, const char *name) {
 ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group,
                                   bool owner) {
   const size_t n = owner ? f->n : 0; /* rows this rank adds (a replicated model: the owner's) */
-  fin_array a[20];
+  fin_array a[21];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -88,6 +90,7 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "work", f->work);
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "dt_next", f->dt_next);
   if (st == MS_OK) st = ms_h5_attr_double(h, name, "step", (double)f->step);
+  if (st == MS_OK && f->fext) st = ms_h5_attr_double(h, name, "external_work", f->ext_work);
   return st;
 }
 
@@ -110,7 +113,7 @@ static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, 
 
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e) {
-  fin_array a[20];
+  fin_array a[21];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -118,8 +121,8 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
     path(name, sizeof name, group, a[k].name);
     st = read_into(h, name, f->n, a[k].ncomp, a[k].data, e);
   }
-  if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, s->n, 3, s->w, e);
-  if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, s->n, 3, s->u, e);
+  if (st == MS_OK) path(name, sizeof name, group, "w"), st = read_into(h, name, f->n, 3, s->w, e);
+  if (st == MS_OK) path(name, sizeof name, group, "u"), st = read_into(h, name, f->n, 3, s->u, e);
   if (st == MS_OK && f->failed) { /* a failed particle's bond penalty is off (dm_fracture.c) */
     double *fl = ms_calloc(f->n + 1, sizeof *fl);
     path(name, sizeof name, group, "failed");
@@ -148,6 +151,11 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "work", &f->work, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "dt_next", &f->dt_next, e);
   if (st == MS_OK) st = ms_h5_read_attr_double(h, name, "step", &step, e);
+  if (st == MS_OK && f->fext)
+    st = ms_h5_read_attr_double(h, name, "external_work", &f->ext_work, e);
   f->step = (long)step;
+  /* symmetry planes: the checkpoint holds the real particles; the mirror ghosts' rows (w, u, v̄,
+   * M Q M, κ, failed) from their partners, as every step leaves them (kick_velocities) */
+  if (st == MS_OK && f->sym.n) dm_sym_sync(f);
   return st;
 }

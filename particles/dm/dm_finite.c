@@ -309,6 +309,7 @@ static ms_status bad_energy(dm_fin *f, long i) {
  * w += dt u itself (one pass over the bonds for both; stress_one). */
 static ms_status forces(dm_fin *f, double dt, double h) {
   const long n = (long)f->n;
+  if (f->sym.n) dm_sym_sync(f); /* the ghosts' w, u of a state set from outside */
   double dtmin = INFINITY;
   long bad = n, bad_e = n, imin = 0;
 #pragma omp parallel if (n > 4096)
@@ -337,6 +338,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   if (bad_e < n) return bad_energy(f, bad_e); /* the kick failed: no drift */
   dm_state *st = f->m->s;
   if (dt > 0) drift(st->w, st->u, dt, 3 * f->n);
+  if (f->sym.n) dm_sym_sync(f); /* the ghosts' w, Q, κ, failed for the gather */
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
     double val = 0;
@@ -354,6 +356,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
     if (dext < dtmin) dtmin = dext;
   }
+  for (size_t j = 0; j < f->nonplane; ++j) f->frc[f->onplane[j]] = 0.0; /* held on its plane */
   for (long i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a)
       if (!isfinite(f->frc[3 * i + a])) {
@@ -378,9 +381,10 @@ static void kick_velocities(dm_fin *f, double h, double *vbar) {
   double dW = 0.0, dWe = 0.0;
   for (long i = 0; i < n; ++i) {
     double *u = &st->u[3 * i], *vb = &vbar[3 * i];
+    const double hw = h * dm_fin_fold(f, (size_t)i); /* full-body sums (symmetry planes) */
     if (is_driven(st->bc[i])) {
       for (int a = 0; a < 3; ++a) vb[a] = u[a];
-      dW -= h * (f->frc[3 * i] * u[0] + f->frc[3 * i + 1] * u[1] + f->frc[3 * i + 2] * u[2]);
+      dW -= hw * (f->frc[3 * i] * u[0] + f->frc[3 * i + 1] * u[1] + f->frc[3 * i + 2] * u[2]);
       continue;
     }
     const double im = h / st->mass[i];
@@ -388,10 +392,11 @@ static void kick_velocities(dm_fin *f, double h, double *vbar) {
       const double u1 = u[a] + im * f->frc[3 * i + a];
       vb[a] = 0.5 * (u[a] + u1);
       u[a] = u1;
-      if (f->ext) dWe += h * f->fext[3 * i + a] * vb[a]; /* its share of Σ m Δ|u|²/2 */
+      if (f->ext) dWe += hw * f->fext[3 * i + a] * vb[a]; /* its share of Σ m Δ|u|²/2 */
     }
   }
   f->work += dW, f->ext_work += dWe;
+  if (f->sym.n) dm_sym_sync(f); /* the ghosts' u and v̄ */
 }
 
 ms_status dm_fin_flush(dm_fin *f) {
@@ -453,10 +458,11 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
   const dm_state *st = f->m->s;
   double K = 0, U = 0, H = 0;
   for (size_t i = 0; i < f->n; ++i) {
-    const double *u = &st->u[3 * i];
-    if (!is_driven(st->bc[i])) K += 0.5 * st->mass[i] * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-    U += st->mass[i] * f->e[i];
-    H += f->ehg[i];
+    const double *u = &st->u[3 * i], wt = dm_fin_fold(f, i);
+    if (!is_driven(st->bc[i]))
+      K += wt * 0.5 * st->mass[i] * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    U += wt * st->mass[i] * f->e[i];
+    H += wt * f->ehg[i];
   }
   if (kinetic) *kinetic = K;
   if (internal) *internal = U;
@@ -498,6 +504,7 @@ void dm_fin_destroy(dm_fin **fp) {
   free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar), free(f->vclose);
   dm_frac_free(f);
   dm_contact_free(f);
+  dm_sym_free(f);
   free(f->fext);
   free(f);
   *fp = NULL;
@@ -510,18 +517,23 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   const uint8_t *imat = setup->imat;
   const dm_fin_params *par = &setup->par;
   dm_state *st = m->s;
-  for (size_t i = 0; i < st->n; ++i)
-    if (st->bc[i] == DM_MIRROR) return MS_ERR_INPUT;
+  size_t nreal = 0; /* the real particles, then only mirror ghosts (with symmetry planes) */
+  while (nreal < st->n && st->bc[nreal] != DM_MIRROR) ++nreal;
+  for (size_t i = nreal; i < st->n; ++i)
+    if (st->bc[i] != DM_MIRROR || setup->sym.n == 0 || !m->opt.ghost_rows) return MS_ERR_INPUT;
+  /* the short-range contact sees only the real particles' cell list: with symmetry planes it
+   * would miss the pairs across a plane (the impact deck refuses the two together, dm_impact_sym.c) */
   if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0 ||
-      !(par->contact >= 0 && par->contact < 1))
+      !(par->contact >= 0 && par->contact < 1) || (setup->sym.n && par->contact > 0))
     return MS_ERR_INPUT;
-  for (size_t i = 0; i < st->n; ++i)
+  for (size_t i = 0; i < nreal; ++i)
     if ((mat[imat[i]].yield >= DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) ||
         (mat[imat[i]].frac.model != DM_FRACTURE_NONE && !(mat[imat[i]].frac.spall_strength > 0)))
       return MS_ERR_INPUT;
   dm_fin *f = ms_calloc(1, sizeof *f);
-  size_t n = st->n, n1 = n ? n : 1;
-  f->m = m, f->n = n, f->dim = st->dim, f->mat = mat, f->imat = imat, f->par = *par;
+  size_t n = nreal, n1 = n ? n : 1;
+  f->m = m, f->n = n, f->nall = st->n, f->dim = st->dim, f->mat = mat, f->imat = imat;
+  f->par = *par;
   f->e = ms_calloc(n1, sizeof(double)), f->rho = ms_calloc(n1, sizeof(double));
   f->p = ms_calloc(n1, sizeof(double)), f->q = ms_calloc(n1, sizeof(double));
   f->J = ms_calloc(n1, sizeof(double)), f->eps_p = ms_calloc(n1, sizeof(double));
@@ -531,6 +543,10 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   f->frc = ms_calloc(3 * n1, sizeof(double)),
   f->vbar = ms_calloc(3 * n1 + 1, sizeof(double)); /* +1: ld4 */
   f->vclose = ms_calloc(3 * n1 + 1, sizeof(double));
+  if (setup->sym.n && dm_sym_init(f, &setup->sym, imat) != MS_OK) {
+    dm_fin_destroy(&f);
+    return MS_ERR_INPUT;
+  }
   dm_frac_alloc(f);
   if (dm_contact_alloc(f) != MS_OK) {
     dm_fin_destroy(&f);

@@ -50,7 +50,8 @@
 static void contact_stiffness(dm_fin *f) {
   const dm_model *m = f->m;
   const dm_state *st = m->s;
-  dm_pair_stiffness(f, f->kcon, 0.0); /* dm_contact.c */
+  dm_pair_stiffness(f, f->kcon, 0.0);                                           /* dm_contact.c */
+  for (size_t g = f->n; g < f->nall; ++g) f->kcon[g] = f->kcon[st->partner[g]]; /* ghosts */
   /* the dashpot (η = C_l √(κ √(m_i m_k)), damping ratio ζ = C_l/√2 for equal masses) lowers
    * the explicit limit to (2/ω)(√(1 + ζ²) − ζ) */
   const double zeta = f->par.cl / sqrt(2.0), damped = sqrt(1.0 + zeta * zeta) - zeta;
@@ -65,10 +66,10 @@ void dm_frac_alloc(dm_fin *f) {
   bool any = false;
   for (size_t i = 0; i < f->n && !any; ++i) any = f->mat[f->imat[i]].frac.model != DM_FRACTURE_NONE;
   if (!any) return;
-  const size_t n1 = f->n ? f->n : 1;
-  f->failed = ms_calloc(n1, 1);
+  const size_t n1 = f->n ? f->n : 1, na = f->nall > n1 ? f->nall : n1; /* na: with ghosts */
+  f->failed = ms_calloc(na, 1);
   f->broken = ms_calloc(n1, sizeof(double));
-  f->kcon = ms_calloc(n1, sizeof(double)), f->dtcon = ms_calloc(n1, sizeof(double));
+  f->kcon = ms_calloc(na, sizeof(double)), f->dtcon = ms_calloc(n1, sizeof(double));
   f->fcon = ms_calloc(3 * n1, sizeof(double)), f->econ = ms_calloc(n1, sizeof(double));
   f->nlcon = f->m->nbonds;
   f->lcon = ms_calloc(f->nlcon ? f->nlcon : 1, sizeof(double));
@@ -109,6 +110,11 @@ void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, do
   if (!f->failed[i]) {
     const dm_fracture *fr = &mt->frac;
     if (fr->model == DM_FRACTURE_NONE) return;
+    /* a driven particle (a piston's prescribed or a fixed layer) never fails: its motion is
+     * given, and in the coupled region it stands for the grid, which has no spall model — the
+     * material fails above it, not in it (docs/particles-dm.md "Fracture") */
+    const uint8_t bc = f->m->s->bc[i];
+    if (bc == DM_PRESCRIBED || bc == DM_FIXED) return;
     const double tension = fr->model == DM_FRACTURE_PRINCIPAL_STRESS
                                ? dm_frac_max_principal(sig)
                                : (sig[0] + sig[4] + sig[8]) / 3.0;
@@ -264,14 +270,14 @@ void dm_frac_contact_work(dm_fin *f, double h, const double *vb) {
 double dm_fin_broken_energy(const dm_fin *f) {
   double b = 0.0;
   if (f->broken)
-    for (size_t i = 0; i < f->n; ++i) b += f->broken[i];
+    for (size_t i = 0; i < f->n; ++i) b += dm_fin_fold(f, i) * f->broken[i];
   return b;
 }
 
 double dm_fin_contact_energy(const dm_fin *f) {
   double c = 0.0;
   if (f->econ)
-    for (size_t i = 0; i < f->n; ++i) c += f->econ[i];
+    for (size_t i = 0; i < f->n; ++i) c += dm_fin_fold(f, i) * f->econ[i];
   return c + dm_contact_energy(f); /* and the short-range contact's (dm_contact.c) */
 }
 
@@ -304,7 +310,7 @@ double dm_fin_contact_potential(const dm_fin *f) {
           dm_pair_law(f, k, lam + q * hs, &gk, &sk);
           integral += (q == 0 || q == nsimp ? 1.0 : q % 2 ? 4.0 : 2.0) * 0.5 * (gi + gk);
         }
-        U += 0.5 * (f->kcon[i] + f->kcon[k]) * L * L * integral * hs / 3.0;
+        U += dm_fin_fold(f, i) * 0.5 * (f->kcon[i] + f->kcon[k]) * L * L * integral * hs / 3.0;
       }
   return U;
 }
@@ -312,7 +318,7 @@ double dm_fin_contact_potential(const dm_fin *f) {
 size_t dm_fin_failed_count(const dm_fin *f) {
   size_t c = 0;
   if (f->failed)
-    for (size_t i = 0; i < f->n; ++i) c += f->failed[i] != 0;
+    for (size_t i = 0; i < f->n; ++i) c += f->failed[i] ? (size_t)dm_fin_fold(f, i) : 0;
   return c;
 }
 

@@ -14,27 +14,14 @@
  * is constant to round-off; the stored penalty energy E_wall = Σ k d²/2 equals −W_wall up to
  * the time discretisation (reported). Time step: ω_w Δt ≤ 2·courant (ω_w = √(k/m)), and a
  * particle approaching the wall moves at most 0.1 h per step. */
-#include "dm_impact_impl.h"
+#include "dm_impact_run.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct wall {
-  int axis, side;
-  double contact; /* plane of the particle centres: x_wall + side·h/2 */
-  double h;
-  double *k;       /* [n] penalty stiffness */
-  double dt_k;     /* courant·2/max ω_w */
-  double courant;  /* for the approach limit */
-  double stored;   /* Σ k d²/2 at the last evaluation (kJ): wall and contact */
-  long in_contact; /* particles beyond the contact plane */
-  int on;          /* a wall in the deck */
-  dmi_contact *ct; /* contact between bodies (dm_impact_contact.c) */
-} wall;
-
 static double wall_force(void *user, const dm_fin *f, double *fext) {
-  wall *w = user;
+  dmi_wall *w = user;
   const dm_state *s = f->m->s;
   const int a = w->axis;
   double E = 0, vmax = 0;
@@ -45,8 +32,8 @@ static double wall_force(void *user, const dm_fin *f, double *fext) {
     const double d = w->side * (w->contact - x); /* > 0: beyond the contact plane */
     if (d > 0) {
       fext[3 * i + a] = w->side * w->k[i] * d;
-      E += 0.5 * w->k[i] * d * d;
-      ++nc;
+      E += 0.5 * dm_fin_fold(f, i) * w->k[i] * d * d; /* the full body's (symmetry planes) */
+      nc += (long)dm_fin_fold(f, i);
     }
     vmax = fmax(vmax, -w->side * s->u[3 * i + a]); /* approach speed */
   }
@@ -211,6 +198,10 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
   ptl_snapshot_attr_add(&snap, "time", t);
   ptl_snapshot_attr_add(&snap, "step", (double)step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
+  for (int j = 0; j < p->sym.n; ++j) /* the + side of these planes only (dm_impact_sym.c) */
+    ptl_snapshot_attr_add(
+        &snap, (const char *[]){"symmetry_x", "symmetry_y", "symmetry_z"}[p->sym.axis[j]],
+        p->sym.pos[j]);
   char *path = ms_out_path(ctx, name);
   if (ptl_write_snapshot(path, &snap) != MS_OK)
     ms_log(ctx, MS_LOG_WARN, "impact: could not write %s", path);
@@ -219,34 +210,25 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
 
 enum { NHIST = 17 }; /* columns of impact_history.csv */
 
-/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest). */
-static double body0_momentum(const dm_impact *p, const dm_state *s) {
+/* Body 0's momentum along its initial velocity (g·km/s; 0 for a body at rest; the full
+ * body's with symmetry planes: its velocity has no component through them). */
+static double body0_momentum(const dm_impact *p, const dm_fin *f) {
   const dmi_body *b = &p->bodies[0];
+  const dm_state *s = f->m->s;
   const double v = hypot(hypot(b->velocity[0], b->velocity[1]), b->velocity[2]);
   double P = 0;
   for (size_t i = b->first; v > 0 && i < b->first + b->count; ++i)
-    for (int a = 0; a < 3; ++a) P += s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
+    for (int a = 0; a < 3; ++a)
+      P += dm_fin_fold(f, i) * s->mass[i] * s->u[3 * i + a] * b->velocity[a] / v;
   return P;
 }
 
-typedef struct run_state {
-  dm_impact *p;
-  dm_fin *f;
-  wall *wl;
-  const double *X0;
-  double E0, P0, Pv0[3], t; /* initial energy, |momentum|, momentum vector */
-  double Pabs0;             /* Σ m |u(0)| */
-  double *hist;             /* [nhmax][NHIST] */
-  size_t nh, nhmax;
-} run_state;
-
-static void record(run_state *r) {
+static void record(dmi_run *r) {
   const dm_fin *f = r->f;
   const dm_state *s = f->m->s;
   double K, U, H, P[3] = {0, 0, 0}, L, D;
   dm_fin_energies(f, &K, &U, &H);
-  for (size_t i = 0; i < f->n; ++i)
-    for (int a = 0; a < 3; ++a) P[a] += s->mass[i] * s->u[3 * i + a];
+  dm_fin_momentum(f, P); /* the full body's (symmetry planes) */
   taylor_measures(r->p, s, r->X0, &L, &D);
   dm_impact_summary *sum = &r->p->sum;
   const double B = dm_fin_broken_energy(f);  /* booked out of E_hg at failures (dm_fracture.c) */
@@ -293,7 +275,7 @@ static void record(run_state *r) {
   memcpy(&r->hist[NHIST * r->nh++], row, sizeof row);
 }
 
-static void write_outputs(const ms_ctx *ctx, const run_state *r) {
+static void write_outputs(const ms_ctx *ctx, const dmi_run *r) {
   const char *nm[] = {
       "t",        "kinetic", "internal", "bond_penalty",  "wall_work",       "wall_energy",
       "balance",  "p_x",     "p_y",      "p_z",           "length",          "footprint",
@@ -341,8 +323,8 @@ static void write_outputs(const ms_ctx *ctx, const run_state *r) {
 }
 
 /* A particle outside the domain stops the run (the box bounds the problem). */
-static long outside_box(const dm_impact *p, const dm_state *s) {
-  for (size_t i = 0; i < s->n; ++i)
+static long outside_box(const dm_impact *p, const dm_state *s, size_t n) {
+  for (size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) {
       const double x = s->X[3 * i + a] + s->w[3 * i + a];
       if (!(x >= p->lo[a] && x <= p->hi[a])) return (long)i;
@@ -351,7 +333,7 @@ static long outside_box(const dm_impact *p, const dm_state *s) {
 }
 
 /* The reference update when a bond stretch passes 1 + threshold (dm_refamily.c). */
-static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
+static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   dm_impact *p = r->p;
   if (!(p->ref_threshold > 0)) return MS_OK;
   size_t at = 0;
@@ -383,17 +365,28 @@ static ms_status maybe_update(run_state *r, const ms_ctx *ctx) {
  * per particle), since a step that fails (dm_fin_step) changes them before it can fail: the
  * last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
  * discrete_model problem does (dm_fin_output.c). */
-static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat) {
+static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   dm_impact *p = r->p;
   dm_fin *f = r->f;
   ms_status st = MS_OK;
-  size_t next_out = 0;
+  size_t next_out = r->next_out;
   double wall_time = 0;
   double *live[NFIELD], *good[NFIELD], *buf = ms_calloc(FIELD_DOUBLES * f->n + 1, sizeof(double));
   copy_fields(buf, f->n, good);
-  for (long step = 0;; ++step) {
+  for (long step = r->step0;; ++step) {
     live_fields(f, live);
     const int last = r->t >= p->t_end * (1 - 1e-12);
+    /* a checkpoint of the cadence, or the interrupted run's last: the state at the top of this
+     * step, before anything of it is recorded (dm_impact_checkpoint.c) */
+    r->next_out = next_out;
+    if (!last && (dmi_checkpoint_due(r) || r->stopping)) {
+      st = dmi_checkpoint_write(r);
+      if (st == MS_OK && r->stopping) {
+        ms_log(ctx, MS_LOG_WARN, "impact: interrupted; checkpoint at step %ld written", f->step);
+        st = MS_INTERRUPTED;
+      }
+      if (st != MS_OK) break;
+    }
     if (step % p->energy_every == 0 || last) record(r);
     /* particles_NNNN.h5 at output.particle_times, and the final state always the last one */
     const size_t first_now = next_out;
@@ -432,13 +425,9 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
       }
       break;
     }
-    if (ms_interrupt_agreed(ctx)) { /* SIGINT/SIGTERM (docs/reliability.md): no checkpoints
-                                       here, so stop with the outputs so far */
-      ms_log(ctx, MS_LOG_ERROR, "impact: interrupted at step %ld, t = %.9g", f->step, r->t);
-      st = MS_INTERRUPTED;
-      break;
-    }
-    const long out = outside_box(p, f->m->s);
+    /* SIGINT/SIGTERM (docs/reliability.md): checkpoint at the top of the next step, stop */
+    if (ms_interrupt_agreed(ctx)) r->stopping = true;
+    const long out = outside_box(p, f->m->s, f->n); /* real particles (not mirror ghosts) */
     if (out >= 0) { /* a finite state: the one that left the domain */
       ms_log(ctx, MS_LOG_ERROR,
              "impact: step %ld, t = %.9g %s: particle %ld left the domain; its state is "
@@ -455,20 +444,46 @@ static ms_status time_loop(run_state *r, const ms_ctx *ctx, const uint8_t *imat)
   return st;
 }
 
+/* After the time loop: the summary of the state reached (also the last good one of a run that
+ * stopped), the log line and the outputs. */
+static void report(const ms_ctx *ctx, dmi_run *r) {
+  dm_impact *p = r->p;
+  const dm_fin *f = r->f;
+  double K1, U1, H1;
+  dm_fin_energies(f, &K1, &U1, &H1);
+  p->sum.steps = f->step, p->sum.t_end = r->t, p->sum.hg_ratio = H1 / r->E0;
+  p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
+  p->sum.p_body0 = body0_momentum(p, f);
+  taylor_measures(p, f->m->s, r->X0, &p->sum.length, &p->sum.footprint);
+  taylor_profile(p, f->m->s, r->X0, p->sum.length, p->sum.radius_at);
+  ms_log(ctx, MS_LOG_INFO,
+         "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
+         "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
+         "%.3g; transverse momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], "
+         "bond stretch <= %.4g; %ld reference updates; %zu failed particles, broken energy %.4g "
+         "kJ; body 0: length %.5g cm (L/L0 %.4f), footprint %.5g cm (D/D0 %.4f)",
+         f->step, r->t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
+         p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
+         p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
+         p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
+  write_outputs(ctx, r);
+}
+
 ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
-  if (ctx->size > 1 || ctx->restart) {
-    ms_log(ctx, MS_LOG_ERROR, "impact: runs on one rank, without restart");
-    return MS_ERR_INPUT;
-  }
+  static char no_outdir[1] = "";
+  ms_ctx octx = *ctx; /* the files: rank 0 writes them (replicated on ranks: dm_impact_run.h) */
+  if (ctx->rank != 0) octx.outdir = no_outdir;
   memset(&p->sum, 0, sizeof p->sum);
   p->sum.J_min = INFINITY, p->sum.J_max = -INFINITY;
   const long energy_every = p->energy_every;
   dm_state s;
   uint8_t *imat = NULL;
   build_state(p, &s, &imat);
+  if (p->sym.n) dmi_sym_reduce(p, &s, &imat); /* the + side and its mirror ghosts */
   double *X0 = ms_calloc(3 * s.n, sizeof(double));
   memcpy(X0, s.X, 3 * s.n * sizeof(double));
-  dm_options opt = {.horizon = p->horizon * p->h, .cond_max = p->cond_max};
+  dm_options opt = {
+      .horizon = p->horizon * p->h, .cond_max = p->cond_max, .ghost_rows = p->sym.n > 0};
   dm_model *m = NULL;
   ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
   dm_fin_material *mat = ms_calloc(p->nbodies, sizeof *mat);
@@ -481,14 +496,15 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
                        .ell = p->h,
                        .contact = p->contact_distance};
   if (st == MS_OK)
-    st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par}, &f);
+    st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par, .sym = p->sym},
+                       &f);
   dmi_contact ct;
-  wall wl = {.axis = p->wall_axis,
-             .side = p->wall_side,
-             .h = p->h,
-             .courant = p->courant,
-             .on = p->has_wall,
-             .ct = &ct};
+  dmi_wall wl = {.axis = p->wall_axis,
+                 .side = p->wall_side,
+                 .h = p->h,
+                 .courant = p->courant,
+                 .on = p->has_wall,
+                 .ct = &ct};
   wl.contact = p->wall_pos + p->wall_side * 0.5 * p->h;
   wl.k = ms_calloc(s.n, sizeof(double));
   wl.dt_k = INFINITY;
@@ -505,48 +521,43 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
   if (f && f->sr) f->sr->within_material = ct.on;
   free(M);
   if (st == MS_OK && (p->has_wall || ct.on)) st = dm_fin_set_external(f, wall_force, &wl);
-  run_state r = {.p = p, .f = f, .wl = &wl, .X0 = X0, .nhmax = 4096};
+  dmi_run r = {.p = p,
+               .f = f,
+               .wl = &wl,
+               .X0 = X0,
+               .nhmax = 4096,
+               .ncol = NHIST,
+               .ctx = ctx,
+               .ckpt_next = p->checkpoint_time};
   if (st == MS_OK) {
     double K, U, H, P[3] = {0, 0, 0};
     dm_fin_energies(f, &K, &U, &H);
     r.E0 = K + U + H;
-    for (size_t i = 0; i < s.n; ++i)
-      for (int a = 0; a < 3; ++a) P[a] += s.mass[i] * s.u[3 * i + a];
+    dm_fin_momentum(f, P);
     r.P0 = sqrt(P[0] * P[0] + P[1] * P[1] + P[2] * P[2]);
-    for (size_t i = 0; i < s.n; ++i)
-      r.Pabs0 += s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
-    p->sum.p0_body0 = body0_momentum(p, &s);
+    for (size_t i = 0; i < f->n; ++i)
+      r.Pabs0 +=
+          dm_fin_fold(f, i) * s.mass[i] * hypot(hypot(s.u[3 * i], s.u[3 * i + 1]), s.u[3 * i + 2]);
+    p->sum.p0_body0 = body0_momentum(p, f);
     for (int a = 0; a < 3; ++a) r.Pv0[a] = P[a];
     r.hist = ms_calloc(NHIST * r.nhmax, sizeof(double));
-    p->sum.particles = s.n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
+    p->sum.particles = f->n, p->sum.bonds = f->m->nbonds, p->sum.E0 = r.E0;
     taylor_measures(p, &s, X0, &p->sum.length0, &p->sum.footprint0);
     ms_log(ctx, MS_LOG_INFO,
-           "impact: %zu particles in %zu bodies, %zu bonds, h %g cm, first dt %.6g, E0 %.6g kJ, "
-           "wall %s, contact between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
-           s.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0, p->has_wall ? "on" : "off",
-           ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
-    st = time_loop(&r, ctx, imat);
-    double K1, U1, H1;
-    dm_fin_energies(f, &K1, &U1, &H1);
-    p->sum.steps = f->step, p->sum.t_end = r.t, p->sum.hg_ratio = H1 / r.E0;
-    p->sum.broken = dm_fin_broken_energy(f), p->sum.failed = dm_fin_failed_count(f);
-    p->sum.p_body0 = body0_momentum(p, f->m->s);
-    taylor_measures(p, f->m->s, X0, &p->sum.length, &p->sum.footprint);
-    taylor_profile(p, f->m->s, X0, p->sum.length, p->sum.radius_at);
-    ms_log(ctx, MS_LOG_INFO,
-           "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
-           "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
-           "%.3g; transverse "
-           "momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], bond stretch <= "
-           "%.4g; %ld reference updates; %zu failed particles, broken energy %.4g kJ; body 0: "
-           "length "
-           "%.5g cm (L/L0 %.4f), "
-           "footprint %.5g cm (D/D0 %.4f)",
-           f->step, r.t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
-           p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
-           p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
-           p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
-    write_outputs(ctx, &r);
+           "impact: %zu particles (+ %zu mirror ghosts, %d symmetry planes) in %zu bodies, %zu "
+           "bonds, h %g cm, first dt %.6g, E0 %.6g kJ (the full body's), wall %s, contact "
+           "between bodies %s; body 0: length %.5g cm, footprint %.5g cm",
+           f->n, f->nall - f->n, p->sym.n, p->nbodies, f->m->nbonds, p->h, f->dt_next, r.E0,
+           p->has_wall ? "on" : "off", ct.on ? "on" : "off", p->sum.length0, p->sum.footprint0);
+    if (ctx->size > 1)
+      ms_log(ctx, MS_LOG_INFO,
+             "impact on %d ranks: replicated (every rank steps all %zu particles; rank 0 writes)",
+             ctx->size, f->nall);
+    if (ctx->restart) st = dmi_restart(&r);
+    if (st == MS_OK) {
+      st = time_loop(&r, &octx, imat);
+      report(&octx, &r);
+    }
   } else ms_log(ctx, MS_LOG_ERROR, "impact: the initial state is not valid");
   p->energy_every = energy_every;
   if (f) m = f->m; /* a reference update replaces the model */

@@ -19,7 +19,14 @@
  * material's limits the step, and at 2·courant two elastic boxes colliding at ±0.1 km/s gained
  * 2.3 % of E0 through the penalty's time discretisation, test_dm_impact); a pair closer than 1.5 h approaches by at most 0.1 h per step; and no two
  * particles anywhere approach by more than 0.25 h per step (the velocity spread over all
- * particles), so that a pair is seen at r ≥ 1.25 h before it can touch. */
+ * particles), so that a pair is seen at r ≥ 1.25 h before it can touch.
+ *
+ * Symmetry planes (dm_symmetry.c): a particle also touches the mirror images of the other
+ * bodies' particles, found by their current positions (the images of j near x_i are the
+ * particles near M x_i): the families' mirror ghosts, fixed by the reference positions, would
+ * miss debris that has moved towards a plane (the full-size Piekutowski quarter left the full
+ * run at 0.55 µs with them). Forces on the real particles only; the stored energy counts each
+ * visit with the particle's fold, so it is the full body's. */
 #include "dm_impact_impl.h"
 
 #include <math.h>
@@ -47,51 +54,82 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
   c->stored = 0, c->in_contact = 0;
   if (!c->on) return INFINITY;
   const dm_state *s = f->m->s;
-  const size_t n = c->n;
+  const size_t n = f->n; /* the real particles (with symmetry planes: images below) */
   const double *X = s->X, *w = s->w, *u = s->u, *mass = s->mass;
-  /* the cell list (dm_contact.c) and the velocity spread */
+  const dm_sym_planes *pl = &f->sym;
+  /* the cell list (dm_contact.c) over the real particles (the mirror ghosts after them are
+   * not listed: the images are found by current positions) and the velocity spread */
+  c->cells.n = n; /* ≤ the rows it was made for */
   dm_cells_build(&c->cells, X, w);
   double umin[3] = {INFINITY, INFINITY, INFINITY}, umax[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a)
       umin[a] = fmin(umin[a], u[3 * i + a]), umax[a] = fmax(umax[a], u[3 * i + a]);
+  for (int p = 0; p < pl->n; ++p) { /* the images' velocities: the normal one negated */
+    const int a = pl->axis[p];
+    umax[a] = fmax(umax[a], -umin[a]), umin[a] = -umax[a];
+  }
   const dm_cells *cl = &c->cells;
   const double h = c->h, r_see = 1.5 * h;
+  const unsigned nmask = 1u << pl->n;
   double E = 0, vapp = 0;
   long nc = 0;
 #pragma omp parallel for schedule(static) reduction(+ : E, nc) reduction(max : vapp)
   for (size_t i = 0; i < n; ++i) {
     double xi[3], fi[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) xi[a] = X[3 * i + a] + w[3 * i + a];
-    const long *idx = &cl->cidx[3 * i];
     int touching = 0;
-    for (long dz = -1; dz <= 1; ++dz)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dx = -1; dx <= 1; ++dx) {
-          const long cn[3] = {idx[0] + dx, idx[1] + dy, idx[2] + dz};
-          for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
-            const long *cj = &cl->cidx[3 * j]; /* only the cell's own particles: no other cell
-                                                  sharing its bucket, none twice */
-            if (c->imat[j] == c->imat[i] || cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2])
-              continue;
-            double d[3], r2 = 0;
-            for (int a = 0; a < 3; ++a) {
-              d[a] = xi[a] - (X[3 * j + a] + w[3 * j + a]);
-              r2 += d[a] * d[a];
-            }
-            if (r2 >= r_see * r_see) continue;
-            const double r = sqrt(r2);
-            double ur = 0; /* rate of approach: −d(r)/dt */
-            for (int a = 0; a < 3; ++a) ur -= d[a] * (u[3 * i + a] - u[3 * j + a]) / r;
-            vapp = fmax(vapp, ur);
-            if (r >= h) continue;
-            const double k = 2.0 * c->k[i] * c->k[(size_t)j] / (c->k[i] + c->k[(size_t)j]);
-            const double pen = h - r;
-            for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
-            E += 0.25 * k * pen * pen; /* each pair is visited from both sides */
-            touching = 1;
-          }
+    /* symmetry planes (dm_symmetry.c): the images M x_j of the particles j under each product
+     * M of the planes' reflections near i, found as the particles near M x_i; an image is a
+     * particle of its own only where j is off those planes. mask 0: the particles themselves. */
+    for (unsigned mask = 0; mask < nmask; ++mask) {
+      double xm[3], sg[3] = {1, 1, 1};
+      long idx[3];
+      bool near = true;
+      for (int a = 0; a < 3; ++a) xm[a] = xi[a];
+      for (int p = 0; p < pl->n; ++p)
+        if (mask >> p & 1u) {
+          const int a = pl->axis[p];
+          near = near && fabs(xi[a] - pl->pos[p]) < r_see;
+          xm[a] = 2.0 * pl->pos[p] - xi[a], sg[a] = -1;
         }
+      if (!near) continue;
+      dm_cells_of(cl, xm, idx);
+      for (long dz = -1; dz <= 1; ++dz)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dx = -1; dx <= 1; ++dx) {
+            const long cn[3] = {idx[0] + dx, idx[1] + dy, idx[2] + dz};
+            for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
+              const long *cj = &cl->cidx[3 * j]; /* only the cell's own particles: no other cell
+                                                    sharing its bucket, none twice */
+              if (f->imat[j] == f->imat[i] || cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2])
+                continue;
+              double d[3], r2 = 0;
+              bool own = false; /* j on a plane of the mask: its image is itself */
+              for (int p = 0; p < pl->n; ++p)
+                own = own || ((mask >> p & 1u) &&
+                              X[3 * j + pl->axis[p]] + w[3 * j + pl->axis[p]] == pl->pos[p]);
+              if (own) continue;
+              for (int a = 0; a < 3; ++a) { /* x_i − M x_j = M (M x_i − x_j) */
+                d[a] = sg[a] * (xm[a] - (X[3 * j + a] + w[3 * j + a]));
+                r2 += d[a] * d[a];
+              }
+              if (r2 >= r_see * r_see) continue;
+              const double r = sqrt(r2);
+              double ur = 0; /* rate of approach: −d(r)/dt */
+              for (int a = 0; a < 3; ++a) ur -= d[a] * (u[3 * i + a] - sg[a] * u[3 * j + a]) / r;
+              vapp = fmax(vapp, ur);
+              if (r >= h) continue;
+              const double k = 2.0 * c->k[i] * c->k[(size_t)j] / (c->k[i] + c->k[(size_t)j]);
+              const double pen = h - r;
+              for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
+              /* each pair is visited from both sides; a real particle stands for its orbit of
+               * fold particles (dm_symmetry.c), whose visits are all alike */
+              E += 0.25 * dm_fin_fold(f, i) * k * pen * pen;
+              touching = (int)dm_fin_fold(f, i);
+            }
+          }
+    }
     for (int a = 0; a < 3; ++a) fext[3 * i + a] += fi[a];
     nc += touching;
   }

@@ -310,6 +310,8 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
   p->energy_every = 20;
   if (out && dk_expect_map(e, doc, out, "impact.output")) {
     dk_read_int(e, doc, out, "energy_every", false, 20, 1, LONG_MAX, &p->energy_every);
+    dk_read_checkpoint_interval(e, doc, out, "impact.output.", "steps", &p->checkpoint_every,
+                                &p->checkpoint_time);
     if (dk_get(out, "particle_times"))
       dk_read_double_list(e, doc, out, "particle_times", MS_DIM_TIME, true, &p->particle_times,
                           &p->nparticle_times);
@@ -337,6 +339,7 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   read_controls(p, doc, sec, e);
   read_bodies(p, doc, sec, mats, e);
   read_wall(p, doc, sec, e);
+  dmi_sym_read(p, doc, sec, e);
   if (e->n == nerr0 && p->nbodies) { /* geometry checks need a valid deck so far */
     const dk_node *L = dk_get(sec, "bodies");
     size_t n = 0;
@@ -350,12 +353,18 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
     if (e->n == nerr0) {
       check_body_placement(p, doc, L, e);
       check_body_pairs(p, doc, L, e);
+      dmi_sym_check(p, doc, sec, e);
     }
   }
   if (e->n > nerr0) {
     dm_impact_problem_destroy(&p);
     return NULL;
   }
+  /* a restart may run to another end and change the cadence (a checkpoint changes nothing of
+   * the run: dm_impact_checkpoint.c); anything else must be the deck that wrote it */
+  static const char *const hash_skip[] = {"impact.t_end", "impact.output.checkpoint_every",
+                                          "impact.output.checkpoint_time", NULL};
+  p->deck_hash = dk_hash(doc, hash_skip);
   return p;
 }
 

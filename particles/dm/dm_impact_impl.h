@@ -31,9 +31,13 @@ struct dm_impact {
   double ref_threshold;     /* reference update when a bond stretch exceeds 1 + this (0: off) */
   double contact_stiffness; /* c_c of the body–body contact (dm_impact_contact.c; 0: off) */
   double contact_distance;  /* d_c / h of the short-range contact inside bodies (dm_contact.c) */
+  dm_sym_planes sym;        /* symmetry planes (dm_impact_sym.c; sym.n = 0: none) */
   long energy_every;
   double *particle_times;
   size_t nparticle_times;
+  long checkpoint_every;  /* output.checkpoint_every (steps; 0: off) */
+  double checkpoint_time; /* output.checkpoint_time (0: off) */
+  uint64_t deck_hash;     /* of the resolved deck but t_end and the checkpoint cadence */
   dm_impact_summary sum;
 };
 
@@ -58,6 +62,13 @@ void dmi_contact_free(dmi_contact *c);
 /* Adds the contact forces to fext (not zeroed here) at the current configuration of f; returns
  * the contact's stable time step. */
 double dmi_contact_force(dmi_contact *c, const struct dm_fin *f, double *fext);
+
+/* Symmetry planes (dm_impact_sym.c): `impact.symmetry` into p->sym (after the domain and the
+ * wall), the bodies' symmetry (after the bodies), and the run's reduction of the full lattice
+ * to the + side with the mirror ghosts after it (imat reallocated with their rows). */
+void dmi_sym_read(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_errors *e);
+void dmi_sym_check(const dm_impact *p, dk_doc *doc, const dk_node *sec, dk_errors *e);
+void dmi_sym_reduce(dm_impact *p, dm_state *s, uint8_t **imat);
 
 /* Is x inside body b (strictly)? */
 bool dmi_inside(const dmi_body *b, const double x[3]);

@@ -78,6 +78,14 @@ static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double 
   for (int a = 0; a < 3; ++a) xi[a] = X[3 * k + a] + sh[a] - X[3 * i + a];
 }
 
+/* ---- symmetry planes (dm_symmetry.c) ----
+ * dm_sym_init: f->sym, fold, the on-plane components (MS_ERR_INPUT: a real particle on the −
+ * side of a plane, or a velocity through the plane a particle lies on), imat_all and v̄, v_close with the ghosts' rows; dm_sym_resize: the
+ * last two for a new ghost set (after dm_sym_ghosts: dm_refamily.c); dm_sym_free. */
+ms_status dm_sym_init(dm_fin *f, const dm_sym_planes *pl, const uint8_t *imat);
+void dm_sym_resize(dm_fin *f, const uint8_t *imat);
+void dm_sym_free(dm_fin *f);
+
 /* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
  * dm_frac_alloc: failed[], broken[] and the contact's arrays (kcon, dtcon, fcon, econ) when a
  * material of f has a fracture model (else NULL); dm_frac_free releases them. dm_frac_stress, called by the stress pass after

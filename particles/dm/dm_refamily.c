@@ -67,7 +67,7 @@ static double penalty_stored(const dm_fin *f) {
         zz += z * z;
       }
     }
-    E += 0.5 * m->kappa[i] * zz;
+    E += dm_fin_fold(f, i) * 0.5 * m->kappa[i] * zz;
   }
   return E;
 }
@@ -96,6 +96,9 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
     jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
   }
   rep->jmin = jmin, rep->jmax = jmax;
+  /* symmetry planes: the ghosts of the new reference (which particles lie within a horizon of
+   * a plane has changed); the state's arrays are reallocated */
+  if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, old->opt.horizon, f->par.ell);
   dm_model *m = NULL;
   size_t bad = (size_t)-1;
   ms_status st = dm_model_create(
@@ -106,6 +109,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
         s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
       s->vol[i] = keep[6 * n + i];
     }
+    if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, old->opt.horizon, f->par.ell); /* the old set */
+    dm_sym_sync(f);
     free(keep);
     rep->bad = bad;
     return MS_ERR_UNSTABLE;
@@ -114,9 +119,9 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   m->prescribe = old->prescribe, m->prescribe_user = old->prescribe_user;
   f->m = m;
   dm_model_destroy(&old);
+  if (f->sym.n) dm_sym_resize(f, f->imat_all); /* v̄, v_close, materials of the new ghosts */
   dm_fin_bond_penalty(f);
-  if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell);
-  /* V changed */ /* the short-range contact's κc, new families */
+  if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell); /* the short-range κc: V changed */
   rep->bonds = m->nbonds;
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0; /* J is now relative to the new reference */
   return dm_fin_refresh(f);

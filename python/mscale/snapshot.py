@@ -47,11 +47,19 @@ class Snapshot:
     ``snap.to_numpy()`` / ``snap.to_pandas()`` give every per-particle dataset as one
     structured array / DataFrame; ``snap.to_extxyz()`` the extended-XYZ frame that
     ``mscale export --format extxyz`` writes.
+
+    Symmetry planes: a run with ``impact.symmetry`` writes the particles on the + side of its
+    planes only (attributes ``symmetry_x`` etc., the planes' positions). Such a snapshot is
+    unfolded here (``unfold=True``, the default): every dataset is given for the full body, the
+    mirror images appended (a particle on a plane is its own image), positions ``x``, ``X0``
+    mirrored, other [n][3] vectors (velocity) with the normal component negated, everything else
+    copied; ``snap.folded`` is the number of particles in the file (``len(snap)`` the unfolded
+    count). ``unfold=False`` reads the file as it is.
     """
 
     GROUP = "particles"
 
-    def __init__(self, path):
+    def __init__(self, path, unfold=True):
         import h5py
 
         self.path = os.fspath(path)
@@ -77,6 +85,12 @@ class Snapshot:
             if len(self._shape["x"]) != 2 or self._shape["x"][1] != 3:
                 raise ValueError(f"{self.path}: /particles/x is {self._shape['x']}, not [n][3]")
             self.n = self._shape["x"][0]
+        self.folded = self.n
+        self.symmetry = [(a, float(self.attrs[f"symmetry_{c}"])) for a, c in enumerate("xyz")
+                         if f"symmetry_{c}" in self.attrs]
+        self._orbit = None
+        if unfold and self.symmetry:
+            self._unfold_map()
         t = root.get("time", self.attrs.get("time"))  # the root's time first, as the exporter
         self.time = float(t) if t is not None else math.nan
         self.time_unit = as_text(self.attrs.get("time_units")) or INTERNAL_TIME
@@ -84,6 +98,35 @@ class Snapshot:
         if isinstance(names, (list, tuple, np.ndarray)):
             names = ",".join(as_text(n) for n in names)
         self.material_names = [s for s in names.split(",") if s] if names else None
+
+    def _unfold_map(self):
+        """The rows of the unfolded body: the file's particle of each (self._orbit) and which
+        axes are mirrored (self._flip [n][3]); images across each plane of the particles off it."""
+        import h5py
+
+        with h5py.File(self.path, "r") as f:
+            x = f[self.GROUP]["x"][()]
+        tol = 1e-9 * float(self.attrs.get("r0", 1.0))
+        idx, flip = np.arange(self.folded), np.zeros((self.folded, 3), bool)
+        for a, pos in self.symmetry:
+            off = np.abs(x[idx, a] - pos) > tol
+            f2 = flip[off].copy()
+            f2[:, a] = True
+            idx, flip = np.concatenate([idx, idx[off]]), np.concatenate([flip, f2])
+        self._orbit, self._flip, self.n = idx, flip, len(idx)
+        for name, shp in self._shape.items():
+            if len(shp) >= 1 and shp[0] == self.folded:
+                self._shape[name] = (self.n,) + tuple(shp[1:])
+
+    def _unfolded(self, name, raw):
+        if self._orbit is None or raw.ndim == 0 or raw.shape[0] != self.folded:
+            return raw
+        out = raw[self._orbit].copy()
+        if out.ndim == 2 and out.shape[1] == 3 and out.dtype.kind == "f":
+            for a, pos in self.symmetry:
+                m = self._flip[:, a]
+                out[m, a] = 2 * pos - out[m, a] if name in ("x", "X0") else -out[m, a]
+        return out
 
     @staticmethod
     def _attr(v):
@@ -120,7 +163,7 @@ class Snapshot:
             import h5py
 
             with h5py.File(self.path, "r") as f:
-                self._cache[name] = f[self.GROUP][name][()]
+                self._cache[name] = self._unfolded(name, f[self.GROUP][name][()])
         return self._cache[name]
 
     def get(self, name, default=None):

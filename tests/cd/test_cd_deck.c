@@ -2,8 +2,9 @@
 /* The `cluster_dynamics` deck section (docs/input-cd.md): a good deck reads and runs; bad input
  * gives clear deck errors with FILE:LINE:COL — overlapping regions of different materials,
  * fewer than 2 lattice periods across a periodic dimension, R_c not above the nearest-neighbour
- * distance, a piston history with a jump in time. A polycrystal region with a profiled face fills
- * the profile. */
+ * distance, a piston history with a jump in time, a region outside the box, a first step beyond
+ * 0.5 r0. A polycrystal region with a profiled face fills the profile; a polycrystalline sphere
+ * keeps its velocity across the relaxation. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -241,14 +242,139 @@ static void test_polycrystal_profiled(void **state) {
   free(text);
 }
 
+/* Bodies for impact decks (docs/input-cd.md "Regions"): a polycrystalline sphere moving at
+ * 1 km/s above a plate at rest, relaxed first. In the initial snapshot (after the relaxation)
+ * every sphere cluster moves at exactly the region's velocity and every plate cluster is at
+ * rest (the relaxation runs at rest and gives the velocities back); the sphere's clusters lie
+ * within its radius plus r0/2 (the relaxation moves them by a fraction of r0), and their count
+ * is 75-100 % of the dense lattice's 4/3 π R³ / (r0³/√2) (grain-boundary porosity ~5-20 % at
+ * min_distance 0.8, and the lattice's own cut of the sphere). */
+static void test_bodies(void **state) {
+  (void)state;
+  const double r0 = 1.0e-3, R = 6.0e-3, c[3] = {0.015, 0.015, 0.01};
+  char *text = malloc(8192);
+  int n = snprintf(text, 8192, "%s", mats);
+  snprintf(text + n, 8192 - n,
+           "cluster_dynamics:\n"
+           "  r0: %g\n"
+           "  t_end: 1.0e-5\n"
+           "  box: {lo: [0, 0, 0], hi: [0.03, 0.03, 0.03], boundary: [free, free, free]}\n"
+           "  regions:\n"
+           "    - {shape: sphere, material: al, center: [%g, %g, %g], radius: %g,\n"
+           "       velocity: [0, 0, 1.0], polycrystal: {grains: 6, seed: 2}}\n"
+           "    - {material: pb, lo: [0, 0, 0.02], hi: [0.03, 0.03, 0.025]}\n"
+           "  relax: {time: 2.0e-4, box: false}\n"
+           "  output: {every: 5, snapshots: 1}\n",
+           r0, c[0], c[1], c[2], R);
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  eos_materials *m;
+  char dir[] = "/tmp/cd_bodies_test_XXXXXX";
+  cd_problem *p = run_deck(text, dir, &e, &doc, &m);
+  char path[512];
+  snprintf(path, sizeof path, "%s/particles_0000.h5", dir);
+  ms_h5r *h = ms_h5_open_read(path, &e);
+  assert_non_null(h);
+  double *x = NULL, *v = NULL;
+  size_t np = 0, nc = 0, nv = 0, ncv = 0;
+  assert_int_equal(ms_h5_read_doubles(h, "particles/x", &x, &np, &nc, &e), MS_OK);
+  assert_int_equal(ms_h5_read_doubles(h, "particles/v", &v, &nv, &ncv, &e), MS_OK);
+  ms_h5_close_read(h);
+  assert_int_equal(np, nv);
+  size_t nsphere = 0, nplate = 0;
+  double rmax = 0;
+  for (size_t i = 0; i < np; i++) {
+    const double *xi = x + nc * i, *vi = v + ncv * i;
+    if (xi[2] < 0.018) { /* the sphere */
+      nsphere++;
+      rmax = fmax(rmax, sqrt((xi[0] - c[0]) * (xi[0] - c[0]) + (xi[1] - c[1]) * (xi[1] - c[1]) +
+                             (xi[2] - c[2]) * (xi[2] - c[2])));
+      assert_true(vi[0] == 0.0 && vi[1] == 0.0 && vi[2] == 1.0);
+    } else {
+      nplate++;
+      assert_true(vi[0] == 0.0 && vi[1] == 0.0 && vi[2] == 0.0);
+    }
+  }
+  const double dense = 4.0 / 3.0 * M_PI * R * R * R / (r0 * r0 * r0 / sqrt(2.0));
+  printf("polycrystal sphere: %zu clusters (%.3f of dense), farthest %.3f r0 from the centre; "
+         "plate %zu\n",
+         nsphere, nsphere / dense, rmax / r0, nplate);
+  assert_true(nsphere > 0.75 * dense && nsphere < dense);
+  assert_true(rmax < R + 0.5 * r0);
+  assert_true(nplate > 0);
+  free(x);
+  free(v);
+  remove_run_dir(dir);
+  free_deck(p, m, doc, &e);
+  free(text);
+}
+
+/* A dense block of ~1400 clusters and a few clusters 95 r0 away (a debris cloud's spread): the
+ * link cells, capped at 2n + 64 over the particles' extent, are ~8 r0 wide and one row of them
+ * holds more than the list build's 510 candidates; the build raises the cap (neighbour.c) and
+ * the run goes on (without it: MS_ERR_UNSTABLE at the first build). */
+static void test_spread_cells(void **state) {
+  (void)state;
+  char *text = malloc(8192);
+  int n = snprintf(text, 8192, "%s", mats);
+  snprintf(text + n, 8192 - n,
+           "cluster_dynamics:\n"
+           "  r0: 1.0e-3\n"
+           "  t_end: 2.0e-5\n"
+           "  box: {lo: [0, 0, 0], hi: [0.1, 0.1, 0.1], boundary: [free, free, free]}\n"
+           "  regions:\n"
+           "    - {material: al, lo: [0, 0, 0], hi: [0.01, 0.01, 0.01]}\n"
+           "    - {shape: sphere, material: al, center: [0.0955, 0.0955, 0.0955], radius: "
+           "1.5e-3}\n"
+           "  output: {every: 5}\n");
+  dk_errors e;
+  dk_errors_init(&e);
+  dk_doc *doc;
+  eos_materials *m;
+  char dir[] = "/tmp/cd_spread_test_XXXXXX";
+  cd_problem *p = run_deck(text, dir, &e, &doc, &m);
+  remove_run_dir(dir);
+  free_deck(p, m, doc, &e);
+  free(text);
+}
+
+/* Bodies: a region outside the box, a first step beyond 0.5 r0, a polycrystal half-space. */
+static void test_bodies_bad(void **state) {
+  (void)state;
+  static const char *const bad[][2] = {
+      {"{shape: sphere, material: al, center: [0.1, 0.1, 0.1], radius: 0.005}",
+       "holds no lattice site inside the box"},
+      {"{shape: sphere, material: al, center: [0.015, 0.015, 0.015], radius: 0.005, "
+       "velocity: [0, 0, 2.0e3]}",
+       "moves a particle"},
+      {"{shape: halfspace, material: al, axis: 2, below: 0.01, polycrystal: {grains: 4}}",
+       "fills a box, sphere or cylinder"}};
+  for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+    char *text = malloc(8192);
+    int n = snprintf(text, 8192, "%s", mats);
+    snprintf(text + n, 8192 - n,
+             "cluster_dynamics:\n"
+             "  r0: 1.0e-3\n"
+             "  t_end: 1.0e-5\n"
+             "  box: {lo: [0, 0, 0], hi: [0.03, 0.03, 0.03], boundary: [free, free, free]}\n"
+             "  regions:\n"
+             "    - %s\n",
+             bad[k][0]);
+    expect_error(text, bad[k][1]);
+    free(text);
+  }
+}
+
 /* every example deck inputs/cd-*.yaml reads without errors (they are documentation) */
 static void test_example_decks(void **state) {
   (void)state;
   const char *src = getenv("MSCALE_SOURCE_DIR");
-  static const char *const names[] = {"cd-piston-al.yaml",       "cd-piston-history.yaml",
-                                      "cd-dusting.yaml",         "cd-grooves-2d.yaml",
-                                      "cd-heterogeneous.yaml",   "cd-poly-al.yaml",
-                                      "cd-rz80-polycrystal.yaml"};
+  static const char *const names[] = {
+      "cd-piston-al.yaml",        "cd-piston-history.yaml",     "cd-dusting.yaml",
+      "cd-grooves-2d.yaml",       "cd-heterogeneous.yaml",      "cd-poly-al.yaml",
+      "cd-rz80-polycrystal.yaml", "cd-taylor-cu.yaml",          "cd-taylor-cu-coarse.yaml",
+      "cd-piekutowski.yaml",      "cd-piekutowski-coarse.yaml", "cd-piekutowski-poly.yaml"};
   for (size_t k = 0; k < sizeof names / sizeof *names; k++) {
     char path[4096];
     snprintf(path, sizeof path, "%s/inputs/%s", src ? src : "../..", names[k]);
@@ -272,7 +398,9 @@ static void test_example_decks(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_good_deck_runs), cmocka_unit_test(test_bad_input),
-      cmocka_unit_test(test_polycrystal_profiled), cmocka_unit_test(test_example_decks)};
+      cmocka_unit_test(test_good_deck_runs),       cmocka_unit_test(test_bad_input),
+      cmocka_unit_test(test_polycrystal_profiled), cmocka_unit_test(test_bodies),
+      cmocka_unit_test(test_bodies_bad),           cmocka_unit_test(test_spread_cells),
+      cmocka_unit_test(test_example_decks)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

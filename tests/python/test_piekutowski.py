@@ -5,8 +5,9 @@
 
 Runs the shipped deck inputs/impact-piekutowski-coarse.yaml (a 9.53 mm Al sphere at 6.7 km/s
 onto a 2.21 mm Al plate, h = t/3, 4 µs, ~5 s) and measures it with tools/piekutowski.py:
-energy and momentum balance, the hole through the plate, the debris cloud's leading edge and the
-back-spray. PIEK_PRINT=1 prints the numbers.
+energy and momentum balance, the hole through the plate (the areal-mass measure and the hole in
+the recovered plate, the remnant that holds the plate's rim), the debris cloud's leading edge and
+the back-spray. PIEK_PRINT=1 prints the numbers.
 """
 import os
 import subprocess
@@ -36,12 +37,24 @@ P = np.stack([np.asarray(hist[c], float) for c in ("p_x", "p_y", "p_z")], axis=1
 dP = np.max(np.linalg.norm(P - P[0], axis=1)) / np.linalg.norm(P[0])
 m = piekutowski.measure(out)
 hole = 10 * m["hole"]
+hole_rem = 10 * m["hole_rem"]
+g = m["g"]
+# the holed plate's mass: the plate's lattice sites outside the recovered plate's equal-area hole
+snap = run.snapshots[-1]
+X0 = np.asarray(snap["X0"], float)
+body = np.asarray(snap["body"]).astype(int)
+r0 = np.hypot(X0[:, 0] - g["axis"][0], X0[:, 1] - g["axis"][1])
+m_site = m["rem_mass"] / max(np.count_nonzero(m["rem"]), 1)  # ρ0 h³, one plate particle
+holed = m_site * np.count_nonzero((body == 1) & (r0 >= 0.5 * m["hole_rem"]))
+plate = m_site * np.count_nonzero(body == 1)
 if os.environ.get("PIEK_PRINT"):
     print(f"energy_err {float(s['energy_err'][0]):.3g}, contact |W + E|/E0 "
           f"{float(s['wall_err'][0]):.3g}, |dP|/|P0| {dP:.3g}, failed {int(s['failed'][0])}, "
           f"broken {float(s['broken'][0]):.4g} kJ; hole {hole:.3f} mm (innermost particle "
-          f"{10 * m['hole_min']:.3f}, unbroken plate {10 * m['hole_unbroken']:.3f}), theta_v {m['theta_v']:.2f} deg, leading edge "
-          f"{m['v_edge']:.3f} km/s")
+          f"{10 * m['hole_min']:.3f}, unbroken plate {10 * m['hole_unbroken']:.3f}); hole in the "
+          f"recovered plate {hole_rem:.3f} mm, remnant {m['rem_mass']:.4f} g against the holed "
+          f"plate {holed:.4f} g, rim in it {m['rim_frac']:.3f}; theta_v {m['theta_v']:.2f} deg, "
+          f"leading edge {m['v_edge']:.3f} km/s")
 checks = [
     # K + U + E_hg + broken − W_contact = E0 per half kick (dm_finite.c, dm_fracture.c):
     # round-off over ~500 steps
@@ -54,12 +67,29 @@ checks = [
     # LOOSE BOUND (issue 25's criterion for the full size is 5 %). The hole (where the areal
     # mass of the plate's particles, failed or not, reaches half the intact plate's:
     # tools/piekutowski.py) at h = t/3 = 0.74 mm: one ring of width h on the radius is 1.47 mm
-    # of diameter, 8.5 % of 17.3 mm. Measured +7.4 % here at 4 µs, and +9.9 %, +9.1 % at t/4,
-    # t/5 (docs/validation.md: the model's hole, ~19 mm, is itself 10 % above the experiment).
+    # of diameter, 8.5 % of 17.3 mm. Measured +2.7 % here at 4 µs (the contact model), and
+    # +9.6 %, +9.5 % at t/4, t/6 (docs/validation.md: the model's hole, ~19 mm at 4 µs, is
+    # itself 10 % above the experiment).
     # 17 % (two rings) admits the coarse lattice with a margin for round-off in ~400 steps of a
     # fracturing run, and fails a plate that is not perforated (no hole), or a hole a ring
     # larger than the model's converged one.
     (abs(hole / EXP_HOLE - 1) < 0.17, f"hole {hole:.2f} mm within 17 % of {EXP_HOLE}"),
+    # LOOSE BOUND, the same two lattice spacings of diameter (17 %) for the hole in the
+    # recovered plate (the remnant holding the plate's rim by unbroken, untorn bonds, seen along
+    # the axis: tools/piekutowski.py): measured 19.47 mm (+12.6 %) here at 4 µs, 19.28 and
+    # 19.26 mm at t/4 and t/6 (the model's hole is itself 11 % above the experiment); it fails
+    # a plate that is not perforated or one whose bonds never break (6.9 mm)
+    (abs(hole_rem / EXP_HOLE - 1) < 0.17, f"recovered plate's hole {hole_rem:.2f} mm within 17 % "
+     f"of {EXP_HOLE}"),
+    # the remnant is the holed plate: its rim in one piece, and its mass at least the lattice
+    # outside its equal-area hole (4.20 g) and at most 14 % more: measured +9.0 % (4.58 g, the
+    # lip's material pushed outwards beyond the hole's radius and still attached: the hole is
+    # measured at its innermost particles, the lip's mass lies outside them); a remnant that
+    # keeps the failed lip (failed-failed bonds left unbroken: +18 %, 5.44 g, hole 17.2 mm) or
+    # the whole plate (6.0 g), or misses a torn-off part, falls outside
+    (m["rim_frac"] == 1.0 and holed < m["rem_mass"] < 1.14 * holed,
+     f"remnant {m['rem_mass']:.4f} g within 0-14 % above the holed plate {holed:.4f} g "
+     f"(the plate {plate:.4f} g), rim in one piece"),
     # the debris cloud's front (its fastest particle): the projectile's rear loses little speed
     # through a plate of t/D = 0.23 (measured 6.63 km/s = 0.99 v here, 7.9 km/s = 1.18 v at
     # t/4 and 8 µs: a few grains run ahead); a front slower than 0.85 v or faster than 1.25 v

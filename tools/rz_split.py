@@ -1,0 +1,204 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: MIT
+"""Jets vs spall layers in a grooved coupled run's last snapshot (docs/validation.md, issue 21).
+
+    /usr/bin/python3 tools/rz_split.py [--png FILE] OUT [OUT ...]
+
+Two splits of the detached material, per unit surface area (g/cm^2; the cross-section is the
+periodic width times the plane-strain thickness: 1 cm for the discrete model, a for cluster
+dynamics):
+
+* by velocity, the run's own (cpl_ejecta_classify, fragments.jet_margin): every fragment but
+  the one holding the deepest particle is a jet when its centre-of-mass velocity exceeds
+  (1 + margin) u_ref, else slow;
+* by shape: a fragment is full-width when its particles occupy at least 90 % of the lateral
+  bins of width a across the period (a spalled layer spans the periodic width; an intact layer
+  leaves no bin empty, a torn one may leave a few). The deepest full-width fragment is the bulk
+  (a lone failed particle at the piston, the run's bulk then, does not make the slab a layer);
+  the other full-width fragments are layers. The level is the median over the lateral bins of
+  the foremost layer's (without layers, the bulk's) front particle. Detached particles beyond
+  the level are "ahead" (jets and the debris in front of the layers), split into those within
+  a quarter groove period of a valley's axis (found in the first snapshot, before breakout)
+  and the rest (crest debris); detached particles below it are "layer" or "behind" (pieces).
+  The depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
+  the foremost layer's particles below the initial crest tops.
+
+With --png, the last snapshot of each run is drawn coloured by that class.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
+
+COVER = 0.9  # lateral coverage of a layer (see the docstring)
+
+
+def thickness(run, r0):
+    """Plane-strain thickness: 1 cm for the discrete model's 2D region, a for cluster dynamics."""
+    with open(os.path.join(run, "deck.resolved.yaml")) as f:
+        return 1.0 if "model: discrete_model" in f.read() else r0
+
+
+def u_ref(run, t_end):
+    """The grid's free-surface jump-off velocity: its first peak, as the run computes it."""
+    fs = mscale.Run(run).histories["free_surface"]
+    u = fs["u"][fs["t"] <= t_end]
+    u = u[u >= 0.05 * u.max()]
+    ref = 0.0
+    for x in u:
+        if x < 0.9 * ref:
+            break
+        ref = max(ref, x)
+    return ref
+
+
+def wavelength(run):
+    """The groove period (the deck's `surface: wavelength`), or 0 without one."""
+    with open(os.path.join(run, "deck.resolved.yaml")) as f:
+        for line in f:
+            if line.strip().startswith("wavelength:"):
+                return float(line.split(":")[1].split("#")[0])
+    return 0.0
+
+
+def valley_phase(snap, lam, nbin, lo, period):
+    """Lateral position of a groove valley, modulo the period lam: where the first snapshot's
+    (before breakout) front is lowest."""
+    x, y = snap["x"][:, 0], snap["x"][:, 1]
+    b = np.floor(((y - lo) % period) / period * nbin).astype(int)
+    front = np.full(nbin, np.inf)
+    np.minimum.at(front, b, -x)
+    return ((np.argmin(-front) + 0.5) * period / nbin) % lam
+
+
+def split(run, margin=0.1):
+    r = mscale.Run(run)
+    snap = r.snapshots[-1]
+    x, y, v, m = snap["x"][:, 0], snap["x"][:, 1], snap["v"][:, 0], snap["mass"]
+    fid = snap["fragment"]
+    t = float(snap.attrs["time"])
+    r0, period = float(snap.attrs["r0"]), float(snap.attrs["period_y"])
+    lo = float(snap.attrs.get("lo_y", 0.0))
+    area = period * thickness(run, r0)
+    ok = fid >= 0
+    run_bulk = fid[ok][np.argmin(x[ok])]  # cpl_ejecta_classify's bulk
+    nbin = max(1, int(round(period / r0)))
+    ids = np.unique(fid[ok])
+    cls = {}
+    info = {}
+    for k in ids:
+        s = fid == k
+        mk = m[s].sum()
+        vk = (m[s] * v[s]).sum() / mk
+        bins = np.unique(np.floor(((y[s] - lo) % period) / period * nbin).astype(int))
+        info[k] = (mk, vk, x[s].min())
+        cls[k] = "layer" if bins.size >= COVER * nbin else "piece"
+    # the shape split's bulk: the deepest full-width fragment (what stays on the piston; a lone
+    # failed particle next to the piston, the run's bulk then, does not make the slab a layer)
+    full = [k for k in ids if cls[k] == "layer"]
+    bulk = min(full, key=lambda k: info[k][2]) if full else run_bulk
+    cls[bulk] = "bulk"
+
+    # the level of a full-width fragment: the median over the lateral bins of its front particle
+    def level(sel):
+        b = np.floor(((y[sel] - lo) % period) / period * nbin).astype(int)
+        front = np.full(nbin, -np.inf)
+        np.maximum.at(front, b, x[sel])
+        return np.median(front[np.isfinite(front)])
+
+    layers = [k for k in ids if cls[k] == "layer"]
+    x_l = max(level(fid == k) for k in layers + [bulk])
+    ur = u_ref(run, t)
+    out = dict(t=t, u_ref=ur, area=area, x_l=x_l, bulk=info[bulk][0] / area, jets=0.0, slow=0.0,
+               run_bulk=info[run_bulk][0] / area,
+               n_jets=0, n_slow=0, v_max=-np.inf)
+    for k in ids:  # the run's split, with the run's bulk
+        if k == run_bulk:
+            continue
+        mk, vk = info[k][:2]
+        out["v_max"] = max(out["v_max"], vk)
+        key = "jets" if vk > (1.0 + margin) * ur else "slow"
+        out[key] += mk / area
+        out["n_" + key] += 1
+    # per particle: ahead of the foremost layer's level (jets and the debris that leads them),
+    # in a layer below it, or in a piece below it
+    det = ok & (fid != bulk)
+    lay = np.isin(fid, layers)
+    where = np.where(~ok | (fid == bulk), "bulk", "behind")
+    where[det & lay] = "layer"
+    where[det & (x > x_l)] = "ahead"
+    for key in ("ahead", "layer", "behind"):
+        out[key] = m[where == key].sum() / area
+    # "ahead" split laterally: within a quarter period of a valley's axis (the jets) or not
+    # (the crests' debris)
+    lam = wavelength(run) or period
+    y0 = valley_phase(r.snapshots[0], lam, nbin, lo, period)
+    dist = np.abs((y - lo - y0 + 0.5 * lam) % lam - 0.5 * lam)
+    out["ahead_valley"] = m[(where == "ahead") & (dist < 0.25 * lam)].sum() / area
+    out["ahead_crest"] = out["ahead"] - out["ahead_valley"]
+    # depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
+    # the foremost layer's particles, below the initial crest tops
+    first = r.snapshots[0]
+    x0 = dict(zip(first["gid"], first["x"][:, 0]))
+    top = max(first["x"][:, 0])
+    out["spall_depth"] = np.nan
+    if layers:
+        front_layer = max(layers, key=lambda k: level(fid == k))
+        out["spall_depth"] = top - min(x0[g] for g in snap["gid"][fid == front_layer])
+    out["n_layers"] = len(layers)
+    return out, ((y - lo) % period, x, where, t)
+
+
+def draw(png, runs, pics):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colour = {"bulk": "0.6", "layer": "tab:blue", "behind": "tab:orange", "ahead": "tab:red"}
+    ncol = min(4, len(runs))
+    nrow = -(-len(runs) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 5 * nrow), squeeze=False)
+    for ax in axes.flat[len(runs):]:
+        ax.axis("off")
+    for ax, run, (y, x, where, t) in zip(axes.flat, runs, pics):
+        for key, c in colour.items():
+            s = where == key
+            ax.scatter(y[s] * 1e4, x[s] * 1e4, c=c, s=0.3, linewidths=0)
+        ax.set_title(f"{os.path.basename(run.rstrip('/'))}: t = {t:.2f} us", fontsize=9)
+        ax.set_xlabel("y [um] (periodic)")
+        ax.set_ylabel("x [um] (drive axis)")
+        ax.set_aspect("equal")
+    handles = [plt.Line2D([], [], marker="o", ls="", color=c, label=k) for k, c in colour.items()]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    fig.savefig(png, dpi=80)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("runs", nargs="+")
+    ap.add_argument("--margin", type=float, default=0.1, help="fragments.jet_margin of the runs")
+    ap.add_argument("--png", help="draw the last snapshots coloured by class")
+    a = ap.parse_args()
+    pics = []
+    print("run,t_us,u_ref,run_bulk,jets(n),slow(n),bulk,ahead(valley/crest),layers(n),behind,x_level_um,spall_depth_um,v_max"
+          "  [g/cm^2, km/s]")
+    for run in a.runs:
+        o, pic = split(run, a.margin)
+        pics.append(pic)
+        print(f"{run},{o['t']:.3f},{o['u_ref']:.3f},{o['run_bulk']:.3g},"
+              f"{o['jets']:.3g}({o['n_jets']}),{o['slow']:.3g}({o['n_slow']}),"
+              f"{o['bulk']:.3g},{o['ahead']:.3g}({o['ahead_valley']:.3g}/{o['ahead_crest']:.3g}),"
+              f"{o['layer']:.3g}({o['n_layers']}),{o['behind']:.3g},"
+              f"{o['x_l'] * 1e4:.0f},{o['spall_depth'] * 1e4:.0f},{o['v_max']:.3f}")
+    if a.png:
+        draw(a.png, a.runs, pics)
+
+
+if __name__ == "__main__":
+    main()
