@@ -278,6 +278,8 @@ typedef struct dm_fin_params {
   double courant;   /* dt = courant · min_i ℓ_i / (c_L + 2 ν_q / ℓ_i) */
   double hourglass; /* bond-penalty coefficient c_s: κ_i = c_s M_i V_i / tr A_i (0 = off) */
   double ell;       /* particle spacing ℓ (cm) */
+  double contact;   /* short-range contact distance d_c / ℓ between particles not in each
+                       other's family (dm_contact.c; 0 = off) */
 } dm_fin_params;
 struct dm_fin;
 /* An external force on the particles (dm_impact.c's rigid wall): fills fext [n][3] at the
@@ -315,6 +317,7 @@ typedef struct dm_fin {
   double *broken;
   double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose, *lam_end;
   size_t nlcon;
+  struct dm_contact *sr; /* the short-range contact (dm_contact.c; NULL when par.contact = 0) */
   double dt_next;
   size_t dt_particle; /* the particle whose stable step is dt_next (smallest index of ties) */
   long step;

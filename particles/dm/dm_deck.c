@@ -270,6 +270,19 @@ static void read_response(dm_problem *p, dk_doc *doc, const dk_node *sec, int co
   dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, p->finite ? 1.0 : 0.0, 0.0, 100.0,
                  &p->hourglass);
   if (p->finite && !courant_given) p->courant = 0.4;
+  if (!p->finite && dk_get(sec, "contact_distance"))
+    dk_error(e, doc, dk_get(sec, "contact_distance"),
+             "discrete_model.contact_distance: needs response: eos");
+  /* off by default here: it costs 65 % on the finite benchmark (docs/benchmarks.md) */
+  dk_read_double(e, doc, sec, "contact_distance", MS_DIM_NONE, false, 0.0, 0.0, DM_CONTACT_MAX,
+                 &p->contact);
+  for (int a = 0; a < p->dim && p->contact > 0; ++a) /* its cells: 3 seeing distances a box */
+    if (p->face[2 * a] == FACE_PERIODIC &&
+        p->hi[a] - p->lo[a] < 3.0 * (p->contact + 0.5) * p->h * (1 + 1e-9))
+      dk_error(e, doc, dk_get(sec, "contact_distance"),
+               "discrete_model.contact_distance: a periodic box must hold 3 seeing distances "
+               "(d_c + spacing/2 = %g cm) along each periodic axis",
+               (p->contact + 0.5) * p->h);
   if (p->finite && dk_get(sec, "dt"))
     dk_error(e, doc, dk_get(sec, "dt"),
              "discrete_model.dt: response: eos takes its step from the sound speed (give courant)");

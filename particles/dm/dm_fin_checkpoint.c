@@ -17,7 +17,7 @@ typedef struct fin_array {
 } fin_array;
 
 /* Every per-particle array of dm_fin; a field added to dm_fin that a step reads belongs here. */
-static size_t fin_arrays(const dm_fin *f, fin_array a[17]) {
+static size_t fin_arrays(const dm_fin *f, fin_array a[21]) {
   size_t k = 0;
   a[k++] = (fin_array){"e", "kJ/g", 1, f->e};
   a[k++] = (fin_array){"rho", "g/cm^3", 1, f->rho};
@@ -37,6 +37,11 @@ static size_t fin_arrays(const dm_fin *f, fin_array a[17]) {
     a[k++] = (fin_array){"contact_energy", "kJ", 1, f->econ};
     a[k++] = (fin_array){"contact_force", "g cm/(10 us)^2", 3, f->fcon};
   }
+  if (f->sr) { /* the short-range contact (dm_contact.c) */
+    a[k++] = (fin_array){"short_range_energy", "kJ", 1, f->sr->energy};
+    a[k++] = (fin_array){"short_range_force", "g cm/(10 us)^2", 3, f->sr->force};
+    a[k++] = (fin_array){"short_range_step", "10 us", 1, f->sr->dt};
+  }
   if (f->fext) /* an external force (dm_impact.c's wall): the next half kick books its work */
     a[k++] = (fin_array){"external_force", "g cm/(10 us)^2", 3, f->fext};
   return k;
@@ -49,7 +54,7 @@ static void path(char *buf, size_t len, const char *group, const char *name) {
 ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, const char *group,
                                   bool owner) {
   const size_t n = owner ? f->n : 0; /* rows this rank adds (a replicated model: the owner's) */
-  fin_array a[17];
+  fin_array a[21];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -72,6 +77,13 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
     if (st == MS_OK) st = ms_h5_write_doubles_dist(h, name, nb, 1, f->lcon, "cm");
     path(name, sizeof name, group, "contact_dashpot");
     if (st == MS_OK) st = ms_h5_write_doubles_dist(h, name, nb, 1, f->gcon, "g cm/(10 us)^2");
+  }
+  if (st == MS_OK && f->sr) { /* the short-range contact: where it acted (as 0/1) */
+    double *fl = ms_calloc(f->n + 1, sizeof *fl);
+    for (size_t i = 0; i < f->n; ++i) fl[i] = f->sr->touch[i];
+    path(name, sizeof name, group, "short_range_touch");
+    st = ms_h5_write_doubles_dist(h, name, n, 1, fl, "1");
+    free(fl);
   }
   /* the scalars as attributes of the group's e dataset: the step count exactly (< 2^53) */
   path(name, sizeof name, group, "e");
@@ -101,7 +113,7 @@ static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, 
 
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e) {
-  fin_array a[17];
+  fin_array a[21];
   const size_t na = fin_arrays(f, a);
   char name[256];
   ms_status st = MS_OK;
@@ -124,6 +136,15 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
     if (st == MS_OK) st = read_into(h, name, f->nlcon, 1, f->lcon, e);
     path(name, sizeof name, group, "contact_dashpot");
     if (st == MS_OK) st = read_into(h, name, f->nlcon, 1, f->gcon, e);
+  }
+  if (st == MS_OK && f->sr) {
+    double *fl = ms_calloc(f->n + 1, sizeof *fl);
+    path(name, sizeof name, group, "short_range_touch");
+    st = read_into(h, name, f->n, 1, fl, e);
+    f->sr->touching = 0;
+    for (size_t i = 0; st == MS_OK && i < f->n; ++i)
+      f->sr->touch[i] = fl[i] != 0, f->sr->touching += fl[i] != 0;
+    free(fl);
   }
   double step = 0;
   path(name, sizeof name, group, "e");

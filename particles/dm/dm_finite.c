@@ -350,6 +350,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
   if (f->failed && dm_frac_contact(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
+  if (f->sr && dm_contact_force(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */
     const double dext = f->ext(f->ext_user, f, f->fext);
     for (size_t j = 0; j < 3 * f->n; ++j) f->frc[j] += f->fext[j];
@@ -418,10 +419,12 @@ ms_status dm_fin_advance(dm_fin *f) {
       if (f->failed[i]) f->keep_e[i] = f->e[i], f->keep_ehg[i] = f->ehg[i];
   kick_velocities(f, 0.5 * dt, f->vbar);
   dm_frac_contact_work(f, 0.5 * dt, f->vbar);
+  dm_contact_work(f, 0.5 * dt, f->vbar);
   ms_status r = forces(f, dt, 0.5 * dt);
   if (r != MS_OK) return r;
   kick_velocities(f, 0.5 * dt, f->vclose);
   dm_frac_contact_work(f, 0.5 * dt, f->vclose);
+  dm_contact_work(f, 0.5 * dt, f->vclose);
   f->h_close = 0.5 * dt, f->pending = true;
   ++f->step;
   return MS_OK;
@@ -500,6 +503,7 @@ void dm_fin_destroy(dm_fin **fp) {
   free(f->e), free(f->rho), free(f->p), free(f->q), free(f->J), free(f->eps_p), free(f->ehg);
   free(f->F), free(f->s), free(f->QP), free(f->sig), free(f->frc), free(f->vbar), free(f->vclose);
   dm_frac_free(f);
+  dm_contact_free(f);
   dm_sym_free(f);
   free(f->fext);
   free(f);
@@ -517,7 +521,10 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
   while (nreal < st->n && st->bc[nreal] != DM_MIRROR) ++nreal;
   for (size_t i = nreal; i < st->n; ++i)
     if (st->bc[i] != DM_MIRROR || setup->sym.n == 0 || !m->opt.ghost_rows) return MS_ERR_INPUT;
-  if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0)
+  /* the short-range contact sees only the real particles' cell list: with symmetry planes it
+   * would miss the pairs across a plane (the impact deck refuses the two together, dm_impact_sym.c) */
+  if (!(par->ell > 0) || !(par->courant > 0) || par->cq < 0 || par->cl < 0 || par->hourglass < 0 ||
+      !(par->contact >= 0 && par->contact < 1) || (setup->sym.n && par->contact > 0))
     return MS_ERR_INPUT;
   for (size_t i = 0; i < nreal; ++i)
     if ((mat[imat[i]].yield >= DM_YIELD_STEINBERG_GUINAN && !mat[imat[i]].sg) ||
@@ -541,6 +548,10 @@ ms_status dm_fin_create(const dm_fin_setup *setup, dm_fin **out) {
     return MS_ERR_INPUT;
   }
   dm_frac_alloc(f);
+  if (dm_contact_alloc(f) != MS_OK) {
+    dm_fin_destroy(&f);
+    return MS_ERR_INPUT;
+  }
   dm_fin_bond_penalty(f);
   for (size_t i = 0; i < n; ++i) f->e[i] = eos_e0(mat[imat[i]].eos);
   const ms_status status = forces(f, 0.0, 0.0);

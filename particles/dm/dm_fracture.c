@@ -50,18 +50,7 @@
 static void contact_stiffness(dm_fin *f) {
   const dm_model *m = f->m;
   const dm_state *st = m->s;
-  const double d = f->dim;
-  for (size_t i = 0; i < f->n; ++i) {
-    const dm_fin_material *mt = &f->mat[f->imat[i]];
-    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
-    double trA = 0.0;
-    for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-      double xi[3];
-      dm_bond_vector(m, i, b, xi);
-      trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
-    }
-    f->kcon[i] = trA > 0 ? rho0 * c0 * c0 * d * d * st->vol[i] / trA : 0.0;
-  }
+  dm_pair_stiffness(f, f->kcon, 0.0);                                           /* dm_contact.c */
   for (size_t g = f->n; g < f->nall; ++g) f->kcon[g] = f->kcon[st->partner[g]]; /* ghosts */
   /* the dashpot (η = C_l √(κ √(m_i m_k)), damping ratio ζ = C_l/√2 for equal masses) lowers
    * the explicit limit to (2/ω)(√(1 + ζ²) − ζ) */
@@ -70,30 +59,6 @@ static void contact_stiffness(dm_fin *f) {
     double sk = 0.0;
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) sk += f->kcon[i] + f->kcon[m->nbr[b]];
     f->dtcon[i] = sk > 0 ? f->par.courant * 2.0 * damped / sqrt(2.0 * sk / st->mass[i]) : INFINITY;
-  }
-}
-
-static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s);
-
-/* lam_end of each material present: the end of its EOS's range as a failed pair's r/L
- * (mg_linear ends at ρ/ρ0 = s/(s − 1): λ = ((s − 1)/s)^(1/d), 0.63 for Al in 3D), by bisection
- * to 1e-9; 0 when the springs are finite down to λ = 1e-3. */
-static void contact_ends(dm_fin *f) {
-  bool seen[256] = {false};
-  for (size_t i = 0; i < f->n; ++i) {
-    const uint8_t im = f->imat[i];
-    if (seen[im]) continue;
-    seen[im] = true;
-    double lo = 1e-3, hi = 1.0, g, sl;
-    pair_law(f, i, lo, &g, &sl);
-    if (isfinite(g) && isfinite(sl)) continue;
-    while (hi - lo > 1e-9) {
-      const double mid = 0.5 * (lo + hi);
-      pair_law(f, i, mid, &g, &sl);
-      if (isfinite(g) && isfinite(sl)) hi = mid;
-      else lo = mid;
-    }
-    f->lam_end[im] = hi;
   }
 }
 
@@ -113,7 +78,7 @@ void dm_frac_alloc(dm_fin *f) {
   for (size_t b = 0; b < f->nlcon; ++b) f->lcon[b] = -1.0; /* not broken yet */
   f->lam_end = ms_calloc(256, sizeof(double));
   contact_stiffness(f);
-  contact_ends(f);
+  dm_pair_ends(f, f->lam_end);
 }
 
 void dm_frac_free(dm_fin *f) {
@@ -188,21 +153,6 @@ static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b,
   }
 }
 
-/* The pair law of particle i's material at λ = |y|/L ≤ 1: the spring force is κ_ik L g, with
- * g = [p(ρ0 λ^−d, e0) − p(ρ0, e0)] λ^(d−1)/(K d) — the EOS pressure of a uniform compression λ
- * over the bond's share of the face it acts on, so that the virial of a uniformly compressed
- * failed lattice is the EOS pressure, and g → 1 − λ for small strain (the linear spring of κ)
- * — and s ≥ |dg/dλ|, the stiffness over κ: ρ0 c(ρ, e0)²/(K λ²) + (d − 1) p λ^(d−2)/(K d). */
-static void pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s) {
-  const eos_t *eos = f->mat[f->imat[i]].eos;
-  const double rho0 = eos_rho0(eos), e0 = eos_e0(eos), c0 = eos_sound_speed(eos, rho0, e0);
-  const double K = rho0 * c0 * c0, d = f->dim, rho = rho0 * pow(lam, -d);
-  const double p = eos_pressure(eos, rho, e0) - eos_pressure(eos, rho0, e0);
-  const double c = eos_sound_speed(eos, rho, e0);
-  *g = p * pow(lam, d - 1.0) / (K * d);
-  *s = rho0 * c * c / (K * lam * lam) + (d - 1.0) * fabs(p) * pow(lam, d - 2.0) / (K * d);
-}
-
 /* The contact force on failed particle i from its broken, compressed bonds: the spring into
  * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
  * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
@@ -243,8 +193,8 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
     if (rdot < 0) closing = fmax(closing, -rdot / fmin(L, fmax(r - lend * L, 1e-300)));
     if (!(r < L)) continue;
     double gi, si, gk, sk;
-    pair_law(f, i, r / L, &gi, &si);
-    pair_law(f, k, r / L, &gk, &sk);
+    dm_pair_law(f, i, r / L, &gi, &si);
+    dm_pair_law(f, k, r / L, &gk, &sk);
     const double kap = f->kcon[i] + f->kcon[k], gl = 0.5 * (gi + gk), sl = 0.5 * (si + sk);
     if (!isfinite(gl) || !isfinite(sl)) {
       lmin = 0.0;
@@ -328,7 +278,7 @@ double dm_fin_contact_energy(const dm_fin *f) {
   double c = 0.0;
   if (f->econ)
     for (size_t i = 0; i < f->n; ++i) c += dm_fin_fold(f, i) * f->econ[i];
-  return c;
+  return c + dm_contact_energy(f); /* and the short-range contact's (dm_contact.c) */
 }
 
 double dm_fin_contact_potential(const dm_fin *f) {
@@ -356,8 +306,8 @@ double dm_fin_contact_potential(const dm_fin *f) {
         double integral = 0.0;
         for (int q = 0; q <= nsimp; ++q) {
           double gi, si, gk, sk;
-          pair_law(f, i, lam + q * hs, &gi, &si);
-          pair_law(f, k, lam + q * hs, &gk, &sk);
+          dm_pair_law(f, i, lam + q * hs, &gi, &si);
+          dm_pair_law(f, k, lam + q * hs, &gk, &sk);
           integral += (q == 0 || q == nsimp ? 1.0 : q % 2 ? 4.0 : 2.0) * 0.5 * (gi + gk);
         }
         U += dm_fin_fold(f, i) * 0.5 * (f->kcon[i] + f->kcon[k]) * L * L * integral * hs / 3.0;

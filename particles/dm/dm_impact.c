@@ -490,8 +490,12 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
   dm_fin_material *mat = ms_calloc(p->nbodies, sizeof *mat);
   for (size_t b = 0; b < p->nbodies; ++b) mat[b] = p->bodies[b].mat, mat[b].sg = &p->bodies[b].sg;
   dm_fin *f = NULL;
-  dm_fin_params par = {
-      .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
+  dm_fin_params par = {.cq = p->cq,
+                       .cl = p->cl,
+                       .courant = p->courant,
+                       .hourglass = p->hourglass,
+                       .ell = p->h,
+                       .contact = p->contact_distance};
   if (st == MS_OK)
     st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = mat, .imat = imat, .par = par, .sym = p->sym},
                        &f);
@@ -514,6 +518,8 @@ ms_status dm_impact_problem_run(ms_ctx *ctx, dm_impact *p) {
     if (p->has_wall) wl.dt_k = fmin(wl.dt_k, 2.0 * p->courant / sqrt(wl.k[i] / s.mass[i]));
   }
   dmi_contact_init(&ct, p, s.n, imat, M);
+  /* the short-range contact (dm_contact.c) inside bodies; between them the bodies' own */
+  if (f && f->sr) f->sr->within_material = ct.on;
   free(M);
   if (st == MS_OK && (p->has_wall || ct.on)) st = dm_fin_set_external(f, wall_force, &wl);
   dmi_run r = {.p = p,

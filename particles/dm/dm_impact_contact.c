@@ -13,10 +13,8 @@
  * discretisation (reported with the wall's). No friction, no bonding (the bodies' families
  * stay their own: docs/input-impact.md).
  *
- * Neighbours: a cell list of cell size 1.5 h, the cells hashed into a table of 2n buckets
- * ([Teschner2003]: memory O(n) however far the debris flies; two cells sharing a bucket only
- * add candidates, which the distance test drops), rebuilt at every force evaluation into
- * arrays allocated once. Time step: ω Δt ≤ courant, ω = √(2 k_ij/m) the pair's frequency
+ * Neighbours: the hashed cell list of dm_contact.c (dm_cells, cell size 1.5 h), rebuilt at
+ * every force evaluation into arrays allocated once. Time step: ω Δt ≤ courant, ω = √(2 k_ij/m) the pair's frequency
  * (half the wall's 2·courant: the contact is 10× stiffer, so its ω Δt rather than the
  * material's limits the step, and at 2·courant two elastic boxes colliding at ±0.1 km/s gained
  * 2.3 % of E0 through the penalty's time discretisation, test_dm_impact); a pair closer than 1.5 h approaches by at most 0.1 h per step; and no two
@@ -41,32 +39,15 @@ void dmi_contact_init(dmi_contact *c, const dm_impact *p, size_t n, const uint8_
   c->on = p->nbodies > 1 && p->contact_stiffness > 0;
   if (!c->on) return;
   c->h = p->h, c->courant = p->courant, c->n = n, c->imat = imat;
-  c->cell = 1.5 * p->h;
-  for (int a = 0; a < 3; ++a) c->lo[a] = p->lo[a];
-  c->ncell = 2 * n + 1;
-  c->head = ms_calloc(c->ncell, sizeof(long));
-  c->next = ms_calloc(n ? n : 1, sizeof(long));
-  c->cidx = ms_calloc(3 * (n ? n : 1), sizeof(long));
+  dm_cells_init(&c->cells, n, 3, 1.5 * p->h, p->lo, NULL); /* not periodic: cannot fail */
   c->k = ms_calloc(n ? n : 1, sizeof(double)); /* c_c h M_i; the pair's k is their harmonic mean */
   c->dt_k = INFINITY;
   for (size_t i = 0; i < n; ++i) c->k[i] = p->contact_stiffness * p->h * M[i];
 }
 
 void dmi_contact_free(dmi_contact *c) {
-  free(c->head), free(c->next), free(c->k), free(c->cidx);
+  dm_cells_free(&c->cells), free(c->k);
   memset(c, 0, sizeof *c);
-}
-
-/* The bucket of cell (i, j, k): the spatial hash of [Teschner2003]. */
-static size_t bucket(const dmi_contact *c, long i, long j, long k) {
-  const uint64_t hsh =
-      ((uint64_t)i * 73856093u) ^ ((uint64_t)j * 19349663u) ^ ((uint64_t)k * 83492791u);
-  return (size_t)(hsh % c->ncell);
-}
-
-static size_t cell_of(const dmi_contact *c, const double x[3], long idx[3]) {
-  for (int a = 0; a < 3; ++a) idx[a] = (long)floor((x[a] - c->lo[a]) / c->cell);
-  return bucket(c, idx[0], idx[1], idx[2]);
 }
 
 double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
@@ -76,24 +57,19 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
   const size_t n = f->n; /* the real particles (with symmetry planes: images below) */
   const double *X = s->X, *w = s->w, *u = s->u, *mass = s->mass;
   const dm_sym_planes *pl = &f->sym;
-  /* the cell list (serial counting into linked lists: O(n)) and the velocity spread */
-  for (size_t q = 0; q < c->ncell; ++q) c->head[q] = -1;
+  /* the cell list (dm_contact.c) over the real particles (the mirror ghosts after them are
+   * not listed: the images are found by current positions) and the velocity spread */
+  c->cells.n = n; /* ≤ the rows it was made for */
+  dm_cells_build(&c->cells, X, w);
   double umin[3] = {INFINITY, INFINITY, INFINITY}, umax[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t i = 0; i < n; ++i) {
-    double x[3];
-    long idx[3];
-    for (int a = 0; a < 3; ++a) {
-      x[a] = X[3 * i + a] + w[3 * i + a];
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a)
       umin[a] = fmin(umin[a], u[3 * i + a]), umax[a] = fmax(umax[a], u[3 * i + a]);
-    }
-    const size_t q = cell_of(c, x, idx);
-    c->next[i] = c->head[q], c->head[q] = (long)i;
-    for (int a = 0; a < 3; ++a) c->cidx[3 * i + a] = idx[a];
-  }
   for (int p = 0; p < pl->n; ++p) { /* the images' velocities: the normal one negated */
     const int a = pl->axis[p];
     umax[a] = fmax(umax[a], -umin[a]), umin[a] = -umax[a];
   }
+  const dm_cells *cl = &c->cells;
   const double h = c->h, r_see = 1.5 * h;
   const unsigned nmask = 1u << pl->n;
   double E = 0, vapp = 0;
@@ -118,15 +94,16 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
           xm[a] = 2.0 * pl->pos[p] - xi[a], sg[a] = -1;
         }
       if (!near) continue;
-      cell_of(c, xm, idx);
+      dm_cells_of(cl, xm, idx);
       for (long dz = -1; dz <= 1; ++dz)
         for (long dy = -1; dy <= 1; ++dy)
           for (long dx = -1; dx <= 1; ++dx) {
-            const long cx = idx[0] + dx, cy = idx[1] + dy, cz = idx[2] + dz;
-            for (long j = c->head[bucket(c, cx, cy, cz)]; j >= 0; j = c->next[j]) {
-              const long *cj = &c->cidx[3 * j]; /* only the cell's own particles: no other cell
-                                                   sharing its bucket, none twice */
-              if (f->imat[j] == f->imat[i] || cj[0] != cx || cj[1] != cy || cj[2] != cz) continue;
+            const long cn[3] = {idx[0] + dx, idx[1] + dy, idx[2] + dz};
+            for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
+              const long *cj = &cl->cidx[3 * j]; /* only the cell's own particles: no other cell
+                                                    sharing its bucket, none twice */
+              if (f->imat[j] == f->imat[i] || cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2])
+                continue;
               double d[3], r2 = 0;
               bool own = false; /* j on a plane of the mask: its image is itself */
               for (int p = 0; p < pl->n; ++p)

@@ -289,6 +289,9 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
   if (p->courant > 1.0) dk_error(e, doc, dk_get(sec, "courant"), "impact.courant: at most 1");
   dk_read_double(e, doc, sec, "hourglass", MS_DIM_NONE, false, 1.0, 0.0, 100.0, &p->hourglass);
   dk_read_double(e, doc, sec, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
+  dk_read_double(
+      e, doc, sec, "contact_distance", MS_DIM_NONE, false, 0.0, 0.0, DM_CONTACT_MAX,
+      &p->contact_distance); /* dm_contact.c; off by default (cost, docs/input-impact.md) */
   p->cq = 2.0, p->cl = 0.5;
   const dk_node *vis = dk_get(sec, "viscosity");
   if (vis && dk_expect_map(e, doc, vis, "impact.viscosity")) {

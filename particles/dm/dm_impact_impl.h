@@ -31,6 +31,7 @@ struct dm_impact {
   double ref_threshold;     /* reference update when a bond stretch exceeds 1 + this (0: off) */
   int ref_keep;             /* 1: the update keeps the families (dm_fin_rebase), 0: rebuilds */
   double contact_stiffness; /* c_c of the body–body contact (dm_impact_contact.c; 0: off) */
+  double contact_distance;  /* d_c / h of the short-range contact inside bodies (dm_contact.c) */
   dm_sym_planes sym;        /* symmetry planes (dm_impact_sym.c; sym.n = 0: none) */
   long energy_every;
   double *particle_times;
@@ -45,11 +46,10 @@ struct dm_impact {
  * different bodies closer than h; a cell list over the domain allocated once. */
 typedef struct dmi_contact {
   int on;
-  double h, courant, cell, lo[3];
-  size_t ncell, n;     /* hash buckets (2n + 1), particles */
+  double h, courant;
+  size_t n;            /* particles */
   const uint8_t *imat; /* [n] body of each particle (not owned) */
-  long *head, *next;   /* the cell list: buckets, and the next particle of a bucket */
-  long *cidx;          /* [n][3] each particle's cell */
+  dm_cells cells;      /* the hashed cell list (dm_contact.c), cells of 1.5 h */
   double *k;           /* [n] c_c h M_i */
   double dt_k;         /* 2 courant / max ω of a pair */
   double stored;       /* Σ k d²/2 at the last evaluation (kJ) */

@@ -37,6 +37,13 @@ void dmi_sym_read(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_errors *e) {
   }
   if (p->sym.n == 0)
     dk_error(e, doc, S, "impact.symmetry: give planes as {x: position, y: position, z: position}");
+  /* the short-range contact (dm_contact.c) lists the real particles only: it would miss the
+   * pairs across a plane, and the quarter would leave the full run */
+  if (p->sym.n > 0 && p->contact_distance > 0)
+    dk_error(e, doc, dk_get(sec, "contact_distance"),
+             "impact.contact_distance: the short-range contact (%g spacing) does not take "
+             "symmetry planes (impact.symmetry, line %d); drop one of the two",
+             p->contact_distance, dk_node_line(S));
 }
 
 /* Every body symmetric about every plane: its centre on it (the lattice sites of

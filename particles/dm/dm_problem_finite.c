@@ -91,8 +91,12 @@ static ms_status setup(dmf_run *r) {
   r->imat = ms_calloc(s->n, 1);
   for (size_t i = 0; i < s->n; ++i)
     r->imat[i] = (uint8_t)(dmp_layer_at(p, s->X[3 * i]) - p->layers);
-  dm_fin_params par = {
-      .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = p->h};
+  dm_fin_params par = {.cq = p->cq,
+                       .cl = p->cl,
+                       .courant = p->courant,
+                       .hourglass = p->hourglass,
+                       .ell = p->h,
+                       .contact = p->contact};
   st = dm_fin_create(&(dm_fin_setup){.m = r->m, .mat = r->mat, .imat = r->imat, .par = par}, &r->f);
   if (st != MS_OK) {
     ms_log(ctx, MS_LOG_ERROR, "discrete model (response eos): the initial state is not valid");

@@ -51,7 +51,7 @@ struct dm_problem {
   int integrator;
   double dt, courant, t_end;
   long steps;
-  double hourglass, cond_max;
+  double hourglass, cond_max, contact; /* contact: d_c / h (response: eos) */
   double *probes;
   size_t nprobes;
   long probe_every, energy_every;

@@ -126,6 +126,7 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   dm_model_destroy(&old);
   if (f->sym.n) dm_sym_resize(f, f->imat_all); /* v̄, v_close, materials of the new ghosts */
   dm_fin_bond_penalty(f);
+  if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell); /* the short-range κc: V changed */
   rep->bonds = m->nbonds;
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0; /* J is now relative to the new reference */
   return dm_fin_refresh(f);

@@ -41,7 +41,7 @@ typedef struct dm_region_params {
   double G, Y0;
   dm_sg sg;         /* steinberg_guinan: strength_set and/or strength {...} (dm_strength.c) */
   dm_fracture frac; /* fracture: {...} (dm_fracture.c) */
-  double cq, cl, courant, hourglass, dt_margin, cond_max;
+  double cq, cl, courant, hourglass, dt_margin, cond_max, contact;
   int surface;
   double surf_depth, surf_wavelength;
   const dk_node *at, *at_r0;
@@ -150,6 +150,17 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
   dk_read_double(e, doc, P, "hourglass", MS_DIM_NONE, false, 1.0, 0.0, 100.0, &p->hourglass);
   dk_read_double(e, doc, P, "dt_margin", MS_DIM_NONE, false, 0.5, 1e-3, 1.0, &p->dt_margin);
   dk_read_double(e, doc, P, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
+  dk_read_double(e, doc, P, "contact_distance", MS_DIM_NONE, false, DM_CONTACT_DEFAULT, 0.0,
+                 DM_CONTACT_MAX, &p->contact); /* dm_contact.c */
+  /* its cells: at least 3 seeing distances (d_c + h/2) across a periodic width */
+  const double see = (p->contact + 0.5) * p->h;
+  if (p->contact > 0 && p->h > 0 &&
+      ((p->width > 0 && p->width < 3.0 * see * (1 + 1e-9)) ||
+       (p->dim == 3 && p->width_z < 3.0 * see * (1 + 1e-9))))
+    dk_error(e, doc, dk_get(P, "contact_distance") ? dk_get(P, "contact_distance") : P,
+             "particles.contact_distance: the periodic width must hold 3 seeing distances "
+             "(d_c + r0/2 = %g cm): give a smaller contact_distance or a wider region",
+             see);
   const dk_node *S = dk_get(P, "surface");
   p->surface = SURF_FLAT;
   if (S && dk_expect_map(e, doc, S, "particles.surface")) read_surface(p, doc, S, e);
@@ -371,8 +382,12 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
     }
   }
   r->imat = ms_calloc(r->s.n, 1);
-  const dm_fin_params par = {
-      .cq = p->cq, .cl = p->cl, .courant = p->courant, .hourglass = p->hourglass, .ell = h};
+  const dm_fin_params par = {.cq = p->cq,
+                             .cl = p->cl,
+                             .courant = p->courant,
+                             .hourglass = p->hourglass,
+                             .ell = h,
+                             .contact = p->contact};
   st =
       dm_fin_create(&(dm_fin_setup){.m = r->m, .mat = &r->mat, .imat = r->imat, .par = par}, &r->f);
   if (st != MS_OK) {
