@@ -29,6 +29,21 @@ Run with Debian's python (/usr/bin/python3: numpy, h5py, yaml).
 import numpy as np
 
 
+def components(n, ii, kk):
+    """Connected components of n particles joined by the pairs (ii[b], kk[b]): each particle's
+    label is the smallest index in its component (min-label propagation with pointer jumping)."""
+    label = np.arange(n)
+    while True:
+        lo = np.minimum(label[ii], label[kk])
+        new = label.copy()
+        np.minimum.at(new, ii, lo)
+        np.minimum.at(new, kk, lo)
+        new = new[new]
+        if np.array_equal(new, label):
+            return label
+        label = new
+
+
 def is_cd(run):
     return (run.deck or {}).get("problem") == "cluster_dynamics"
 
@@ -145,17 +160,7 @@ class CdAsImpact:
                         j = order[start[pos[ok]] + s]
                         keep = (j > i) & (np.sum((x[i] - x[j]) ** 2, axis=1) < rc * rc)
                         ii.append(i[keep]), kk.append(j[keep])
-        ii, kk = np.concatenate(ii), np.concatenate(kk)
-        label = np.arange(n)
-        while True:  # min-label propagation with pointer jumping
-            lo = np.minimum(label[ii], label[kk])
-            new = label.copy()
-            np.minimum.at(new, ii, lo)
-            np.minimum.at(new, kk, lo)
-            new = new[new]
-            if np.array_equal(new, label):
-                return label
-            label = new
+        return components(n, np.concatenate(ii), np.concatenate(kk))
 
 
 def balance(outdir, snapshot=-1):

@@ -132,7 +132,6 @@ def fragments(X0, body, failed, h, delta, x=None, tear=None):
     the same body, not both failed). With x and tear: a bond whose length |x_i − x_k| exceeds
     tear times its reference length |X0_i − X0_k| is torn too (see hole_remnant)."""
     n = len(body)
-    label = np.arange(n)
     ii, kk = [], []
     reach = int(np.ceil(delta / h))
     offs = [(a, b, c) for a in range(-reach, reach + 1) for b in range(-reach, reach + 1)
@@ -159,16 +158,7 @@ def fragments(X0, body, failed, h, delta, x=None, tear=None):
                 ok &= (np.linalg.norm(x[i] - x[k], axis=1)
                        <= tear * np.linalg.norm(X0[i] - X0[k], axis=1))
             ii.append(i[ok]), kk.append(k[ok])
-    ii, kk = np.concatenate(ii), np.concatenate(kk)
-    while True:  # min-label propagation with pointer jumping
-        lo = np.minimum(label[ii], label[kk])
-        new = label.copy()
-        np.minimum.at(new, ii, lo)
-        np.minimum.at(new, kk, lo)
-        new = new[new]
-        if np.array_equal(new, label):
-            return label
-        label = new
+    return cd_impact.components(n, np.concatenate(ii), np.concatenate(kk))
 
 
 def veil_silhouette(dz, r, m, h):
