@@ -77,6 +77,35 @@ static double penalty_stored(const dm_fin *f) {
   return E;
 }
 
+/* The reference moves to the current configuration: X ← X + w, w ← 0, V ← J V (ρ = m/V stays
+ * the current density); the old X, w (6n) and V (n) saved in keep for a refusal; J's range in
+ * rep. */
+static void move_reference(dm_fin *f, double *keep, dm_refamily_report *rep) {
+  dm_state *s = f->m->s;
+  const size_t n = f->n;
+  double jmin = INFINITY, jmax = 0;
+  for (size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      keep[6 * i + a] = s->X[3 * i + a], keep[6 * i + 3 + a] = s->w[3 * i + a];
+      s->X[3 * i + a] += s->w[3 * i + a];
+      s->w[3 * i + a] = 0.0;
+    }
+    keep[6 * n + i] = s->vol[i];
+    s->vol[i] *= f->J[i];
+    jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
+  }
+  rep->jmin = jmin, rep->jmax = jmax;
+}
+
+/* A refused update: the old X, w and V back from keep. */
+static void restore_reference(dm_state *s, size_t n, const double *keep) {
+  for (size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a)
+      s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
+    s->vol[i] = keep[6 * n + i];
+  }
+}
+
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep) {
   dm_model *old = f->m;
   dm_state *s = old->s;
@@ -89,18 +118,7 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   if (fl != MS_OK) return fl;
   rep->released = penalty_stored(f);
   double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
-  double jmin = INFINITY, jmax = 0;
-  for (size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      keep[6 * i + a] = s->X[3 * i + a], keep[6 * i + 3 + a] = s->w[3 * i + a];
-      s->X[3 * i + a] += s->w[3 * i + a];
-      s->w[3 * i + a] = 0.0;
-    }
-    keep[6 * n + i] = s->vol[i];
-    s->vol[i] *= f->J[i]; /* V ← J V: ρ = m/V is the current density */
-    jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
-  }
-  rep->jmin = jmin, rep->jmax = jmax;
+  move_reference(f, keep, rep);
   /* symmetry planes: the ghosts of the new reference (which particles lie within a horizon of
    * a plane has changed); the state's arrays are reallocated */
   if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, old->opt.horizon, f->par.ell);
@@ -109,11 +127,7 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   ms_status st = dm_model_create(
       &(dm_model_params){.state = s, .opt = old->opt, .ctx = ctx, .first_bad = &bad}, &m);
   if (st != MS_OK) { /* refused: the old reference stays, the caller stops the run */
-    for (size_t i = 0; i < n; ++i) {
-      for (int a = 0; a < 3; ++a)
-        s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
-      s->vol[i] = keep[6 * n + i];
-    }
+    restore_reference(s, n, keep);
     if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, old->opt.horizon, f->par.ell); /* the old set */
     dm_sym_sync(f);
     free(keep);
@@ -186,30 +200,15 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
   /* keep: X, w (6n), V (n) to restore on refusal, and each family's stored penalty energy (n),
    * measured at the old reference */
   double *keep = ms_calloc(8 * (n ? n : 1), sizeof(double)), *Ehg = keep + 7 * n;
-  double jmin = INFINITY, jmax = 0;
   for (size_t i = 0; i < n; ++i) Ehg[i] = penalty_stored_one(f, i);
-  for (size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      keep[6 * i + a] = s->X[3 * i + a], keep[6 * i + 3 + a] = s->w[3 * i + a];
-      s->X[3 * i + a] += s->w[3 * i + a];
-      s->w[3 * i + a] = 0.0;
-    }
-    keep[6 * n + i] = s->vol[i];
-    s->vol[i] *= f->J[i];
-    jmin = fmin(jmin, f->J[i]), jmax = fmax(jmax, f->J[i]);
-  }
-  rep->jmin = jmin, rep->jmax = jmax;
+  move_reference(f, keep, rep);
   size_t bad = (size_t)-1;
   bond_lists old = {0};
   ms_status st = merge ? merge_families(m, ctx, &old) : MS_OK;
   rep->bonds = m->nbonds;
   if (st == MS_OK && dm_build_shape(m, ctx, &bad) != MS_OK) st = MS_ERR_UNSTABLE;
   if (st != MS_OK) { /* refused (cond F A Fᵀ > cond_max): the old reference and families */
-    for (size_t i = 0; i < n; ++i) {
-      for (int a = 0; a < 3; ++a)
-        s->X[3 * i + a] = keep[6 * i + a], s->w[3 * i + a] = keep[6 * i + 3 + a];
-      s->vol[i] = keep[6 * n + i];
-    }
+    restore_reference(s, n, keep);
     if (old.start) {
       free(m->start), free(m->nbr), free(m->img);
       m->start = old.start, m->nbr = old.nbr, m->img = old.img, m->nbonds = old.nbonds;
@@ -227,6 +226,7 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
     f->e[i] += Ehg[i] / s->mass[i], f->ehg[i] -= Ehg[i], rep->released += Ehg[i];
   free(keep);
   dm_fin_bond_penalty(f);
+  if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell); /* the short-range κc: V changed */
   for (size_t i = 0; i < n; ++i) f->J[i] = 1.0;
   return dm_fin_refresh(f);
 }
