@@ -80,20 +80,6 @@ discrete_model:
   dt: 0.002
   output: {snapshot_times: [0, 0.004, 0.008]}
 """
-IMPACT = """problem: impact
-materials:
-  - name: cu
-    eos: {type: mg_linear, rho0: 8.93, c0: 3.94, s: 1.489, gamma0: 2.02}
-impact:
-  spacing: 0.05
-  domain: {lo: [-1, -1, 0], hi: [1, 1, 1.5]}
-  bodies:
-    - {shape: cylinder, axis: z, center: [0, 0, 0.3], radius: 0.15, length: 0.6,
-       material: cu, yield: johnson_cook, strength_set: Cu_OFHC_JC, velocity: [0, 0, -0.3]}
-  wall: {axis: z, position: 0}
-  t_end: 0.05
-  output: {particle_times: [0, 0.02]}
-"""
 
 
 def deck_file(name, text):
@@ -109,7 +95,7 @@ for name, deck, array in [
         ("cluster_dynamics", "tests/cd/data/cd_restart_2d.yaml", "pressure"),
         ("discrete_model", deck_file("dm_linear", DM_LINEAR), "von_mises"),
         ("discrete_model (eos)", "tests/dm/data/dm_fin_piston_2d.yaml", "von_mises"),
-        ("impact", deck_file("impact", IMPACT), "pressure")]:
+        ("impact", "tests/dm/data/impact_small_rod.yaml", "pressure")]:
     out = run(deck, os.path.join(work, name.replace(" ", "_").strip("()")))
     snaps = sorted(glob.glob(os.path.join(out, "particles_[0-9]*.h5")))
     assert len(snaps) >= 2, (name, snaps)

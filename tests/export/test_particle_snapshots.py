@@ -59,20 +59,8 @@ discrete_model:
   dt: 0.002
   output: {snapshot_times: [0, 0.004, 0.008]}
 """
-IMPACT = """problem: impact
-materials:
-  - name: cu
-    eos: {type: mg_linear, rho0: 8.93, c0: 3.94, s: 1.489, gamma0: 2.02}
-impact:
-  spacing: 0.05
-  domain: {lo: [-1, -1, 0], hi: [1, 1, 1.5]}
-  bodies:
-    - {shape: cylinder, axis: z, center: [0, 0, 0.3], radius: 0.15, length: 0.6,
-       material: cu, yield: johnson_cook, strength_set: Cu_OFHC_JC, velocity: [0, 0, -0.3]}
-  wall: {axis: z, position: 0}
-  t_end: 0.05
-  output: {particle_times: [0, 0.02]}
-"""
+with open(os.path.join(src, "tests/dm/data/impact_small_rod.yaml")) as f:
+    IMPACT = f.read()  # the shared small rod (also test_paraview.py, test_taylor_profile.py)
 # problem: (deck, its material names, first index, has fragments)
 PROBLEMS = {
     "coupled": (os.path.join(src, "tests/coupling/data/cpl_restart.yaml"), None, 1, True),

@@ -20,27 +20,15 @@ sys.path.insert(0, os.path.join(src, "tools"))
 import mscale  # noqa: E402
 import taylor_profile  # noqa: E402
 
-DECK = """problem: impact
-materials:
-  - name: cu
-    eos: {type: mg_linear, rho0: 8.93, c0: 3.94, s: 1.489, gamma0: 2.02}
-impact:
-  spacing: 0.05
-  domain: {lo: [-1, -1, 0], hi: [1, 1, 1.5]}
-  bodies:
-    - {shape: cylinder, axis: z, center: [0, 0, 0.3], radius: 0.15, length: 0.6,
-       material: cu, yield: johnson_cook, strength_set: Cu_OFHC_JC, velocity: [0, 0, -0.3]}
-  wall: {axis: z, position: 0}
-  t_end: 0.3
-  output: {particle_times: [0]}
-"""
 os.makedirs(work, exist_ok=True)
-deck = os.path.join(work, "taylor_small.yaml")
-with open(deck, "w") as f:
-    f.write(DECK)
+# the shared small rod (tests/dm/data/impact_small_rod.yaml), run on to t = 0.3 with snapshots at
+# t = 0 and of the final state only
+deck = os.path.join(src, "tests/dm/data/impact_small_rod.yaml")
 out = os.path.join(work, "taylor_small")
 env = dict(os.environ, ASAN_OPTIONS=os.environ.get("ASAN_OPTIONS", "") + ":detect_leaks=0")
-res = subprocess.run([mscale_bin, "run", deck, "-o", out, "--force", "--quiet"], env=env,
+res = subprocess.run([mscale_bin, "run", deck, "-o", out, "--force", "--quiet",
+                      "--set", "impact.t_end=0.3", "--set", "impact.output.particle_times=[0]"],
+                     env=env,
                      capture_output=True, text=True)
 if res.returncode != 0:
     sys.exit(f"test_taylor_profile: mscale run failed ({res.returncode}):\n{res.stderr}")
