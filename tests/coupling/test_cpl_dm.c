@@ -144,6 +144,41 @@ static void test_deck_errors(void **state) {
                "test.yaml:26:", "spall_strength");
 }
 
+/* Runs a read deck in a temporary directory and finds, in its fragments.csv, the outermost
+ * piece of at least 5 particles (its size, velocity) and the velocity of the innermost one. */
+static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, double *in_v) {
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.quiet = true;
+  ctx.verbosity = MS_LOG_WARN;
+  char dir[] = "/tmp/mscale_test_cpl_dm_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
+  assert_int_equal(cpl_problem_run(&ctx, r->p), MS_OK);
+  char *fr = ms_out_path(&ctx, "fragments.csv");
+  FILE *fp = fopen(fr, "r");
+  assert_non_null(fp);
+  char line[1024];
+  double xmax = -INFINITY, xmin = INFINITY;
+  *out_count = 0, *out_v = *in_v = NAN;
+  while (fgets(line, sizeof line, fp)) {
+    long id, count;
+    double mass, d, x, y, z, vx;
+    if (sscanf(line, "%ld,%ld,%lf,%lf,%lf,%lf,%lf,%lf", &id, &count, &mass, &d, &x, &y, &z, &vx) !=
+            8 ||
+        count < 5)
+      continue;
+    if (x > xmax) xmax = x, *out_count = count, *out_v = vx; /* the outermost big piece */
+    if (x < xmin) xmin = x, *in_v = vx;
+  }
+  fclose(fp);
+  free(fr);
+  ms_ctx_close(&ctx);
+  char cmd[128];
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
 /* 3. Spall in the coupled run (tests/coupling/data/cpl_spall_dm.yaml: a 0.2 mm Al flyer at
  * 0.6 km/s, σ_s = 1.2 GPa): the slab breaks about a flyer thickness below the free surface and
  * the layer beyond is one fragment: the fragment holding every surface particle is a whole
@@ -172,41 +207,12 @@ static void spall_fragments(bool fracture, size_t *nfrag, long *scab_count, doub
   cpl_test_read(&r, text, "spall.yaml");
   dk_errors_print(&r.e, stderr);
   assert_int_equal(r.e.n, 0);
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_cpl_spall_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, r.p), MS_OK);
-  const cpl_run_summary s = *cpl_problem_summary(r.p);
-  *nfrag = s.fragments, *balance = s.energy_balance;
-  char *fr = ms_out_path(&ctx, "fragments.csv");
-  fp = fopen(fr, "r");
-  assert_non_null(fp);
-  char line[1024];
-  double xmax = -INFINITY, xmin = INFINITY;
-  *scab_count = 0, *scab_v = *bulk_v = NAN;
-  while (fgets(line, sizeof line, fp)) {
-    long id, count;
-    double mass, d, x, y, z, vx;
-    if (sscanf(line, "%ld,%ld,%lf,%lf,%lf,%lf,%lf,%lf", &id, &count, &mass, &d, &x, &y, &z, &vx) !=
-            8 ||
-        count < 5)
-      continue;
-    if (x > xmax) xmax = x, *scab_count = count, *scab_v = vx; /* the outermost big piece */
-    if (x < xmin) xmin = x, *bulk_v = vx;
-  }
-  fclose(fp);
-  free(fr);
+  run_fragments(&r, scab_count, scab_v, bulk_v);
+  const cpl_run_summary *sum = cpl_problem_summary(r.p);
+  *nfrag = sum->fragments, *balance = sum->energy_balance;
   printf("coupled spall (fracture %s): %zu fragments; outermost piece %ld particles at %.4f km/s, "
          "bulk at %.4f km/s; energy balance %.2e of the piston work\n",
          fracture ? "on" : "off", *nfrag, *scab_count, *scab_v, *bulk_v, *balance);
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
   cpl_test_run_free(&r);
 }
 
@@ -295,41 +301,6 @@ static double grid_spall_depth(cpl_test_run *r, double sigma_s, double depth, do
   cont_problem_destroy(&cp);
   dk_errors_free(&e);
   return d;
-}
-
-/* Runs a read deck in a temporary directory and finds, in its fragments.csv, the outermost
- * piece of at least 5 particles (its size, velocity) and the velocity of the innermost one. */
-static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, double *in_v) {
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_cpl_default_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, r->p), MS_OK);
-  char *fr = ms_out_path(&ctx, "fragments.csv");
-  FILE *fp = fopen(fr, "r");
-  assert_non_null(fp);
-  char line[1024];
-  double xmax = -INFINITY, xmin = INFINITY;
-  *out_count = 0, *out_v = *in_v = NAN;
-  while (fgets(line, sizeof line, fp)) {
-    long id, count;
-    double mass, d, x, y, z, vx;
-    if (sscanf(line, "%ld,%ld,%lf,%lf,%lf,%lf,%lf,%lf", &id, &count, &mass, &d, &x, &y, &z, &vx) !=
-            8 ||
-        count < 5)
-      continue;
-    if (x > xmax) xmax = x, *out_count = count, *out_v = vx;
-    if (x < xmin) xmin = x, *in_v = vx;
-  }
-  fclose(fp);
-  free(fr);
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
 }
 
 static void test_default_deck(void **state) {
