@@ -441,6 +441,10 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
                                   bool owner);
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e);
+/* Rows of a checkpoint's [rows][ncol] dataset `name` into dst: exactly nmax rows when `exact`,
+ * else at most nmax (their number in *nrow, may be NULL); any other shape is an error in e. */
+ms_status dm_ckpt_read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, bool exact,
+                            double *dst, size_t *nrow, dk_errors *e);
 
 /* A piston driving a planar shock into a slab along x (dm_finite.c): nx × ny × nz simple-cubic
  * lattice (spacing h, periodic in y, z), the first npiston x layers move at up. */

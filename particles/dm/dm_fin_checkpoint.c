@@ -94,21 +94,28 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
   return st;
 }
 
-static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, double *dst,
-                           dk_errors *e) {
+ms_status dm_ckpt_read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, bool exact,
+                            double *dst, size_t *nrow, dk_errors *e) {
   double *v = NULL;
   size_t nr = 0, nc = 0;
   ms_status st = ms_h5_read_doubles_rows(h, name, 0, SIZE_MAX, &v, &nr, &nc, e);
-  if (st == MS_OK && (nr != n || nc != ncomp)) {
+  if (st == MS_OK && (nc != ncol || nr > nmax || (exact && nr != nmax))) {
     dk_error_at(e, "checkpoint", 0, 0,
-                "'%s' has %zu rows of %zu values; this run's discrete model needs %zu of %zu "
-                "(a checkpoint of another particle region?)",
-                name, nr, nc, n, ncomp);
+                "'%s' has %zu rows of %zu values; this run needs %s%zu of %zu (a checkpoint of "
+                "another run?)",
+                name, nr, nc, exact ? "" : "at most ", nmax, ncol);
     st = MS_ERR_INPUT;
   }
-  if (st == MS_OK) memcpy(dst, v, n * ncomp * sizeof *dst);
+  if (st == MS_OK) memcpy(dst, v, nr * ncol * sizeof *dst);
+  if (st == MS_OK && nrow) *nrow = nr;
   free(v);
   return st;
+}
+
+/* exactly n rows of ncomp values */
+static ms_status read_into(ms_h5r *h, const char *name, size_t n, size_t ncomp, double *dst,
+                           dk_errors *e) {
+  return dm_ckpt_read_rows(h, name, ncomp, n, true, dst, NULL, e);
 }
 
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,

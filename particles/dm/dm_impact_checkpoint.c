@@ -99,23 +99,6 @@ ms_status dmi_checkpoint_write(dmi_run *r) {
   return ms_ckpt_commit(ctx, h, st, DMI_CHECKPOINT_NAME, r->f->step);
 }
 
-/* Rows of an [n][ncol] dataset into dst (at most nmax rows; exactly nmax when `exact`). */
-static ms_status read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, bool exact,
-                           double *dst, size_t *nrow, dk_errors *e) {
-  double *v = NULL;
-  size_t nr = 0, nc = 0;
-  ms_status st = ms_h5_read_doubles_rows(h, name, 0, SIZE_MAX, &v, &nr, &nc, e);
-  if (st == MS_OK && (nc != ncol || nr > nmax || (exact && nr != nmax))) {
-    dk_error_at(e, "checkpoint", 0, 0,
-                "'%s' has %zu rows of %zu values; this deck's impact run needs %s %zu of %zu", name,
-                nr, nc, exact ? "" : "at most", nmax, ncol);
-    st = MS_ERR_INPUT;
-  }
-  if (st == MS_OK) memcpy(dst, v, nr * ncol * sizeof *dst), *nrow = nr;
-  free(v);
-  return st;
-}
-
 /* The reference configuration of the checkpoint (its real particles); the families rebuilt on
  * it when a reference update had moved it, as dm_refamily.c's update did: with symmetry planes
  * the mirror ghosts of the new reference first (dm_sym_ghosts: which particles lie within a
@@ -127,8 +110,8 @@ static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
   const size_t n = f->n;
   double *X = ms_calloc(3 * n + 1, sizeof *X), *V = ms_calloc(n + 1, sizeof *V);
   size_t nr = 0;
-  ms_status st = read_rows(h, "/impact/X", 3, n, true, X, &nr, e);
-  if (st == MS_OK) st = read_rows(h, "/impact/volume", 1, n, true, V, &nr, e);
+  ms_status st = dm_ckpt_read_rows(h, "/impact/X", 3, n, true, X, &nr, e);
+  if (st == MS_OK) st = dm_ckpt_read_rows(h, "/impact/volume", 1, n, true, V, &nr, e);
   const bool moved =
       st == MS_OK && (memcmp(X, s->X, 3 * n * sizeof *X) || memcmp(V, s->vol, n * sizeof *V));
   if (moved && r->p->ref_keep) { /* kept or merged families are not a function of X alone */
@@ -160,7 +143,8 @@ static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
 }
 
 static ms_status read_run(dmi_run *r, ms_h5r *h, dk_errors *e) {
-  ms_status st = read_rows(h, "/impact/history", r->ncol, r->nhmax, false, r->hist, &r->nh, e);
+  ms_status st =
+      dm_ckpt_read_rows(h, "/impact/history", r->ncol, r->nhmax, false, r->hist, &r->nh, e);
   double *v[NSCALAR], buf[5] = {0, 0, 0, 0, 0};
   const char *name[NSCALAR];
   scalars(r, v, name, buf);
