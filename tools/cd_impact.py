@@ -163,9 +163,10 @@ class CdAsImpact:
         return components(n, np.concatenate(ii), np.concatenate(kk))
 
 
-def balance(outdir, snapshot=-1):
+def balance(outdir, snapshot=-1, e0=None):
     """Energy and momentum balance of a cluster-dynamics impact run at a snapshot (the final
-    state by default), as fractions of E0 = the kinetic energy at t = 0 and of |P0|: kinetic
+    state by default), as fractions of E0 = the kinetic energy at t = 0 (or ``e0``, g (km/s)², for
+    a run that starts at rest: the moving run's E0) and of |P0| (absolute when P0 = 0): kinetic
     (and its part in the bodies' bulk motion, Σ_b |P_b|²/2M_b over the regions; the rest is the
     clusters' motion relative to their body's centre of mass: heat, and the debris' spread),
     the potential energy's change since t = 0 (a relaxed polycrystal starts with some), broken,
@@ -176,7 +177,10 @@ def balance(outdir, snapshot=-1):
     snap = run.snapshots[snapshot]
     t = np.asarray(h["t"], float)
     k = int(np.argmin(np.abs(t - snap.time)))
-    E0 = float(h["kinetic"][0])
+    E0 = float(h["kinetic"][0]) if e0 is None else float(e0)
+    if not E0 > 0.0:
+        raise SystemExit(f"{outdir}: the run starts at rest (E0 = 0): give --e0, the energy "
+                         "to measure it by (e.g. the moving run's E0)")
     P = np.stack([np.asarray(h[c], float) for c in ("px", "py", "pz")], axis=1)
     m, v, body = np.asarray(snap["mass"], float), np.asarray(snap["v"], float), snap["body"]
     kcm = 0.0
@@ -189,7 +193,9 @@ def balance(outdir, snapshot=-1):
                broken=float(h["broken"][k]) / E0,
                dissipated=float(h["dissipated"][k]) / E0,
                balance=float(np.max(np.abs(h["balance"][:k + 1]))) / E0,
-               P0=P[0], P=P[k], dP=float(np.linalg.norm(P[k] - P[0]) / np.linalg.norm(P[0])))
+               P0=P[0], P=P[k], dP=float(np.linalg.norm(P[k] - P[0]) / np.linalg.norm(P[0]))
+               if np.linalg.norm(P[0]) > 0.0 else float(np.linalg.norm(P[k] - P[0])),
+               mode=str(((run.deck or {}).get("cluster_dynamics") or {}).get("cutoff_mode", "")))
     return out
 
 
@@ -199,15 +205,19 @@ def main(argv=None):
                                  "impact runs (fractions of E0 = K(0) and |P0|)")
     ap.add_argument("dirs", nargs="+")
     ap.add_argument("--snapshot", type=int, default=-1)
+    ap.add_argument("--e0", type=float, default=None,
+                    help="E0 in g (km/s)^2 instead of K(0) (for a run that starts at rest)")
     args = ap.parse_args(argv)
     for d in args.dirs:
-        b = balance(d, args.snapshot)
-        print(f"{d}: t {b['t']:.3f} us, E0 {b['E0']:.5g} g(km/s)^2: kinetic {b['kinetic']:.4f} "
+        b = balance(d, args.snapshot, args.e0)
+        dp = "|P - P0|/|P0|" if np.linalg.norm(b["P0"]) > 0.0 else "|P - P0| (g km/s)"
+        print(f"{d} ({b['mode']} cutoff): t {b['t']:.3f} us, E0 {b['E0']:.5g} g(km/s)^2: "
+              f"kinetic {b['kinetic']:.4f} "
               f"(each body's bulk motion {b['bulk']:.4f}, the rest: heat and the debris' spread "
               f"{b['kinetic'] - b['bulk']:.4f}), potential change {b['potential']:+.4f}, broken "
               f"{b['broken']:.4f}, dissipated {b['dissipated']:.4f}; "
               f"max |balance| {b['balance']:.2e}; P0 {np.array2string(b['P0'], precision=5)}, "
-              f"P {np.array2string(b['P'], precision=5)}, |P - P0|/|P0| {b['dP']:.3g}")
+              f"P {np.array2string(b['P'], precision=5)}, {dp} {b['dP']:.3g}")
     return 0
 
 

@@ -60,6 +60,8 @@ typedef struct cd_pair_table {
   double rc, rc2; /* cutoff (hard truncation) */
   double r0;      /* nearest-neighbour distance at rest */
   double e_rc;    /* E(rc): energy a pair takes with it when it leaves the cutoff */
+  double e_shift; /* subtracted from every E of the table (cd_pair_table_shift_energy): the
+                   * plain table's E(rc) in cutoff_mode shifted, else 0 */
   double *fcoef;  /* [nint][4]: F/r = f0 + t(f1 + t f2), t in [0,1) (4th slot padding) */
   double *ecoef;  /* [nint][4]: E = e0 + t(e1 + t(e2 + t e3)) */
   /* F/r on fit_slo <= s < rc2 as Σ_p fit_coef[p][k mod 16] (s − c_k)^p, c_k the centre of the
@@ -86,6 +88,10 @@ ms_status cd_pair_table_build(cd_pair_table *t, const eos_t *a, const eos_t *b, 
 void cd_pair_table_free(cd_pair_table *t);
 double cd_pair_table_energy(const cd_pair_table *t, double r); /* 0 beyond rc */
 double cd_pair_table_force(const cd_pair_table *t, double r);  /* scalar f, + = repulsive */
+/* The energy-shifted cutoff (cutoff_mode shifted, docs/particles-cd.md): E(r) − E(rc) inside
+ * rc, so E is continuous at rc; the force coefficients (and the fit) are left bitwise as they
+ * are. Sets e_shift = the old e_rc and e_rc = 0; a second call does nothing. */
+void cd_pair_table_shift_energy(cd_pair_table *t);
 /* F/r of the fit at s (fit_ok tables; meaningful for fit_slo <= s < rc2): the fast kernel's
  * arithmetic, lane for lane */
 double cd_pair_fit_eval(const cd_pair_table *t, double s);
@@ -96,11 +102,19 @@ enum { CD_MAX_MATERIALS = 8 };
 typedef enum cd_bc { CD_BC_FREE = 0, CD_BC_PERIODIC, CD_BC_WALL } cd_bc;
 
 /* Cutoff treatment (docs/design.md §5.1, "known trap"):
- *  CD_CUTOFF_PLAIN  — every pair closer than R_c interacts (the benchmark's model);
- *  CD_CUTOFF_BONDED — interaction partners fixed at set-up (pairs closer than R_c then);
- *                     a bond farther than R_c breaks for good; non-bonded pairs (and broken
- *                     bonds) only repel, through the compressive branch r < r0. */
-typedef enum cd_cutoff_mode { CD_CUTOFF_PLAIN = 0, CD_CUTOFF_BONDED } cd_cutoff_mode;
+ *  CD_CUTOFF_PLAIN   — every pair closer than R_c interacts (the benchmark's model);
+ *  CD_CUTOFF_BONDED  — interaction partners fixed at set-up (pairs closer than R_c then);
+ *                      a bond farther than R_c breaks for good; non-bonded pairs (and broken
+ *                      bonds) only repel, through the compressive branch r < r0;
+ *  CD_CUTOFF_SHIFTED — the pairs and forces of PLAIN, the energy E(r) − E(R_c) (the shifted
+ *                      potential of [AllenTildesley1987], p. 145): cd_sim_set_pair shifts the
+ *                      tables (cd_pair_table_shift_energy), so the trajectory is PLAIN's bit for
+ *                      bit and only the energy booking differs (docs/particles-cd.md). */
+typedef enum cd_cutoff_mode {
+  CD_CUTOFF_PLAIN = 0,
+  CD_CUTOFF_BONDED,
+  CD_CUTOFF_SHIFTED
+} cd_cutoff_mode;
 
 /* Time integrator (docs/particles-cd.md): velocity Verlet (fused kick–drift, the default and
  * the benchmark's), or one of the symplectic RKN schemes of rkn_ (docs/design.md §5.2) — position
@@ -258,7 +272,8 @@ typedef struct cd_sim_params {
 /* MS_ERR_INPUT (and *out NULL, the particles still the caller's) for a missing particle state,
  * box or configuration or a material count out of range. */
 ms_status cd_sim_create(const cd_sim_params *p, cd_sim **out);
-/* Takes ownership of t (heap allocated); a != b sets both [a][b] and [b][a]. */
+/* Takes ownership of t (heap allocated); a != b sets both [a][b] and [b][a]. In
+ * CD_CUTOFF_SHIFTED it shifts t's energies (cd_pair_table_shift_energy). */
 void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t);
 /* Piston: every PTL_DRIVEN particle moves with u(t)·dir (history copied). */
 void cd_sim_set_piston(cd_sim *s, const cd_history *h, const double dir[3]);

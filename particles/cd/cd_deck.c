@@ -17,7 +17,7 @@
 static const char *const shape_names[] = {"box", "sphere", "cylinder", "halfspace", NULL};
 static const char *const surface_names[] = {"flat", "sine", "random", NULL};
 static const char *const bc_names[] = {"free", "periodic", "wall", NULL};
-const char *const cd_mode_names[] = {"plain", "bonded", NULL};
+const char *const cd_mode_names[] = {"plain", "bonded", "shifted", NULL};
 const char *const cd_partition_names[] = {"slab", "metis", "auto", NULL};
 
 static int material_index(cd_problem *p, const eos_materials *mats, dk_doc *doc, const dk_node *at,

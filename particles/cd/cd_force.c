@@ -261,7 +261,7 @@ void cd_compute_forces(cd_sim *s, cd_layer_sums *sums, double *pw, bool wf) {
   if (pw) memset(pw, 0, 6 * (size_t)n * sizeof *pw);
   if (sums) memset(sums, 0, (size_t)nl->nlayer * sizeof *sums);
   s->forces_zeroed = false;
-  const bool fast = wf && !sums && !pw && s->nmat == 1 && s->cfg.cutoff == CD_CUTOFF_PLAIN;
+  const bool fast = wf && !sums && !pw && s->nmat == 1 && cd_pairs_by_distance(s->cfg.cutoff);
   if (fast && nl->full) { /* no writes into other particles: every layer at once */
 #pragma omp parallel if (CD_PAR(p->n))
     {

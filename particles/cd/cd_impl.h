@@ -150,6 +150,9 @@ static inline const int32_t *cd_nb_entry(const cd_neigh *nl, const int32_t *row,
   return entry;
 }
 
+/* Plain and shifted cutoffs: every pair closer than R_c interacts, with the same forces. */
+static inline bool cd_pairs_by_distance(cd_cutoff_mode m) { return m != CD_CUTOFF_BONDED; }
+
 /* Full lists (nl->full) hold, for the particle at position pos, the entries of its half list
  * plus those listing it; the half list's pair (i, j) is the one with j in the next layer, or in
  * the same layer and later in cell order: positions are ordered by (cell, index), the counting

@@ -46,7 +46,7 @@ void cd_model_keys_read(dk_errors *e, dk_doc *doc, const dk_node *sec, int dim,
              "cutoff R_c/r0 = %g must exceed 1 (the nearest-neighbour "
              "distance): below it the lattice has no bonds",
              k->rc);
-  static const char *const mode_names[] = {"plain", "bonded", NULL};
+  static const char *const mode_names[] = {"plain", "bonded", "shifted", NULL};
   int mode = CD_CUTOFF_BONDED;
   dk_read_enum(e, doc, sec, "cutoff_mode", false, CD_CUTOFF_BONDED, mode_names, &mode);
   k->mode = (cd_cutoff_mode)mode;

@@ -303,6 +303,16 @@ void cd_pair_table_free(cd_pair_table *t) {
   t->fcoef = t->ecoef = NULL;
 }
 
+/* The shifted potential E(r) − E(R_c) ([AllenTildesley1987], p. 145): a constant off every
+ * cubic's e0 (the spare interval's too, and the below-s_lo continuation reads interval 0's), so
+ * E is continuous at R_c to the cubic's rounding; F/r and the fit are not touched. */
+void cd_pair_table_shift_energy(cd_pair_table *t) {
+  if (t->e_shift != 0.0 || t->e_rc == 0.0) return;
+  for (int k = 0; k <= t->nint; k++) t->ecoef[4 * k] -= t->e_rc;
+  t->e_shift = t->e_rc;
+  t->e_rc = 0.0;
+}
+
 /* Below s_lo (r < r_min, outside the table) the first interval continues as its Taylor
  * polynomial at s_lo cut after the quadratic term of E: E = e0 + e1 w + e2 w², F/r = f0 + f1 w
  * (w = (s − s_lo)/h < 0), so F/r keeps growing linearly as s falls and E stays consistent

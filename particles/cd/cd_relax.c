@@ -45,7 +45,7 @@ void cd_sim_energy(cd_sim *s, cd_energy *out) {
     par_sum_int64s(in64, CD_MAX_MATERIALS * CD_MAX_MATERIALS);
     for (int k = 0; k < CD_MAX_MATERIALS * CD_MAX_MATERIALS; k++) inside[k] = (long)in64[k];
   }
-  if (s->cfg.cutoff == CD_CUTOFF_PLAIN)
+  if (cd_pairs_by_distance(s->cfg.cutoff)) /* shifted: e_rc = 0, nothing is booked */
     for (int a = 0; a < s->nmat; a++)
       for (int b = 0; b < s->nmat; b++)
         broken +=

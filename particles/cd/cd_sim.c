@@ -131,6 +131,7 @@ void cd_sim_set_pair(cd_sim *s, int a, int b, cd_pair_table *t) {
     cd_pair_table_free(old);
     free(old);
   }
+  if (s->cfg.cutoff == CD_CUTOFF_SHIFTED) cd_pair_table_shift_energy(t);
   s->pair[a][b] = s->pair[b][a] = t;
 }
 
@@ -234,7 +235,7 @@ ms_status cd_rebuild_lists(cd_sim *s, bool reorder) {
 static bool fit_path(const cd_sim *s) {
 #if CD_X86_DISPATCH || defined(__AVX512F__)
   return cd_simd_level_ == CD_SIMD_AVX512 && s->nmat == 1 && s->pair[0][0]->fit_ok &&
-         s->cfg.cutoff == CD_CUTOFF_PLAIN && !(s->cfg.damping_gamma > 0.0) &&
+         cd_pairs_by_distance(s->cfg.cutoff) && !(s->cfg.damping_gamma > 0.0) &&
          !getenv("MSCALE_CD_NO_FIT");
 #else
   return false;
