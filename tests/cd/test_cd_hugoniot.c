@@ -513,11 +513,15 @@ static void test_hugoniot(void **state) {
          "(momentum) | D (mass) | Us exp km/s | (D-Us)/Us | EOS Hugoniot Us | rho/rho0 (bins) | "
          "P_zz bins GPa | P exp at rho | P EOS at rho | P_xx,yy GPa | sigma_u GPa |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  static const char *const mode_name[] = {"plain", "bonded", "shifted"}; /* cd_cutoff_mode */
   eos_t *fit = eos_create_mg_linear(eos_rho0(curves[0]), 5.35, 1.34, 2.0);
   for (int c = 0; c < 2; c++) {
     if (opt_curve >= 0 && c != opt_curve) continue;
-    for (int mode = CD_CUTOFF_BONDED; mode >= CD_CUTOFF_PLAIN; mode--) {
-      if (opt_mode >= 0 ? mode != opt_mode : (!full_run && mode == CD_CUTOFF_PLAIN)) continue;
+    for (int mode = CD_CUTOFF_SHIFTED; mode >= CD_CUTOFF_PLAIN; mode--) {
+      /* shifted (the plain cutoff's forces) only on request: --cutoff shifted */
+      if (opt_mode >= 0 ? mode != opt_mode
+                        : (mode == CD_CUTOFF_SHIFTED || (!full_run && mode == CD_CUTOFF_PLAIN)))
+        continue;
       int nup = opt_nup ? opt_nup : (full_run ? 6 : nup_ci[c]);
       for (int k = 0; k < nup; k++) {
         double up = opt_nup ? opt_ups[k] : (full_run ? ups_full[k] : ups_ci[c][k]);
@@ -537,8 +541,8 @@ static void test_hugoniot(void **state) {
         printf(
             "| %s | %s | %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %+.1f %% | %.3f | %.3f | "
             "%.1f | %.1f | %.1f | %.1f | %.2f |\n",
-            cname[c], mode == CD_CUTOFF_BONDED ? "bonded" : "plain", orient_name[opt_orient], up,
-            r.D, r.D_ahead, r.D_mom, d_mass, us, 100 * (r.D - us) / us, eos_us, r.rho_ratio, r.pzz,
+            cname[c], mode_name[mode], orient_name[opt_orient], up, r.D, r.D_ahead, r.D_mom, d_mass,
+            us, 100 * (r.D - us) / us, eos_us, r.rho_ratio, r.pzz,
             p_exp_at(eos_rho0(curves[c]), rho), p_eos_at(curves[c], rho), r.pxx, r.sigma_u);
         fflush(stdout);
         /* [Davydov] §2: the close-packed cluster medium needs no plasticity model for
@@ -563,7 +567,8 @@ static void test_hugoniot(void **state) {
   eos_destroy(&curves[1]);
 }
 
-/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain | --thermal V |
+/* --full | --up 1,2,3 | --size NX,NZ | --curve table|mg | --cutoff bonded|plain|shifted |
+ * --thermal V |
  * --damping J
  * (and the exploration options below) */
 int main(int argc, char **argv) {
@@ -610,7 +615,10 @@ int main(int argc, char **argv) {
     } else if (!strcmp(argv[k], "--curve") && k + 1 < argc) {
       opt_curve = !strcmp(argv[++k], "mg");
     } else if (!strcmp(argv[k], "--cutoff") && k + 1 < argc) {
-      opt_mode = !strcmp(argv[++k], "bonded") ? CD_CUTOFF_BONDED : CD_CUTOFF_PLAIN;
+      k++;
+      opt_mode = !strcmp(argv[k], "bonded")
+                     ? CD_CUTOFF_BONDED
+                     : (!strcmp(argv[k], "shifted") ? CD_CUTOFF_SHIFTED : CD_CUTOFF_PLAIN);
     }
   }
   /* one thread: results do not depend on the thread count (test_cd_dynamics), and ctest -j

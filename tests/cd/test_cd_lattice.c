@@ -78,7 +78,7 @@ static void check_lattice(const eos_t *eos, cd_lattice lat, double rc, cd_cutoff
      * plain cutoff must NOT reproduce P_x (checked below); the bonded mode must, everywhere. */
     double r = R0 * (lat == CD_LATTICE_FCC ? cbrt(1.0 / d) : sqrt(1.0 / d));
     double second = r * (lat == CD_LATTICE_FCC ? sqrt(2.0) : sqrt(3.0));
-    bool trapped = mode == CD_CUTOFF_PLAIN && second < rc;
+    bool trapped = mode != CD_CUTOFF_BONDED && second < rc; /* plain and shifted */
     strained_stress(eos, lat, d, rc, mode, P);
     double px = eos_cold_pressure(eos, d);
     if (trapped) {
@@ -107,6 +107,8 @@ static void test_fcc_mg(void **state) {
   eos_t *eos = eos_create_mg_cold(2.71, 5.35, 4.0, 2.0, true);
   check_lattice(eos, CD_LATTICE_FCC, 1.2 * R0, CD_CUTOFF_PLAIN, "fcc MG plain");
   check_lattice(eos, CD_LATTICE_FCC, 1.2 * R0, CD_CUTOFF_BONDED, "fcc MG bonded");
+  /* the energy-shifted cutoff has the plain cutoff's forces: the same cold curve and trap */
+  check_lattice(eos, CD_LATTICE_FCC, 1.2 * R0, CD_CUTOFF_SHIFTED, "fcc MG shifted");
   eos_destroy(&eos);
 }
 

@@ -72,6 +72,54 @@ static void test_table(void **state) {
   eos_destroy(&eos);
 }
 
+/* The perfect lattice at rest (periodic fcc block of 3³ cells, 108 clusters, 6 pairs each at
+ * r0, the second shell at √2 r0 beyond R_c): plain V = 0 (E(r0) = 0 is a node of the table;
+ * the sites' rounding leaves ~1e-28 of the scale below); shifted V = −6 N E(R_c), the cohesive energy of the pair model (what dispersing the
+ * lattice into free clusters costs), to the rounding of 648 terms. */
+static double lattice_potential(const eos_t *eos, cd_cutoff_mode mode, size_t *n) {
+  const int nc = 3;
+  const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
+  ptl_state *p = NULL;
+  ms_must(ptl_state_create(&(ptl_state_params){.cap = (size_t)4 * nc * nc * nc, .dim = 3}, &p),
+          "ptl_state_create");
+  const double sh[3] = {0.25, 0.25, 0.25}, o[3] = {0, 0, 0};
+  cd_lattice_fcc(p, nc, nc, nc, sh, o, R0, m, 0);
+  *n = p->n;
+  cd_box box = {.lo = {0, 0, 0},
+                .hi = {nc * a, nc * a, nc * a},
+                .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
+  cd_config cfg = {
+      .r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = mode, .lattice = CD_LATTICE_FCC};
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
+          "cd_sim_create");
+  cd_pair_table *t = calloc(1, sizeof *t);
+  build(t, eos);
+  cd_sim_set_pair(s, 0, 0, t);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  cd_energy e;
+  cd_sim_energy(s, &e);
+  cd_sim_destroy(&s);
+  return e.potential;
+}
+
+static void test_cohesive(void **state) {
+  (void)state;
+  eos_t *eos = al_mg();
+  cd_pair_table t;
+  build(&t, eos);
+  const double erc = t.e_rc;
+  cd_pair_table_free(&t);
+  size_t n;
+  const double vp = lattice_potential(eos, CD_CUTOFF_PLAIN, &n);
+  const double vs = lattice_potential(eos, CD_CUTOFF_SHIFTED, &n);
+  printf("lattice at rest, %zu clusters: V plain %.3g, shifted %.10g = %.12f x (-6 N E(R_c))\n", n,
+         vp, vs, vs / (-6.0 * (double)n * erc));
+  assert_true(fabs(vp) <= 1e-12 * 6.0 * (double)n * erc);
+  assert_true(fabs(vs + 6.0 * (double)n * erc) <= 1e-12 * 6.0 * (double)n * erc);
+  eos_destroy(&eos);
+}
+
 /* Two clusters approaching head-on along x from 1.3 r0 apart with relative speed v: they enter
  * R_c, fall through the well, bounce off the core and leave R_c again (v is chosen so that
  * ¼ m v² = 4 E(R_c), well above the ¼ m v² > E(R_c) needed to escape). */
@@ -173,6 +221,7 @@ static void test_crossing(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_table),
+      cmocka_unit_test(test_cohesive),
       cmocka_unit_test(test_crossing),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
