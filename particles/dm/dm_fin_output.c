@@ -67,16 +67,12 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
   const size_t n = r->nreal;
   /* columns: x y z, vx vy vz, p, J, rho, e_hourglass, hourglass */
   double *buf = ms_calloc(11 * n + 1, sizeof *buf);
-  double *x = buf, *v = buf + 3 * n, *pres = buf + 6 * n, *J = buf + 7 * n, *rho = buf + 8 * n;
+  double *pres = buf + 6 * n, *J = buf + 7 * n, *rho = buf + 8 * n;
   double *ehs = buf + 9 * n, *hg = buf + 10 * n;
   int64_t *mat = ms_calloc(n + 1, sizeof *mat);
   for (size_t i = 0; i < n; ++i) {
     double F[9];
     hg[i] = kinematics(r->m, fl->w, i, F);
-    for (int a = 0; a < 3; ++a) {
-      x[a * n + i] = s->X[3 * i + a] + fl->w[3 * i + a];
-      v[a * n + i] = fl->u[3 * i + a];
-    }
     const double rho0 = s->mass[i] / s->vol[i];
     J[i] = fl->J ? fl->J[i] : dm_det3(F);
     rho[i] = rho0 / J[i];
@@ -107,25 +103,16 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
                                {"J", "particles/J", 1, false},
                                {"e_hourglass", "particles/e_hourglass", 1, false},
                                {"hourglass", "particles/hourglass", 1, false}};
-  const double *const xc[3] = {x, x + n, x + 2 * n}, *const vc[3] = {v, v + n, v + 2 * n};
-  ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
-  char names[4096];
+  char names[4096]; /* the index table of particles/material */
   dmp_material_table(p, names, sizeof names);
-  snap.material_names = names; /* the index table of particles/material */
-  snap.ndata = sizeof data / sizeof data[0];
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
-  ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)step);
+  ptl_snapshot snap = dmp_snapshot_of(n, s->X, fl->w, fl->u, s->mass, t, buf); /* x, v columns */
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0], data, sizeof xdmf / sizeof xdmf[0],
+                        xdmf, names, step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC)
       ptl_snapshot_period_add(&snap, a, p->hi[a] - p->lo[a], p->lo[a]);
-  char *path = ms_out_path(ctx, name);
-  const ms_status st = ptl_write_snapshot(path, &snap);
-  if (st != MS_OK) ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
-  free(path);
+  const ms_status st = dmp_snapshot_write(ctx, name, &snap, "discrete model");
   free(buf);
   free(mat);
   return st;

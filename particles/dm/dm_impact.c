@@ -149,7 +149,6 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
                             const uint8_t *imat, double t, long step) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = f->m->s;
-  const double *w = fld[0], *u = fld[1];
   const size_t n = f->n;
   double *xv = ms_calloc(6 * n + 1, sizeof(double));
   int64_t *ids = ms_calloc(3 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n,
@@ -164,13 +163,8 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
     if (bmat[b] == (int64_t)nm) ptl_material_table_add(names, sizeof names, p->bodies[b].material);
     if (bmat[b] == (int64_t)nm) ++nm;
   }
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < n; ++i)
     body[i] = imat[i], mat[i] = bmat[imat[i]], failed[i] = f->failed ? f->failed[i] : 0;
-    for (int a = 0; a < 3; ++a) {
-      xv[a * n + i] = s->X[3 * i + a] + w[3 * i + a];
-      xv[(3 + a) * n + i] = u[3 * i + a];
-    }
-  }
   const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
                                     {"particles/body", NULL, body, 1, NULL},
                                     {"particles/X0", X0, NULL, 3, "cm"},
@@ -187,25 +181,16 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
                                {"energy", "particles/energy", 1, false},
                                {"eps_p", "particles/eps_p", 1, false},
                                {"J", "particles/J", 1, false}};
-  const double *const xc[3] = {xv, xv + n, xv + 2 * n};
-  const double *const vc[3] = {xv + 3 * n, xv + 4 * n, xv + 5 * n};
-  ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
-  snap.ndata = sizeof data / sizeof data[0];
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
-  snap.material_names = names;
-  ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)step);
+  ptl_snapshot snap = dmp_snapshot_of(n, s->X, fld[0], fld[1], s->mass, t, xv); /* w, u */
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0], data, sizeof xdmf / sizeof xdmf[0],
+                        xdmf, names, step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
   for (int j = 0; j < p->sym.n; ++j) /* the + side of these planes only (dm_impact_sym.c) */
     ptl_snapshot_attr_add(
         &snap, (const char *[]){"symmetry_x", "symmetry_y", "symmetry_z"}[p->sym.axis[j]],
         p->sym.pos[j]);
-  char *path = ms_out_path(ctx, name);
-  if (ptl_write_snapshot(path, &snap) != MS_OK)
-    ms_log(ctx, MS_LOG_WARN, "impact: could not write %s", path);
-  free(path), free(xv), free(ids), free(bmat);
+  dmp_snapshot_write(ctx, name, &snap, "impact");
+  free(xv), free(ids), free(bmat);
 }
 
 enum { NHIST = 17 }; /* columns of impact_history.csv */

@@ -98,6 +98,14 @@ ms_status dmp_write_series(const ms_ctx *ctx, const char *file, const char *titl
 void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
                        int index);
 void dmp_material_table(const dm_problem *p, char *names, size_t size);
+/* The snapshot set-up of the model's writers: particles [0, n) at the current positions X + w
+ * and velocities u ([n][3] each, as columns into xv[6 n], which must live until it is written),
+ * masses `mass`, at time t; serial. */
+ptl_snapshot dmp_snapshot_of(size_t n, const double *X, const double *w, const double *u,
+                             const double *mass, double t, double *xv);
+/* Writes snap to OUTDIR/name; a failure is logged as a warning ("WHO: could not write PATH"). */
+ms_status dmp_snapshot_write(const ms_ctx *ctx, const char *name, const ptl_snapshot *snap,
+                             const char *who);
 void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
                         long step, const char *name);
 void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_state *s,
