@@ -235,11 +235,7 @@ static void record(dmi_run *r) {
         hypot(P[(a + 1) % 3] - r->Pv0[(a + 1) % 3], P[(a + 2) % 3] - r->Pv0[(a + 2) % 3]) / r->P0);
     sum->p_normal = r->p->wall_side * P[a] / r->P0;
   }
-  if (r->nh == r->nhmax) { /* thin: keep every other row */
-    for (size_t j = 0; j < r->nh / 2; ++j)
-      memmove(&r->hist[NHIST * j], &r->hist[NHIST * 2 * j], NHIST * sizeof(double));
-    r->nh /= 2, r->p->energy_every *= 2;
-  }
+  if (r->nh == r->nhmax) r->nh = dm_rows_thin(r->hist, r->nh, NHIST), r->p->energy_every *= 2;
   const double row[NHIST] = {r->t,
                              K,
                              U,

@@ -155,9 +155,7 @@ static void record_probes(dmf_run *r, long step) {
   const long k = step / p->probe_every;
   if (k % r->pstride != 0) return;
   if (r->nrec == r->nrec_max) {
-    for (size_t j = 0; j < r->nrec / 2; ++j)
-      memmove(&r->hist[j * r->pcols], &r->hist[2 * j * r->pcols], r->pcols * sizeof(double));
-    r->nrec /= 2, r->pstride *= 2;
+    r->nrec = dm_rows_thin(r->hist, r->nrec, r->pcols), r->pstride *= 2;
     if (k % r->pstride != 0) return;
   }
   double *row = &r->hist[r->nrec++ * r->pcols];
