@@ -129,13 +129,10 @@ static void taylor_profile(const dm_impact *p, const dm_state *s, const double *
 
 /* The per-particle fields a snapshot shows: w, u ([n][3]), e, ρ, p, J, ε_p ([n]), of the live
  * model or of the copy taken at the start of a step (the last good state when it fails). */
-enum { NFIELD = 7, FIELD_DOUBLES = 2 * 3 + 5 }; /* per particle */
+enum { NFIELD = 7 };
 static void live_fields(const dm_fin *f, double *fld[NFIELD]) {
   double *const live[NFIELD] = {f->m->s->w, f->m->s->u, f->e, f->rho, f->p, f->J, f->eps_p};
   memcpy(fld, live, sizeof live);
-}
-static void copy_fields(double *buf, size_t n, double *fld[NFIELD]) {
-  for (int k = 0; k < NFIELD; buf += (k < 2 ? 3 : 1) * n, ++k) fld[k] = buf;
 }
 
 /* OUTDIR/NAME: an HDF5 snapshot of every particle in the layout of every particle problem
@@ -343,9 +340,9 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   return MS_OK;
 }
 
-/* The time loop. Before every step it copies the fields of the snapshots (11 doubles = 88 B
- * per particle), since a step that fails (dm_fin_step) changes them before it can fail: the
- * last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
+/* The time loop. Before every step it copies the fields of the snapshots (dmp_backup: 11 doubles
+ * = 88 B per particle), since a step that fails (dm_fin_step) changes them before it can fail:
+ * the last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
  * discrete_model problem does (dm_fin_output.c). */
 static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   dm_impact *p = r->p;
@@ -353,8 +350,9 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   ms_status st = MS_OK;
   size_t next_out = r->next_out;
   double wall_time = 0;
-  double *live[NFIELD], *good[NFIELD], *buf = ms_calloc(FIELD_DOUBLES * f->n + 1, sizeof(double));
-  copy_fields(buf, f->n, good);
+  dmp_backup bk;
+  dmp_backup_alloc(&bk, f->n, DMP_KEEP_RHO | DMP_KEEP_J);
+  double *live[NFIELD], *const good[NFIELD] = {bk.w, bk.u, bk.e, bk.rho, bk.p, bk.J, bk.eps_p};
   for (long step = r->step0;; ++step) {
     live_fields(f, live);
     const int last = r->t >= p->t_end * (1 - 1e-12);
@@ -385,10 +383,7 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
     }
     if (last) break;
     if (r->t + f->dt_next > p->t_end) f->dt_next = p->t_end - r->t;
-    const double t_good = r->t;
-    const long step_good = f->step;
-    for (int k = 0; k < NFIELD; ++k)
-      memcpy(good[k], live[k], (k < 2 ? 3 : 1) * f->n * sizeof(double));
+    dmp_backup_take(&bk, f, r->t);
     const double dt = f->dt_next, w0 = ms_wall_time();
     st = dm_fin_step(f);
     const bool step_failed = st != MS_OK;
@@ -402,8 +397,8 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
                "impact: step %ld, t = %.9g %s: particle %zu (X = %g %g %g): %s = %g; the run "
                "stops, the last good state (step %ld, t = %.9g %s) is in " PTL_SNAPSHOT_UNSTABLE,
                f->step, ms_out_time(r->t), ms_out_time_label(), f->bad, X[0], X[1], X[2],
-               f->bad_what, f->bad_value, step_good, ms_out_time(t_good), ms_out_time_label());
-        write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, good, r->X0, imat, t_good, step_good);
+               f->bad_what, f->bad_value, bk.step, ms_out_time(bk.t), ms_out_time_label());
+        write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, good, r->X0, imat, bk.t, bk.step);
       }
       break;
     }
@@ -421,7 +416,7 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
       break;
     }
   }
-  free(buf);
+  dmp_backup_free(&bk);
   p->sum.wall_s = wall_time;
   return st;
 }
