@@ -22,7 +22,7 @@
 #include <cmocka.h>
 
 #include "dm_impl.h"
-#include "dm_fin_body.h"
+#include "dm_test.h"
 
 /* Two blocks of nx × ny particles (spacing h; Al, no strength), block B shifted by gap h beyond
  * A along x in the reference (so no bond crosses: gap > horizon 1.5 h), then moved by shift h

@@ -26,7 +26,7 @@
 #include <cmocka.h>
 
 #include "dm_impl.h"
-#include "dm_fin_body.h"
+#include "dm_test.h"
 
 /* a. */
 static void test_max_principal(void **state) {

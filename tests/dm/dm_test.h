@@ -1,13 +1,38 @@
 /* SPDX-License-Identifier: MIT */
-/* dm_fin_body.h — the finite-model test body of test_dm_contact.c (two blocks) and
- * test_dm_fracture.c (a bar): particles of Al (mg_linear ρ0 2.703, c0 5.35, s 1.34, Γ0 2.0) on a
- * lattice of spacing h, its model (horizon 1.5 h, periodic in y over ny h when dim > 1) and
- * dm_fin of one material. Include after <cmocka.h> and "dm_impl.h". */
-#ifndef MSCALE_TEST_DM_FIN_BODY_H
-#define MSCALE_TEST_DM_FIN_BODY_H
+/* dm_test.h — fixtures shared by the discrete model's tests (include after <cmocka.h>):
+ *  - dm_test_deck: a deck text read as `mscale run` reads it before the problem's reader (units,
+ *    materials), and dm_test_deck_free;
+ *  - dm_fin_body: the finite-model test body of test_dm_contact.c (two blocks) and
+ *    test_dm_fracture.c (a bar): particles of Al (mg_linear ρ0 2.703, c0 5.35, s 1.34, Γ0 2.0)
+ *    on a lattice of spacing h, its model (horizon 1.5 h, periodic in y over ny h when dim > 1)
+ *    and dm_fin of one material. */
+#ifndef MSCALE_TEST_DM_TEST_H
+#define MSCALE_TEST_DM_TEST_H
 
 #include <math.h>
 #include <stdlib.h>
+
+#include "dm.h"
+
+/* The deck text (named `name` in the messages) read up to the problem's reader: its units and
+ * materials (*mats); e is initialised here and collects the errors. */
+static inline dk_doc *dm_test_deck(const char *text, const char *name, eos_materials **mats,
+                                   dk_errors *e) {
+  dk_errors_init(e);
+  dk_doc *doc = dk_load_string(text, name, e);
+  assert_non_null(doc);
+  dk_read_units(doc, e);
+  dk_get(dk_root(doc), "problem"); /* read, as the front end reads it */
+  *mats = eos_materials_read(doc, e);
+  return doc;
+}
+
+/* Frees what dm_test_deck made (e NULL: the caller keeps the errors). */
+static inline void dm_test_deck_free(dk_doc *doc, eos_materials **mats, dk_errors *e) {
+  eos_materials_destroy(mats);
+  dk_free(doc);
+  if (e) dk_errors_free(e);
+}
 
 typedef struct dm_fin_body {
   dm_state s;
