@@ -31,12 +31,8 @@ ms_status cpl_write_snapshot(const char *path, const cpl_particles *p, const cpl
                                {"fragment", "particles/fragment_id", 1, false}};
   const double *const x[3] = {p->x, p->y, p->z}, *const v[3] = {p->vx, p->vy, p->vz};
   ptl_snapshot snap = ptl_snapshot_of(n, x, v, p->mass, info->time, par_size() > 1);
-  snap.ndata = ndata;
-  snap.data = data;
-  snap.nxdmf = 3;
-  snap.xdmf = xdmf;
-  snap.material_names = info->material; /* the index table of particles/material */
-  ptl_snapshot_attr_add(&snap, "time", info->time);
+  /* material: the index table of particles/material; no step attribute */
+  ptl_snapshot_contents(&snap, ndata, data, 3, xdmf, info->material, -1);
   ptl_snapshot_attr_add(&snap, "r0", info->spacing);
   if (info->rho0 > 0) ptl_snapshot_attr_add(&snap, "rho0", info->rho0);
   for (int k = 0; k < 3; k++)

@@ -109,6 +109,13 @@ typedef struct ptl_snapshot {
 ptl_snapshot ptl_snapshot_of(size_t n, const double *const x[3], const double *const v[3],
                              const double *mass, double time, bool dist);
 ptl_snapshot ptl_snapshot_of_state(const ptl_state *p, size_t n, double time, bool dist);
+/* The set-up every particle writer shares: the datasets data[0..ndata) beyond x, v and mass, the
+ * sidecar's xdmf[0..nxdmf) and the table of material names (NULL: none); then the attributes
+ * "time" (snap->time) and, for step >= 0, "step" (called before any other attribute, these
+ * come first). The arrays and names must live until the snapshot is written. */
+void ptl_snapshot_contents(ptl_snapshot *snap, size_t ndata, const ptl_snapshot_data *data,
+                           size_t nxdmf, const ms_xdmf_attr *xdmf, const char *material_names,
+                           long step);
 /* Appends the attribute name = v to /particles (at most PTL_SNAPSHOT_MAX_ATTR: more aborts). */
 void ptl_snapshot_attr_add(ptl_snapshot *snap, const char *name, double v);
 /* The attributes of periodic axis `axis` (0, 1, 2) that `mscale spectrum` reads: period_x|y|z

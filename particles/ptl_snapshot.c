@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* ptl_snapshot.c — the particle snapshot writer (ptl.h) of cluster dynamics (cd/cd_diag.c), of
- * the discrete model (dm/dm_output.c) and of the coupled problem's fragment snapshots
- * (coupling/snapshot.c): positions, velocities and masses as [n][3] and [n] datasets, the
+ * the discrete model (dm/dm_output.c, dm_fin_output.c, dm_region.c, dm_impact.c) and of the
+ * coupled problem's fragment snapshots (coupling/snapshot.c): positions, velocities and masses as [n][3] and [n] datasets, the
  * caller's extra datasets and attributes, an XDMF sidecar that ParaView opens. Under MPI one
  * collective file, rows in rank order. */
 #include "ptl.h"
@@ -31,6 +31,18 @@ void ptl_snapshot_attr_add(ptl_snapshot *snap, const char *name, double v) {
     abort();
   }
   snap->attr[snap->nattr++] = (ptl_snapshot_attr){name, v};
+}
+
+void ptl_snapshot_contents(ptl_snapshot *snap, size_t ndata, const ptl_snapshot_data *data,
+                           size_t nxdmf, const ms_xdmf_attr *xdmf, const char *material_names,
+                           long step) {
+  snap->ndata = ndata;
+  snap->data = data;
+  snap->nxdmf = nxdmf;
+  snap->xdmf = xdmf;
+  snap->material_names = material_names;
+  ptl_snapshot_attr_add(snap, "time", snap->time);
+  if (step >= 0) ptl_snapshot_attr_add(snap, "step", (double)step);
 }
 
 void ptl_snapshot_period_add(ptl_snapshot *snap, int axis, double period, double lo) {

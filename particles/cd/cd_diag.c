@@ -163,23 +163,17 @@ ms_status cd_write_snapshot(cd_sim *s, const char *path) {
                                     {"particles/pressure", pr, NULL, 1, "GPa"},
                                     {"particles/material", NULL, mat, 1, NULL},
                                     {"particles/gid", NULL, p->gid, 1, NULL}};
+  const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
+                               {"sigma_u", "particles/sigma_u", 1, false},
+                               {"pressure", "particles/pressure", 1, false},
+                               {"mass", "particles/mass", 1, false}};
   ptl_snapshot snap = ptl_snapshot_of_state(p, n, s->t, s->dd != NULL);
-  ptl_snapshot_attr_add(&snap, "time", s->t);
-  ptl_snapshot_attr_add(&snap, "step", (double)s->step);
+  ptl_snapshot_contents(&snap, 4, data, 4, xdmf, s->material_names, s->step);
   ptl_snapshot_attr_add(&snap, "r0", s->cfg.r0);
   /* periodic axes as the coupling snapshots name them (`mscale spectrum` reads them) */
   for (int a = 0; a < s->p->dim; a++)
     if (s->box.bc[a] == CD_BC_PERIODIC)
       ptl_snapshot_period_add(&snap, a, s->box.hi[a] - s->box.lo[a], s->box.lo[a]);
-  const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
-                               {"sigma_u", "particles/sigma_u", 1, false},
-                               {"pressure", "particles/pressure", 1, false},
-                               {"mass", "particles/mass", 1, false}};
-  snap.material_names = s->material_names;
-  snap.ndata = 4;
-  snap.data = data;
-  snap.nxdmf = 4;
-  snap.xdmf = xdmf;
   const ms_status st = ptl_write_snapshot(path, &snap);
   free(su);
   free(pr);

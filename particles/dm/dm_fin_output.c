@@ -67,16 +67,12 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
   const size_t n = r->nreal;
   /* columns: x y z, vx vy vz, p, J, rho, e_hourglass, hourglass */
   double *buf = ms_calloc(11 * n + 1, sizeof *buf);
-  double *x = buf, *v = buf + 3 * n, *pres = buf + 6 * n, *J = buf + 7 * n, *rho = buf + 8 * n;
+  double *pres = buf + 6 * n, *J = buf + 7 * n, *rho = buf + 8 * n;
   double *ehs = buf + 9 * n, *hg = buf + 10 * n;
   int64_t *mat = ms_calloc(n + 1, sizeof *mat);
   for (size_t i = 0; i < n; ++i) {
     double F[9];
     hg[i] = kinematics(r->m, fl->w, i, F);
-    for (int a = 0; a < 3; ++a) {
-      x[a * n + i] = s->X[3 * i + a] + fl->w[3 * i + a];
-      v[a * n + i] = fl->u[3 * i + a];
-    }
     const double rho0 = s->mass[i] / s->vol[i];
     J[i] = fl->J ? fl->J[i] : dm_det3(F);
     rho[i] = rho0 / J[i];
@@ -107,64 +103,58 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
                                {"J", "particles/J", 1, false},
                                {"e_hourglass", "particles/e_hourglass", 1, false},
                                {"hourglass", "particles/hourglass", 1, false}};
-  const double *const xc[3] = {x, x + n, x + 2 * n}, *const vc[3] = {v, v + n, v + 2 * n};
-  ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
-  char names[4096];
+  char names[4096]; /* the index table of particles/material */
   dmp_material_table(p, names, sizeof names);
-  snap.material_names = names; /* the index table of particles/material */
-  snap.ndata = sizeof data / sizeof data[0];
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
-  ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)step);
+  ptl_snapshot snap = dmp_snapshot_of(n, s->X, fl->w, fl->u, s->mass, t, buf); /* x, v columns */
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0], data, sizeof xdmf / sizeof xdmf[0],
+                        xdmf, names, step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
   for (int a = 0; a < p->dim; ++a)
     if (p->face[2 * a] == FACE_PERIODIC)
       ptl_snapshot_period_add(&snap, a, p->hi[a] - p->lo[a], p->lo[a]);
-  char *path = ms_out_path(ctx, name);
-  const ms_status st = ptl_write_snapshot(path, &snap);
-  if (st != MS_OK) ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
-  free(path);
+  const ms_status st = dmp_snapshot_write(ctx, name, &snap, "discrete model");
   free(buf);
   free(mat);
   return st;
 }
 
-void dmf_backup_alloc(dmf_run *r) {
-  const size_t n = r->s.n ? r->s.n : 1;
-  dmf_backup *b = &r->bk;
-  /* w: +1 for dm_finite.c's 4-lane loads */
-  b->w = ms_calloc(3 * n + 1, sizeof(double)), b->u = ms_calloc(3 * n, sizeof(double));
-  b->e = ms_calloc(n, sizeof(double)), b->ehg = ms_calloc(n, sizeof(double));
-  b->eps_p = ms_calloc(n, sizeof(double)), b->q = ms_calloc(n, sizeof(double));
-  b->p = ms_calloc(n, sizeof(double)), b->sigma_u = ms_calloc(n, sizeof(double));
+void dmp_backup_alloc(dmp_backup *b, size_t n, unsigned keep) {
+  const size_t m = n ? n : 1;
+  *b = (dmp_backup){.w = ms_calloc(3 * m + 1, sizeof(double)),
+                    .u = ms_calloc(3 * m, sizeof(double)),
+                    .e = ms_calloc(m, sizeof(double)),
+                    .eps_p = ms_calloc(m, sizeof(double)),
+                    .p = ms_calloc(m, sizeof(double)),
+                    .ehg = keep & DMP_KEEP_EHG ? ms_calloc(m, sizeof(double)) : NULL,
+                    .q = keep & DMP_KEEP_Q ? ms_calloc(m, sizeof(double)) : NULL,
+                    .sigma_u = keep & DMP_KEEP_SIGMA_U ? ms_calloc(m, sizeof(double)) : NULL,
+                    .rho = keep & DMP_KEEP_RHO ? ms_calloc(m, sizeof(double)) : NULL,
+                    .J = keep & DMP_KEEP_J ? ms_calloc(m, sizeof(double)) : NULL,
+                    .n = n};
 }
 
-void dmf_backup_free(dmf_run *r) {
-  dmf_backup *b = &r->bk;
-  free(b->w), free(b->u), free(b->e), free(b->ehg), free(b->eps_p), free(b->q), free(b->p);
-  free(b->sigma_u);
+void dmp_backup_free(dmp_backup *b) {
+  free(b->w), free(b->u), free(b->e), free(b->eps_p), free(b->p);
+  free(b->ehg), free(b->q), free(b->sigma_u), free(b->rho), free(b->J);
   memset(b, 0, sizeof *b);
 }
 
-void dmf_backup_take(dmf_run *r, double t) {
-  const dm_fin *f = r->f;
-  dmf_backup *b = &r->bk;
-  const size_t n = r->s.n;
-  memcpy(b->w, r->s.w, 3 * n * sizeof(double));
-  memcpy(b->u, r->s.u, 3 * n * sizeof(double));
-  memcpy(b->e, f->e, n * sizeof(double));
-  memcpy(b->ehg, f->ehg, n * sizeof(double));
-  memcpy(b->eps_p, f->eps_p, n * sizeof(double));
-  memcpy(b->q, f->q, n * sizeof(double));
-  memcpy(b->p, f->p, n * sizeof(double));
-  dmf_sigma_u(f, b->sigma_u);
-  b->t = t, b->step = f->step, b->valid = 1;
+static void copy_kept(double *to, const double *from, size_t n) {
+  if (to) memcpy(to, from, n * sizeof(double));
+}
+
+void dmp_backup_take(dmp_backup *b, const dm_fin *f, double t) {
+  const size_t n = b->n;
+  copy_kept(b->w, f->m->s->w, 3 * n), copy_kept(b->u, f->m->s->u, 3 * n);
+  copy_kept(b->e, f->e, n), copy_kept(b->eps_p, f->eps_p, n), copy_kept(b->p, f->p, n);
+  copy_kept(b->ehg, f->ehg, n), copy_kept(b->q, f->q, n);
+  copy_kept(b->rho, f->rho, n), copy_kept(b->J, f->J, n);
+  if (b->sigma_u) dmf_sigma_u(f, b->sigma_u);
+  b->t = t, b->step = f->step, b->valid = true;
 }
 
 void dmf_report_unstable(dmf_run *r, size_t particle, const char *what, double value, double t) {
-  const dmf_backup *b = &r->bk;
+  const dmp_backup *b = &r->bk;
   const double *X = &r->s.X[3 * (particle < r->s.n ? particle : 0)];
   static const char name[] = PTL_SNAPSHOT_UNSTABLE;
   if (r->ctx->rank == 0) /* replicated: every rank found the same */

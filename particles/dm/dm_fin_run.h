@@ -18,14 +18,6 @@ typedef struct dmf_fields {
   const double *p, *J;                         /* [n]; J may be NULL */
 } dmf_fields;
 
-/* The state at the start of the step being taken: what a failed step leaves to show. */
-typedef struct dmf_backup {
-  double *w, *u, *e, *ehg, *eps_p, *p, *q, *sigma_u;
-  double t;
-  long step; /* dm_fin's step count of that state */
-  int valid;
-} dmf_backup;
-
 typedef struct dmf_run {
   ms_ctx *ctx;
   ms_ctx octx; /* the files: rank 0's outdir, an empty one on the other ranks */
@@ -50,7 +42,8 @@ typedef struct dmf_run {
   double K, U, H;                 /* energies of the last good state (kJ) */
   long step0;                     /* the step the run started from (0, or the checkpoint's) */
   long steps; /* the steps completed */ /* the step the run started from (0, or the checkpoint's) */
-  dmf_backup bk;
+  /* the state at the start of the step being taken: w, u, e, E_hg, ε_p, p, q, σ_u */
+  dmp_backup bk;
 } dmf_run;
 
 /* ---- dm_fin_output.c ---- */
@@ -62,10 +55,6 @@ dmf_fields dmf_live_fields(dmf_run *r);
  * particles.xmf time series); nothing without an outdir. */
 ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, long step,
                              const char *name);
-void dmf_backup_alloc(dmf_run *r);
-void dmf_backup_free(dmf_run *r);
-/* Copies the live state (good: checked) as the last good state at time t. */
-void dmf_backup_take(dmf_run *r, double t);
 /* A step failed: the report (particle, step, quantity) and the last good state's snapshot
  * particles_unstable.h5. `what`, `value`, `particle` describe the finding. */
 void dmf_report_unstable(dmf_run *r, size_t particle, const char *what, double value, double t);

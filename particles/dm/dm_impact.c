@@ -129,13 +129,10 @@ static void taylor_profile(const dm_impact *p, const dm_state *s, const double *
 
 /* The per-particle fields a snapshot shows: w, u ([n][3]), e, ρ, p, J, ε_p ([n]), of the live
  * model or of the copy taken at the start of a step (the last good state when it fails). */
-enum { NFIELD = 7, FIELD_DOUBLES = 2 * 3 + 5 }; /* per particle */
+enum { NFIELD = 7 };
 static void live_fields(const dm_fin *f, double *fld[NFIELD]) {
   double *const live[NFIELD] = {f->m->s->w, f->m->s->u, f->e, f->rho, f->p, f->J, f->eps_p};
   memcpy(fld, live, sizeof live);
-}
-static void copy_fields(double *buf, size_t n, double *fld[NFIELD]) {
-  for (int k = 0; k < NFIELD; buf += (k < 2 ? 3 : 1) * n, ++k) fld[k] = buf;
 }
 
 /* OUTDIR/NAME: an HDF5 snapshot of every particle in the layout of every particle problem
@@ -149,7 +146,6 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
                             const uint8_t *imat, double t, long step) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = f->m->s;
-  const double *w = fld[0], *u = fld[1];
   const size_t n = f->n;
   double *xv = ms_calloc(6 * n + 1, sizeof(double));
   int64_t *ids = ms_calloc(3 * n + 1, sizeof(int64_t)), *body = ids, *mat = ids + n,
@@ -164,13 +160,8 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
     if (bmat[b] == (int64_t)nm) ptl_material_table_add(names, sizeof names, p->bodies[b].material);
     if (bmat[b] == (int64_t)nm) ++nm;
   }
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < n; ++i)
     body[i] = imat[i], mat[i] = bmat[imat[i]], failed[i] = f->failed ? f->failed[i] : 0;
-    for (int a = 0; a < 3; ++a) {
-      xv[a * n + i] = s->X[3 * i + a] + w[3 * i + a];
-      xv[(3 + a) * n + i] = u[3 * i + a];
-    }
-  }
   const ptl_snapshot_data data[] = {{"particles/material", NULL, mat, 1, NULL},
                                     {"particles/body", NULL, body, 1, NULL},
                                     {"particles/X0", X0, NULL, 3, "cm"},
@@ -187,25 +178,16 @@ static void write_particles(const ms_ctx *ctx, const dm_impact *p, const char *n
                                {"energy", "particles/energy", 1, false},
                                {"eps_p", "particles/eps_p", 1, false},
                                {"J", "particles/J", 1, false}};
-  const double *const xc[3] = {xv, xv + n, xv + 2 * n};
-  const double *const vc[3] = {xv + 3 * n, xv + 4 * n, xv + 5 * n};
-  ptl_snapshot snap = ptl_snapshot_of(n, xc, vc, s->mass, t, false);
-  snap.ndata = sizeof data / sizeof data[0];
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
-  snap.material_names = names;
-  ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)step);
+  ptl_snapshot snap = dmp_snapshot_of(n, s->X, fld[0], fld[1], s->mass, t, xv); /* w, u */
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0], data, sizeof xdmf / sizeof xdmf[0],
+                        xdmf, names, step);
   ptl_snapshot_attr_add(&snap, "r0", p->h);
   for (int j = 0; j < p->sym.n; ++j) /* the + side of these planes only (dm_impact_sym.c) */
     ptl_snapshot_attr_add(
         &snap, (const char *[]){"symmetry_x", "symmetry_y", "symmetry_z"}[p->sym.axis[j]],
         p->sym.pos[j]);
-  char *path = ms_out_path(ctx, name);
-  if (ptl_write_snapshot(path, &snap) != MS_OK)
-    ms_log(ctx, MS_LOG_WARN, "impact: could not write %s", path);
-  free(path), free(xv), free(ids), free(bmat);
+  dmp_snapshot_write(ctx, name, &snap, "impact");
+  free(xv), free(ids), free(bmat);
 }
 
 enum { NHIST = 17 }; /* columns of impact_history.csv */
@@ -250,11 +232,7 @@ static void record(dmi_run *r) {
         hypot(P[(a + 1) % 3] - r->Pv0[(a + 1) % 3], P[(a + 2) % 3] - r->Pv0[(a + 2) % 3]) / r->P0);
     sum->p_normal = r->p->wall_side * P[a] / r->P0;
   }
-  if (r->nh == r->nhmax) { /* thin: keep every other row */
-    for (size_t j = 0; j < r->nh / 2; ++j)
-      memmove(&r->hist[NHIST * j], &r->hist[NHIST * 2 * j], NHIST * sizeof(double));
-    r->nh /= 2, r->p->energy_every *= 2;
-  }
+  if (r->nh == r->nhmax) r->nh = dm_rows_thin(r->hist, r->nh, NHIST), r->p->energy_every *= 2;
   const double row[NHIST] = {r->t,
                              K,
                              U,
@@ -362,9 +340,9 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   return MS_OK;
 }
 
-/* The time loop. Before every step it copies the fields of the snapshots (11 doubles = 88 B
- * per particle), since a step that fails (dm_fin_step) changes them before it can fail: the
- * last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
+/* The time loop. Before every step it copies the fields of the snapshots (dmp_backup: 11 doubles
+ * = 88 B per particle), since a step that fails (dm_fin_step) changes them before it can fail:
+ * the last good state is then particles_unstable.h5 (docs/reliability.md §6), as the
  * discrete_model problem does (dm_fin_output.c). */
 static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   dm_impact *p = r->p;
@@ -372,8 +350,9 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
   ms_status st = MS_OK;
   size_t next_out = r->next_out;
   double wall_time = 0;
-  double *live[NFIELD], *good[NFIELD], *buf = ms_calloc(FIELD_DOUBLES * f->n + 1, sizeof(double));
-  copy_fields(buf, f->n, good);
+  dmp_backup bk;
+  dmp_backup_alloc(&bk, f->n, DMP_KEEP_RHO | DMP_KEEP_J);
+  double *live[NFIELD], *const good[NFIELD] = {bk.w, bk.u, bk.e, bk.rho, bk.p, bk.J, bk.eps_p};
   for (long step = r->step0;; ++step) {
     live_fields(f, live);
     const int last = r->t >= p->t_end * (1 - 1e-12);
@@ -404,10 +383,7 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
     }
     if (last) break;
     if (r->t + f->dt_next > p->t_end) f->dt_next = p->t_end - r->t;
-    const double t_good = r->t;
-    const long step_good = f->step;
-    for (int k = 0; k < NFIELD; ++k)
-      memcpy(good[k], live[k], (k < 2 ? 3 : 1) * f->n * sizeof(double));
+    dmp_backup_take(&bk, f, r->t);
     const double dt = f->dt_next, w0 = ms_wall_time();
     st = dm_fin_step(f);
     const bool step_failed = st != MS_OK;
@@ -421,8 +397,8 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
                "impact: step %ld, t = %.9g %s: particle %zu (X = %g %g %g): %s = %g; the run "
                "stops, the last good state (step %ld, t = %.9g %s) is in " PTL_SNAPSHOT_UNSTABLE,
                f->step, ms_out_time(r->t), ms_out_time_label(), f->bad, X[0], X[1], X[2],
-               f->bad_what, f->bad_value, step_good, ms_out_time(t_good), ms_out_time_label());
-        write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, good, r->X0, imat, t_good, step_good);
+               f->bad_what, f->bad_value, bk.step, ms_out_time(bk.t), ms_out_time_label());
+        write_particles(ctx, p, PTL_SNAPSHOT_UNSTABLE, f, good, r->X0, imat, bk.t, bk.step);
       }
       break;
     }
@@ -440,7 +416,7 @@ static ms_status time_loop(dmi_run *r, const ms_ctx *ctx, const uint8_t *imat) {
       break;
     }
   }
-  free(buf);
+  dmp_backup_free(&bk);
   p->sum.wall_s = wall_time;
   return st;
 }

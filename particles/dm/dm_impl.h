@@ -6,6 +6,7 @@
 #include "dm.h"
 
 #include <math.h>
+#include <string.h>
 
 /* The per-particle arrays of a model of n particles (at least 1 row each), zeroed: A⁻¹, cond,
  * κ, C, σ, Q, energy (dm_create; the local model of dm_par.c). */
@@ -188,6 +189,16 @@ void dm_contact_free(dm_fin *f);
 ms_status dm_contact_force(dm_fin *f, double *dtmin, long *imin);
 void dm_contact_work(dm_fin *f, double h, const double *vb);
 double dm_contact_energy(const dm_fin *f); /* Σ energy[i] (0 when off), in dm_fin_contact_energy */
+
+/* The thinning of a full history table of n rows of ncol doubles, in place: every other row is
+ * dropped (rows 0, 2, 4, ... kept), so the rows stay evenly spaced at twice the interval, which
+ * the caller doubles, and any run length fits a fixed table. Returns the kept count, n / 2. The
+ * finite model's probes (dm_problem_finite.c) and the impact history (dm_impact.c). */
+static inline size_t dm_rows_thin(double *rows, size_t n, size_t ncol) {
+  for (size_t j = 0; j < n / 2; ++j)
+    memmove(&rows[j * ncol], &rows[2 * j * ncol], ncol * sizeof *rows);
+  return n / 2;
+}
 
 /* A free-surface history of fixed size: (t, mean u_x of the last x layer of an nx × nyz slab)
  * recorded every `stride`-th step; when full, every other row is dropped and the stride

@@ -75,6 +75,27 @@ void dmp_material_table(const dm_problem *p, char *names, size_t size) {
     ptl_material_table_add(names, size, p->layers[k].name ? p->layers[k].name : "");
 }
 
+ptl_snapshot dmp_snapshot_of(size_t n, const double *X, const double *w, const double *u,
+                             const double *mass, double t, double *xv) {
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      xv[a * n + i] = X[3 * i + a] + w[3 * i + a];
+      xv[(3 + a) * n + i] = u[3 * i + a];
+    }
+  const double *const xc[3] = {xv, xv + n, xv + 2 * n};
+  const double *const vc[3] = {xv + 3 * n, xv + 4 * n, xv + 5 * n};
+  return ptl_snapshot_of(n, xc, vc, mass, t, false);
+}
+
+ms_status dmp_snapshot_write(const ms_ctx *ctx, const char *name, const ptl_snapshot *snap,
+                             const char *who) {
+  char *path = ms_out_path(ctx, name);
+  const ms_status st = ptl_write_snapshot(path, snap);
+  if (st != MS_OK) ms_log(ctx, MS_LOG_WARN, "%s: could not write %s", who, path);
+  free(path);
+  return st;
+}
+
 /* HDF5 snapshot of the real particles with an XDMF sidecar (ParaView), by ptl_write_snapshot,
  * in the layout every particle problem shares (docs/output.md, "Particle snapshots"): current
  * positions X + w (particles/x), velocity u (particles/v), mass, the layer's material index
@@ -85,19 +106,13 @@ void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, siz
                         long step, const char *name) {
   if (!ctx->outdir || !ctx->outdir[0]) return;
   const dm_state *s = m->s;
-  char *path = ms_out_path(ctx, name);
   double *S = malloc(9 * s->n * sizeof(double));
-  double *x = malloc((6 * nreal + 1) * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
-  double *v = x + 3 * nreal;
+  double *xv = malloc((6 * nreal + 1) * sizeof(double)), *sc = malloc(4 * nreal * sizeof(double));
   int64_t *mat = ms_calloc(nreal + 1, sizeof *mat);
   dm_cauchy_stress(m, S);
   double *speed = sc, *pres = sc + nreal, *vm = sc + 2 * nreal, *sxx = sc + 3 * nreal;
   for (size_t i = 0; i < nreal; ++i) {
     const double *u = &s->u[3 * i], *T = &S[9 * i];
-    for (int a = 0; a < 3; ++a) {
-      x[a * nreal + i] = s->X[3 * i + a] + s->w[3 * i + a];
-      v[a * nreal + i] = u[a];
-    }
     mat[i] = dmp_layer_at(p, s->X[3 * i]) - p->layers;
     speed[i] = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     pres[i] = -(T[0] + T[4] + T[8]) / 3.0;
@@ -116,23 +131,14 @@ void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, siz
       {"displacement", "particles/w", 3, false},    {"speed", "particles/speed", 1, false},
       {"pressure", "particles/pressure", 1, false}, {"von_mises", "particles/von_mises", 1, false},
       {"sigma_xx", "particles/sigma_xx", 1, false}};
-  const double *const xc[3] = {x, x + nreal, x + 2 * nreal};
-  const double *const vc[3] = {v, v + nreal, v + 2 * nreal};
   char names[4096];
   dmp_material_table(p, names, sizeof names);
-  ptl_snapshot snap = ptl_snapshot_of(nreal, xc, vc, s->mass, t, false);
-  snap.ndata = sizeof data / sizeof data[0];
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
-  snap.material_names = names;
-  ptl_snapshot_attr_add(&snap, "time", t);
-  ptl_snapshot_attr_add(&snap, "step", (double)step);
-  if (ptl_write_snapshot(path, &snap) != MS_OK)
-    ms_log(ctx, MS_LOG_WARN, "discrete model: could not write %s", path);
-  free(path);
+  ptl_snapshot snap = dmp_snapshot_of(nreal, s->X, s->w, s->u, s->mass, t, xv);
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0], data, sizeof xdmf / sizeof xdmf[0],
+                        xdmf, names, step);
+  dmp_snapshot_write(ctx, name, &snap, "discrete model");
   free(S);
-  free(x);
+  free(xv);
   free(sc);
   free(mat);
 }

@@ -114,7 +114,7 @@ static ms_status setup(dmf_run *r) {
   dmp_find_probes(p, s, r->nreal, r->pr);
   r->pcols = 1 + p->nprobes, r->nrec_max = 8192, r->pstride = 1;
   r->hist = ms_calloc(r->nrec_max * r->pcols, sizeof(double));
-  dmf_backup_alloc(r);
+  dmp_backup_alloc(&r->bk, s->n, DMP_KEEP_EHG | DMP_KEEP_Q | DMP_KEEP_SIGMA_U);
   if (p->profile == PROF_ROD_TRIANGLE || p->profile == PROF_ROD_SINE ||
       p->profile == PROF_CONTACT) {
     st = initial_strain(r);
@@ -155,9 +155,7 @@ static void record_probes(dmf_run *r, long step) {
   const long k = step / p->probe_every;
   if (k % r->pstride != 0) return;
   if (r->nrec == r->nrec_max) {
-    for (size_t j = 0; j < r->nrec / 2; ++j)
-      memmove(&r->hist[j * r->pcols], &r->hist[2 * j * r->pcols], r->pcols * sizeof(double));
-    r->nrec /= 2, r->pstride *= 2;
+    r->nrec = dm_rows_thin(r->hist, r->nrec, r->pcols), r->pstride *= 2;
     if (k % r->pstride != 0) return;
   }
   double *row = &r->hist[r->nrec++ * r->pcols];
@@ -209,7 +207,7 @@ static ms_status failed(dmf_run *r, ms_status st) {
    * non-finite one there (the last step's closing kick) leaves no good state to write */
   for (size_t i = 0; i < r->s.n && r->bk.valid; ++i)
     if (!isfinite(r->bk.e[i]) || !isfinite(r->bk.ehg[i])) {
-      r->bk.valid = 0;
+      r->bk.valid = false;
       ms_log(r->ctx, MS_LOG_WARN,
              "discrete model (response eos): particle %zu: the energy of the last step's closing "
              "half kick is not finite: no snapshot of the last good state",
@@ -290,7 +288,7 @@ static ms_status run_steps(dmf_run *r) {
     if (r->flyer) dm_fs_history_record(&r->fs, step, r->t, &r->s, p->ncell[0], nyz);
     record_probes(r, step);
     if (last) break;
-    dmf_backup_take(r, r->t);
+    dmp_backup_take(&r->bk, f, r->t);
     if (r->t + f->dt_next > t_end) f->dt_next = t_end - r->t;
     const double dt = f->dt_next, w0 = ms_wall_time(), c0 = dmp_cpu_time();
     st = dm_fin_advance(f);
@@ -373,7 +371,7 @@ static void report(dmf_run *r) {
 }
 
 static void run_free(dmf_run *r) {
-  dmf_backup_free(r);
+  dmp_backup_free(&r->bk);
   free(r->fs.rows), free(r->bins), free(r->sigma_u), free(r->eh), free(r->pr), free(r->hist);
   free(r->prof_done), free(r->snap_done), free(r->mat), free(r->imat);
   dm_fin_destroy(&r->f);

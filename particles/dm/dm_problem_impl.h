@@ -98,8 +98,42 @@ ms_status dmp_write_series(const ms_ctx *ctx, const char *file, const char *titl
 void dmp_write_profile(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
                        int index);
 void dmp_material_table(const dm_problem *p, char *names, size_t size);
+/* The snapshot set-up of the model's writers: particles [0, n) at the current positions X + w
+ * and velocities u ([n][3] each, as columns into xv[6 n], which must live until it is written),
+ * masses `mass`, at time t; serial. */
+ptl_snapshot dmp_snapshot_of(size_t n, const double *X, const double *w, const double *u,
+                             const double *mass, double t, double *xv);
+/* Writes snap to OUTDIR/name; a failure is logged as a warning ("WHO: could not write PATH"). */
+ms_status dmp_snapshot_write(const ms_ctx *ctx, const char *name, const ptl_snapshot *snap,
+                             const char *who);
 void dmp_write_snapshot(const ms_ctx *ctx, const dm_problem *p, dm_model *m, size_t nreal, double t,
                         long step, const char *name);
+/* The last good state of a run of the finite model (dm_fin), which a failed step leaves to show
+ * (docs/reliability.md §6): a step changes the arrays before it can fail, so the
+ * discrete_model problem with response eos and the impact problem copy the ones their
+ * snapshots show at the top of every step (dm_fin_output.c). w, u, e, ε_p and p are always
+ * kept; the others (DMP_KEEP_*) when asked for, NULL otherwise. */
+typedef struct dmp_backup {
+  double *w, *u;                       /* [n][3] */
+  double *e, *eps_p, *p;               /* [n] */
+  double *ehg, *q, *sigma_u, *rho, *J; /* [n] or NULL; σ_u = √(3/2 s:s) of the deviator */
+  size_t n;
+  double t;
+  long step; /* dm_fin's step count of that state */
+  bool valid;
+} dmp_backup;
+enum {
+  DMP_KEEP_EHG = 1u,
+  DMP_KEEP_Q = 2u,
+  DMP_KEEP_SIGMA_U = 4u,
+  DMP_KEEP_RHO = 8u,
+  DMP_KEEP_J = 16u
+};
+/* Room for the state of particles [0, n) (w one longer: the 4-lane loads of dm_finite.c). */
+void dmp_backup_alloc(dmp_backup *b, size_t n, unsigned keep);
+void dmp_backup_free(dmp_backup *b);
+/* Copies f's state (particles [0, b->n)) at time t as the last good one. */
+void dmp_backup_take(dmp_backup *b, const dm_fin *f, double t);
 void dmp_write_sphere_radial(const ms_ctx *ctx, const dm_problem *p, const dm_state *s,
                              size_t nreal, double t);
 void dmp_write_fin_profile(const ms_ctx *ctx, const dm_problem *p, const dm_fin *f, size_t nreal,

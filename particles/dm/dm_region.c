@@ -655,21 +655,16 @@ static ms_status region_write_snapshot(ptl_region *rr, const char *path, const c
                                     {"particles/J", f->J, NULL, 1, "1"},
                                     {"particles/gid", NULL, ps->gid, 1, NULL},
                                     {"particles/failed", NULL, failed, 1, NULL}};
-  ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
-  snap.material_names = material;
-  ptl_snapshot_attr_add(&snap, "time", r->t);
-  ptl_snapshot_attr_add(&snap, "step", (double)f->step);
-  ptl_snapshot_attr_add(&snap, "r0", r->geo.spacing);
-  ptl_snapshot_period_add(&snap, 1, r->geo.period[1], 0.0);
-  if (ps->dim == 3) ptl_snapshot_period_add(&snap, 2, r->geo.period[2], 0.0);
   const ms_xdmf_attr xdmf[] = {{"velocity", "particles/v", 3, false},
                                {"pressure", "particles/pressure", 1, false},
                                {"density", "particles/density", 1, false},
                                {"mass", "particles/mass", 1, false}};
-  snap.ndata = sizeof data / sizeof data[0] - (failed ? 0 : 1);
-  snap.data = data;
-  snap.nxdmf = sizeof xdmf / sizeof xdmf[0];
-  snap.xdmf = xdmf;
+  ptl_snapshot snap = ptl_snapshot_of_state(ps, r->s.n, r->t, false);
+  ptl_snapshot_contents(&snap, sizeof data / sizeof data[0] - (failed ? 0 : 1), data,
+                        sizeof xdmf / sizeof xdmf[0], xdmf, material, f->step);
+  ptl_snapshot_attr_add(&snap, "r0", r->geo.spacing);
+  ptl_snapshot_period_add(&snap, 1, r->geo.period[1], 0.0);
+  if (ps->dim == 3) ptl_snapshot_period_add(&snap, 2, r->geo.period[2], 0.0);
   const ms_status st = ptl_write_snapshot(path, &snap);
   free(mat), free(failed);
   return st;

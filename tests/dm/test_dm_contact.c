@@ -22,32 +22,17 @@
 #include <cmocka.h>
 
 #include "dm_impl.h"
+#include "dm_test.h"
 
-/* Two blocks of nx × ny particles (spacing h; Al mg_linear, no strength), block B shifted by
- * gap h beyond A along x in the reference (so no bond crosses: gap > horizon 1.5 h), then moved
- * by shift h (w) and given velocities ±v along x. Periodic in y for ny > 1. */
-typedef struct blocks {
-  dm_state s;
-  dm_model *m;
-  dm_fin *f;
-  eos_t *eos;
-  dm_fin_material mat;
-  uint8_t *imat;
-  long nx, ny;
-  double h;
-} blocks;
+/* Two blocks of nx × ny particles (spacing h; Al, no strength), block B shifted by gap h beyond
+ * A along x in the reference (so no bond crosses: gap > horizon 1.5 h), then moved by shift h
+ * (w) and given velocities ±v along x. Periodic in y for ny > 1. */
+typedef dm_fin_body blocks;
 
 static ms_status blocks_build(blocks *b, int dim, long nx, long ny, double gap, double shift,
                               double v, const dm_fin_params *par) {
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
   const double h = par->ell;
-  b->eos = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
-  b->mat = (dm_fin_material){.eos = b->eos};
-  b->nx = nx, b->ny = ny, b->h = h;
-  const size_t n = (size_t)(2 * nx * ny);
-  const double vol = pow(h, dim), rho0 = 2.703;
-  dm_state_alloc(&b->s, n, dim);
+  dm_fin_body_alloc(b, dim, (size_t)(2 * nx * ny), nx, ny, h, &(dm_fin_material){0});
   for (long blk = 0; blk < 2; ++blk)
     for (long iy = 0; iy < ny; ++iy)
       for (long ix = 0; ix < nx; ++ix) {
@@ -56,32 +41,8 @@ static ms_status blocks_build(blocks *b, int dim, long nx, long ny, double gap, 
         b->s.X[3 * i + 1] = dim > 1 ? (iy + 0.5) * h : 0.0;
         b->s.w[3 * i] = blk ? -shift * h : 0.0;
         b->s.u[3 * i] = blk ? -v : v;
-        b->s.mass[i] = rho0 * vol, b->s.vol[i] = vol;
-        b->s.K[i] = rho0 * 5.35 * 5.35;
-        b->s.bc[i] = DM_FREE;
       }
-  dm_options opt = {.horizon = 1.5 * h, .cond_max = 1e8};
-  if (dim > 1) opt.box[1] = ny * h;
-  assert_int_equal(
-      dm_model_create(&(dm_model_params){.state = &b->s, .opt = opt, .ctx = &ctx}, &b->m), MS_OK);
-  ms_ctx_close(&ctx);
-  b->imat = calloc(n, 1);
-  return dm_fin_create(&(dm_fin_setup){.m = b->m, .mat = &b->mat, .imat = b->imat, .par = *par},
-                       &b->f);
-}
-
-static void blocks_free(blocks *b) {
-  dm_fin_destroy(&b->f);
-  dm_model_destroy(&b->m);
-  dm_state_free(&b->s);
-  free(b->imat);
-  eos_destroy(&b->eos);
-}
-
-static double blocks_energy(const blocks *b) {
-  double K, U, H;
-  dm_fin_energies(b->f, &K, &U, &H);
-  return K + U + H + dm_fin_contact_energy(b->f) - b->f->work;
+  return dm_fin_body_finish(b, par);
 }
 
 /* the smallest distance between a particle of A and one of B (current positions) */
@@ -128,7 +89,7 @@ static void test_pair_pushed_apart(void **state) {
   const double r1 = (b.s.X[3 * ib] + b.s.w[3 * ib]) - (b.s.X[3 * ia] + b.s.w[3 * ia]);
   assert_true(r1 >= dc * h);                           /* pushed out of the contact */
   assert_true(b.s.u[3 * ia] < 0 && b.s.u[3 * ib] > 0); /* and moving apart */
-  blocks_free(&b);
+  dm_fin_body_free(&b);
 }
 
 /* b. Returns the contact energy left after the separation over K0; *rmin the closest approach
@@ -142,7 +103,7 @@ static double rebound(double courant, double contact, double *rmin, int *passed)
   const size_t nb = (size_t)(b.nx * b.ny);
   double K0;
   dm_fin_energies(b.f, &K0, NULL, NULL);
-  const double E0 = blocks_energy(&b), m = b.s.mass[0];
+  const double E0 = dm_fin_body_energy(&b), m = b.s.mass[0];
   double dE = 0, dP = 0;
   *rmin = INFINITY, *passed = 0;
   int met = 0, apart = 0;
@@ -150,7 +111,7 @@ static double rebound(double courant, double contact, double *rmin, int *passed)
   for (long step = 0; step < 100000 && st == MS_OK; ++step) {
     st = dm_fin_step(b.f);
     if (st != MS_OK) break;
-    dE = fmax(dE, fabs(blocks_energy(&b) - E0));
+    dE = fmax(dE, fabs(dm_fin_body_energy(&b) - E0));
     double P = 0, uA = 0, uB = 0;
     for (size_t i = 0; i < 2 * nb; ++i) P += m * b.s.u[3 * i];
     for (size_t i = 0; i < nb; ++i) uA += b.s.u[3 * i] / nb, uB += b.s.u[3 * (i + nb)] / nb;
@@ -184,7 +145,7 @@ static double rebound(double courant, double contact, double *rmin, int *passed)
     printf("rebound courant %.2f contact %.2f: closest %.3f h, contact energy left %.2e K0, "
            "balance %.1e K0, passed %d\n",
            courant, contact, *rmin, E_c / K0, dE / K0, *passed);
-  blocks_free(&b);
+  dm_fin_body_free(&b);
   return E_c / K0;
 }
 

@@ -13,7 +13,7 @@
 #include <dirent.h>
 #include <unistd.h>
 
-#include "dm.h"
+#include "dm_test.h"
 #include "test_util.h"
 
 static const char *materials =
@@ -30,24 +30,23 @@ typedef struct loaded {
   dk_errors e;
 } loaded;
 
+/* A whole deck text read through the model's reader. */
+static void load_text(loaded *L, const char *text) {
+  L->doc = dm_test_deck(text, "deck.yaml", &L->mats, &L->e);
+  L->p = dm_problem_read(L->doc, dk_get(dk_root(L->doc), "discrete_model"), L->mats, &L->e);
+}
+
+/* The steel head + a discrete_model section, read, with the unused-key report. */
 static void load(loaded *L, const char *section) {
   char text[4096];
   snprintf(text, sizeof text, "%s%s", materials, section);
-  dk_errors_init(&L->e);
-  L->doc = dk_load_string(text, "deck.yaml", &L->e);
-  assert_non_null(L->doc);
-  dk_read_units(L->doc, &L->e);
-  dk_get(dk_root(L->doc), "problem");
-  L->mats = eos_materials_read(L->doc, &L->e);
-  L->p = dm_problem_read(L->doc, dk_get(dk_root(L->doc), "discrete_model"), L->mats, &L->e);
+  load_text(L, text);
   dk_report_unused(&L->e, L->doc);
 }
 
 static void unload(loaded *L) {
   dm_problem_destroy(&L->p);
-  eos_materials_destroy(&L->mats);
-  dk_free(L->doc);
-  dk_errors_free(&L->e);
+  dm_test_deck_free(L->doc, &L->mats, &L->e);
 }
 
 /* Six independent mistakes: all reported in one pass, each with FILE:LINE:COL. */
@@ -171,25 +170,17 @@ static void test_finite_errors(void **state) {
       "    - {material: gas, x_max: 2, response: eos, yield: elastic_plastic}\n"
       "    - {rho: 1, bulk_modulus: 1, response: eos}\n"
       "  t_end: 1.0\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
-  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
-  dk_errors_print(&e, stderr);
-  assert_null(p);
-  assert_true(has_error(&e, "deck.yaml:12:"));     /* negative yield stress */
-  assert_true(has_error(&e, "ideal gas"));         /* line 13 */
-  assert_true(has_error(&e, "shear_modulus > 0")); /* the gas has no G */
-  assert_true(has_error(&e, "needs 'yield_stress'"));
-  assert_true(has_error(&e, "deck.yaml:14:"));
-  assert_true(has_error(&e, "needs a material with an 'eos:'"));
-  eos_materials_destroy(&mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  loaded L;
+  load_text(&L, deck);
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:12:"));     /* negative yield stress */
+  assert_true(has_error(&L.e, "ideal gas"));         /* line 13 */
+  assert_true(has_error(&L.e, "shear_modulus > 0")); /* the gas has no G */
+  assert_true(has_error(&L.e, "needs 'yield_stress'"));
+  assert_true(has_error(&L.e, "deck.yaml:14:"));
+  assert_true(has_error(&L.e, "needs a material with an 'eos:'"));
+  unload(&L);
 }
 
 /* The flyer problem's per-layer 'velocity': a number in km/s within ±1000, only with
@@ -210,23 +201,15 @@ static void test_flyer_errors(void **state) {
       "    - {material: al, response: eos, velocity: 1.0}\n"
       "  initial: {profile: random_velocity, amplitude: 0.1}\n"
       "  t_end: 1.0\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(eos_deck, "deck.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
-  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
-  dk_errors_print(&e, stderr);
-  assert_null(p);
-  assert_true(has_error(&e, "deck.yaml:9:"));  /* 5000 km/s: out of range */
-  assert_true(has_error(&e, "deck.yaml:10:")); /* not a number */
-  assert_true(has_error(&e, "exclude each other"));
-  eos_materials_destroy(&mats);
-  dk_free(doc);
-  dk_errors_free(&e);
-  loaded L; /* the linear model has no per-body velocity */
+  loaded L;
+  load_text(&L, eos_deck);
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:9:"));  /* 5000 km/s: out of range */
+  assert_true(has_error(&L.e, "deck.yaml:10:")); /* not a number */
+  assert_true(has_error(&L.e, "exclude each other"));
+  unload(&L);
+  /* the linear model has no per-body velocity */
   load(&L, "discrete_model:\n"
            "  spacing: 0.1\n"
            "  domain: {lo: [0], hi: [3.0]}\n"
@@ -258,25 +241,17 @@ static void test_fracture_errors(void **state) {
       "    - {material: al, x_max: 3, response: eos, fracture: {spall_strength: 0}}\n"
       "    - {material: al, fracture: {spall_strength: 1.2}}\n"
       "  t_end: 1.0\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
-  dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
-  dk_errors_print(&e, stderr);
-  assert_null(p);
-  assert_true(has_error(&e, "deck.yaml:9:")); /* no spall_strength */
-  assert_true(has_error(&e, "needs 'spall_strength'"));
-  assert_true(has_error(&e, "deck.yaml:10:")); /* σ_s < 0 */
-  assert_true(has_error(&e, "deck.yaml:11:")); /* σ_s = 0 */
-  assert_true(has_error(&e, "deck.yaml:12:")); /* the linear model */
-  assert_true(has_error(&e, "'fracture' needs response: eos"));
-  eos_materials_destroy(&mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  loaded L;
+  load_text(&L, deck);
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:9:")); /* no spall_strength */
+  assert_true(has_error(&L.e, "needs 'spall_strength'"));
+  assert_true(has_error(&L.e, "deck.yaml:10:")); /* σ_s < 0 */
+  assert_true(has_error(&L.e, "deck.yaml:11:")); /* σ_s = 0 */
+  assert_true(has_error(&L.e, "deck.yaml:12:")); /* the linear model */
+  assert_true(has_error(&L.e, "'fracture' needs response: eos"));
+  unload(&L);
 }
 
 /* A piston far beyond what the time step resolves (courant 20) inverts a family: the run stops
@@ -296,14 +271,8 @@ static void test_finite_degenerate_stops(void **state) {
       "  piston: {velocity: 5.0}\n"
       "  courant: 20\n"
       "  t_end: 0.5\n";
-  dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
-  loaded L = {.doc = doc, .mats = mats, .e = e};
-  L.p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &L.e);
+  loaded L;
+  load_text(&L, deck);
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_UNSTABLE);
   unload(&L);

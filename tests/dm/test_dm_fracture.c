@@ -26,6 +26,7 @@
 #include <cmocka.h>
 
 #include "dm_impl.h"
+#include "dm_test.h"
 
 /* a. */
 static void test_max_principal(void **state) {
@@ -52,65 +53,24 @@ static void test_max_principal(void **state) {
   assert_true(dm_frac_max_principal(D) == 3.0);
 }
 
-/* A bar of nx × ny particles (spacing h, periodic in y for ny > 1), Al mg_linear, one
- * material, initial u_x = rate (X − X_c) (and u_x = u_piston on the first npiston layers,
- * which are then DM_PRESCRIBED). */
-typedef struct bar {
-  dm_state s;
-  dm_model *m;
-  dm_fin *f;
-  eos_t *eos;
-  dm_fin_material mat;
-  uint8_t *imat;
-  long nx, ny;
-} bar;
+/* A bar of nx × ny particles (spacing h, periodic in y for ny > 1), Al, one material, initial
+ * u_x = rate (X − X_c) (and u_x = u_piston on the first npiston layers, which are then
+ * DM_PRESCRIBED). */
+typedef dm_fin_body bar;
 
 static void bar_build(bar *b, int dim, long nx, long ny, double h, double rate, double up,
                       long npiston, const dm_fin_material *mat, double hourglass) {
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  b->eos = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
-  b->mat = *mat;
-  b->mat.eos = b->eos;
-  b->nx = nx, b->ny = ny;
-  const size_t n = (size_t)(nx * ny);
-  const double vol = pow(h, dim), rho0 = 2.703, Xc = 0.5 * nx * h;
-  dm_state_alloc(&b->s, n, dim);
+  dm_fin_body_alloc(b, dim, (size_t)(nx * ny), nx, ny, h, mat);
+  const double Xc = 0.5 * nx * h;
   for (long iy = 0; iy < ny; ++iy)
     for (long ix = 0; ix < nx; ++ix) {
       const size_t i = (size_t)(iy * nx + ix);
       b->s.X[3 * i] = (ix + 0.5) * h, b->s.X[3 * i + 1] = dim > 1 ? (iy + 0.5) * h : 0.0;
-      b->s.X[3 * i + 2] = 0.0;
-      for (int a = 0; a < 3; ++a) b->s.w[3 * i + a] = b->s.u[3 * i + a] = 0.0;
       b->s.u[3 * i] = ix < npiston ? up : rate * (b->s.X[3 * i] - Xc);
-      b->s.mass[i] = rho0 * vol, b->s.vol[i] = vol;
-      b->s.K[i] = rho0 * 5.35 * 5.35, b->s.G[i] = mat->G;
       b->s.bc[i] = ix < npiston ? DM_PRESCRIBED : DM_FREE;
     }
-  dm_options opt = {.horizon = 1.5 * h, .cond_max = 1e8};
-  if (dim > 1) opt.box[1] = ny * h;
-  assert_int_equal(
-      dm_model_create(&(dm_model_params){.state = &b->s, .opt = opt, .ctx = &ctx}, &b->m), MS_OK);
-  b->imat = calloc(n, 1);
   dm_fin_params par = {.cq = 2.0, .cl = 0.5, .courant = 0.4, .hourglass = hourglass, .ell = h};
-  assert_int_equal(
-      dm_fin_create(&(dm_fin_setup){.m = b->m, .mat = &b->mat, .imat = b->imat, .par = par}, &b->f),
-      MS_OK);
-  ms_ctx_close(&ctx);
-}
-
-static void bar_free(bar *b) {
-  dm_fin_destroy(&b->f);
-  dm_model_destroy(&b->m);
-  dm_state_free(&b->s);
-  free(b->imat);
-  eos_destroy(&b->eos);
-}
-
-static double bar_energy(const bar *b) {
-  double K, U, H;
-  dm_fin_energies(b->f, &K, &U, &H);
-  return K + U + H + dm_fin_broken_energy(b->f) + dm_fin_contact_energy(b->f) - b->f->work;
+  assert_int_equal(dm_fin_body_finish(b, &par), MS_OK);
 }
 
 /* Components of the unbroken bonds (union–find), labels in lab[]. */
@@ -143,14 +103,14 @@ static void pull_apart(int dim, long ny, int yield, long nsteps) {
   const long nx = 60;
   const double h = 0.001, rate = 5.0; /* ε̇ 5 per 10 µs: ±0.15 km/s at the ends */
   bar_build(&b, dim, nx, ny, h, rate, 0.0, 0, &mat, 1.0);
-  const double E0 = bar_energy(&b);
+  const double E0 = dm_fin_body_energy(&b);
   double K0;
   dm_fin_energies(b.f, &K0, NULL, NULL);
   double dE = 0;
   long broke_at = -1;
   for (long step = 0; step < nsteps; ++step) {
     assert_int_equal(dm_fin_step(b.f), MS_OK);
-    dE = fmax(dE, fabs(bar_energy(&b) - E0));
+    dE = fmax(dE, fabs(dm_fin_body_energy(&b) - E0));
     if (broke_at < 0 && dm_fin_failed_count(b.f) > 0) broke_at = step;
   }
   assert_true(broke_at > 0); /* not at once: the tension has to build up first */
@@ -194,7 +154,7 @@ static void pull_apart(int dim, long ny, int yield, long nsteps) {
            dim, yield, broke_at, dm_fin_failed_count(b.f), ncomp, dm_fin_broken_energy(b.f),
            dE / K0, Jmax);
   free(lab), free(lab1), free(p0), free(p1);
-  bar_free(&b);
+  dm_fin_body_free(&b);
 }
 static void test_pull_apart_1d(void **state) {
   (void)state;
@@ -226,13 +186,13 @@ static void test_failed_compression(void **state) {
   bar_build(&b, 1, 200, 1, 0.001, 0.0, up, 3, &mat, 0.0);
   for (size_t i = 0; i < b.f->n; ++i) b.f->failed[i] = 1, b.m->kappa[i] = 0.0;
   assert_int_equal(dm_fin_refresh(b.f), MS_OK);
-  const double E0 = bar_energy(&b);
+  const double E0 = dm_fin_body_energy(&b);
   double dE = 0;
   for (long step = 0; step < 600; ++step) {
     assert_int_equal(dm_fin_step(a.f), MS_OK);
     b.f->dt_next = a.f->dt_next;
     assert_int_equal(dm_fin_step(b.f), MS_OK);
-    dE = fmax(dE, fabs(bar_energy(&b) - E0));
+    dE = fmax(dE, fabs(dm_fin_body_energy(&b) - E0));
   }
   /* the front: the last particle moving at ≥ up/2; the mean p over the middle half behind it */
   long front = 0;
@@ -256,8 +216,8 @@ static void test_failed_compression(void **state) {
   assert_true(fabs(pb - pa) < 0.015 * pa);
   assert_true(pb > zc * (1.0 + 0.5 * 1.34 * up / 5.35));
   assert_true(dE < 1e-12 * b.f->work); /* round-off, ~1e-15 per step */
-  bar_free(&a);
-  bar_free(&b);
+  dm_fin_body_free(&a);
+  dm_fin_body_free(&b);
 }
 
 /* e. Two failed particles (a 1D pair, spacing h) approaching head-on at ±v: across their broken
@@ -294,7 +254,7 @@ static double rebound(double courant, double cl, double *dmin) {
   assert_int_equal(dm_fin_refresh(b.f), MS_OK);
   double K0;
   dm_fin_energies(b.f, &K0, NULL, NULL);
-  const double E0 = bar_energy(&b), m = b.s.mass[0], K = 2.703 * 5.35 * 5.35;
+  const double E0 = dm_fin_body_energy(&b), m = b.s.mass[0], K = 2.703 * 5.35 * 5.35;
   const double omega = sqrt(2.0 * K * b.s.vol[0] / (h * h) / (0.5 * m)), xmax = 2.0 * v / omega;
   double lo = 0.5, hi = 1.0; /* the elastic turning point: κ h² ∫ g = μ (2v)²/2 */
   for (int it = 0; it < 60; ++it) {
@@ -308,7 +268,7 @@ static double rebound(double courant, double cl, double *dmin) {
     assert_int_equal(dm_fin_step(b.f), MS_OK);
     const double r = h + b.s.w[3] - b.s.w[0];
     rmin = fmin(rmin, r);
-    dE = fmax(dE, fabs(bar_energy(&b) - E0));
+    dE = fmax(dE, fabs(dm_fin_body_energy(&b) - E0));
     p = fmax(p, fabs(m * b.s.u[0] + m * b.s.u[3]));
     if (r > 1.5 * h) break; /* apart again */
   }
@@ -327,7 +287,7 @@ static double rebound(double courant, double cl, double *dmin) {
            "K1/K0 %.6f, error %.2e, balance %.1e of K0\n",
            courant, cl, omega * courant * h / 5.35, (h - rmin) / h,
            (cl > 0 ? xmax * e_exact : delta) / h, K1 / K0, err, dE / K0);
-  bar_free(&b);
+  dm_fin_body_free(&b);
   return err;
 }
 static void test_contact_rebound(void **state) {
@@ -366,7 +326,7 @@ static void test_contact_limit(void **state) {
   if (getenv("DM_FRACTURE_PRINT"))
     printf("contact limit: stopped at |y|/L = %.3f\n", b.f->bad_value);
   assert_true(b.f->bad_value < DM_CONTACT_MIN_RATIO && b.f->bad_value > 0.25);
-  bar_free(&b);
+  dm_fin_body_free(&b);
 }
 
 /* f. A 2D block (12 × 12, periodic in y) whose particles have all failed, thrown together by
@@ -388,14 +348,14 @@ static void test_failed_cluster(void **state) {
     b.f->failed[i] = 1, b.m->kappa[i] = 0.0;
   }
   assert_int_equal(dm_fin_refresh(b.f), MS_OK);
-  const double E0 = bar_energy(&b);
+  const double E0 = dm_fin_body_energy(&b);
   double K0, dE = 0;
   dm_fin_energies(b.f, &K0, NULL, NULL);
   long steps = 0;
   ms_status st = MS_OK;
   for (; steps < 4000 && st == MS_OK; ++steps) {
     st = dm_fin_step(b.f);
-    dE = fmax(dE, fabs(bar_energy(&b) - E0));
+    dE = fmax(dE, fabs(dm_fin_body_energy(&b) - E0));
   }
   double K1, U1, U0 = 0, vr = 0;
   dm_fin_energies(b.f, &K1, &U1, NULL);
@@ -425,7 +385,7 @@ static void test_failed_cluster(void **state) {
                               rate * (b.s.X[3 * i] - 0.006));
   assert_true(fabs(px - px0) < 1e-12 * pm * (double)b.f->n &&
               fabs(py - py0) < 1e-12 * pm * (double)b.f->n);
-  bar_free(&b);
+  dm_fin_body_free(&b);
 }
 
 /* d. A uniform stretch J − 1 = ε (periodic 2D block): fails iff the tension −p ≥ σ_s. */
@@ -451,7 +411,7 @@ static void test_threshold(void **state) {
     assert_true(f->failed[i]);
     for (int a = 0; a < 9; ++a) assert_true(sig[a] == 0.0 && s[a] == 0.0);
     assert_true(f->broken[i] == 2.5e-9 && f->ehg[i] == 0.0 && b.m->kappa[i] == 0.0);
-    bar_free(&b);
+    dm_fin_body_free(&b);
   }
   /* failure strain: J − 1 ≥ ε_f fails at any stress */
   dm_fin_material mat = {
@@ -463,7 +423,7 @@ static void test_threshold(void **state) {
   assert_false(b.f->failed[5]);
   dm_frac_stress(b.f, 5, &b.mat, 1.1, sig, s);
   assert_true(b.f->failed[5]);
-  bar_free(&b);
+  dm_fin_body_free(&b);
 }
 
 int main(void) {

@@ -14,7 +14,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "dm.h"
+#include "dm_test.h"
 #include "test_util.h"
 
 static const char *materials =
@@ -34,21 +34,14 @@ typedef struct loaded {
 static void load(loaded *L, const char *section) {
   char text[4096];
   snprintf(text, sizeof text, "%s%s", materials, section);
-  dk_errors_init(&L->e);
-  L->doc = dk_load_string(text, "deck.yaml", &L->e);
-  assert_non_null(L->doc);
-  dk_read_units(L->doc, &L->e);
-  dk_get(dk_root(L->doc), "problem");
-  L->mats = eos_materials_read(L->doc, &L->e);
+  L->doc = dm_test_deck(text, "deck.yaml", &L->mats, &L->e);
   L->p = dm_impact_problem_read(L->doc, dk_get(dk_root(L->doc), "impact"), L->mats, &L->e);
   dk_report_unused(&L->e, L->doc);
 }
 
 static void unload(loaded *L) {
   dm_impact_problem_destroy(&L->p);
-  eos_materials_destroy(&L->mats);
-  dk_free(L->doc);
-  dk_errors_free(&L->e);
+  dm_test_deck_free(L->doc, &L->mats, &L->e);
 }
 
 /* The deck errors the issue names, each located at its body (line of the list item). */

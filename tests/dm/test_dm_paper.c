@@ -18,7 +18,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "dm.h"
+#include "dm_test.h"
 
 /* Load a deck (a file under MSCALE_SOURCE_DIR/inputs, with `edits` = pairs of literal text
  * replacements applied first), run it, return its summary. */
@@ -40,12 +40,8 @@ static dm_run_summary run_deck(const char *file, const char *const *edits) {
     memcpy(at, edits[k + 1], ln);
   }
   dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(text, path, &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
+  eos_materials *mats;
+  dk_doc *doc = dm_test_deck(text, path, &mats, &e);
   dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
   dk_report_unused(&e, doc);
   dk_errors_print(&e, stderr);
@@ -57,9 +53,7 @@ static dm_run_summary run_deck(const char *file, const char *const *edits) {
   assert_int_equal(dm_problem_run(&ctx, p), MS_OK);
   dm_run_summary sum = *dm_problem_summary(p);
   dm_problem_destroy(&p);
-  eos_materials_destroy(&mats);
-  dk_free(doc);
-  dk_errors_free(&e);
+  dm_test_deck_free(doc, &mats, &e);
   ms_ctx_close(&ctx);
   free(text);
   return sum;

@@ -16,6 +16,7 @@
 #include <cmocka.h>
 
 #include "dm_impl.h"
+#include "dm_test.h"
 #include "test_util.h"
 
 static int print_on(void) {
@@ -108,19 +109,14 @@ static void test_closed_forms(void **state) {
 
 static dk_errors read_deck(const char *deck, int *ok) {
   dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(deck, "deck.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
+  eos_materials *mats;
+  dk_doc *doc = dm_test_deck(deck, "deck.yaml", &mats, &e);
   dm_problem *p = dm_problem_read(doc, dk_get(dk_root(doc), "discrete_model"), mats, &e);
   dk_report_unused(&e, doc);
   *ok = p != NULL && e.n == 0;
   if (print_on()) dk_errors_print(&e, stdout);
   dm_problem_destroy(&p);
-  eos_materials_destroy(&mats);
-  dk_free(doc);
+  dm_test_deck_free(doc, &mats, NULL);
   return e;
 }
 

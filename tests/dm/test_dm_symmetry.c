@@ -17,7 +17,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "dm.h"
+#include "dm_test.h"
 #include "test_util.h"
 
 enum { CYL = 0, BOX = 1 };
@@ -285,27 +285,17 @@ static void test_deck_errors(void **state) {
       "  symmetry: {x: 0, y: 0, z: 1.0}\n"
       "  t_end: 1\n";
   dk_errors e;
-  dk_errors_init(&e);
-  dk_doc *doc = dk_load_string(text, "deck.yaml", &e);
-  assert_non_null(doc);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  eos_materials *mats = eos_materials_read(doc, &e);
+  eos_materials *mats;
+  dk_doc *doc = dm_test_deck(text, "deck.yaml", &mats, &e);
   dm_impact *p = dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e);
   assert_null(p);
   dk_errors_print(&e, stderr);
   assert_true(has_error(&e, "deck.yaml:14:29: impact.symmetry.z: the wall's normal is z too"));
-  dk_errors_free(&e);
-  dk_errors_init(&e); /* without the plane along the wall's normal: the body checks */
-  dk_free(doc);
-  eos_materials_destroy(&mats);
-  char t2[2048];
+  dm_test_deck_free(doc, &mats, &e);
+  char t2[2048]; /* without the plane along the wall's normal: the body checks */
   snprintf(t2, sizeof t2, "%.*s  symmetry: {x: 0, y: 0}\n  t_end: 1\n",
            (int)(strstr(text, "  symmetry") - text), text);
-  doc = dk_load_string(t2, "deck.yaml", &e);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  mats = eos_materials_read(doc, &e);
+  doc = dm_test_deck(t2, "deck.yaml", &mats, &e);
   p = dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e);
   assert_null(p);
   dk_errors_print(&e, stderr);
@@ -315,24 +305,17 @@ static void test_deck_errors(void **state) {
                             "symmetry plane x = 0"));
   assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0 passes "
                             "through the body off its symmetry"));
-  dk_free(doc);
-  eos_materials_destroy(&mats);
-  dk_errors_free(&e);
-  dk_errors_init(&e); /* merged families with the planes (the bodies' errors above kept) */
+  dm_test_deck_free(doc, &mats, &e);
+  /* merged families with the planes (the bodies' errors above kept) */
   snprintf(t2, sizeof t2,
            "%.*s  symmetry: {x: 0, y: 0}\n"
            "  reference_update: {threshold: 0.1, families: merge}\n  t_end: 1\n",
            (int)(strstr(text, "  symmetry") - text), text);
-  doc = dk_load_string(t2, "deck.yaml", &e);
-  dk_read_units(doc, &e);
-  dk_get(dk_root(doc), "problem");
-  mats = eos_materials_read(doc, &e);
+  doc = dm_test_deck(t2, "deck.yaml", &mats, &e);
   assert_null(dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e));
   assert_true(has_error(&e, "deck.yaml:15:48: impact.reference_update.families: merge is not "
                             "available with symmetry planes"));
-  dk_free(doc);
-  eos_materials_destroy(&mats);
-  dk_errors_free(&e);
+  dm_test_deck_free(doc, &mats, &e);
 }
 
 int main(void) {
