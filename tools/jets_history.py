@@ -48,7 +48,7 @@ def history(trace, kh0_row, step):
     tau = (t - tb) * us / lam
     rows = []
     a = 0.0
-    while a + step <= tau[-1] + 1e-9:
+    while a + 0.5 * step < tau[-1]:  # the last interval may end a trace row early
         m = (tau >= a) & (tau <= a + step)
         rows.append((a, a + step, k * float(np.mean(eta[m])), slope(t[m], spike[m]),
                      slope(t[m], eta[m] + h2[m]), slope(t[m], bubble[m]),

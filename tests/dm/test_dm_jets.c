@@ -104,7 +104,7 @@ static void test_linear_growth(void **state) {
    * [VelikovichDimonte1996; ZhangSohn1997] the spike sits at η + (k/2)(η² − η_b²) from the mean
    * surface (velocity η̇ (1 + k η)), η the measured amplitude. Over the window k η runs from
    * 0.18 to 0.69. 10 %: the issue's bound on the spike; the theory's next order is O((k η)²)
-   * of η̇ (measured −6.6 % here; @256@ at λ = 256 h, −14 % at 64 h, where the amplitude itself
+   * of η̇ (measured −6.6 % here; −3.9 % at λ = 256 h, −14 % at 64 h, where the amplitude itself
    * is 16 % slow). Seen to fail with the second harmonic's sign flipped in jets.c (η̇ (1 − k η):
    * the spike @FLIP@ the prediction) and without it (η̇ alone: @DROP@). */
   printf("second order: spike %.4f km/s vs eta'(1 + k eta) %.4f (%+.1f %%); bubble %.4f vs "
