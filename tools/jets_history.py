@@ -69,7 +69,8 @@ def main():
         if not os.path.exists(trace):
             continue
         row = {key: kh[key][i] for key in kh.keys()}
-        print(f"kh0 {row['kh0']:g}, lambda/h {row['ncol']:g} (units km/s; tau = (t - t_b) U_s/lambda)")
+        print(f"kh0 {row['kh0']:g}, lambda/h {row['ncol']:g} "
+              "(units km/s; tau = (t - t_b) U_s/lambda)")
         print("  tau          k eta   spike  eta'(1+k eta)  ratio   bubble  -eta'(1-k eta)   eta'")
         for r in history(trace, row, args.step):
             ratio = r[3] / r[4] if r[4] != 0 else float("nan")
