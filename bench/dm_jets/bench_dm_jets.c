@@ -6,12 +6,15 @@
  *   bench_dm_jets [--deck D] [--material M] [--up U] [--kh0 LIST] [--ncol LIST] [--h H]
  *                 [--depth WL] [--obs WL] [--fit-from WL] [--dt-margin F]
  *                 [--yield LIST --shear-modulus G --strength-kh0 X --strength-ncol N]
+ *                 [--strength-set NAME]
  *                 [--trace] -o OUTDIR
  *
  * Defaults: inputs/eos-materials.yaml's pb, u_p 0.8 km/s (26.2 GPa, `mscale hugoniot`),
  * kh0 0.05,0.1,0.2,0.5,1,1.5, ncol 64,128 (spacings per wavelength), h 1e-4 cm, depth 1.5 λ,
  * obs 3 λ/U_s after breakout, fit from 1 λ/U_s, dt_margin 0.35; strength at kh0 0.5 and
- * ncol 64 with Y = 0 (none) and the --yield list, G from --shear-modulus.
+ * ncol 64 with Y = 0 (none) and the --yield list, G from --shear-modulus. --strength-set NAME:
+ * the k h0 sweep's cases with yield steinberg_guinan and that built-in set (Al6061_T6, Cu_OFHC,
+ * Pb, Sn: particles/dm/dm_strength.c) instead of yield none.
  * Writes OUTDIR/jets_kh0.csv and OUTDIR/jets_strength.csv (units in the headers), with
  * --trace the histories OUTDIR/trace_<kind>_<i>.csv and the final particle snapshots
  * OUTDIR/snap_<kind>_<i>.h5 (pressure, density); one line per case on stdout.
@@ -39,7 +42,7 @@ static int parse_list(const char *s, double *v) {
 }
 
 typedef struct opts {
-  const char *deck, *material, *outdir;
+  const char *deck, *material, *outdir, *strength_set;
   double up, h, depth, obs, fit_from, fit_to, dt_margin, G, skh0, sobs, sdepth;
   double kh0[MAXL], ncol[MAXL], Y[MAXL];
   int nk, nn, ny, trace;
@@ -47,12 +50,16 @@ typedef struct opts {
 } opts;
 
 static const char *const kh0_names[] = {
-    "kh0",          "ncol",        "h",       "lambda", "a0_over_h0", "up",       "us",
-    "du",           "v_lin",       "v_spike", "v_tip",  "v_eta",      "ratio",    "v_spike_peak",
-    "v_spike_late", "v_spike_max", "eta_end", "t_end",  "stopped",    "particles"};
-static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",    "km/s",     "km/s",
-                                        "km/s", "km/s", "km/s", "km/s", "km/s", "1",        "km/s",
-                                        "km/s", "km/s", "cm",   "10us", "1",    "particles"};
+    "kh0",         "ncol",       "h",           "lambda",       "a0_over_h0",
+    "up",          "us",         "du",          "v_lin",        "v_spike",
+    "v_tip",       "v_eta",      "ratio",       "v_spike_peak", "v_spike_late",
+    "v_spike_max", "eta_end",    "t_end",       "stopped",      "particles",
+    "v_bubble",    "v_spike_nl", "v_bubble_nl", "keta_start",   "keta_end",
+    "k_deta_end"};
+static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",    "km/s",      "km/s",
+                                        "km/s", "km/s", "km/s", "km/s", "km/s", "1",         "km/s",
+                                        "km/s", "km/s", "cm",   "10us", "1",    "particles", "km/s",
+                                        "km/s", "km/s", "1",    "1",    "1"};
 static const char *const str_names[] = {
     "Y",        "G",         "kh0",      "ncol",   "lambda",         "du",      "v_lin", "eta_b",
     "deta_max", "t_eta_max", "arrested", "k_deta", "rho_v2_over_kY", "stopped", "t_end"};
@@ -75,7 +82,8 @@ static jets_case base_case(const opts *o, const eos_t *eos) {
                      .fit_from = o->fit_from,
                      .fit_to = o->fit_to,
                      .dt_margin = o->dt_margin,
-                     .G = o->G};
+                     .G = o->G,
+                     .strength_set = o->strength_set};
 }
 
 static int sweep_kh0(const opts *o, const eos_t *eos) {
@@ -124,7 +132,13 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
                             0.5 * r.spike_len,
                             r.t_end,
                             r.status,
-                            (double)r.particles};
+                            (double)r.particles,
+                            r.v_bubble,
+                            r.v_spike_nl,
+                            r.v_bubble_nl,
+                            r.keta_fit0,
+                            r.keta_fit1,
+                            r.k * r.deta_end};
       ms_csv_row(af.f, sizeof row / sizeof *row, row);
       fflush(af.f);
       printf("kh0 %-5g ncol %-4ld a0/h0 %.3f du %.4f v_lin %.4f v_spike %.4f (ratio %.3f) "
@@ -135,6 +149,11 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
              r.v_spike_peak, r.v_spike_late, r.v_spike_max, r.v_tip, r.v_eta, r.eta_b,
              0.5 * r.spike_len, r.particles, r.steps, r.status ? "; STOPPED: " : "",
              r.status ? r.err : "");
+      printf(
+          "    second order [VelikovichDimonte1996]: spike %.4f vs eta*(1+k eta) %.4f (%+.1f %%), "
+          "bubble %.4f vs %.4f; k eta %.3f -> %.3f, k deta %.3f; tip u_fs + spike %.4f km/s\n",
+          r.v_spike, r.v_spike_nl, 100 * (r.v_spike / r.v_spike_nl - 1), r.v_bubble, r.v_bubble_nl,
+          r.keta_fit0, r.keta_fit1, r.k * r.deta_end, r.du + r.v_spike);
       fflush(stdout);
     }
   return ms_afile_commit(&af) == MS_OK ? 0 : 1;
@@ -233,6 +252,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--strength-obs")) o.sobs = atof(v);
     else if (!strcmp(a, "--strength-depth")) o.sdepth = atof(v);
     else if (!strcmp(a, "--dt-margin")) o.dt_margin = atof(v);
+    else if (!strcmp(a, "--strength-set")) o.strength_set = v;
     else if (!strcmp(a, "--shear-modulus")) o.G = atof(v);
     else if (!strcmp(a, "--strength-kh0")) o.skh0 = atof(v);
     else if (!strcmp(a, "--strength-ncol")) o.sncol = atol(v);

@@ -55,6 +55,9 @@ static ms_status build(const jets_case *c, double width, bool grooved, double de
     len += snprintf(text + len, sizeof text - (size_t)len,
                     "  yield: elastic_plastic\n  shear_modulus: %.17g\n  yield_stress: %.17g\n",
                     c->G, c->Y);
+  else if (c->strength_set)
+    len += snprintf(text + len, sizeof text - (size_t)len,
+                    "  yield: steinberg_guinan\n  strength_set: %s\n", c->strength_set);
   if (grooved)
     snprintf(text + len, sizeof text - (size_t)len,
              "  surface: {profile: sine, depth: %.17g, wavelength: %.17g}\n", 2 * h0, lambda);
@@ -147,6 +150,21 @@ static void classify(const ptl_state *ps, double lambda, double k, double h, uin
   *a0 = 2 * c1 / (double)ns; /* x_top − h0 (1 − cos ky): the cosine coefficient is h0 */
 }
 
+/* The weakly nonlinear impulsive theory of a free surface (Atwood number −1; [VelikovichDimonte1996;
+ * ZhangSohn1997], derived for this case in docs/validation.md "Microjets"): incompressible,
+ * irrotational, pressure-free surface, the first harmonic η cos ky with η̇ constant; to second
+ * order the surface is η cos ky + (k/2)(η² − η_b²) cos 2ky, so the spike (on the valley's axis)
+ * sits at η + (k/2)(η² − η_b²) and the bubble at −η + (k/2)(η² − η_b²) from the mean surface,
+ * their velocities η̇ (1 ± k η). From the measured η, over [k0, k1): the predicted spike and
+ * bubble positions (up to the constant −(k/2) η_b², which no slope sees). */
+static void nl_prediction(const jets_result *r, const double *eta, double eta_b, long k0, long k1,
+                          double *spike, double *bubble) {
+  for (long k = k0; k < k1; k++) {
+    const double h2 = 0.5 * r->k * (eta[k] * eta[k] - eta_b * eta_b);
+    spike[k] = eta[k] + h2, bubble[k] = -eta[k] + h2;
+  }
+}
+
 ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) {
   memset(r, 0, sizeof *r);
   const double rho0 = eos_rho0(c->eos);
@@ -171,9 +189,10 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   r->dt = g.dt;
   r->particles = (long)g.particles;
   const long nsteps = (long)ceil(t_end / r->dt);
-  double *buf = malloc(7 * (size_t)nsteps * sizeof *buf);
+  double *buf = malloc(10 * (size_t)nsteps * sizeof *buf);
   double *x_fs = buf, *u_fs = buf + nsteps, *tt = buf + 2 * nsteps, *xs = buf + 3 * nsteps;
   double *eta = buf + 4 * nsteps, *vt = buf + 5 * nsteps, *rel = buf + 6 * nsteps;
+  double *relb = buf + 7 * nsteps, *nl = buf + 8 * nsteps, *nlb = buf + 9 * nsteps;
   double dt_flat = 0;
   st = run_flat(c, depth, nsteps, x_fs, u_fs, &dt_flat, r);
   if (st != MS_OK || fabs(dt_flat - r->dt) > 1e-12 * r->dt) {
@@ -212,7 +231,7 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
     x_va /= n_va;
     tt[k] = (double)(k + 1) * r->dt;
     xs[k] = x_sp - x_fs[k], eta[k] = 0.5 * (x_va - x_bu), vt[k] = v_sp - u_fs[k];
-    rel[k] = x_va - x_fs[k];
+    rel[k] = x_va - x_fs[k], relb[k] = x_bu - x_fs[k];
     n = k + 1;
     if (trace && (k % every == 0 || k == nsteps - 1))
       fprintf(trace, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", tt[k], x_sp, x_bu, x_fs[k],
@@ -231,7 +250,8 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   while (k1 < n && tt[k1] <= t_fit_end) k1++;
   const long nfit = k1 - k0;
   r->v_lin = r->v_spike = r->v_tip = r->v_eta = r->du = r->v_spike_peak = r->v_spike_late =
-      r->v_spike_max = NAN;
+      r->v_spike_max = r->v_bubble = r->v_spike_nl = r->v_bubble_nl = r->keta_fit0 = r->keta_fit1 =
+          r->deta_end = NAN;
   if (nfit >= 10) {
     double du = 0, vtip = 0;
     for (long k = k0; k < k1; k++) du += u_fs[k], vtip += vt[k];
@@ -241,6 +261,12 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
     r->v_spike_max = jets_slope(tt + k0, xs + k0, nfit);
     r->v_eta = jets_slope(tt + k0, eta + k0, nfit);
     r->v_lin = r->k * r->a0 * (1 - c->up / r->us) * r->du;
+    nl_prediction(r, eta, kb < n ? eta[kb] : eta[0], k0, k1, nl, nlb);
+    r->v_bubble = jets_slope(tt + k0, relb + k0, nfit);
+    r->v_spike_nl = jets_slope(tt + k0, nl + k0, nfit);
+    r->v_bubble_nl = jets_slope(tt + k0, nlb + k0, nfit);
+    r->keta_fit0 = r->k * eta[k0], r->keta_fit1 = r->k * eta[k1 - 1];
+    r->deta_end = eta[k1 - 1] - (kb < n ? eta[kb] : eta[0]);
     /* the tip's history: the largest slope over a sliding λ/U_s after breakout, and the slope
      * over the last λ/U_s (a jet held by its neck decelerates) */
     const long w = (long)ceil(r->lambda / r->us / r->dt);

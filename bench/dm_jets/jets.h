@@ -13,18 +13,20 @@
 #include "ptl_region.h"
 
 typedef struct jets_case {
-  const eos_t *eos;     /* the sample's EOS */
-  double up;            /* piston velocity, km/s */
-  double h;             /* lattice spacing, cm */
-  long ncol;            /* spacings per groove wavelength (λ = ncol h, the slab's width) */
-  double kh0;           /* k h0 of the groove: depth 2 h0 (peak to valley), k = 2π/λ */
-  double depth_wl;      /* slab depth (drive face to the groove peaks) in wavelengths */
-  double obs_wl;        /* run time after breakout, in λ/U_s */
-  double fit_from;      /* the fit window starts this many λ/U_s after breakout */
-  double fit_to;        /* and ends this many (or at the run's end) */
-  double Y, G;          /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
-  double dt_margin;     /* the region's dt_margin */
-  const char *snapshot; /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
+  const eos_t *eos;         /* the sample's EOS */
+  double up;                /* piston velocity, km/s */
+  double h;                 /* lattice spacing, cm */
+  long ncol;                /* spacings per groove wavelength (λ = ncol h, the slab's width) */
+  double kh0;               /* k h0 of the groove: depth 2 h0 (peak to valley), k = 2π/λ */
+  double depth_wl;          /* slab depth (drive face to the groove peaks) in wavelengths */
+  double obs_wl;            /* run time after breakout, in λ/U_s */
+  double fit_from;          /* the fit window starts this many λ/U_s after breakout */
+  double fit_to;            /* and ends this many (or at the run's end) */
+  double Y, G;              /* Y > 0: yield elastic_plastic with these (GPa); Y = 0: yield none */
+  const char *strength_set; /* if not NULL (and Y = 0): yield steinberg_guinan with this
+                             * built-in set (particles/dm/dm_strength.c, [Steinberg1996]) */
+  double dt_margin;         /* the region's dt_margin */
+  const char *snapshot;     /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
 } jets_case;
 
 typedef struct jets_result {
@@ -48,10 +50,18 @@ typedef struct jets_result {
   double v_spike_late; /* the slope over the run's last λ/U_s */
   double v_tip;        /* the leading particle's velocity − u_fs(flat), mean over the window */
   double v_eta;        /* slope of η over the fit window (the amplitude growth rate) */
-  double deta_max;     /* max η − η_b over the run, cm */
-  double t_eta_max;    /* when, after breakout, 10 µs */
-  int arrested;        /* η reached its maximum before the last 10 % of the run */
-  double spike_len;    /* x_spike − x_bubble at the end, cm */
+  /* the weakly nonlinear (second-order) impulsive theory for |A| = 1 (jets.c): spike and bubble
+   * at ±η + (k/2)(η² − η_b²) about the bulk surface, from the measured η */
+  double v_bubble;    /* slope of x_peak − x_fs over the fit window (negative: it lags) */
+  double v_spike_nl;  /* slope of η + (k/2) η² over the fit window: the predicted spike */
+  double v_bubble_nl; /* slope of −η + (k/2) η²: the predicted bubble */
+  double keta_fit0;   /* k η at the fit window's start and end */
+  double keta_fit1;
+  double deta_end;  /* η − η_b at the fit window's end, cm */
+  double deta_max;  /* max η − η_b over the run, cm */
+  double t_eta_max; /* when, after breakout, 10 µs */
+  int arrested;     /* η reached its maximum before the last 10 % of the run */
+  double spike_len; /* x_spike − x_bubble at the end, cm */
   long steps, particles;
 } jets_result;
 

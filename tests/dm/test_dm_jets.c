@@ -9,7 +9,9 @@
  * free surface, one wavelength wide and periodic, slab depth 1.5 λ:
  *   - k h0 = 0.1 (λ = 128 h): the amplitude's growth rate over [t_b + λ/U_s, t_b + 3 λ/U_s]
  *     (the slope of (x_valley − x_peak)/2) is Richtmyer's impulsive k a0 (1 − u_p/U_s) Δu
- *     [Richtmyer1960; Buttler2012] within 10 %, and the spike tip runs ahead of it;
+ *     [Richtmyer1960; Buttler2012] within 10 %, and the spike tip runs ahead of it by the
+ *     second harmonic of the weakly nonlinear theory [VelikovichDimonte1996; ZhangSohn1997]:
+ *     the spike's velocity over the free surface is η̇ (1 + k η) within 10 %;
  *   - k h0 = 0.5 with strength (elastic–perfectly plastic, G = 8.6 GPa): the growth η_max − η_b
  *     is arrested at Y = 1 and 2 GPa, and halves when Y doubles (∝ 1/Y, [Piriz2008;
  *     Dimonte2011]) to within a log–log slope of −1 ± 0.25. Why these two: below 1 GPa the
@@ -98,6 +100,18 @@ static void test_linear_growth(void **state) {
   /* the spike leads the amplitude (measured +29 % over k a0+ du, +34 % over the amplitude's
    * rate): a model without the nonlinear asymmetry (or with the jets held back) fails this */
   assert_true(r.v_spike > 1.1 * r.v_eta);
+  /* ... and by as much as the weakly nonlinear theory of a free surface says: to second order
+   * [VelikovichDimonte1996; ZhangSohn1997] the spike sits at η + (k/2)(η² − η_b²) from the mean
+   * surface (velocity η̇ (1 + k η)), η the measured amplitude. Over the window k η runs from
+   * 0.18 to 0.69. 10 %: the issue's bound on the spike; the theory's next order is O((k η)²)
+   * of η̇ (measured −6.6 % here; −3.9 % at λ = 256 h, −14 % at 64 h, where the amplitude itself
+   * is 16 % slow). Seen to fail with the second harmonic's sign flipped in jets.c (η̇ (1 − k η):
+   * the spike 2.4× the prediction, measured) and without it (η̇ alone: 1.34×). */
+  printf("second order: spike %.4f km/s vs eta'(1 + k eta) %.4f (%+.1f %%); bubble %.4f vs "
+         "-eta'(1 - k eta) %.4f; k eta %.3f -> %.3f over the window\n",
+         r.v_spike, r.v_spike_nl, 100 * (r.v_spike / r.v_spike_nl - 1), r.v_bubble, r.v_bubble_nl,
+         r.keta_fit0, r.keta_fit1);
+  assert_true(fabs(r.v_spike / r.v_spike_nl - 1) < 0.10);
 }
 
 static void test_strength_arrests_growth(void **state) {
