@@ -312,8 +312,15 @@ typedef struct dm_fin {
    * kick's time-centred velocity), lcon [bonds] the contact's rest length of each broken bond
    * (−1 while not broken; nlcon = the model's bond count), gcon [bonds] its dashpot force of the
    * last evaluation, dtclose[i] its closing-speed step of the last evaluation; lam_end[256]
-   * per material index: the smallest r/L at which its EOS springs are finite (0: none) */
-  uint8_t *failed;
+   * per material index: the smallest r/L at which its EOS springs are finite (0: none).
+   * A bond is broken when either of its particles has failed: it leaves the intact one's F,
+   * stress and force, and its compression is the contact's (docs/particles-dm.md "Fracture").
+   * fresh[i] = 1: failed in the stress pass under way (committed by dm_frac_commit after it);
+   * cut[i] = 1: i has a broken bond (failed, or a failed family member); nintact[i] its intact
+   * family members (failed: 0); fq [n], fmark [n]: dm_frac_commit's work list and marks */
+  uint8_t *failed, *fresh, *cut, *fmark;
+  uint32_t *nintact;
+  size_t *fq;
   double *broken;
   double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose, *lam_end;
   size_t nlcon;
