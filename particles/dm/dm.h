@@ -319,6 +319,9 @@ typedef struct dm_fin {
    * cut[i] = 1: i has a broken bond (failed, or a failed family member); nintact[i] its intact
    * family members (failed: 0); fq [n], fmark [n]: dm_frac_commit's work list and marks */
   uint8_t *failed, *fresh, *cut, *fmark;
+  /* failures by cause since set-up (diagnostics, not checkpointed): the criterion of
+   * dm_frac_stress, the isolated-particle rule, a degenerate F (dm_frac_degenerate) */
+  long nfail_stress, nfail_isolated, nfail_degenerate;
   uint32_t *nintact;
   size_t *fq;
   double *broken;

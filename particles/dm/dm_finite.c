@@ -162,10 +162,14 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = dm_det3(F);
+  const double J = dm_det3(F), J_prev = f->J[i];
   f->J[i] = J;
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = st->mass[i] / st->vol[i];
+  /* a particle that has lost family members and whose F leaves the material's range fails
+   * (dm_frac_degenerate); anywhere else the run stops */
+  if ((!(J > 0) || !isfinite(J)) && dm_frac_degenerate(f, i, J_prev))
+    return dm_frac_failed_step(f, i);
   if (!(J > 0) || !isfinite(J)) {
     *what = "J = det F", *val = J;
     return -1.0;
@@ -178,6 +182,8 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
   const double trD = L[0] + L[4] + L[8];
   const double p = eos_pressure(mt->eos, rho0 / J, f->e[i]);
   const double c = eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
+  if ((!isfinite(p) || !isfinite(c)) && dm_frac_degenerate(f, i, J_prev))
+    return dm_frac_failed_step(f, i);
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
@@ -193,6 +199,8 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
     if (!isfinite(T) && mt->frac.model != DM_FRACTURE_NONE && rho < eos_rho0(mt->eos)) {
       Y = 0.0; /* stretched beyond the cold curve (below ~0.63 ρ0 for Al): far beyond the spall
                 * strength, it fails in this pass (dm_frac_stress); no strength meanwhile */
+    } else if (!isfinite(T) && dm_frac_degenerate(f, i, J_prev)) {
+      return dm_frac_failed_step(f, i);
     } else if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
       return -1.0;

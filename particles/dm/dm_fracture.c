@@ -214,7 +214,10 @@ bool dm_frac_commit(dm_fin *f) {
   const size_t n = f->n, n1 = n ? n : 1;
   size_t nq = 0, head = 0, *marked = f->fq + n1;
   for (size_t i = 0; i < n; ++i)
-    if (f->fresh[i]) f->fresh[i] = 0, f->failed[i] = 2, f->fq[nq++] = i;
+    if (f->fresh[i]) {
+      ++*(f->fresh[i] == 2 ? &f->nfail_degenerate : &f->nfail_stress);
+      f->fresh[i] = 0, f->failed[i] = 2, f->fq[nq++] = i;
+    }
   if (!nq) return false;
   while (head < nq) { /* a round: the failures so far break their bonds */
     const size_t end = nq;
@@ -236,7 +239,7 @@ bool dm_frac_commit(dm_fin *f) {
       if (bc == DM_PRESCRIBED || bc == DM_FIXED) continue;
       const double n0 = (double)(m->start[i + 1] - m->start[i]);
       if ((double)f->nintact[i] < DM_FRAC_MIN_INTACT * n0 || !(cond <= DM_FRAC_COND_MAX))
-        fail_isolated(f, i), f->fq[nq++] = i;
+        fail_isolated(f, i), f->fq[nq++] = i, ++f->nfail_isolated;
     }
     for (size_t h = head; h < end; ++h) f->failed[f->fq[h]] = 1;
     for (size_t h = end; h < nq; ++h) f->failed[f->fq[h]] = 2;
@@ -259,6 +262,17 @@ void dm_frac_restore(dm_fin *f) {
       lost = member_state(f, m->nbr[b]) != 0;
     if (lost) f->cut[i] = 1, reshape(f, i, false);
   }
+}
+
+bool dm_frac_degenerate(dm_fin *f, size_t i, double J_prev) {
+  if (!f->failed || !f->cut[i] || f->mat[f->imat[i]].frac.model == DM_FRACTURE_NONE) return false;
+  const uint8_t bc = f->m->s->bc[i];
+  if (bc == DM_PRESCRIBED || bc == DM_FIXED) return false;
+  f->fresh[i] = 2; /* as a failure in dm_frac_stress: committed after the pass */
+  f->broken[i] += f->ehg[i];
+  f->ehg[i] = 0.0, f->m->kappa[i] = 0.0;
+  f->J[i] = J_prev; /* held from the last valid state, as a failed particle's */
+  return true;
 }
 
 /* The pair vectors of bond b of particle i (to k): ξ = (X_k − X_i) + shift and y = ξ + w_k − w_i

@@ -110,6 +110,11 @@ static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed 
  * A⁻¹, nintact and cut from the failed flags alone (a checkpoint's), the same bits as the run's
  * last dm_frac_commit. docs/particles-dm.md "Fracture". */
 bool dm_frac_commit(dm_fin *f); /* true if a particle failed */
+/* dm_frac_degenerate, from the stress pass when particle i's F gives no valid state (J ≤ 0, or
+ * p, c or T not finite): if i has lost family members (cut) and can fail, it fails now (fresh,
+ * its penalty energy booked, J held at J_prev) and true is returned (the caller then returns
+ * dm_frac_failed_step); false: the run stops as before. */
+bool dm_frac_degenerate(dm_fin *f, size_t i, double J_prev);
 void dm_frac_restore(dm_fin *f);
 #define DM_FRAC_MIN_INTACT 0.25
 #define DM_FRAC_COND_MAX   100.0
