@@ -433,14 +433,15 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
  * of failed particles (Σ econ[i], kJ; the accumulated work of the pair forces) and the contact
  * potential Σ_pairs κ (|ξ| − |y|)²/2 of the current configuration (kJ; equal to the contact
  * energy up to the integrator's O(dt²)), the number of failed particles, and whether bond (i, k)
- * is broken (both failed). K + U + E_hg + broken + contact − W is conserved to round-off. All
+ * is broken (either failed: no tension or shear across it, only the contact's compression; so a
+ * failed particle is a fragment of its own). K + U + E_hg + broken + contact − W is conserved to round-off. All
  * 0/false without fracture. */
 double dm_fin_broken_energy(const dm_fin *f);
 double dm_fin_contact_energy(const dm_fin *f);
 double dm_fin_contact_potential(const dm_fin *f);
 size_t dm_fin_failed_count(const dm_fin *f);
 static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
-  return f->failed && f->failed[i] && f->failed[k];
+  return f->failed && (f->failed[i] || f->failed[k]);
 }
 /* Checkpoints (dm_fin_checkpoint.c): every array a step reads (the external force and its work
  * too, when one is installed) and the state's w, u, under
