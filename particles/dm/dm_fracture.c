@@ -7,7 +7,11 @@
  * A failed particle keeps its mass, momentum, family and internal energy, but no longer has a
  * stress of its own: no F over its family (whose members may have scattered), no EOS, no
  * deviator, no bond penalty (Q_i = 0, κ_i = 0; the penalty energy it held is booked as broken).
- * A bond is broken when both of its particles have failed. Across a broken bond acts only a
+ * A bond is broken when either of its particles has failed: it leaves the intact one's F,
+ * stress and force (dm_frac_commit rebuilds its shape matrix over its intact members, as LAMMPS
+ * smd/tlsph leaves failed particles out of K and F [Ganzenmuller2015]); an intact particle left
+ * with too few members, or whose F leaves its material's range, fails too (dm_frac_commit,
+ * dm_frac_degenerate). Across a broken bond acts only a
  * compression-only central pair force, after the short-range contact forces of bond-based
  * peridynamics ([SillingAskari2005]; LAMMPS PERI, [Parks2008]), here across the broken bonds of
  * the families only (they act between any two nodes closer than a contact distance there):
@@ -24,10 +28,9 @@
  * along the pair while it approaches in contact (η_ik = C_l √(κ_ik s √(m_i m_k)), s the spring's
  * current stiffness over κ, C_l the linear viscosity's coefficient: in a 1D chain at rest
  * η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
- * particle) damps the collisions; its work is the particles' heat. A bond between a failed and an
- * intact particle is not broken: the intact particle's correspondence stress (tension
- * included) and its penalty still act through it, so a crack needs two failed layers and the
- * fragments (dm_region.c: components of the unbroken bonds) are unchanged by the contact.
+ * particle) damps the collisions; its work is the particles' heat. (Before issue 25's
+ * follow-up a failed–intact bond was not broken: a failed neighbour drifting off dilated the
+ * intact particle it hung on.) Fragments (dm_region.c) are the components of the unbroken bonds.
  *
  * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept); the
  * springs derive from the potential Σ_pairs κ L² ∫_λ^1 g. The contact energy econ is booked as
