@@ -21,7 +21,9 @@
  *  h. the isolated-particle rule: a particle left with fewer than a quarter of its family, or
  *     with collinear members only (cond A = ∞), fails at the commit; one with three members
  *     around it does not; the penalty energy moves to broken (E_hg + broken unchanged) and the
- *     shape matrices are those dm_frac_restore rebuilds from the flags (the same bits). */
+ *     shape matrices are those dm_frac_restore rebuilds from the flags (the same bits);
+ *  i. a particle that has lost members and whose F turns degenerate (J < 0) fails instead of
+ *     stopping the run. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -572,17 +574,41 @@ static void test_isolated(void **state) {
   }
 }
 
+/* i. A degenerate F after lost members (dm_frac_degenerate): in a 2D block (9 × 9, periodic in
+ * y, 8 members each) the three upper members of particle c fail (it keeps 5 of 8, cond A 4/3:
+ * intact); c is then moved down by 1.1 h, so its fit over the five lower and side members gives
+ * F_yy = 1 − 1.1·3h²/3h² = −0.1, J < 0 (its lower neighbours, with c one of 8 members, stay at
+ * J ≈ 0.82). c fails in that stress pass (J held at 1, its penalty energy booked) instead of
+ * stopping the run; the run goes on with the balance at round-off. */
+static void test_degenerate(void **state) {
+  (void)state;
+  dm_fin_material mat = {.frac = {.model = DM_FRACTURE_MEAN_STRESS, .spall_strength = 1e3}};
+  bar b;
+  const long nx = 9, ny = 9, c = 4 * nx + 4;
+  const double h = 0.001;
+  bar_build(&b, 2, nx, ny, h, 0.0, 0.0, 0, &mat, 1.0);
+  for (long j = c + nx - 1; j <= c + nx + 1; ++j) b.f->fresh[j] = 1;
+  assert_true(dm_frac_commit(b.f));
+  assert_false(b.f->failed[c]);
+  assert_int_equal(b.f->nintact[c], 5);
+  b.s.w[3 * c + 1] = -1.1 * h;
+  b.f->ehg[c] = 1e-9;
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK); /* before: "J = det F" stopped it */
+  assert_true(b.f->failed[c] && b.f->nfail_degenerate == 1);
+  assert_true(b.f->J[c] == 1.0 && b.f->ehg[c] == 0.0 && b.f->broken[c] >= 1e-9);
+  const double E0 = bar_energy(&b);
+  for (int step = 0; step < 200; ++step) assert_int_equal(dm_fin_step(b.f), MS_OK);
+  assert_true(fabs(bar_energy(&b) - E0) < 1e-12 * fabs(E0));
+  bar_free(&b);
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_max_principal),
-                                     cmocka_unit_test(test_pull_apart_1d),
-                                     cmocka_unit_test(test_pull_apart_2d),
-                                     cmocka_unit_test(test_pull_apart_sg),
-                                     cmocka_unit_test(test_failed_compression),
-                                     cmocka_unit_test(test_threshold),
-                                     cmocka_unit_test(test_contact_rebound),
-                                     cmocka_unit_test(test_contact_limit),
-                                     cmocka_unit_test(test_failed_cluster),
-                                     cmocka_unit_test(test_failed_member_leaves_F),
-                                     cmocka_unit_test(test_isolated)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_max_principal),      cmocka_unit_test(test_pull_apart_1d),
+      cmocka_unit_test(test_pull_apart_2d),      cmocka_unit_test(test_pull_apart_sg),
+      cmocka_unit_test(test_failed_compression), cmocka_unit_test(test_threshold),
+      cmocka_unit_test(test_contact_rebound),    cmocka_unit_test(test_contact_limit),
+      cmocka_unit_test(test_failed_cluster),     cmocka_unit_test(test_failed_member_leaves_F),
+      cmocka_unit_test(test_isolated),           cmocka_unit_test(test_degenerate)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
