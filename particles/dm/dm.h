@@ -312,8 +312,18 @@ typedef struct dm_fin {
    * kick's time-centred velocity), lcon [bonds] the contact's rest length of each broken bond
    * (−1 while not broken; nlcon = the model's bond count), gcon [bonds] its dashpot force of the
    * last evaluation, dtclose[i] its closing-speed step of the last evaluation; lam_end[256]
-   * per material index: the smallest r/L at which its EOS springs are finite (0: none) */
-  uint8_t *failed;
+   * per material index: the smallest r/L at which its EOS springs are finite (0: none).
+   * A bond is broken when either of its particles has failed: it leaves the intact one's F,
+   * stress and force, and its compression is the contact's (docs/particles-dm.md "Fracture").
+   * fresh[i] = 1: failed in the stress pass under way (committed by dm_frac_commit after it);
+   * cut[i] = 1: i has a broken bond (failed, or a failed family member); nintact[i] its intact
+   * family members (failed: 0); fq [n], fmark [n]: dm_frac_commit's work list and marks */
+  uint8_t *failed, *fresh, *cut, *fmark;
+  /* failures by cause since set-up (diagnostics, not checkpointed): the criterion of
+   * dm_frac_stress, the isolated-particle rule, a degenerate F (dm_frac_degenerate) */
+  long nfail_stress, nfail_isolated, nfail_degenerate;
+  uint32_t *nintact;
+  size_t *fq;
   double *broken;
   double *kcon, *dtcon, *fcon, *econ, *lcon, *gcon, *dtclose, *lam_end;
   size_t nlcon;
@@ -423,14 +433,15 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
  * of failed particles (Σ econ[i], kJ; the accumulated work of the pair forces) and the contact
  * potential Σ_pairs κ (|ξ| − |y|)²/2 of the current configuration (kJ; equal to the contact
  * energy up to the integrator's O(dt²)), the number of failed particles, and whether bond (i, k)
- * is broken (both failed). K + U + E_hg + broken + contact − W is conserved to round-off. All
+ * is broken (either failed: no tension or shear across it, only the contact's compression; so a
+ * failed particle is a fragment of its own). K + U + E_hg + broken + contact − W is conserved to round-off. All
  * 0/false without fracture. */
 double dm_fin_broken_energy(const dm_fin *f);
 double dm_fin_contact_energy(const dm_fin *f);
 double dm_fin_contact_potential(const dm_fin *f);
 size_t dm_fin_failed_count(const dm_fin *f);
 static inline bool dm_fin_bond_broken(const dm_fin *f, size_t i, size_t k) {
-  return f->failed && f->failed[i] && f->failed[k];
+  return f->failed && (f->failed[i] || f->failed[k]);
 }
 /* Checkpoints (dm_fin_checkpoint.c): every array a step reads (the external force and its work
  * too, when one is installed) and the state's w, u, under

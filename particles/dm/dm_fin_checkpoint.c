@@ -164,5 +164,7 @@ ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *
   /* symmetry planes: the checkpoint holds the real particles; the mirror ghosts' rows (w, u, v̄,
    * M Q M, κ, failed) from their partners, as every step leaves them (kick_velocities) */
   if (st == MS_OK && f->sym.n) dm_sym_sync(f);
+  /* the shape matrices of particles with failed members, from the failed flags (dm_fracture.c) */
+  if (st == MS_OK) dm_frac_restore(f);
   return st;
 }

@@ -39,12 +39,14 @@ dmf_fields dmf_live_fields(dmf_run *r) {
  * and the family's non-affine part: √(Σ_k |Δw_ik − (F − I)ξ_ik|² / Σ_k |ξ_ik|²), the bond
  * stretch the fit cannot represent — the zero-energy (hourglass) modes the bond penalty acts
  * on (docs/particles-dm.md "Finite deformation"); 0 under any uniform deformation. */
-static double kinematics(const dm_model *m, const double *w, size_t i, double F[9]) {
+static double kinematics(const dm_model *m, const double *w, const uint8_t *failed, size_t i,
+                         double F[9]) {
   double C[9];
-  dm_fin_displacement_gradient(m, w, i, C);
+  dm_fin_displacement_gradient(m, w, failed, i, C);
   double zz = 0, xx = 0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
+    if (failed && failed[k]) continue; /* a broken bond */
     double xi[3];
     dm_bond_vector(m, i, b, xi);
     for (int a = 0; a < 3; ++a) {
@@ -72,7 +74,7 @@ ms_status dmf_write_snapshot(const dmf_run *r, const dmf_fields *fl, double t, l
   int64_t *mat = ms_calloc(n + 1, sizeof *mat);
   for (size_t i = 0; i < n; ++i) {
     double F[9];
-    hg[i] = kinematics(r->m, fl->w, i, F);
+    hg[i] = kinematics(r->m, fl->w, r->f ? r->f->failed : NULL, i, F);
     const double rho0 = s->mass[i] / s->vol[i];
     J[i] = fl->J ? fl->J[i] : dm_det3(F);
     rho[i] = rho0 / J[i];

@@ -59,11 +59,11 @@ typedef struct moments {
  * (lane 3 unused), updated per bond by ξ_c (broadcast) times Δa: three multiply-adds per moment,
  * no lane shuffles in the loop, independent accumulators. The flags are constants at each call
  * site, so each use compiles to its own loop; Bc and sc get the same bits in each. */
-MS_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, size_t i,
-                                                 const double *restrict w, const double *restrict u,
-                                                 const double *restrict vb,
-                                                 const double *restrict vc, double dt, bool stress,
-                                                 bool kick, bool close, moments *restrict M) {
+MS_KERNEL_INLINE static inline void
+bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
+             const double *restrict u, const double *restrict vb, const double *restrict vc,
+             const uint8_t *restrict failed, double dt, bool stress, bool kick, bool close,
+             moments *restrict M) {
   const double *restrict X = m->s->X;
   const v4d zero = {0}, xi0 = ld4(&X[3 * i]), wi = ld4(&w[3 * i]);
   const v4d ui = stress ? ld4(&u[3 * i]) : zero;
@@ -75,6 +75,7 @@ MS_KERNEL_INLINE static inline void bond_moments(const dm_model *restrict m, siz
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
+    if (failed && failed[k]) continue; /* a broken bond (dm_fracture.c) */
     const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
     const v4d x = bc4(xi[0]), y = bc4(xi[1]), z = bc4(xi[2]);
     const v4d wk = ld4(&w[3 * k]);
@@ -114,10 +115,10 @@ MS_KERNEL_INLINE static inline void mul33(const double *restrict B, const double
       r[3 * a + c] = B[3 * a] * A[c] + B[3 * a + 1] * A[3 + c] + B[3 * a + 2] * A[6 + c];
 }
 
-MS_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i,
-                                                   double C[9]) {
+MS_KERNEL_CLONES void dm_fin_displacement_gradient(const dm_model *m, const double *w,
+                                                   const uint8_t *failed, size_t i, double C[9]) {
   moments M; /* u = w with dt = 0: Bw is Σ Δw ⊗ ξ exactly (Bu unused) */
-  bond_moments(m, i, w, w, NULL, NULL, 0.0, true, false, false, &M);
+  bond_moments(m, i, w, w, NULL, NULL, failed, 0.0, true, false, false, &M);
   mul33(M.Bw, &m->Ainv[9 * i], C);
 }
 
@@ -147,23 +148,28 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
   const double *Ai = &m->Ainv[9 * i];
   double C[9], Fd[9];
   moments M;
+  const uint8_t *fl = f->failed; /* its bonds to failed particles are broken (dm_fracture.c) */
   if (h > 0 && f->pending) {
-    bond_moments(m, i, st->w, st->u, f->vbar, f->vclose, dt, true, true, true, &M);
+    bond_moments(m, i, st->w, st->u, f->vbar, f->vclose, fl, dt, true, true, true, &M);
     if (!kick_energy(f, i, f->h_close, M.Bc, M.sc)) *bad_e = true;
     if (f->keep_e) f->keep_e[i] = f->e[i], f->keep_ehg[i] = f->ehg[i];
     if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
   } else if (h > 0) {
-    bond_moments(m, i, st->w, st->u, f->vbar, NULL, dt, true, true, false, &M);
+    bond_moments(m, i, st->w, st->u, f->vbar, NULL, fl, dt, true, true, false, &M);
     if (!kick_energy(f, i, h, M.Bv, M.sv)) *bad_e = true;
-  } else bond_moments(m, i, st->w, st->u, NULL, NULL, dt, true, false, false, &M);
+  } else bond_moments(m, i, st->w, st->u, NULL, NULL, fl, dt, true, false, false, &M);
   mul33(M.Bw, Ai, C), mul33(M.Bu, Ai, Fd);
   double *F = &f->F[9 * i];
   for (int a = 0; a < 9; ++a) F[a] = C[a];
   F[0] += 1.0, F[4] += 1.0, F[8] += 1.0;
-  const double J = dm_det3(F);
+  const double J = dm_det3(F), J_prev = f->J[i];
   f->J[i] = J;
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = st->mass[i] / st->vol[i];
+  /* a particle that has lost family members and whose F leaves the material's range fails
+   * (dm_frac_degenerate); anywhere else the run stops */
+  if ((!(J > 0) || !isfinite(J)) && dm_frac_degenerate(f, i, J_prev))
+    return dm_frac_failed_step(f, i);
   if (!(J > 0) || !isfinite(J)) {
     *what = "J = det F", *val = J;
     return -1.0;
@@ -176,6 +182,8 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
   const double trD = L[0] + L[4] + L[8];
   const double p = eos_pressure(mt->eos, rho0 / J, f->e[i]);
   const double c = eos_sound_speed(mt->eos, rho0 / J, f->e[i]);
+  if ((!isfinite(p) || !isfinite(c)) && dm_frac_degenerate(f, i, J_prev))
+    return dm_frac_failed_step(f, i);
   if (!isfinite(p) || !isfinite(c)) {
     *what = "pressure p(rho, e)", *val = p;
     return -1.0;
@@ -191,6 +199,8 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
     if (!isfinite(T) && mt->frac.model != DM_FRACTURE_NONE && rho < eos_rho0(mt->eos)) {
       Y = 0.0; /* stretched beyond the cold curve (below ~0.63 ρ0 for Al): far beyond the spall
                 * strength, it fails in this pass (dm_frac_stress); no strength meanwhile */
+    } else if (!isfinite(T) && dm_frac_degenerate(f, i, J_prev)) {
+      return dm_frac_failed_step(f, i);
     } else if (!isfinite(T)) {
       *what = "temperature T (no cold curve at this density)", *val = rho;
       return -1.0;
@@ -261,17 +271,25 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
 /* The force on particle i, F_i = Σ_k [(Q_i + Q_k) ξ_ik + (κ_i + κ_k) Δw_ik] (dm_model.c's
  * gather_force, the same sum) = Q_i Σ_k ξ_ik + Σ_k [Q_k ξ_ik + (κ_i + κ_k) Δw_ik]. m->Q holds
  * each Q transposed (stress_one), so Q_k ξ is Σ_c ξ_c (column c of Q_k): three broadcasts times
- * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. */
+ * contiguous 4-lane loads (lane 3 unused), no lane shuffles in the loop. The sum runs over the
+ * unbroken bonds (failed: NULL or both ends intact, dm_fracture.c), the same set from both ends,
+ * so the pair terms stay equal and opposite; a failed particle gets no bond force. */
 MS_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
-                                        size_t i, double *restrict F) {
+                                        const uint8_t *restrict failed, size_t i,
+                                        double *restrict F) {
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double ki = kap[i];
+  if (failed && failed[i]) {
+    F[3 * i] = F[3 * i + 1] = F[3 * i + 2] = 0.0;
+    return;
+  }
   const v4d zero = {0}, wi = ld4(&w[3 * i]), xi0 = ld4(&X[3 * i]);
   v4d r0 = zero, r1 = zero, r2 = zero, fw = zero;
   v4d sxi = zero; /* Σ_k ξ_ik */
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
+    if (failed && failed[k]) continue;
     const v4d xi = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - xi0; /* (X_k + shift) − X_i */
     const double x = xi[0], y = xi[1], z = xi[2];
     const double *q = &QT[9 * k];
@@ -294,8 +312,9 @@ MS_KERNEL_CLONES static void drift(double *restrict w, const double *restrict u,
 /* The pending closing half kick's energies of particle i (dm_fin_flush); false if e is not
  * finite. */
 MS_KERNEL_CLONES static bool flush_one(dm_fin *f, size_t i) {
+  if (dm_frac_failed(f, i)) return true; /* no bond force: no work (as in the stress pass) */
   moments M;
-  bond_moments(f->m, i, f->m->s->w, NULL, NULL, f->vclose, 0.0, false, false, true, &M);
+  bond_moments(f->m, i, f->m->s->w, NULL, NULL, f->vclose, f->failed, 0.0, false, false, true, &M);
   return kick_energy(f, i, f->h_close, M.Bc, M.sc);
 }
 
@@ -339,6 +358,8 @@ static ms_status forces(dm_fin *f, double dt, double h) {
   dm_state *st = f->m->s;
   if (dt > 0) drift(st->w, st->u, dt, 3 * f->n);
   if (f->sym.n) dm_sym_sync(f); /* the ghosts' w, Q, κ, failed for the gather */
+  /* this pass's failures break their bonds before the gather (the ghosts' w are current) */
+  if (dm_frac_commit(f) && f->sym.n) dm_sym_sync(f);
   if (bad < n) { /* redo the first bad particle serially for the report (no deviator step) */
     const char *what = "state";
     double val = 0;
@@ -348,7 +369,7 @@ static ms_status forces(dm_fin *f, double dt, double h) {
     return MS_ERR_UNSTABLE;
   }
 #pragma omp parallel for schedule(static) if (n > 4096)
-  for (long i = 0; i < n; ++i) gather_one(f->m, st->w, (size_t)i, f->frc);
+  for (long i = 0; i < n; ++i) gather_one(f->m, st->w, f->failed, (size_t)i, f->frc);
   if (f->failed && dm_frac_contact(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
   if (f->sr && dm_contact_force(f, &dtmin, &imin) != MS_OK) return MS_ERR_UNSTABLE;
   if (f->ext) { /* an external force (the rigid wall of dm_impact.c) */

@@ -7,7 +7,11 @@
  * A failed particle keeps its mass, momentum, family and internal energy, but no longer has a
  * stress of its own: no F over its family (whose members may have scattered), no EOS, no
  * deviator, no bond penalty (Q_i = 0, κ_i = 0; the penalty energy it held is booked as broken).
- * A bond is broken when both of its particles have failed. Across a broken bond acts only a
+ * A bond is broken when either of its particles has failed: it leaves the intact one's F,
+ * stress and force (dm_frac_commit rebuilds its shape matrix over its intact members, as LAMMPS
+ * smd/tlsph leaves failed particles out of K and F [Ganzenmuller2015]); an intact particle left
+ * with too few members, or whose F leaves its material's range, fails too (dm_frac_commit,
+ * dm_frac_degenerate). Across a broken bond acts only a
  * compression-only central pair force, after the short-range contact forces of bond-based
  * peridynamics ([SillingAskari2005]; LAMMPS PERI, [Parks2008]), here across the broken bonds of
  * the families only (they act between any two nodes closer than a contact distance there):
@@ -24,10 +28,9 @@
  * along the pair while it approaches in contact (η_ik = C_l √(κ_ik s √(m_i m_k)), s the spring's
  * current stiffness over κ, C_l the linear viscosity's coefficient: in a 1D chain at rest
  * η = C_l ρ0 c0 A, the q = C_l ρ c ℓ|tr D| of a
- * particle) damps the collisions; its work is the particles' heat. A bond between a failed and an
- * intact particle is not broken: the intact particle's correspondence stress (tension
- * included) and its penalty still act through it, so a crack needs two failed layers and the
- * fragments (dm_region.c: components of the unbroken bonds) are unchanged by the contact.
+ * particle) damps the collisions; its work is the particles' heat. (Before issue 25's
+ * follow-up a failed–intact bond was not broken: a failed neighbour drifting off dilated the
+ * intact particle it hung on.) Fragments (dm_region.c) are the components of the unbroken bonds.
  *
  * Energy: pair forces are central and antisymmetric (momentum and angular momentum kept); the
  * springs derive from the potential Σ_pairs κ L² ∫_λ^1 g. The contact energy econ is booked as
@@ -68,6 +71,10 @@ void dm_frac_alloc(dm_fin *f) {
   if (!any) return;
   const size_t n1 = f->n ? f->n : 1, na = f->nall > n1 ? f->nall : n1; /* na: with ghosts */
   f->failed = ms_calloc(na, 1);
+  f->fresh = ms_calloc(n1, 1), f->cut = ms_calloc(n1, 1), f->fmark = ms_calloc(n1, 1);
+  f->nintact = ms_calloc(n1, sizeof(uint32_t));
+  f->fq = ms_calloc(2 * n1, sizeof(size_t)); /* the work list, then the round's marked list */
+  for (size_t i = 0; i < f->n; ++i) f->nintact[i] = (uint32_t)(f->m->start[i + 1] - f->m->start[i]);
   f->broken = ms_calloc(n1, sizeof(double));
   f->kcon = ms_calloc(na, sizeof(double)), f->dtcon = ms_calloc(n1, sizeof(double));
   f->fcon = ms_calloc(3 * n1, sizeof(double)), f->econ = ms_calloc(n1, sizeof(double));
@@ -83,6 +90,8 @@ void dm_frac_alloc(dm_fin *f) {
 
 void dm_frac_free(dm_fin *f) {
   free(f->failed), free(f->broken), free(f->kcon), free(f->dtcon), free(f->fcon), free(f->econ);
+  free(f->fresh), free(f->cut), free(f->fmark), free(f->nintact), free(f->fq);
+  f->fresh = f->cut = f->fmark = NULL, f->nintact = NULL, f->fq = NULL;
   free(f->lcon), free(f->gcon), free(f->dtclose), free(f->lam_end);
   f->failed = NULL, f->broken = NULL;
   f->kcon = f->dtcon = f->fcon = f->econ = f->lcon = f->gcon = f->dtclose = NULL;
@@ -120,12 +129,13 @@ void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, do
                                : (sig[0] + sig[4] + sig[8]) / 3.0;
     const bool strained = fr->failure_strain > 0 && J - 1.0 >= fr->failure_strain;
     if (!(tension >= fr->spall_strength) && !strained) return;
-    f->failed[i] = 1;
+    f->fresh[i] = 1; /* failed from dm_frac_commit on, after this pass (no race on failed[]) */
     f->broken[i] += f->ehg[i]; /* the penalty's stored energy leaves E_hg: it is released */
     f->ehg[i] = 0.0;
     f->m->kappa[i] = 0.0;
   }
-  /* failed: no stress of its own (from the next evaluation on dm_frac_failed_step) */
+  /* failed: no stress of its own (from the next evaluation on dm_frac_failed_step); this
+   * evaluation's gather already has its bonds broken */
   for (int a = 0; a < 9; ++a) s[a] = 0.0, sig[a] = 0.0;
 }
 
@@ -133,12 +143,139 @@ double dm_frac_failed_step(dm_fin *f, size_t i) {
   double *Q = &f->m->Q[9 * i], *QP = &f->QP[9 * i], *sg = &f->sig[9 * i], *s = &f->s[9 * i];
   for (int a = 0; a < 9; ++a) Q[a] = QP[a] = sg[a] = s[a] = 0.0;
   f->q[i] = 0.0;
-  /* its intact neighbours' stress acts on it through the unbroken bonds: their speed of sound
-   * at rest (as c_L of the stress pass, without compression) bounds that part */
+  /* all its bonds are broken: only the contact acts on it (dtcon, dtclose, the contact pass);
+   * the material's speed of sound at rest (as c_L of the stress pass, without compression)
+   * still bounds its step, as before the bonds broke */
   const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double rho0 = eos_rho0(mt->eos), c0 = eos_c0(mt->eos);
   const double cL = sqrt(c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / (3.0 * rho0) : 0));
   return fmin(f->par.courant * f->par.ell / cL, f->dtcon[i]);
+}
+
+/* ---- broken bonds and the shape matrix (dm_frac_commit) ----
+ * The state of family member k during dm_frac_commit (a mirror ghost: its partner's): 0 intact,
+ * 1 failed before this commit, 2 failed with its bonds breaking in the current round, 4 failed
+ * in the current round's reshapes (its bonds break in the next round). */
+static uint8_t member_state(const dm_fin *f, size_t k) {
+  return f->failed[k < f->n ? k : f->m->s->partner[k]];
+}
+
+/* Particle i's shape matrix over the members it still holds (states 0, 4): A⁻¹ into m->Ainv
+ * (dm_sym_inverse, as dm_build_shape over the whole family: the same bits while none failed),
+ * nintact[i]; returns cond A (∞: singular, A⁻¹ = 0). With book, the bond-penalty energy of the
+ * bonds it loses in this round (members in state 2) moves from E_hg to broken, in proportion
+ * to their share of Σ|z|² over the bonds it held, z = Δw − (F − I)ξ the penalty's measure
+ * (dm_finite.c; F of this evaluation): a lost bond's penalty energy is released, as a failed
+ * particle's whole E_hg is. */
+static double reshape(dm_fin *f, size_t i, bool book) {
+  dm_model *m = f->m;
+  const double *w = m->s->w, *F = &f->F[9 * i];
+  double A[9] = {0}, zlost = 0.0, zheld = 0.0;
+  uint32_t cnt = 0;
+  for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
+    const size_t k = m->nbr[b];
+    const uint8_t sk = member_state(f, k);
+    if (sk == 1) continue;
+    double xi[3];
+    dm_bond_vector(m, i, b, xi);
+    if (sk != 2) {
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c) A[3 * a + c] += xi[a] * xi[c];
+      ++cnt;
+    }
+    if (!book) continue;
+    double zz = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double z = (w[3 * k + a] - w[3 * i + a]) + xi[a] -
+                       (F[3 * a] * xi[0] + F[3 * a + 1] * xi[1] + F[3 * a + 2] * xi[2]);
+      zz += z * z;
+    }
+    zheld += zz, zlost += sk == 2 ? zz : 0.0;
+  }
+  if (book && zlost > 0 && zheld > 0) {
+    const double moved = f->ehg[i] * (zlost / zheld);
+    f->ehg[i] -= moved, f->broken[i] += moved;
+  }
+  f->nintact[i] = cnt;
+  return dm_sym_inverse(f->dim, A, &m->Ainv[9 * i]);
+}
+
+/* An intact particle left with too few members fails (state 4): as at a failure in the stress
+ * pass, its penalty energy is booked as broken and it has no stress from now on. */
+static void fail_isolated(dm_fin *f, size_t i) {
+  dm_model *m = f->m;
+  f->failed[i] = 4;
+  f->broken[i] += f->ehg[i];
+  f->ehg[i] = 0.0, m->kappa[i] = 0.0, f->nintact[i] = 0;
+  for (int a = 0; a < 9; ++a)
+    m->Q[9 * i + a] = f->QP[9 * i + a] = f->sig[9 * i + a] = f->s[9 * i + a] = 0.0;
+}
+
+bool dm_frac_commit(dm_fin *f) {
+  if (!f->failed) return false;
+  const dm_model *m = f->m;
+  const size_t n = f->n, n1 = n ? n : 1;
+  size_t nq = 0, head = 0, *marked = f->fq + n1;
+  for (size_t i = 0; i < n; ++i)
+    if (f->fresh[i]) {
+      ++*(f->fresh[i] == 2 ? &f->nfail_degenerate : &f->nfail_stress);
+      f->fresh[i] = 0, f->failed[i] = 2, f->fq[nq++] = i;
+    }
+  if (!nq) return false;
+  while (head < nq) { /* a round: the failures so far break their bonds */
+    const size_t end = nq;
+    size_t nm = 0;
+    for (size_t h = head; h < end; ++h) { /* their intact members, each once, in order */
+      const size_t k = f->fq[h];
+      f->cut[k] = 1, f->nintact[k] = 0;
+      for (size_t b = m->start[k]; b < m->start[k + 1]; ++b) {
+        const size_t j = m->nbr[b] < n ? m->nbr[b] : m->s->partner[m->nbr[b]];
+        if (f->failed[j] || f->fmark[j]) continue; /* (a ghost's partner holds the mirror bond) */
+        f->fmark[j] = 1, marked[nm++] = j;
+      }
+    }
+    for (size_t q = 0; q < nm; ++q) {
+      const size_t i = marked[q];
+      f->fmark[i] = 0, f->cut[i] = 1;
+      const double cond = reshape(f, i, true);
+      const uint8_t bc = m->s->bc[i]; /* driven particles never fail (dm_frac_stress) */
+      if (bc == DM_PRESCRIBED || bc == DM_FIXED) continue;
+      const double n0 = (double)(m->start[i + 1] - m->start[i]);
+      if ((double)f->nintact[i] < DM_FRAC_MIN_INTACT * n0 || !(cond <= DM_FRAC_COND_MAX))
+        fail_isolated(f, i), f->fq[nq++] = i, ++f->nfail_isolated;
+    }
+    for (size_t h = head; h < end; ++h) f->failed[f->fq[h]] = 1;
+    for (size_t h = end; h < nq; ++h) f->failed[f->fq[h]] = 2;
+    head = end;
+  }
+  return true;
+}
+
+void dm_frac_restore(dm_fin *f) {
+  if (!f->failed) return;
+  const dm_model *m = f->m;
+  for (size_t i = 0; i < f->n; ++i) {
+    f->cut[i] = f->failed[i] != 0, f->fresh[i] = f->fmark[i] = 0;
+    if (f->failed[i]) {
+      f->nintact[i] = 0;
+      continue;
+    }
+    bool lost = false;
+    for (size_t b = m->start[i]; b < m->start[i + 1] && !lost; ++b)
+      lost = member_state(f, m->nbr[b]) != 0;
+    if (lost) f->cut[i] = 1, reshape(f, i, false);
+  }
+}
+
+bool dm_frac_degenerate(dm_fin *f, size_t i, double J_prev) {
+  if (!f->failed || !f->cut[i] || f->mat[f->imat[i]].frac.model == DM_FRACTURE_NONE) return false;
+  const uint8_t bc = f->m->s->bc[i];
+  if (bc == DM_PRESCRIBED || bc == DM_FIXED) return false;
+  f->fresh[i] = 2; /* as a failure in dm_frac_stress: committed after the pass */
+  f->broken[i] += f->ehg[i];
+  f->ehg[i] = 0.0, f->m->kappa[i] = 0.0;
+  f->J[i] = J_prev; /* held from the last valid state, as a failed particle's */
+  return true;
 }
 
 /* The pair vectors of bond b of particle i (to k): ξ = (X_k − X_i) + shift and y = ξ + w_k − w_i
@@ -153,7 +290,8 @@ static void pair_vectors(const dm_model *m, const double *w, size_t i, size_t b,
   }
 }
 
-/* The contact force on failed particle i from its broken, compressed bonds: the spring into
+/* The contact force on particle i (failed, or intact with a failed family member) from its
+ * broken, compressed bonds (to a failed member, or all of a failed particle's): the spring into
  * fcon_i, the dashpot's g = η ṙ (≤ 0, along y/|y|) into gcon[b]; their sum is returned in ft.
  * Its virial pressure p_i = Σ_k |f_ik| |y| / (2 d V_i λ̄^d) (each pair's virial shared by its two
  * particles, over the current volume, λ̄ the mean |y|/L of its bonds in contact: K tr ε/(1 +
@@ -169,7 +307,7 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
     f->gcon[b] = 0.0;
-    if (!f->failed[k]) continue;
+    if (!f->failed[i] && !f->failed[k]) continue; /* unbroken */
     double xi[3], y[3];
     pair_vectors(m, w, i, b, xi, y);
     const double r = sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
@@ -211,7 +349,8 @@ static double contact_one(dm_fin *f, size_t i, double ft[3]) {
   for (int a = 0; a < 3; ++a) f->fcon[3 * i + a] = fc[a];
   f->dtclose[i] = fmin(closing > 0 ? f->par.courant / closing : INFINITY,
                        f->dtcon[i] / sqrt(smax)); /* the springs stiffen with the EOS */
-  f->p[i] = nc > 0 ? vir / (2.0 * f->dim * m->s->vol[i] * pow(lsum / nc, f->dim)) : 0.0;
+  if (f->failed[i])                               /* an intact particle's p is its EOS pressure */
+    f->p[i] = nc > 0 ? vir / (2.0 * f->dim * m->s->vol[i] * pow(lsum / nc, f->dim)) : 0.0;
   return lmin;
 }
 
@@ -220,7 +359,7 @@ ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin) {
   long bad = n;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > 4096)
   for (long i = 0; i < n; ++i)
-    if (f->failed[i]) {
+    if (f->cut[i]) {
       double ft[3];
       const double lmin = contact_one(f, (size_t)i, ft);
       for (int a = 0; a < 3; ++a) f->frc[3 * i + a] += ft[a];
@@ -234,7 +373,7 @@ ms_status dm_frac_contact(dm_fin *f, double *dtmin, long *imin) {
     return MS_ERR_UNSTABLE;
   }
   for (long i = 0; i < n; ++i) /* the smallest index of ties, as the stress pass */
-    if (f->failed[i] && (f->dtclose[i] < *dtmin || (f->dtclose[i] == *dtmin && i < *imin)))
+    if (f->cut[i] && (f->dtclose[i] < *dtmin || (f->dtclose[i] == *dtmin && i < *imin)))
       *dtmin = f->dtclose[i], *imin = i;
   return MS_OK;
 }
@@ -249,7 +388,7 @@ void dm_frac_contact_work(dm_fin *f, double h, const double *vb) {
   const long n = (long)f->n;
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < n; ++i)
-    if (f->failed[i]) {
+    if (f->cut[i]) {
       const double *fc = &f->fcon[3 * i];
       f->econ[i] -= h * (fc[0] * vb[3 * i] + fc[1] * vb[3 * i + 1] + fc[2] * vb[3 * i + 2]);
       double heat = 0.0;
@@ -287,10 +426,10 @@ double dm_fin_contact_potential(const dm_fin *f) {
   const double *X = m->s->X, *w = m->s->w;
   double U = 0.0;
   for (size_t i = 0; i < f->n; ++i)
-    if (f->failed[i])
+    if (f->cut[i])
       for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
         const size_t k = m->nbr[b];
-        if (!f->failed[k]) continue;
+        if (!f->failed[i] && !f->failed[k]) continue;
         const double *sh = m->shift[m->img[b]];
         double L2 = 0, r2 = 0;
         for (int a = 0; a < 3; ++a) {

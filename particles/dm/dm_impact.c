@@ -437,12 +437,14 @@ static void report(const ms_ctx *ctx, dmi_run *r) {
          "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
          "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "
          "%.3g; transverse momentum / |P0| <= %.3g, normal at the end %.4g; J in [%.4g, %.4g], "
-         "bond stretch <= %.4g; %ld reference updates; %zu failed particles, broken energy %.4g "
+         "bond stretch <= %.4g; %ld reference updates; %zu failed particles (of the real ones: %ld "
+         "by the criterion, %ld isolated, %ld degenerate), broken energy %.4g "
          "kJ; body 0: length %.5g cm (L/L0 %.4f), footprint %.5g cm (D/D0 %.4f)",
          f->step, r->t, p->sum.wall_s, p->sum.energy_err, p->sum.wall_err, p->sum.hg_ratio,
          p->sum.p_transverse, p->sum.p_normal, p->sum.J_min, p->sum.J_max, p->sum.stretch_max,
-         p->sum.ref_updates, p->sum.failed, p->sum.broken, p->sum.length,
-         p->sum.length / p->sum.length0, p->sum.footprint, p->sum.footprint / p->sum.footprint0);
+         p->sum.ref_updates, p->sum.failed, f->nfail_stress, f->nfail_isolated, f->nfail_degenerate,
+         p->sum.broken, p->sum.length, p->sum.length / p->sum.length0, p->sum.footprint,
+         p->sum.footprint / p->sum.footprint0);
   write_outputs(ctx, r);
 }
 

@@ -69,7 +69,8 @@ static inline double dm_det3(const double *a) {
 /* The displacement gradient C_i = F_i − I = (Σ_k Δw_ik ⊗ ξ_ik) A_i⁻¹ of displacements w, by the
  * stress pass's own arithmetic (dm_finite.c), so a state's F and J are the same bits wherever
  * they are computed (snapshots of the last good state). */
-void dm_fin_displacement_gradient(const dm_model *m, const double *w, size_t i, double C[9]);
+void dm_fin_displacement_gradient(const dm_model *m, const double *w, const uint8_t *failed,
+                                  size_t i, double C[9]);
 
 /* ξ_ik = X_k + image shift − X_i of bond b of particle i. */
 static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double xi[3]) {
@@ -102,6 +103,22 @@ void dm_sym_free(dm_fin *f);
 void dm_frac_alloc(dm_fin *f);
 void dm_frac_free(dm_fin *f);
 static inline bool dm_frac_failed(const dm_fin *f, size_t i) { return f->failed && f->failed[i]; }
+/* dm_frac_commit, after the stress pass (its drift done): the particles that failed in it (fresh)
+ * become failed; every intact particle with a newly failed family member gets its shape matrix
+ * A over its intact members back (A⁻¹, nintact), the penalty energy of its lost bonds booked as
+ * broken, and fails itself (isolated) when fewer than DM_FRAC_MIN_INTACT of its reference family
+ * is intact or cond A > DM_FRAC_COND_MAX — repeated until no particle fails. dm_frac_restore:
+ * A⁻¹, nintact and cut from the failed flags alone (a checkpoint's), the same bits as the run's
+ * last dm_frac_commit. docs/particles-dm.md "Fracture". */
+bool dm_frac_commit(dm_fin *f); /* true if a particle failed */
+/* dm_frac_degenerate, from the stress pass when particle i's F gives no valid state (J ≤ 0, or
+ * p, c or T not finite): if i has lost family members (cut) and can fail, it fails now (fresh,
+ * its penalty energy booked, J held at J_prev) and true is returned (the caller then returns
+ * dm_frac_failed_step); false: the run stops as before. */
+bool dm_frac_degenerate(dm_fin *f, size_t i, double J_prev);
+void dm_frac_restore(dm_fin *f);
+#define DM_FRAC_MIN_INTACT 0.25
+#define DM_FRAC_COND_MAX   100.0
 void dm_frac_stress(dm_fin *f, size_t i, const dm_fin_material *mt, double J, double *sig,
                     double *s);
 double dm_frac_failed_step(dm_fin *f, size_t i);

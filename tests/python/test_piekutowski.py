@@ -67,22 +67,27 @@ checks = [
     # LOOSE BOUND (issue 25's criterion for the full size is 5 %). The hole (where the areal
     # mass of the plate's particles, failed or not, reaches half the intact plate's:
     # tools/piekutowski.py) at h = t/3 = 0.74 mm: one ring of width h on the radius is 1.47 mm
-    # of diameter, 8.5 % of 17.3 mm. Measured +2.7 % here at 4 µs (the contact model), and
-    # +9.6 %, +9.5 % at t/4, t/6 (docs/validation.md: the model's hole, ~19 mm at 4 µs, is
-    # itself 10 % above the experiment).
+    # of diameter, 8.5 % of 17.3 mm. Measured +8.6 % here at 4 µs (+2.7 % before a failed
+    # member left F), −4.7 % and −8.9 % on the t/4 and t/6 quarters (docs/validation.md).
     # 17 % (two rings) admits the coarse lattice with a margin for round-off in ~400 steps of a
     # fracturing run, and fails a plate that is not perforated (no hole), or a hole a ring
     # larger than the model's converged one.
     (abs(hole / EXP_HOLE - 1) < 0.17, f"hole {hole:.2f} mm within 17 % of {EXP_HOLE}"),
-    # LOOSE BOUND, the same two lattice spacings of diameter (17 %) for the hole in the
-    # recovered plate (the remnant holding the plate's rim by unbroken, untorn bonds, seen along
-    # the axis: tools/piekutowski.py): measured 19.47 mm (+12.6 %) here at 4 µs, 19.28 and
-    # 19.26 mm at t/4 and t/6 (the model's hole is itself 11 % above the experiment); it fails
-    # a plate that is not perforated or one whose bonds never break (6.9 mm)
-    (abs(hole_rem / EXP_HOLE - 1) < 0.17, f"recovered plate's hole {hole_rem:.2f} mm within 17 % "
+    # LOOSE BOUND for the hole in the recovered plate (the remnant holding the plate's rim by
+    # unbroken, untorn bonds, seen along the axis: tools/piekutowski.py). Since a failed member
+    # leaves an intact particle's F (docs/particles-dm.md "Fracture") it is measured 20.33 mm
+    # (+17.5 %) here at 4 µs but 16.33 and 15.53 mm (−5.6 %, −10.2 %) on the t/4 and t/6
+    # quarters: at t/3 the plate is three layers and a lip particle's family 13–18 members, so
+    # its lost members leave it with a one-sided family sooner (the isolated-particle rule
+    # fails a third of the failed particles here, a sixth at t/6) and the lip opens ~2.5
+    # spacings wider. 20 % (2.3 rings of width h on the diameter) admits that lattice; it fails
+    # a plate that is not perforated or one whose bonds never break (6.9 mm), and the earlier
+    # model's unzipping lip (t/6: 22.7 mm at 8 µs, +31 %). Before the change: 19.47 mm, 17 %.
+    (abs(hole_rem / EXP_HOLE - 1) < 0.20, f"recovered plate's hole {hole_rem:.2f} mm within 20 % "
      f"of {EXP_HOLE}"),
     # the remnant is the holed plate: its rim in one piece, and its mass at least the lattice
-    # outside its equal-area hole (4.20 g) and at most 14 % more: measured +9.0 % (4.58 g, the
+    # outside its equal-area hole and at most 14 % more: measured +4.5 % (4.25 g against 4.07 g;
+    # +9.0 % before a failed member left F: 4.58 g against 4.20 g, the
     # lip's material pushed outwards beyond the hole's radius and still attached: the hole is
     # measured at its innermost particles, the lip's mass lies outside them); a remnant that
     # keeps the failed lip (failed-failed bonds left unbroken: +18 %, 5.44 g, hole 17.2 mm) or
