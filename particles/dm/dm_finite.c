@@ -464,9 +464,7 @@ void dm_fs_history_record(dm_fs_history *h, long step, double t, const dm_state 
                           long nyz) {
   if (step % h->stride != 0) return;
   if (h->n == h->cap) {
-    for (size_t r = 0; r < h->n / 2; ++r)
-      memmove(&h->rows[2 * r], &h->rows[4 * r], 2 * sizeof(double));
-    h->n /= 2, h->stride *= 2;
+    h->n = dm_rows_thin(h->rows, h->n, 2), h->stride *= 2;
     if (step % h->stride != 0) return;
   }
   double ux = 0;
