@@ -159,15 +159,19 @@ double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s);
  * `spacing` (an open lateral axis is one bin).
  *  - full-width fragment: its particles occupy at least `cover` (0.9) of the bins — a plate
  *    across the periodic width, as planar spall leaves it (a torn plate may miss a few bins);
- *  - bulk: the deepest full-width fragment (smallest x): what stays on the driven layer (the
- *    driven particles belong to no fragment; a lone failed particle next to them is not it);
- *  - level: the median over the bins of the front (largest x) of the foremost full-width
- *    fragment, the one whose median is largest (the bulk's own free surface if nothing spalled);
+ *  - bulk: the deepest full-width fragment (smallest x), if its deepest particle lies within
+ *    `reach` spacings of the deepest particle of all (next to the driven layer): what stays on
+ *    the driven layer (the driven particles belong to no fragment; a lone failed particle next
+ *    to them is not the bulk, and a plate with a thicker failed zone beneath it has come off:
+ *    it is a layer, and there is no bulk);
+ *  - level: one spacing above the median over the bins of the front (largest x) of the
+ *    foremost full-width fragment, the one whose median is largest (the bulk's own free surface
+ *    if nothing spalled; the spacing: a plate's own roughness of a lattice row is not ejecta);
+ *    NaN without a full-width fragment;
  *  - detached material: every fragment but the bulk. Each of its particles is a jet when it lies
  *    beyond the level (jets, their tips and the debris they lead: ejecta ahead of the foremost
  *    plate), else a layer particle when its fragment is full-width, else debris (pieces among
- *    or behind the layers). Without a full-width fragment there is no bulk and no level: every
- *    particle is debris.
+ *    or behind the layers). Without a full-width fragment every particle is debris.
  * Fragment counts: n_layer the detached full-width fragments; the other detached fragments count
  * as jets or debris by their centre of mass. Independently of shape, m_fast/n_fast: detached
  * fragments whose centre-of-mass velocity along x exceeds v_fast (the coupled run: (1 +
@@ -179,9 +183,10 @@ typedef struct cpl_split_opts {
   double spacing; /* lateral bin width a, cm */
   cpl_box box;    /* the periodic lateral axes (y, z) */
   double cover;   /* fraction of the bins a full-width fragment occupies */
+  double reach;   /* spacings between the deepest particle and the bulk's (2) */
   double v_fast;  /* km/s */
 } cpl_split_opts;
-/* spacing and box from the fragment search's options, cover 0.9 */
+/* spacing and box from the fragment search's options, cover 0.9, reach 2 */
 void cpl_split_opts_default(cpl_split_opts *o, const cpl_fragment_opts *fo, double v_fast);
 typedef struct cpl_ejecta_classes {
   double m_bulk, m_layer, m_jet, m_debris; /* g */

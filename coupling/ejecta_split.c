@@ -59,6 +59,7 @@ void cpl_split_opts_default(cpl_split_opts *o, const cpl_fragment_opts *fo, doub
   o->spacing = fo->spacing;
   o->box = fo->box;
   o->cover = 0.9;
+  o->reach = 2.0;
   o->v_fast = v_fast;
 }
 
@@ -78,23 +79,27 @@ void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const c
   size_t ncand = 0;
   for (size_t k = 0; k < f->n; k++) slot[k] = (double)f->count[k] >= need ? (int64_t)ncand++ : -1;
   /* 2. per candidate: the front (largest x) in each bin, and its deepest particle (as −x, so
-   * that one max-reduction serves both); −∞ where it has no particle */
+   * that one max-reduction serves both); −∞ where it has no particle. The last entry: the
+   * deepest particle of any fragment (as −x), next to the driven layer. */
   const size_t row = nbin + 1;
   double *front = ms_calloc(ncand * row + 1, sizeof *front);
-  for (size_t j = 0; j < ncand * row; j++) front[j] = -INFINITY;
+  for (size_t j = 0; j <= ncand * row; j++) front[j] = -INFINITY;
   const size_t n = p->n < f->n_particles ? p->n : f->n_particles;
   for (size_t i = 0; i < n; i++) {
+    if (f->id[i] >= 0 && -p->x[i] > front[ncand * row]) front[ncand * row] = -p->x[i];
     if (f->id[i] < 0 || slot[f->id[i]] < 0) continue;
     double *fr = front + (size_t)slot[f->id[i]] * row;
     const size_t b = bin_of(o, nb, p, i);
     if (p->x[i] > fr[b]) fr[b] = p->x[i];
     if (-p->x[i] > fr[nbin]) fr[nbin] = -p->x[i];
   }
-  if (dist && ncand) par_max_doubles(front, ncand * row); /* exact: max is order-free */
-  /* 3. full width, the bulk (the deepest full-width fragment: what stays on the driven layer)
-   * and each full-width fragment's level (median front over the bins it occupies) */
+  if (dist) par_max_doubles(front, ncand * row + 1); /* exact: max is order-free */
+  /* 3. full width, the bulk (the deepest full-width fragment, if it reaches down to the driven
+   * layer: what stays on it) and each full-width fragment's level (median front over the bins
+   * it occupies) */
   double *scratch = ms_calloc(nbin + 1, sizeof *scratch);
   double deepest = INFINITY, level = -INFINITY;
+  size_t deepest_k = SIZE_MAX;
   for (size_t k = 0; k < f->n; k++) {
     if (slot[k] < 0) continue;
     const double *fr = front + (size_t)slot[k] * row;
@@ -104,15 +109,18 @@ void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const c
       slot[k] = -1; /* not full-width after all */
       continue;
     }
-    if (-fr[nbin] < deepest) deepest = -fr[nbin], out->bulk = k;
+    if (-fr[nbin] < deepest) deepest = -fr[nbin], deepest_k = k;
     memcpy(scratch, fr, nbin * sizeof *scratch);
     const double lk = median_finite(scratch, nbin);
     if (lk > level) level = lk;
   }
-  if (out->bulk != SIZE_MAX) out->level = level;
+  const double x_low = -front[ncand * row]; /* the deepest particle of all */
+  if (deepest_k != SIZE_MAX && deepest <= x_low + o->reach * o->spacing) out->bulk = deepest_k;
+  /* one spacing above the median front: a plate's own roughness of a lattice row is not ejecta */
+  if (deepest_k != SIZE_MAX) out->level = level + o->spacing;
   /* 4. per particle of a detached fragment: ahead of the level (jets), in a full-width fragment
    * (layers), or neither (debris) */
-  const bool have_level = out->bulk != SIZE_MAX;
+  const bool have_level = deepest_k != SIZE_MAX;
   double m[3] = {0, 0, 0}; /* jets, layers, debris */
   for (size_t i = 0; i < n; i++) {
     const int64_t k = f->id[i];

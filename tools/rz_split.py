@@ -13,10 +13,12 @@ two check each other (the run's numbers are the last row of its ejecta_mass.csv,
 * a fragment is full-width when its particles occupy at least 90 % of the lateral bins of width
   a across the period (a spalled layer spans the periodic width; an intact layer leaves no bin
   empty, a torn one may leave a few). The deepest full-width fragment is the bulk (what stays on
-  the piston; a lone failed particle at the piston does not make the slab detached); the other
-  full-width fragments are layers. Without a full-width fragment there is no bulk.
-* The level is the largest, over the full-width fragments, of the median over the lateral bins
-  of the fragment's front particle. Detached particles beyond the level are "ahead" (jets and
+  the piston) if its deepest particle lies within 2 spacings of the deepest particle of all (a
+  lone failed particle at the piston does not make the slab detached; a thicker failed zone
+  beneath it does: then it is a layer and there is no bulk); the other full-width fragments are
+  layers.
+* The level is one spacing above the largest, over the full-width fragments, of the median over
+  the lateral bins of the fragment's front particle. Detached particles beyond the level are "ahead" (jets and
   the debris in front of the layers: the run's M_jet), split here into those within a quarter
   groove period of a valley's axis (found in the first snapshot, before breakout) and the rest
   (crest debris); detached particles below it are "layer" (M_layer) or "behind" (M_debris).
@@ -36,6 +38,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 
 COVER = 0.9  # lateral coverage of a layer (see the docstring)
+REACH = 2.0  # spacings between the deepest particle and the bulk's
 
 
 def thickness(run, r0):
@@ -97,10 +100,13 @@ def split(run):
         bins = np.unique(np.floor(((y[s] - lo) % period) / period * nbin).astype(int))
         info[k] = (mk, vk, x[s].min())
         cls[k] = "layer" if bins.size >= COVER * nbin else "piece"
-    # the bulk: the deepest full-width fragment (what stays on the piston; a lone failed particle
-    # next to the piston does not make the slab a layer); none without a full-width fragment
+    # the bulk: the deepest full-width fragment if it reaches within REACH spacings of the deepest
+    # particle (what stays on the piston; a lone failed particle next to the piston does not make
+    # the slab a layer, a thicker failed zone beneath it does); else none
     full = [k for k in ids if cls[k] == "layer"]
     bulk = min(full, key=lambda k: info[k][2]) if full else None
+    if bulk is not None and info[bulk][2] > x[ok].min() + REACH * r0:
+        bulk = None
     if bulk is not None:
         cls[bulk] = "bulk"
 
@@ -112,10 +118,10 @@ def split(run):
         return np.median(front[np.isfinite(front)])
 
     layers = [k for k in ids if cls[k] == "layer"]
-    x_l = max(level(fid == k) for k in layers + [bulk]) if full else np.nan
+    x_l = max(level(fid == k) for k in full) + r0 if full else np.nan  # + a row's roughness
     ur = u_ref(run, t)
     out = dict(t=t, u_ref=ur, area=area, x_l=x_l,
-               bulk=info[bulk][0] / area if full else 0.0, v_max=-np.inf)
+               bulk=info[bulk][0] / area if bulk is not None else 0.0, v_max=-np.inf)
     for k in ids:
         if k != bulk:
             out["v_max"] = max(out["v_max"], info[k][1])
@@ -126,7 +132,7 @@ def split(run):
         out["run_" + col] = em[col][row] / area if col in em else np.nan
     # per particle: ahead of the foremost layer's level (jets and the debris that leads them),
     # in a layer below it, or in a piece below it
-    det = ok & (fid != bulk) if full else ok
+    det = ok & (fid != bulk) if bulk is not None else ok
     lay = np.isin(fid, layers)
     where = np.where(det, "behind", "bulk")
     where[det & lay] = "layer"

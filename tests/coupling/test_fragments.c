@@ -664,11 +664,12 @@ static void test_csv_outputs(void **state) {
 /* The jets / spall layers / debris split (cpl_ejecta_classify, docs/coupling.md §9 "The split")
  * on a built configuration whose answer is known by construction: a square lattice a = 1,
  * periodic width 10 (10 lateral bins), unit masses, drive axis x:
- *   x = 0        one lone particle at the piston (a failed particle: not the bulk, debris);
+ *   x = 0.5      one lone particle at the piston (a failed particle: not the bulk, debris);
  *   x = 2..4     the bulk plate, 3 rows × 10 (the deepest full-width fragment);
  *   x = 6        a 2-particle piece below the layer (debris);
  *   x = 8, 9     a spalled layer, 2 rows × 10, with a jet of 3 particles rooted in it at
- *                y = 4.5, x = 10..12 (level = the median front 9: the 3 are jets, 20 layer);
+ *                y = 4.5, x = 10..12 (level = the median front 9 + one spacing: the particles
+ *                at 11 and 12 are jets, the other 21 layer);
  *   x = 15       a detached jet tip, 1 particle, vx = 3 (everything else vx = 1).
  * Masses are sums of unit masses (exact). Then the same without the plates: no full-width
  * fragment, no bulk, every particle debris. */
@@ -678,7 +679,7 @@ static void test_ejecta_split(void **state) {
   frag_points_alloc(&c, 1 + 30 + 2 + 23 + 1);
   size_t n = 0;
 #define PUT(px, py, pv) (c.x[n] = (px), c.y[n] = (py), c.vx[n] = (pv), c.m[n] = 1.0, n++)
-  PUT(0.0, 0.5, 1.0);
+  PUT(0.5, 0.5, 1.0);
   for (int row = 2; row <= 4; row++)
     for (int j = 0; j < 10; j++) PUT(row, j + 0.5, 1.0);
   PUT(6.0, 2.5, 1.0);
@@ -702,9 +703,9 @@ static void test_ejecta_split(void **state) {
   cpl_ejecta_classify(&f, &p, &so, NULL, &k);
   assert_int_equal(f.count[k.bulk], 30);
   assert_double_equal(k.m_bulk, 30.0, 0.0);
-  assert_double_equal(k.level, 9.0, 0.0);
-  assert_double_equal(k.m_jet, 4.0, 0.0);
-  assert_double_equal(k.m_layer, 20.0, 0.0);
+  assert_double_equal(k.level, 10.0, 0.0);
+  assert_double_equal(k.m_jet, 3.0, 0.0);
+  assert_double_equal(k.m_layer, 21.0, 0.0);
   assert_double_equal(k.m_debris, 3.0, 0.0);
   assert_int_equal(k.n_layer, 1);
   assert_int_equal(k.n_jet, 1);
@@ -712,27 +713,38 @@ static void test_ejecta_split(void **state) {
   assert_double_equal(k.m_fast, 1.0, 0.0); /* the tip alone is faster than v_fast = 2 */
   assert_int_equal(k.n_fast, 1);
   assert_double_equal(k.v_max, 3.0, 0.0);
+  /* the lone particle 7 spacings below the plate (more than reach = 2): a failed zone beneath
+   * it, so the plate has come off the piston: no bulk, the plate is a layer */
+  c.x[0] = -5.0;
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_true(k.bulk == SIZE_MAX);
+  assert_double_equal(k.level, 10.0, 0.0);
+  assert_double_equal(k.m_layer, 51.0, 0.0);
+  assert_int_equal(k.n_layer, 2);
+  assert_double_equal(k.m_jet, 3.0, 0.0);
+  c.x[0] = 0.5;
   /* a torn layer (one of its 10 bins emptied: 9 of 10 = 90 %) is still full-width; two emptied
-   * bins make it a piece: the level falls to the bulk's front, 4, and every detached particle
+   * bins make it a piece: the level falls to the bulk's front 4 + 1, and every detached particle
    * beyond it — the torn layer, its jet, the tip and the piece at x = 6 — is ahead */
   for (size_t i = 0; i < c.n; i++)
     if ((c.x[i] == 8.0 || c.x[i] == 9.0) && c.y[i] == 0.5) c.x[i] = 30.0 + c.x[i];
   assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
   cpl_ejecta_classify(&f, &p, &so, NULL, &k);
   assert_int_equal(k.n_layer, 1);
-  assert_double_equal(k.m_layer, 18.0, 0.0);
+  assert_double_equal(k.m_layer, 19.0, 0.0);
   for (size_t i = 0; i < c.n; i++)
     if ((c.x[i] == 8.0 || c.x[i] == 9.0) && c.y[i] == 1.5) c.x[i] = 50.0 + c.x[i];
   assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
   cpl_ejecta_classify(&f, &p, &so, NULL, &k);
   assert_int_equal(k.n_layer, 0);
-  assert_double_equal(k.level, 4.0, 0.0);
+  assert_double_equal(k.level, 5.0, 0.0);
   assert_double_equal(k.m_layer, 0.0, 0.0);
   assert_double_equal(k.m_bulk, 30.0, 0.0);
   assert_double_equal(k.m_jet, 26.0, 0.0);
   assert_double_equal(k.m_debris, 1.0, 0.0); /* the lone particle at the piston */
   /* no full-width fragment at all: no bulk, no level, everything debris */
-  c.n = 3; /* the lone particle and... */
+  c.n = 3; /* the lone particle and the piece, moved to indices 1, 2 */
   c.x[1] = 6.0, c.y[1] = 2.5, c.x[2] = 6.0, c.y[2] = 3.5;
   p = view(&c, false, false);
   assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);

@@ -9,10 +9,12 @@
  * cluster dynamics, 1 cm for the discrete model's 2D region).
  * Argument: the deck's name without inputs/coupled- and .yaml (one ctest entry each):
  *   rz80, rz20             cluster dynamics, the ~30 GPa decks (its documented result);
- *   dm-rz80-15gpa, dm-rz20-15gpa   the discrete model at the paper's 15 GPa: the paper's claim.
+ *   dm-rz80-15gpa, dm-rz20-15gpa   the discrete model at the paper's 15 GPa, at twice the
+ *                          decks' spacing (CI size, ~5 s each on an idle core): the paper's claim.
  * Why 0.7 µs after breakout: by then the release from the free surface has crossed the 500 µm
- * region and come back twice (2 h / c_L ≈ 0.4 µs with c_L ≈ 2.4 km/s), so every spall plane the
- * region can hold has opened, and the layers have separated by more than the bond reach; later
+ * region and come back (2 h / c_L ≈ 0.45 µs, c_L = Z / ρ0 = 2.2 km/s from the decks' piston
+ * impedance), so every spall plane the region can hold has opened and the layers have separated
+ * by more than the bond reach; later
  * the 15 GPa Rz80 region comes apart into single failed particles (at 2.7 µs after breakout a
  * cloud, docs/validation.md), which neither the paper's picture nor this split describes. The
  * time was fixed from the 30 GPa runs' tables before this test was written. */
@@ -51,6 +53,16 @@ static char *load_deck(void) {
     fail_msg("%s: the time.end line or the transport section moved; update the test", path);
   memcpy(e, "    end: 0.10", strlen(end_line));
   *t = 0;
+  /* the discrete model's cases at twice the deck's spacing (CI size): the split's answer holds
+   * from h = 8 to 3 µm (Rz80) and 4 to 2 µm (Rz20), docs/validation.md "Resolution" */
+  static const char *const coarse[][2] = {{"dm-rz80-15gpa", "    r0: 4.0e-4"},
+                                          {"dm-rz20-15gpa", "    r0: 2.0e-4"}};
+  for (size_t k = 0; k < 2; k++) {
+    if (strcmp(which, coarse[k][0])) continue;
+    char *r = strstr(buf, coarse[k][1]);
+    if (!r) fail_msg("%s: the r0 line moved; update the test", path);
+    r[8] = r[8] == '4' ? '8' : '4'; /* "    r0: 4.0e-4" -> 8.0e-4, 2.0e-4 -> 4.0e-4 */
+  }
   return buf;
 }
 
