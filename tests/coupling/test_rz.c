@@ -108,10 +108,15 @@ static void test_rz(void **state) {
   } else if (!strcmp(which, "dm-rz20-15gpa")) {
     /* Rz20: spall clearly visible — the layers' mass exceeds the jets' */
     assert_true(c->m_layer > c->m_jet);
+  } else if (!strcmp(which, "rz20")) {
+    /* cluster dynamics, Rz20 (docs/coupling.md §9): spall layers, a few tip clusters ahead */
+    assert_true(c->m_jet < 0.1 * c->m_layer);
   } else {
-    /* cluster dynamics (docs/coupling.md §9): the grooved layer spalls; no jets form, so
-     * what lies ahead of the foremost layer (tip clusters) stays below 10 % of the rest */
-    assert_true(c->m_jet < 0.1 * (c->m_layer + c->m_debris));
+    /* cluster dynamics, Rz80: the grooved layer breaks off in chunks that no layer spans, so
+     * the shape split puts them ahead ("jets", docs/coupling.md "The split": its limit), but
+     * none outruns a flat free surface — no Richtmyer–Meshkov jet (the former velocity split's
+     * criterion, 1.1 u_ref, kept here as the documented cluster-dynamics result) */
+    assert_true(c->v_max < 1.1 * s->u_ref);
   }
   cpl_test_run_free(&r);
 }
