@@ -69,6 +69,37 @@ cpl_particles cpl_particle_view(ptl_region *r, uint8_t *skip) {
   return v;
 }
 
+void cpl_phase_classify(const ms_ctx *ctx, const cpl_particle_phase *ph, const cpl_particles *view,
+                        double v_fast, cpl_ejecta_classes *out) {
+  cpl_split_opts o;
+  cpl_split_opts_default(&o, &ph->fo, v_fast);
+  cpl_ejecta_classify(&ph->fr, view, &o, ctx, out);
+}
+
+const char *const CPL_EJECTA_TITLE =
+    "ejected mass vs time: M_ej every fragment but the largest with its centre ahead of the free "
+    "surface (one-way: the grid's; two-way: the gas grid's first node); the split of "
+    "docs/coupling.md \"The split\": M_jet ahead of the foremost "
+    "full-width fragment, M_layer spall layers, M_debris other detached pieces, M_bulk what stays "
+    "on the piston";
+const char *const cpl_ejecta_names[CPL_EJECTA_COLS] = {"t",       "M_ej",     "fragments", "M_jet",
+                                                       "M_layer", "M_debris", "M_bulk"};
+const char *const cpl_ejecta_units[CPL_EJECTA_COLS] = {"10us", "g", "1", "g", "g", "g", "g"};
+
+void cpl_ejecta_row(const ms_ctx *ctx, const cpl_particle_phase *ph, const cpl_particles *view,
+                    double t, double row[CPL_EJECTA_COLS]) {
+  cpl_ejecta_classes c;
+  cpl_phase_classify(ctx, ph, view, INFINITY, &c);
+  const double r[CPL_EJECTA_COLS] = {t,
+                                     cpl_ejected_mass(&ph->fr, &ph->sel),
+                                     (double)ph->fr.n,
+                                     c.m_jet,
+                                     c.m_layer,
+                                     c.m_debris,
+                                     c.m_bulk};
+  memcpy(row, r, sizeof r);
+}
+
 ms_status cpl_phase_open(const ms_ctx *ctx, const cpl_problem *p, double x_drive, double depth,
                          size_t npiston, const double *t_piston, const double *u_piston,
                          cpl_particle_phase *ph) {

@@ -106,6 +106,18 @@ ms_status cpl_phase_open(const ms_ctx *ctx, const cpl_problem *p, double x_drive
                          cpl_particle_phase *ph);
 void cpl_phase_close(cpl_particle_phase *ph);
 cpl_particles cpl_particle_view(ptl_region *r, uint8_t *skip);
+/* Jets, spall layers and debris of the phase's last fragment search (cpl_ejecta_classify with the
+ * search's spacing and box; view as cpl_find_fragments left it). Collective on MPI ranks. */
+void cpl_phase_classify(const ms_ctx *ctx, const cpl_particle_phase *ph, const cpl_particles *view,
+                        double v_fast, cpl_ejecta_classes *out);
+/* The ejected-mass history (ejecta_mass.csv) of both drives: its title, columns and one row
+ * (collective on MPI ranks). */
+enum { CPL_EJECTA_COLS = 7 };
+extern const char *const cpl_ejecta_names[CPL_EJECTA_COLS],
+    *const cpl_ejecta_units[CPL_EJECTA_COLS];
+extern const char *const CPL_EJECTA_TITLE;
+void cpl_ejecta_row(const ms_ctx *ctx, const cpl_particle_phase *ph, const cpl_particles *view,
+                    double t, double row[CPL_EJECTA_COLS]);
 ms_status cpl_find_fragments(const ms_ctx *ctx, cpl_particle_phase *ph, cpl_particles *view);
 ms_status cpl_drag_kick(const cpl_problem *p, cpl_particle_phase *ph, const cpl_particles *view,
                         gas_ctx *gas, double t, double span);

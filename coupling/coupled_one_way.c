@@ -119,12 +119,7 @@ static ms_status particle_setup(one_way *w) {
   if (ctx->size > 1) st = par_agree_status(st);
   if (st != MS_OK) return st;
   if (!ctx->restart && w->f_ej) { /* a restart writes back the text so far */
-    static const char *const ejn[] = {"t", "M_ej", "fragments"};
-    static const char *const eju[] = {"10us", "g", "1"};
-    ms_csv_header(w->f_ej,
-                  "ejected mass (fragments but the largest, ahead of the grid's free surface) "
-                  "vs time",
-                  3, ejn, eju);
+    ms_csv_header(w->f_ej, CPL_EJECTA_TITLE, CPL_EJECTA_COLS, cpl_ejecta_names, cpl_ejecta_units);
     static const char *const fsn[] = {"t", "u_grid", "u_particles"};
     static const char *const fsu[] = {"10us", "km/s", "km/s"};
     ms_csv_header(w->f_fs, "free-surface velocity: grid tag vs particle surface layer", 3, fsn,
@@ -207,8 +202,9 @@ static ms_status search(one_way *w, long step, bool out_now) {
   }
   /* ejecta: detached fragments ahead of the grid's free surface at this time */
   w->ph.sel.plane = w->hf.x[0] + cpl_piston_displacement(&w->fsurf, t_abs);
-  double row_ej[3] = {t_abs, cpl_ejected_mass(&w->ph.fr, &w->ph.sel), (double)w->ph.fr.n};
-  if (w->f_ej) ms_csv_row(w->f_ej, 3, row_ej);
+  double row_ej[CPL_EJECTA_COLS];
+  cpl_ejecta_row(ctx, &w->ph, &view, t_abs, row_ej);
+  if (w->f_ej) ms_csv_row(w->f_ej, CPL_EJECTA_COLS, row_ej);
   if (p->drag_law != CPL_DRAG_NONE) {
     st = cont_grid_run_to(w->gas.g, t_abs);
     if (st != MS_OK) {
@@ -326,31 +322,12 @@ static void drive_check(one_way *w) {
   p->sum.check = chk;
 }
 
-/* The bulk (the fragment holding the deepest particle along x) over all ranks: a one-particle
- * view of the global deepest particle for cpl_ejecta_classify, so it classifies as serially. */
-static void classify_dist(const cpl_fragments *fr, const cpl_particles *view, double u_ref,
-                          double margin, cpl_ejecta_classes *out) {
-  double deepest = INFINITY;
-  for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
-    if (fr->id[i] >= 0 && view->x[i] < deepest) deepest = view->x[i];
-  const double dmin = par_min_double(deepest);
-  int64_t bulk = -1;
-  for (size_t i = 0; i < view->n && i < fr->n_particles; i++)
-    if (fr->id[i] >= 0 && view->x[i] == dmin) bulk = fr->id[i] > bulk ? fr->id[i] : bulk;
-  bulk = par_max_int64(bulk);
-  double zero = 0;
-  cpl_particles one = {.n = bulk >= 0 ? 1 : 0, .x = &dmin, .y = &zero};
-  cpl_fragments f1 = *fr; /* shallow: the table, and the bulk particle's id */
-  f1.id = &bulk;
-  f1.n_particles = 1;
-  const double normal[3] = {1, 0, 0};
-  cpl_ejecta_classify(&f1, &one, normal, u_ref, margin, out);
-}
-
-/* The run's summary; jets vs spall (docs/coupling.md §9) measured against the flat free
- * surface's (the grid's) jump-off velocity, its first peak: from breakout (5 % of the maximum
- * over the phase, as in the drive check) until it first falls below 90 % of the running
- * maximum (later peaks are reverberations in the unbroken grid); the final fragment tables. */
+/* The run's summary; jets, spall layers and debris (cpl_ejecta_classify, docs/coupling.md §9
+ * "The split"), and the fast detached mass: faster than (1 + jet_margin) × the grid's
+ * free-surface plateau (the drive check's window; its first peak, the breakout overshoot, if the
+ * check found no breakout). u_ref, that first peak, is kept for the summary: from breakout (5 %
+ * of the maximum over the phase, as in the drive check) until it first falls below 90 % of the
+ * running maximum. The final fragment tables. */
 static ms_status summarise(one_way *w) {
   ms_ctx *ctx = w->ctx;
   cpl_problem *p = w->p;
@@ -372,22 +349,22 @@ static ms_status summarise(one_way *w) {
     if (hf->u[k] < 0.9 * u_ref) break;
     u_ref = fmax(u_ref, hf->u[k]);
   }
-  cpl_particles view = cpl_particle_view(r, w->ph.skip);
-  const double normal[3] = {1, 0, 0};
-  if (ctx->size > 1) {
-    view.n = ptl_region_state(r)->nlocal;
-    classify_dist(&w->ph.fr, &view, u_ref, p->jet_margin, &p->sum.classes);
-  } else {
-    cpl_ejecta_classify(&w->ph.fr, &view, normal, u_ref, p->jet_margin, &p->sum.classes);
-  }
   p->sum.u_ref = u_ref;
+  p->sum.u_plateau = isfinite(p->sum.check.plateau_grid) ? p->sum.check.plateau_grid : u_ref;
+  cpl_particles view = cpl_particle_view(r, w->ph.skip);
+  if (ctx->size > 1) view.n = ptl_region_state(r)->nlocal;
+  cpl_phase_classify(ctx, &w->ph, &view, (1 + p->jet_margin) * p->sum.u_plateau, &p->sum.classes);
   const cpl_ejecta_classes *ec = &p->sum.classes;
   ms_log(ctx, MS_LOG_INFO,
-         "coupled: detached material at t = %.5g %s (bulk %.4g g): jets (faster than %.4g km/s = "
-         "(1 + %g) x the grid's free-surface jump-off velocity %.4g) %.4g g in %zu fragments, "
-         "slower (spall layers, debris) %.4g g in %zu fragments; fastest %.4g km/s",
-         ms_out_time(t_now), ms_out_time_label(), ec->m_bulk, (1 + p->jet_margin) * u_ref,
-         p->jet_margin, u_ref, ec->m_jet, ec->n_jet, ec->m_slow, ec->n_slow, ec->v_max);
+         "coupled: detached material at t = %.5g %s (docs/coupling.md \"The split\"; bulk %.4g g "
+         "in fragment %lld; level of the foremost full-width fragment x = %.5g cm): jets (ahead "
+         "of the level) %.4g g, spall layers (full-width) %.4g g in %zu fragments, debris %.4g "
+         "g; fragments ahead %zu, behind %zu; faster than %.4g km/s = (1 + %g) x the grid's "
+         "free-surface plateau %.4g: %.4g g in %zu fragments; fastest %.4g km/s",
+         ms_out_time(t_now), ms_out_time_label(), ec->m_bulk,
+         ec->bulk == SIZE_MAX ? -1LL : (long long)ec->bulk, ec->level, ec->m_jet, ec->m_layer,
+         ec->n_layer, ec->m_debris, ec->n_jet, ec->n_debris, ec->v_fast, p->jet_margin,
+         p->sum.u_plateau, ec->m_fast, ec->n_fast, ec->v_max);
   char title[160];
   snprintf(title, sizeof title, "fragments at the end of the particle phase, t = %g %s",
            ms_out_time(t_now), ms_out_time_label());

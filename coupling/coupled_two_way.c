@@ -81,8 +81,9 @@ static ms_status two_way_fragments(two_way *w, double t) {
   /* ejecta: detached fragments ahead of the gas grid's first node (the particles' free surface
    * as the gas sees it) */
   w->ph.sel.plane = cont_grid_view(w->gas.g).x[0] + w->gas.offset;
-  double row[3] = {t, cpl_ejected_mass(&w->ph.fr, &w->ph.sel), (double)w->ph.fr.n};
-  if (w->f_ej) ms_csv_row(w->f_ej, 3, row);
+  double row[CPL_EJECTA_COLS];
+  cpl_ejecta_row(w->ctx, &w->ph, &view, t, row);
+  if (w->f_ej) ms_csv_row(w->f_ej, CPL_EJECTA_COLS, row);
   if (p->drag_law != CPL_DRAG_NONE) {
     double span = (double)(w->psteps - w->last_search) * w->dt_sub;
     st = cpl_drag_kick(p, &w->ph, &view, &w->gas, t, span);
@@ -261,14 +262,8 @@ static ms_status open_files(two_way *w) {
                   "two-way interface: node velocity, particle pressure, impulse and work "
                   "per unit area as the grid and the particles received them",
                   8, names, units);
-  if (w->f_ej && !ctx->restart) {
-    static const char *const ejn[] = {"t", "M_ej", "fragments"};
-    static const char *const eju[] = {"10us", "g", "1"};
-    ms_csv_header(w->f_ej,
-                  "ejected mass (fragments but the largest, ahead of the particles' "
-                  "free surface) vs time",
-                  3, ejn, eju);
-  }
+  if (w->f_ej && !ctx->restart)
+    ms_csv_header(w->f_ej, CPL_EJECTA_TITLE, CPL_EJECTA_COLS, cpl_ejecta_names, cpl_ejecta_units);
   return MS_OK;
 }
 

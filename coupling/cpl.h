@@ -154,20 +154,52 @@ bool cpl_is_ejecta(const cpl_fragments *f, size_t k, const cpl_ejecta_sel *s);
 /* Total ejected mass (for the ejected-mass-vs-time history). */
 double cpl_ejected_mass(const cpl_fragments *f, const cpl_ejecta_sel *s);
 
-/* Jets vs spall ([Davydov] §4.2; docs/coupling.md §9). Detached material = every fragment but
- * the bulk, the fragment holding the deepest particle (smallest normal·r; the piston side, so a
- * spalled slab larger than what stays behind is still detached). Each detached fragment is a
- * jet if its centre-of-mass normal velocity exceeds (1 + margin)·u_ref (u_ref: the flat free
- * surface's velocity, e.g. the grid's), otherwise slow (spalled layers and debris no faster
- * than the free surface). */
+/* Jets vs spall layers vs debris ([Davydov] §4.2; coupling/ejecta_split.c, docs/coupling.md §9
+ * "The split"). The drive axis is +x; the lateral (periodic) axes are cut into bins of width
+ * `spacing` (an open lateral axis is one bin).
+ *  - full-width fragment: its particles occupy at least `cover` (0.9) of the bins — a plate
+ *    across the periodic width, as planar spall leaves it (a torn plate may miss a few bins);
+ *  - bulk: the deepest full-width fragment (smallest x), if its deepest particle lies within
+ *    `reach` spacings of the deepest particle of all (next to the driven layer): what stays on
+ *    the driven layer (the driven particles belong to no fragment; a lone failed particle next
+ *    to them is not the bulk, and a plate with a thicker failed zone beneath it has come off:
+ *    it is a layer, and there is no bulk);
+ *  - level: one spacing above the median over the bins of the front (largest x) of the
+ *    foremost full-width fragment, the one whose median is largest (the bulk's own free surface
+ *    if nothing spalled; the spacing: a plate's own roughness of a lattice row is not ejecta);
+ *    NaN without a full-width fragment;
+ *  - detached material: every fragment but the bulk. Each of its particles is a jet when it lies
+ *    beyond the level (jets, their tips and the debris they lead: ejecta ahead of the foremost
+ *    plate), else a layer particle when its fragment is full-width, else debris (pieces among
+ *    or behind the layers). Without a full-width fragment every particle is debris.
+ * Fragment counts: n_layer the detached full-width fragments; the other detached fragments count
+ * as jets or debris by their centre of mass. Independently of shape, m_fast/n_fast: detached
+ * fragments whose centre-of-mass velocity along x exceeds v_fast (the coupled run: (1 +
+ * fragments.jet_margin) × the grid's free-surface plateau).
+ * ctx NULL or serial: p and f over the same particles. On MPI ranks (collective): p holds the
+ * rank's owned particles, f->id for them and the table replicated (cpl_fragments_find_dist);
+ * every rank gets the serial classes (masses to round-off; bitwise when one rank owns all). */
+typedef struct cpl_split_opts {
+  double spacing; /* lateral bin width a, cm */
+  cpl_box box;    /* the periodic lateral axes (y, z) */
+  double cover;   /* fraction of the bins a full-width fragment occupies */
+  double reach;   /* spacings between the deepest particle and the bulk's (2) */
+  double v_fast;  /* km/s */
+} cpl_split_opts;
+/* spacing and box from the fragment search's options, cover 0.9, reach 2 */
+void cpl_split_opts_default(cpl_split_opts *o, const cpl_fragment_opts *fo, double v_fast);
 typedef struct cpl_ejecta_classes {
-  double m_jet, m_slow, m_bulk; /* g */
-  size_t n_jet, n_slow;         /* fragments */
-  double v_max;                 /* fastest detached fragment (normal velocity), km/s */
-  size_t bulk;                  /* fragment index of the bulk (SIZE_MAX if none) */
+  double m_bulk, m_layer, m_jet, m_debris; /* g */
+  size_t n_layer, n_jet, n_debris;         /* fragments */
+  double m_fast;                           /* g, detached fragments faster than v_fast */
+  size_t n_fast;
+  double v_fast; /* km/s */
+  double level;  /* cm; NaN without a full-width fragment */
+  double v_max;  /* fastest detached fragment (centre of mass along x), km/s; 0 if none */
+  size_t bulk;   /* fragment index of the bulk (SIZE_MAX if none) */
 } cpl_ejecta_classes;
-void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const double normal[3],
-                         double u_ref, double margin, cpl_ejecta_classes *out);
+void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const cpl_split_opts *o,
+                         const ms_ctx *ctx, cpl_ejecta_classes *out);
 
 /* CSV writers (core's units header; `f` may be stdout or an ms_afile's FILE).
  *   spectrum:    g,count,mass
@@ -392,8 +424,9 @@ typedef struct cpl_run_summary {
   double piston_work;         /* kJ */
   size_t fragments;           /* at the end of the particle phase */
   double ejected_mass;        /* g (every fragment but the largest) */
-  cpl_ejecta_classes classes; /* jets vs slow detached material at the end (one-way runs) */
+  cpl_ejecta_classes classes; /* jets, layers, debris at the end (one-way runs) */
   double u_ref;               /* the grid's free-surface jump-off velocity (first peak) */
+  double u_plateau;           /* the grid's free-surface plateau (drive check window) */
   size_t transported, arrived;
   /* two-way coupling: interface impulse and work as the grid received them vs as the particles
    * did (per unit area), their relative mismatch, and the end state */

@@ -209,34 +209,3 @@ void cpl_write_ejecta_velocity(FILE *out, const cpl_fragments *f, const cpl_ejec
   }
   free(o);
 }
-
-void cpl_ejecta_classify(const cpl_fragments *f, const cpl_particles *p, const double normal[3],
-                         double u_ref, double margin, cpl_ejecta_classes *out) {
-  memset(out, 0, sizeof *out);
-  out->bulk = SIZE_MAX;
-  double deepest = INFINITY;
-  for (size_t i = 0; i < p->n && i < f->n_particles; i++) {
-    if (f->id[i] < 0) continue;
-    double d = normal[0] * p->x[i] + normal[1] * p->y[i] + (p->z ? normal[2] * p->z[i] : 0.0);
-    if (d < deepest) {
-      deepest = d;
-      out->bulk = (size_t)f->id[i];
-    }
-  }
-  const double v_cut = (1.0 + margin) * u_ref;
-  for (size_t k = 0; k < f->n; k++) {
-    if (k == out->bulk) {
-      out->m_bulk = f->mass[k];
-      continue;
-    }
-    double vn = normal[0] * f->vx[k] + normal[1] * f->vy[k] + normal[2] * f->vz[k];
-    if (out->n_jet + out->n_slow == 0 || vn > out->v_max) out->v_max = vn;
-    if (vn > v_cut) {
-      out->m_jet += f->mass[k];
-      out->n_jet++;
-    } else {
-      out->m_slow += f->mass[k];
-      out->n_slow++;
-    }
-  }
-}

@@ -7,8 +7,9 @@
 For each coupled run directory: the last particle snapshot (coloured by the velocity along the
 drive axis; narrow periodic strips are tiled to the same lateral extent for display), and the
 detached mass per unit surface area faster than v, against v / u_ref (u_ref: the grid's peak
-free-surface velocity, the jet threshold 1.1 u_ref marked), from fragments.csv — the measure the
-coupled run logs (cpl_ejecta_classify). Writes PREFIX-snapshots.png and PREFIX-velocity.png.
+free-surface velocity, the jet threshold 1.1 u_ref marked), from fragments.csv — the former
+velocity split of the coupled run (before the split by shape of coupling/ejecta_split.c; for that
+one, tools/rz_split.py). Writes PREFIX-snapshots.png and PREFIX-velocity.png.
 """
 import argparse
 import os
@@ -37,7 +38,7 @@ def f_time(run):
 
 def detached(run):
     """Masses and velocities of the fragments but the bulk (the fragment holding the deepest
-    particle of the last snapshot, as cpl_ejecta_classify chooses it) and u_ref."""
+    particle of the last snapshot, as the former velocity split chose it) and u_ref."""
     r = mscale.Run(run)
     f = r.fragments
     fs = r.histories["free_surface"]

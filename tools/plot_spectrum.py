@@ -13,7 +13,8 @@ In a run directory it looks for the coupling outputs by name (any that exist):
   cumulative*.csv        mass,N_ge,M_ge           cumulative N(>=m)
   mass_hist*.csv, diameter_hist*.csv  lo,hi,count,mass
   ejecta_velocity*.csv   v,M_ge                   cumulative ejected mass vs velocity
-  ejecta_mass.csv        t,M_ej                   ejected mass vs time
+  ejecta_mass.csv        t,M_ej,...,M_jet,M_layer,M_debris  ejected mass and the run's split
+                                                  (jets / spall layers / debris) vs time
   arrivals.csv           id,mass,d,t_arrival,...  fragments at the detector plane
 Also offers plot_run(outdir, plotdir) for tools/plot_run.py. Debian's numpy/matplotlib only.
 """
@@ -189,10 +190,18 @@ def plot_ejecta(outdir, plotdir):
         c, u, _ = read_csv(em)
         m, mu = to_ng(c["M_ej"], u.get("M_ej", ""))
         t_us = mscale.to_us(c["t"], u.get("t"))
-        axs[1].plot(t_us, m, "o-", ms=3)
+        axs[1].plot(t_us, m, "o-", ms=3, color="k", label="M_ej (all but the largest, ahead)")
+        # the run's split (docs/coupling.md "The split"), where the file has it
+        for col, colour, what in (("M_jet", "tab:red", "jets (ahead of the foremost layer)"),
+                                  ("M_layer", "tab:blue", "spall layers (full-width)"),
+                                  ("M_debris", "tab:orange", "debris")):
+            if col in c:
+                axs[1].plot(t_us, to_ng(c[col], u.get(col, ""))[0], "-", color=colour, label=what)
+        if "M_jet" in c:
+            axs[1].legend(fontsize=7)
         axs[1].set_xlabel("t [us]")
-        axs[1].set_ylabel(f"ejected mass M_ej [{mu}]")
-        axs[1].set_title("ejected mass vs time")
+        axs[1].set_ylabel(f"mass [{mu}]")
+        axs[1].set_title("ejected mass and the run's split vs time")
         axs[1].grid(True, alpha=0.3)
     else:
         axs[1].set_visible(False)

@@ -4,23 +4,26 @@
 
     /usr/bin/python3 tools/rz_split.py [--png FILE] OUT [OUT ...]
 
-Two splits of the detached material, per unit surface area (g/cm^2; the cross-section is the
-periodic width times the plane-strain thickness: 1 cm for the discrete model, a for cluster
-dynamics):
+The split of the detached material by shape, per unit surface area (g/cm^2; the cross-section
+is the periodic width times the plane-strain thickness: 1 cm for the discrete model, a for
+cluster dynamics), recomputed from the last snapshot: the definition of the run's own split
+(coupling/ejecta_split.c, docs/coupling.md §9 "The split"), written independently, so that the
+two check each other (the run's numbers are the last row of its ejecta_mass.csv, printed beside):
 
-* by velocity, the run's own (cpl_ejecta_classify, fragments.jet_margin): every fragment but
-  the one holding the deepest particle is a jet when its centre-of-mass velocity exceeds
-  (1 + margin) u_ref, else slow;
-* by shape: a fragment is full-width when its particles occupy at least 90 % of the lateral
-  bins of width a across the period (a spalled layer spans the periodic width; an intact layer
-  leaves no bin empty, a torn one may leave a few). The deepest full-width fragment is the bulk
-  (a lone failed particle at the piston, the run's bulk then, does not make the slab a layer);
-  the other full-width fragments are layers. The level is the median over the lateral bins of
-  the foremost layer's (without layers, the bulk's) front particle. Detached particles beyond
-  the level are "ahead" (jets and the debris in front of the layers), split into those within
-  a quarter groove period of a valley's axis (found in the first snapshot, before breakout)
-  and the rest (crest debris); detached particles below it are "layer" or "behind" (pieces).
-  The depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
+* a fragment is full-width when its particles occupy at least 90 % of the lateral bins of width
+  a across the period (a spalled layer spans the periodic width; an intact layer leaves no bin
+  empty, a torn one may leave a few). The deepest full-width fragment is the bulk (what stays on
+  the piston) if its deepest particle lies within 2 spacings of the deepest particle of all (a
+  lone failed particle at the piston does not make the slab detached; a thicker failed zone
+  beneath it does: then it is a layer and there is no bulk); the other full-width fragments are
+  layers.
+* The level is one spacing above the largest, over the full-width fragments, of the median over
+  the lateral bins of the fragment's front particle. Detached particles beyond the level are "ahead" (jets and
+  the debris in front of the layers: the run's M_jet), split here into those within a quarter
+  groove period of a valley's axis (found in the first snapshot, before breakout) and the rest
+  (crest debris); detached particles below it are "layer" (M_layer) or "behind" (M_debris).
+  Without a level every detached particle is "behind".
+* The depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
   the foremost layer's particles below the initial crest tops.
 
 With --png, the last snapshot of each run is drawn coloured by that class.
@@ -35,6 +38,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import mscale  # noqa: E402  (python/mscale: the reader of mscale's outputs)
 
 COVER = 0.9  # lateral coverage of a layer (see the docstring)
+REACH = 2.0  # spacings between the deepest particle and the bulk's
 
 
 def thickness(run, r0):
@@ -75,7 +79,7 @@ def valley_phase(snap, lam, nbin, lo, period):
     return ((np.argmin(-front) + 0.5) * period / nbin) % lam
 
 
-def split(run, margin=0.1):
+def split(run):
     r = mscale.Run(run)
     snap = r.snapshots[-1]
     x, y, v, m = snap["x"][:, 0], snap["x"][:, 1], snap["v"][:, 0], snap["mass"]
@@ -85,7 +89,6 @@ def split(run, margin=0.1):
     lo = float(snap.attrs.get("lo_y", 0.0))
     area = period * thickness(run, r0)
     ok = fid >= 0
-    run_bulk = fid[ok][np.argmin(x[ok])]  # cpl_ejecta_classify's bulk
     nbin = max(1, int(round(period / r0)))
     ids = np.unique(fid[ok])
     cls = {}
@@ -97,11 +100,15 @@ def split(run, margin=0.1):
         bins = np.unique(np.floor(((y[s] - lo) % period) / period * nbin).astype(int))
         info[k] = (mk, vk, x[s].min())
         cls[k] = "layer" if bins.size >= COVER * nbin else "piece"
-    # the shape split's bulk: the deepest full-width fragment (what stays on the piston; a lone
-    # failed particle next to the piston, the run's bulk then, does not make the slab a layer)
+    # the bulk: the deepest full-width fragment if it reaches within REACH spacings of the deepest
+    # particle (what stays on the piston; a lone failed particle next to the piston does not make
+    # the slab a layer, a thicker failed zone beneath it does); else none
     full = [k for k in ids if cls[k] == "layer"]
-    bulk = min(full, key=lambda k: info[k][2]) if full else run_bulk
-    cls[bulk] = "bulk"
+    bulk = min(full, key=lambda k: info[k][2]) if full else None
+    if bulk is not None and info[bulk][2] > x[ok].min() + REACH * r0:
+        bulk = None
+    if bulk is not None:
+        cls[bulk] = "bulk"
 
     # the level of a full-width fragment: the median over the lateral bins of its front particle
     def level(sel):
@@ -111,26 +118,26 @@ def split(run, margin=0.1):
         return np.median(front[np.isfinite(front)])
 
     layers = [k for k in ids if cls[k] == "layer"]
-    x_l = max(level(fid == k) for k in layers + [bulk])
+    x_l = max(level(fid == k) for k in full) + r0 if full else np.nan  # + a row's roughness
     ur = u_ref(run, t)
-    out = dict(t=t, u_ref=ur, area=area, x_l=x_l, bulk=info[bulk][0] / area, jets=0.0, slow=0.0,
-               run_bulk=info[run_bulk][0] / area,
-               n_jets=0, n_slow=0, v_max=-np.inf)
-    for k in ids:  # the run's split, with the run's bulk
-        if k == run_bulk:
-            continue
-        mk, vk = info[k][:2]
-        out["v_max"] = max(out["v_max"], vk)
-        key = "jets" if vk > (1.0 + margin) * ur else "slow"
-        out[key] += mk / area
-        out["n_" + key] += 1
+    out = dict(t=t, u_ref=ur, area=area, x_l=x_l,
+               bulk=info[bulk][0] / area if bulk is not None else 0.0, v_max=-np.inf)
+    for k in ids:
+        if k != bulk:
+            out["v_max"] = max(out["v_max"], info[k][1])
+    # the run's own split: the ejecta_mass.csv row at the snapshot's time
+    em = mscale.read_csv(os.path.join(run, "ejecta_mass.csv"))
+    row = int(np.argmin(np.abs(em["t"] - t)))
+    for col in ("M_jet", "M_layer", "M_debris", "M_bulk"):
+        out["run_" + col] = em[col][row] / area if col in em else np.nan
     # per particle: ahead of the foremost layer's level (jets and the debris that leads them),
     # in a layer below it, or in a piece below it
-    det = ok & (fid != bulk)
+    det = ok & (fid != bulk) if bulk is not None else ok
     lay = np.isin(fid, layers)
-    where = np.where(~ok | (fid == bulk), "bulk", "behind")
+    where = np.where(det, "behind", "bulk")
     where[det & lay] = "layer"
-    where[det & (x > x_l)] = "ahead"
+    if full:
+        where[det & (x > x_l)] = "ahead"
     for key in ("ahead", "layer", "behind"):
         out[key] = m[where == key].sum() / area
     # "ahead" split laterally: within a quarter period of a valley's axis (the jets) or not
@@ -182,17 +189,16 @@ def draw(png, runs, pics):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs", nargs="+")
-    ap.add_argument("--margin", type=float, default=0.1, help="fragments.jet_margin of the runs")
     ap.add_argument("--png", help="draw the last snapshots coloured by class")
     a = ap.parse_args()
     pics = []
-    print("run,t_us,u_ref,run_bulk,jets(n),slow(n),bulk,ahead(valley/crest),layers(n),behind,x_level_um,spall_depth_um,v_max"
-          "  [g/cm^2, km/s]")
+    print("run,t_us,u_ref,run's split: jets/layers/debris/bulk,bulk,ahead(valley/crest),layers(n),behind,"
+          "x_level_um,spall_depth_um,v_max  [g/cm^2, km/s]")
     for run in a.runs:
-        o, pic = split(run, a.margin)
+        o, pic = split(run)
         pics.append(pic)
-        print(f"{run},{o['t']:.3f},{o['u_ref']:.3f},{o['run_bulk']:.3g},"
-              f"{o['jets']:.3g}({o['n_jets']}),{o['slow']:.3g}({o['n_slow']}),"
+        print(f"{run},{o['t']:.3f},{o['u_ref']:.3f},{o['run_M_jet']:.3g}/{o['run_M_layer']:.3g}/"
+              f"{o['run_M_debris']:.3g}/{o['run_M_bulk']:.3g},"
               f"{o['bulk']:.3g},{o['ahead']:.3g}({o['ahead_valley']:.3g}/{o['ahead_crest']:.3g}),"
               f"{o['layer']:.3g}({o['n_layers']}),{o['behind']:.3g},"
               f"{o['x_l'] * 1e4:.0f},{o['spall_depth'] * 1e4:.0f},{o['v_max']:.3f}")

@@ -661,6 +661,102 @@ static void test_csv_outputs(void **state) {
   frag_points_free(&c);
 }
 
+/* The jets / spall layers / debris split (cpl_ejecta_classify, docs/coupling.md §9 "The split")
+ * on a built configuration whose answer is known by construction: a square lattice a = 1,
+ * periodic width 10 (10 lateral bins), unit masses, drive axis x:
+ *   x = 0.5      one lone particle at the piston (a failed particle: not the bulk, debris);
+ *   x = 2..4     the bulk plate, 3 rows × 10 (the deepest full-width fragment);
+ *   x = 6        a 2-particle piece below the layer (debris);
+ *   x = 8, 9     a spalled layer, 2 rows × 10, with a jet of 3 particles rooted in it at
+ *                y = 4.5, x = 10..12 (level = the median front 9 + one spacing: the particles
+ *                at 11 and 12 are jets, the other 21 layer);
+ *   x = 15       a detached jet tip, 1 particle, vx = 3 (everything else vx = 1).
+ * Masses are sums of unit masses (exact). Then the same without the plates: no full-width
+ * fragment, no bulk, every particle debris. */
+static void test_ejecta_split(void **state) {
+  (void)state;
+  frag_points c;
+  frag_points_alloc(&c, 1 + 30 + 2 + 23 + 1);
+  size_t n = 0;
+#define PUT(px, py, pv) (c.x[n] = (px), c.y[n] = (py), c.vx[n] = (pv), c.m[n] = 1.0, n++)
+  PUT(0.5, 0.5, 1.0);
+  for (int row = 2; row <= 4; row++)
+    for (int j = 0; j < 10; j++) PUT(row, j + 0.5, 1.0);
+  PUT(6.0, 2.5, 1.0);
+  PUT(6.0, 3.5, 1.0);
+  for (int row = 8; row <= 9; row++)
+    for (int j = 0; j < 10; j++) PUT(row, j + 0.5, 1.0);
+  for (int row = 10; row <= 12; row++) PUT(row, 4.5, 1.0);
+  PUT(15.0, 4.5, 3.0);
+#undef PUT
+  assert_int_equal(n, c.n);
+  cpl_fragments f;
+  cpl_fragments_init(&f);
+  cpl_fragment_opts o = opts(1.01, 1.0);
+  o.box.period[1] = 10.0;
+  cpl_particles p = view(&c, false, false);
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  assert_int_equal(f.n, 5);
+  cpl_split_opts so;
+  cpl_split_opts_default(&so, &o, 2.0);
+  cpl_ejecta_classes k;
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_int_equal(f.count[k.bulk], 30);
+  assert_double_equal(k.m_bulk, 30.0, 0.0);
+  assert_double_equal(k.level, 10.0, 0.0);
+  assert_double_equal(k.m_jet, 3.0, 0.0);
+  assert_double_equal(k.m_layer, 21.0, 0.0);
+  assert_double_equal(k.m_debris, 3.0, 0.0);
+  assert_int_equal(k.n_layer, 1);
+  assert_int_equal(k.n_jet, 1);
+  assert_int_equal(k.n_debris, 2);
+  assert_double_equal(k.m_fast, 1.0, 0.0); /* the tip alone is faster than v_fast = 2 */
+  assert_int_equal(k.n_fast, 1);
+  assert_double_equal(k.v_max, 3.0, 0.0);
+  /* the lone particle 7 spacings below the plate (more than reach = 2): a failed zone beneath
+   * it, so the plate has come off the piston: no bulk, the plate is a layer */
+  c.x[0] = -5.0;
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_true(k.bulk == SIZE_MAX);
+  assert_double_equal(k.level, 10.0, 0.0);
+  assert_double_equal(k.m_layer, 51.0, 0.0);
+  assert_int_equal(k.n_layer, 2);
+  assert_double_equal(k.m_jet, 3.0, 0.0);
+  c.x[0] = 0.5;
+  /* a torn layer (one of its 10 bins emptied: 9 of 10 = 90 %) is still full-width; two emptied
+   * bins make it a piece: the level falls to the bulk's front 4 + 1, and every detached particle
+   * beyond it — the torn layer, its jet, the tip and the piece at x = 6 — is ahead */
+  for (size_t i = 0; i < c.n; i++)
+    if ((c.x[i] == 8.0 || c.x[i] == 9.0) && c.y[i] == 0.5) c.x[i] = 30.0 + c.x[i];
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_int_equal(k.n_layer, 1);
+  assert_double_equal(k.m_layer, 19.0, 0.0);
+  for (size_t i = 0; i < c.n; i++)
+    if ((c.x[i] == 8.0 || c.x[i] == 9.0) && c.y[i] == 1.5) c.x[i] = 50.0 + c.x[i];
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_int_equal(k.n_layer, 0);
+  assert_double_equal(k.level, 5.0, 0.0);
+  assert_double_equal(k.m_layer, 0.0, 0.0);
+  assert_double_equal(k.m_bulk, 30.0, 0.0);
+  assert_double_equal(k.m_jet, 26.0, 0.0);
+  assert_double_equal(k.m_debris, 1.0, 0.0); /* the lone particle at the piston */
+  /* no full-width fragment at all: no bulk, no level, everything debris */
+  c.n = 3; /* the lone particle and the piece, moved to indices 1, 2 */
+  c.x[1] = 6.0, c.y[1] = 2.5, c.x[2] = 6.0, c.y[2] = 3.5;
+  p = view(&c, false, false);
+  assert_int_equal(cpl_fragments_find(&f, &p, &o), MS_OK);
+  cpl_ejecta_classify(&f, &p, &so, NULL, &k);
+  assert_true(k.bulk == SIZE_MAX && isnan(k.level));
+  assert_double_equal(k.m_debris, 3.0, 0.0);
+  assert_double_equal(k.m_jet + k.m_layer + k.m_bulk, 0.0, 0.0);
+  cpl_fragments_free(&f);
+  c.n = 57;
+  frag_points_free(&c);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_union_find),      cmocka_unit_test(test_random_sets),
@@ -668,7 +764,7 @@ int main(void) {
       cmocka_unit_test(test_chains),          cmocka_unit_test(test_rings_and_isolated),
       cmocka_unit_test(test_periodic_wrap),   cmocka_unit_test(test_statistics),
       cmocka_unit_test(test_bad_input),       cmocka_unit_test(test_csv_outputs),
-      cmocka_unit_test(test_gid_numbering),
+      cmocka_unit_test(test_gid_numbering),   cmocka_unit_test(test_ejecta_split),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
