@@ -360,9 +360,10 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   for (size_t b = 0; p->ref_family && b < p->nbodies; ++b)
     if (p->bodies[b].mat.frac.model != DM_FRACTURE_NONE) {
       dk_error(e, doc, dk_get(dk_get(sec, "reference_update"), "scope"),
-               "impact.reference_update.scope: family is not available with fracture (body %zu "
-               "has a fracture model: the broken bonds' contact belongs to one shared reference)",
-               b + 1);
+               "impact.reference_update.scope: family is not available with fracture "
+               "(impact.bodies[%zu] has a fracture model: the broken bonds' contact belongs to one "
+               "shared reference)",
+               b);
       break;
     }
   read_wall(p, doc, sec, e);
