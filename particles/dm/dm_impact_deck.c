@@ -314,8 +314,10 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
                "(the mirror ghosts would need the kept families too): use rebuild or the full body",
                p->ref_keep == 2 ? "merge" : "keep");
     static const char *const scope_names[] = {"all", "family", NULL};
-    dk_read_enum(e, doc, ru, "scope", false, 0, scope_names, &p->ref_family);
     const dk_node *sc = dk_get(ru, "scope");
+    /* read only when given: the resolved deck, and so the checkpoints' deck hash, of a deck
+     * without it stay those of before the key */
+    if (sc) dk_read_enum(e, doc, ru, "scope", false, 0, scope_names, &p->ref_family);
     if (p->ref_family && !p->ref_keep)
       dk_error(e, doc, sc,
                "impact.reference_update.scope: family needs families: keep or merge (a rebuilt "
