@@ -419,6 +419,10 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
  * dm_fin_reference_update refuse (MS_ERR_INTERNAL). */
 ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bool merge,
                               dm_refamily_report *rep);
+/* Switches f to per-family references (each family's vectors = the shared reference's, so
+ * nothing changes but the kernels' round-off order) without updating any family; done by the
+ * first dm_fin_rebase_local that updates. MS_ERR_INTERNAL for asymmetric families. */
+ms_status dm_fin_local_init(dm_fin *f);
 /* Symmetry planes (dm_symmetry.c): dm_sym_ghosts (re)builds the mirror ghosts of a state whose
  * first nreal rows are the real particles (on the + side of every plane or on it): the images
  * under every product of the planes' reflections of the real particles within `reach` of each

@@ -136,13 +136,18 @@ MS_KERNEL_CLONES void dm_fin_local_gather(const dm_model *m, const double *w, si
         r0[a] + r1[a] + r2[a] + fw[a] + qi[a] * sxi[0] + qi[3 + a] * sxi[1] + qi[6 + a] * sxi[2];
 }
 
-/* The largest stretch max(|Δx|/|ξ|, |ξ|/|Δx|) of family i's bonds. */
+/* The largest stretch max(|Δx|/|ξ|, |ξ|/|Δx|) of family i's bonds (before the first update:
+ * against the shared reference). */
 static double family_stretch(const dm_model *m, size_t i) {
   const double *w = m->s->w;
   double lm = 1.0;
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     double xi[3], dw[3], r0 = 0, r1 = 0;
-    dm_fin_local_bond(m, w, i, b, xi, dw);
+    if (m->xref) dm_fin_local_bond(m, w, i, b, xi, dw);
+    else {
+      dm_bond_vector(m, i, b, xi);
+      for (int a = 0; a < 3; ++a) dw[a] = w[3 * m->nbr[b] + a] - w[3 * i + a];
+    }
     for (int a = 0; a < 3; ++a) {
       const double d = xi[a] + dw[a];
       r0 += xi[a] * xi[a], r1 += d * d;
@@ -215,6 +220,16 @@ static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_
       else ++bad;
     }
   return bad ? MS_ERR_INTERNAL : MS_OK;
+}
+
+ms_status dm_fin_local_init(dm_fin *f) {
+  dm_model *m = f->m;
+  if (m->xref) return MS_OK;
+  init_xref(m);
+  m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
+  const ms_status st = build_rev(m, m->start, m->nbr, m->rev);
+  if (st != MS_OK) free(m->xref), free(m->rev), m->xref = NULL, m->rev = NULL;
+  return st;
 }
 
 /* Is k in family i (sorted by neighbour)? */
@@ -472,11 +487,6 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
     return MS_ERR_INTERNAL; /* the head of this file */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;
-  if (!m->xref) {
-    init_xref(m);
-    m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
-    if (build_rev(m, m->start, m->nbr, m->rev) != MS_OK) return MS_ERR_INTERNAL; /* asymmetric */
-  }
   uint8_t *upd = ms_calloc(n + 1, 1);
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < (long)n; ++i) upd[i] = family_stretch(m, (size_t)i) > 1.0 + threshold;
@@ -485,6 +495,12 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
   if (!nl) {
     free(upd);
     return MS_OK;
+  }
+  /* the first update: until now the shared reference's kernels ran (the same bits as a run
+   * without the option, so a restart before it continues bit for bit) */
+  if (!m->xref && dm_fin_local_init(f) != MS_OK) {
+    free(upd);
+    return MS_ERR_INTERNAL; /* asymmetric families */
   }
   size_t *list = ms_calloc(nl, sizeof(size_t));
   for (size_t i = 0, q = 0; i < n; ++i)

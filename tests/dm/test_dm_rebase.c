@@ -245,7 +245,9 @@ static double max_diff(const double *a, const double *b, size_t n3, double *scal
 
 /* The per-family kernels (bond moments, gather with the reverse bonds' own vectors) on vectors
  * equal to the shared reference give the shared reference's forces: a non-affine state (noise
- * 0.05 h, so the penalty acts), threshold 10 (no family passes, only the vectors are set up).
+ * 0.05 h, so the penalty acts), switched to per-family vectors without an update
+ * (dm_fin_local_init; an update call with threshold 10 passes nothing and keeps the shared
+ * reference).
  * 1e-13 of the largest force is round-off of sums of ~20 bonds in another order; a sign error
  * in the reverse bonds' stress term Q_k ξ_rev gives 0.9 of |f|: the test can fail (an error
  * in their offsets ΔX − ξ, 0 here, fails test_local_patch and test_local_dynamics). */
@@ -258,7 +260,9 @@ static void test_local_kernels(void **state) {
   memcpy(f0, b.f->frc, n3 * sizeof(double));
   dm_refamily_report rep;
   assert_int_equal(dm_fin_rebase_local(b.f, &b.ctx, 10.0, false, &rep), MS_OK);
-  assert_true(rep.families == 0 && b.f->m->xref && b.f->m->rev);
+  assert_true(rep.families == 0 && !b.f->m->xref); /* nothing passed: still shared */
+  assert_int_equal(dm_fin_local_init(b.f), MS_OK);
+  assert_true(b.f->m->xref && b.f->m->rev);
   assert_int_equal(dm_fin_refresh(b.f), MS_OK);
   double scale, d = max_diff(b.f->frc, f0, n3, &scale);
   printf("per-family kernels on the shared reference: |df| %.3g of |f| %.3g\n", d, scale);
