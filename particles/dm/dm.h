@@ -67,6 +67,11 @@ typedef struct dm_model {
   double *Ainv;  /* [n][9] A_i⁻¹ (zero outside the dim×dim block) */
   double *cond;  /* [n] condition number of A_i */
   double *kappa; /* [n] hourglass stiffness c_s G_i V_i / tr A_i (0 when off) */
+  /* Per-family references (dm_fin_rebase_local; NULL: one reference X for all, ξ_ik = X_k −
+   * X_i): xref[3b..3b+2] the bond vector ξ of bond b in its family's own reference (one double
+   * of padding at the end), rev[b] the bond k → i of bond b = i → k. */
+  double *xref;
+  size_t *rev;
   /* Work and output arrays, filled by dm_forces: */
   double *C;      /* [n][9] displacement gradient C_i (row a: ∂w_a, column b: ∂/∂X_b) */
   double *sigma;  /* [n][9] stress σ_i (symmetric; GPa) */
@@ -401,8 +406,10 @@ typedef struct dm_refamily_report {
   double jmin, jmax; /* range of J = V_new/V_old */
   size_t bonds;      /* bonds of the new families */
   size_t bad;        /* on refusal: the first particle with a degenerate family */
+  size_t families;   /* dm_fin_rebase_local: the families updated (0: none passed the trigger) */
+  size_t gained;     /* dm_fin_rebase_local: the others that gained bonds (merge) */
 } dm_refamily_report;
-double dm_fin_max_stretch(const dm_fin *f, size_t *where);
+double dm_fin_max_stretch(const dm_fin *f, size_t *where); /* per-family refs: their own ξ */
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
 /* The reference update with the families kept (dm_refamily.c, docs/particles-dm.md "Reference
  * update"): X ← x, w ← 0, V ← J V and A⁻¹, κ from the same bonds' current vectors, so the bond
@@ -411,6 +418,21 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
  * as above). merge: each family also gains the particles now within the horizon (the union
  * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL. */
 ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_report *rep);
+/* The per-family reference update (dm_fin_local.c, docs/particles-dm.md "Reference update"):
+ * only the families whose own largest bond stretch exceeds 1 + threshold move their reference
+ * to the current configuration (their bond vectors, V ← J V, A⁻¹, κ; the stored penalty energy
+ * into e), each family keeping its own bond vectors from then on (m->xref); merge: they also
+ * bond the particles now within the horizon (symmetrically; the partner's new bond pulled back
+ * through its F). rep->families = 0: nothing passed the trigger, nothing changed. Refused as
+ * dm_fin_rebase (MS_ERR_UNSTABLE, rep->bad, nothing changed); MS_ERR_INTERNAL with fracture,
+ * the short-range contact, symmetry planes or a periodic box. Once called, dm_fin_rebase and
+ * dm_fin_reference_update refuse (MS_ERR_INTERNAL). */
+ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bool merge,
+                              dm_refamily_report *rep);
+/* Switches f to per-family references (each family's vectors = the shared reference's, so
+ * nothing changes but the kernels' round-off order) without updating any family; done by the
+ * first dm_fin_rebase_local that updates. MS_ERR_INTERNAL for asymmetric families. */
+ms_status dm_fin_local_init(dm_fin *f);
 /* Symmetry planes (dm_symmetry.c): dm_sym_ghosts (re)builds the mirror ghosts of a state whose
  * first nreal rows are the real particles (on the + side of every plane or on it): the images
  * under every product of the planes' reflections of the real particles within `reach` of each

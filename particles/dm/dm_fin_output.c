@@ -47,11 +47,15 @@ static double kinematics(const dm_model *m, const double *w, const uint8_t *fail
   for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
     const size_t k = m->nbr[b];
     if (failed && failed[k]) continue; /* a broken bond */
-    double xi[3];
-    dm_bond_vector(m, i, b, xi);
+    double xi[3], dw[3];
+    if (m->xref) /* per-family references (dm_fin_local.c) */
+      dm_fin_local_bond(m, w, i, b, xi, dw);
+    else {
+      dm_bond_vector(m, i, b, xi);
+      for (int a = 0; a < 3; ++a) dw[a] = w[3 * k + a] - w[3 * i + a];
+    }
     for (int a = 0; a < 3; ++a) {
-      const double z = w[3 * k + a] - w[3 * i + a] -
-                       (C[3 * a] * xi[0] + C[3 * a + 1] * xi[1] + C[3 * a + 2] * xi[2]);
+      const double z = dw[a] - (C[3 * a] * xi[0] + C[3 * a + 1] * xi[1] + C[3 * a + 2] * xi[2]);
       zz += z * z, xx += xi[a] * xi[a];
     }
   }

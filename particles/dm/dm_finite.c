@@ -13,6 +13,7 @@
  * −(dt/2) Σ_driven f_i·u_i of the driven particles.
  */
 #include "dm_impl.h"
+#include "dm_vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -33,23 +34,6 @@ MS_KERNEL_INLINE static inline void inv3(const double *a, double det, double *r)
 
 static int is_driven(uint8_t bc) { return bc == DM_PRESCRIBED || bc == DM_FIXED; }
 
-/* 4-lane vectors (GCC/Clang vector extension, lowered to what the target has). ld4 loads a
- * particle's 3-vector and the next double (lane 3, unused): the arrays it reads (X, w, u of
- * dm_state_alloc, v̄, Q, the backup's w) carry one double of padding at their end. */
-typedef double v4d __attribute__((vector_size(32)));
-MS_KERNEL_INLINE static inline v4d ld4(const double *p) {
-  v4d v;
-  memcpy(&v, p, sizeof v);
-  return v;
-}
-MS_KERNEL_INLINE static inline v4d bc4(double x) { return (v4d){x, x, x, x}; }
-
-/* Bond moments of one particle: Bw, Bu (stress), Bv, sv (a half kick's v̄), Bc, sc (the pending
- * closing half kick's v̄). */
-typedef struct moments {
-  double Bw[9], Bu[9], Bv[9], Bc[9], sv, sc;
-} moments;
-
 /* The bond moments of particle i, each Σ_k Δa_ik ⊗ ξ_ik (row a, column b: Σ Δa_a ξ_b), so that
  * per-bond products with A⁻¹, P or C become one 3×3 product per particle afterwards (C =
  * (Σ Δw ⊗ ξ) A⁻¹, since g_ik = A⁻¹ξ_ik and A symmetric). Bw: of the displacement after a drift
@@ -64,6 +48,10 @@ bond_moments(const dm_model *restrict m, size_t i, const double *restrict w,
              const double *restrict u, const double *restrict vb, const double *restrict vc,
              const uint8_t *restrict failed, double dt, bool stress, bool kick, bool close,
              moments *restrict M) {
+  if (m->xref) { /* per-family references (dm_fin_local.c; refused with fracture) */
+    dm_fin_local_moments(m, i, w, u, vb, vc, dt, stress, kick, close, M);
+    return;
+  }
   const double *restrict X = m->s->X;
   const v4d zero = {0}, xi0 = ld4(&X[3 * i]), wi = ld4(&w[3 * i]);
   const v4d ui = stress ? ld4(&u[3 * i]) : zero;
@@ -277,6 +265,10 @@ MS_KERNEL_CLONES static double stress_one(dm_fin *f, size_t i, double dt, double
 MS_KERNEL_CLONES static void gather_one(const dm_model *restrict m, const double *restrict w,
                                         const uint8_t *restrict failed, size_t i,
                                         double *restrict F) {
+  if (m->xref) { /* per-family references (dm_fin_local.c; refused with fracture) */
+    dm_fin_local_gather(m, w, i, F);
+    return;
+  }
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double ki = kap[i];
   if (failed && failed[i]) {
@@ -488,23 +480,27 @@ void dm_fin_energies(const dm_fin *f, double *kinetic, double *internal, double 
   if (hourglass) *hourglass = H;
 }
 
-void dm_fin_bond_penalty(dm_fin *f) {
+double dm_fin_kappa(const dm_fin *f, size_t i, double trA) {
   /* bond penalty κ_i = c_s M_i V_i / tr A_i, M = ρ0 c0² + 4G/3 (reference P-wave modulus) */
-  dm_model *m = f->m;
-  const dm_state *st = m->s;
+  const dm_fin_material *mt = &f->mat[f->imat[i]];
   const double cs = f->par.hourglass;
-  m->opt.hourglass = cs;
+  const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
+  const double M = rho0 * c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / 3.0 : 0.0);
+  return cs > 0 && trA > 0 ? cs * M * f->m->s->vol[i] / trA : 0.0;
+}
+
+void dm_fin_bond_penalty(dm_fin *f) {
+  dm_model *m = f->m;
+  m->opt.hourglass = f->par.hourglass;
   for (size_t i = 0; i < f->n; ++i) {
-    const dm_fin_material *mt = &f->mat[f->imat[i]];
-    const double rho0 = eos_rho0(mt->eos), c0 = eos_sound_speed(mt->eos, rho0, eos_e0(mt->eos));
-    const double M = rho0 * c0 * c0 + (mt->yield != DM_YIELD_NONE ? 4.0 * mt->G / 3.0 : 0.0);
     double trA = 0;
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) {
-      double xi[3];
-      dm_bond_vector(m, i, b, xi);
+      double xi[3], dw[3];
+      if (m->xref) dm_fin_local_bond(m, m->s->w, i, b, xi, dw);
+      else dm_bond_vector(m, i, b, xi);
       trA += xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
     }
-    m->kappa[i] = cs > 0 && trA > 0 ? cs * M * st->vol[i] / trA : 0.0;
+    m->kappa[i] = dm_fin_kappa(f, i, trA);
   }
 }
 

@@ -315,11 +315,19 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
   dm_impact *p = r->p;
   if (!(p->ref_threshold > 0)) return MS_OK;
   size_t at = 0;
-  const double lam = dm_fin_max_stretch(r->f, &at);
-  if (lam <= 1.0 + p->ref_threshold) return MS_OK;
   dm_refamily_report rep;
-  const ms_status st = p->ref_keep ? dm_fin_rebase(r->f, ctx, p->ref_keep == 2, &rep)
-                                   : dm_fin_reference_update(r->f, ctx, &rep);
+  double lam = 0;
+  ms_status st;
+  if (p->ref_family) { /* each family against its own trigger */
+    st = dm_fin_rebase_local(r->f, ctx, p->ref_threshold, p->ref_keep == 2, &rep);
+    if (st == MS_OK && rep.families == 0) return MS_OK;
+    lam = 1.0 + p->ref_threshold, at = rep.bad;
+  } else {
+    lam = dm_fin_max_stretch(r->f, &at);
+    if (lam <= 1.0 + p->ref_threshold) return MS_OK;
+    st = p->ref_keep ? dm_fin_rebase(r->f, ctx, p->ref_keep == 2, &rep)
+                     : dm_fin_reference_update(r->f, ctx, &rep);
+  }
   const dm_state *s = r->f->m->s;
   if (st != MS_OK) {
     const size_t b = rep.bad < s->n ? rep.bad : at;
@@ -332,6 +340,16 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
     return st;
   }
   p->sum.ref_updates++, p->sum.released += rep.released;
+  if (p->ref_family) {
+    p->family_updates += (long)rep.families;
+    ms_log(ctx, MS_LOG_DEBUG,
+           "impact: step %ld, t = %.6g: reference update %ld: %zu families past the bond stretch "
+           "%.4g (%ld in all), %zu gained bonds; %zu bonds, J in [%.4g, %.4g], bond-penalty "
+           "energy released %.4g kJ",
+           r->f->step, r->t, p->sum.ref_updates, rep.families, lam, p->family_updates, rep.gained,
+           rep.bonds, rep.jmin, rep.jmax, rep.released);
+    return MS_OK;
+  }
   ms_log(ctx, MS_LOG_INFO,
          "impact: step %ld, t = %.6g: reference update %ld (bond stretch %.4g at particle %zu): "
          "%zu bonds, J in [%.4g, %.4g], bond-penalty energy released %.4g kJ",
@@ -433,6 +451,11 @@ static void report(const ms_ctx *ctx, dmi_run *r) {
   p->sum.p_body0 = body0_momentum(p, f);
   taylor_measures(p, f->m->s, r->X0, &p->sum.length, &p->sum.footprint);
   taylor_profile(p, f->m->s, r->X0, p->sum.length, p->sum.radius_at);
+  if (p->ref_family)
+    ms_log(ctx, MS_LOG_INFO,
+           "impact: per-family reference updates at %ld steps, %ld family updates in all (of %zu "
+           "families), %zu bonds now",
+           p->sum.ref_updates, p->family_updates, f->n, f->m->nbonds);
   ms_log(ctx, MS_LOG_INFO,
          "impact: %ld steps to t = %.6g in %.3f s; energy balance max |K + U + E_hg (+ broken + "
          "contact) - W_wall - E0| / E0 = %.3g; wall |W_wall + E_wall| / E0 <= %.3g; E_hg / E0 = "

@@ -313,6 +313,19 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
                "impact.reference_update.families: %s is not available with symmetry planes yet "
                "(the mirror ghosts would need the kept families too): use rebuild or the full body",
                p->ref_keep == 2 ? "merge" : "keep");
+    static const char *const scope_names[] = {"all", "family", NULL};
+    const dk_node *sc = dk_get(ru, "scope");
+    /* read only when given: the resolved deck, and so the checkpoints' deck hash, of a deck
+     * without it stay those of before the key */
+    if (sc) dk_read_enum(e, doc, ru, "scope", false, 0, scope_names, &p->ref_family);
+    if (p->ref_family && !p->ref_keep)
+      dk_error(e, doc, sc,
+               "impact.reference_update.scope: family needs families: keep or merge (a rebuilt "
+               "family is built on one reference shared by all)");
+    if (p->ref_family && p->contact_distance > 0)
+      dk_error(e, doc, sc,
+               "impact.reference_update.scope: family is not available with contact_distance > 0 "
+               "(the short-range contact's stiffness belongs to one shared reference)");
   }
   const dk_node *out = dk_get(sec, "output");
   p->energy_every = 20;
@@ -346,6 +359,15 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   }
   read_controls(p, doc, sec, e);
   read_bodies(p, doc, sec, mats, e);
+  for (size_t b = 0; p->ref_family && b < p->nbodies; ++b)
+    if (p->bodies[b].mat.frac.model != DM_FRACTURE_NONE) {
+      dk_error(e, doc, dk_get(dk_get(sec, "reference_update"), "scope"),
+               "impact.reference_update.scope: family is not available with fracture "
+               "(impact.bodies[%zu] has a fracture model: the broken bonds' contact belongs to one "
+               "shared reference)",
+               b);
+      break;
+    }
   read_wall(p, doc, sec, e);
   dmi_sym_read(p, doc, sec, e);
   if (e->n == nerr0 && p->nbodies) { /* geometry checks need a valid deck so far */

@@ -30,6 +30,8 @@ struct dm_impact {
   double t_end, courant, cq, cl, hourglass, cond_max;
   double ref_threshold;     /* reference update when a bond stretch exceeds 1 + this (0: off) */
   int ref_keep;             /* 1: the update keeps the families (dm_fin_rebase), 0: rebuilds */
+  int ref_family;           /* 1: per-family references (dm_fin_rebase_local), 0: one for all */
+  long family_updates;      /* per-family: the families updated so far (log only) */
   double contact_stiffness; /* c_c of the body–body contact (dm_impact_contact.c; 0: off) */
   double contact_distance;  /* d_c / h of the short-range contact inside bodies (dm_contact.c) */
   dm_sym_planes sym;        /* symmetry planes (dm_impact_sym.c; sym.n = 0: none) */

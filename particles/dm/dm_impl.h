@@ -72,6 +72,14 @@ static inline double dm_det3(const double *a) {
 void dm_fin_displacement_gradient(const dm_model *m, const double *w, const uint8_t *failed,
                                   size_t i, double C[9]);
 
+/* Per-family references (dm_fin_local.c; m->xref not NULL): bond b of family i's vector ξ and
+ * Δw = Δx − ξ; the largest bond stretch over the families, each against its own reference.
+ * dm_fin_kappa: κ_i = c_s M_i V_i / tr A_i (dm_fin_bond_penalty's, one particle). */
+void dm_fin_local_bond(const dm_model *m, const double *w, size_t i, size_t b, double xi[3],
+                       double dw[3]);
+double dm_fin_local_max_stretch(const dm_fin *f, size_t *where);
+double dm_fin_kappa(const dm_fin *f, size_t i, double trA);
+
 /* ξ_ik = X_k + image shift − X_i of bond b of particle i. */
 static inline void dm_bond_vector(const dm_model *m, size_t i, size_t b, double xi[3]) {
   const double *X = m->s->X;

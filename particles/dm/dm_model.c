@@ -135,6 +135,8 @@ void dm_model_destroy(dm_model **mp) {
   free(m->sigma);
   free(m->Q);
   free(m->energy);
+  free(m->xref);
+  free(m->rev);
   free(m);
   *mp = NULL;
 }

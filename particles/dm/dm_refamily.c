@@ -19,6 +19,7 @@
 #include <string.h>
 
 double dm_fin_max_stretch(const dm_fin *f, size_t *where) {
+  if (f->m->xref) return dm_fin_local_max_stretch(f, where);
   const dm_model *m = f->m;
   const double *w = m->s->w;
   const long n = (long)f->n;
@@ -113,8 +114,8 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
   memset(rep, 0, sizeof *rep);
   /* fracture's per-bond contact state (dm_fracture.c: rest lengths, dashpot) is indexed by the
    * old families' bonds: not carried over to new families (yet), so no update with fracture */
-  if (f->failed) return MS_ERR_INTERNAL;
-  const ms_status fl = dm_fin_flush(f); /* at the families it is about to replace */
+  if (f->failed || old->xref) return MS_ERR_INTERNAL; /* xref: dm_fin_rebase_local's */
+  const ms_status fl = dm_fin_flush(f);               /* at the families it is about to replace */
   if (fl != MS_OK) return fl;
   rep->released = penalty_stored(f);
   double *keep = ms_calloc(7 * (n ? n : 1), sizeof(double)); /* X, w, V to restore on refusal */
@@ -194,7 +195,7 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
   dm_state *s = m->s;
   const size_t n = f->n;
   memset(rep, 0, sizeof *rep);
-  if (f->failed) return MS_ERR_INTERNAL; /* as dm_fin_reference_update */
+  if (f->failed || m->xref) return MS_ERR_INTERNAL; /* as dm_fin_reference_update */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;
   /* keep: X, w (6n), V (n) to restore on refusal, and each family's stored penalty energy (n),

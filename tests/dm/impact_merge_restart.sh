@@ -4,12 +4,16 @@
 # families: merge) does not store those families, which the positions cannot rebuild
 # (docs/particles-dm.md "Families kept or merged"): --continue must refuse it with a located
 # message and exit 2, not continue on other families. Before any update it continues.
-# Usage: impact_merge_restart.sh MSCALE ROD_DECK
+# With SCOPE = family the same for per-family references (reference_update.scope: family,
+# docs/particles-dm.md "Per-family references"), whose families and vectors it does not store
+# either.
+# Usage: impact_merge_restart.sh MSCALE ROD_DECK [SCOPE]
 set -u
-MSCALE=$1; DECK=$2
+MSCALE=$1; DECK=$2; SCOPE=${3:-}
 T=$(mktemp -d merge.XXXXXX); T=$PWD/$T
 export OMP_NUM_THREADS=1 ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
-sed 's/reference_update: {threshold: 0.1}/reference_update: {threshold: 0.1, families: merge}/' \
+EXTRA=""; [[ -n "$SCOPE" ]] && EXTRA=", scope: $SCOPE"
+sed "s/reference_update: {threshold: 0.1}/reference_update: {threshold: 0.1, families: merge$EXTRA}/" \
   "$DECK" > "$T/rod.yaml"
 grep -q "families: merge" "$T/rod.yaml" || { echo "FAIL: the deck has no reference_update line"; exit 1; }
 fail=0

@@ -153,6 +153,56 @@ static void test_key_errors(void **state) {
   unload(&L);
 }
 
+/* The per-family reference update's deck errors (docs/input-impact.md), each at its key:
+ * scope: family with the rebuilding update, with the short-range contact, with a fracture
+ * model; an unknown scope. */
+static void test_scope_errors(void **state) {
+  (void)state;
+  static const char *const decks[] = {
+      "  reference_update: {threshold: 0.05, scope: family}\n",
+      "  reference_update: {threshold: 0.05, families: merge, scope: family}\n"
+      "  contact_distance: 0.5\n",
+      "  reference_update: {threshold: 0.05, families: keep, scope: every}\n",
+  };
+  static const char *const errs[] = {
+      "deck.yaml:12:46: impact.reference_update.scope: family needs families: keep or merge",
+      "deck.yaml:12:63: impact.reference_update.scope: family is not available with "
+      "contact_distance",
+      "deck.yaml:12:62: impact.reference_update.scope: expected one of: all, family",
+  };
+  for (int q = 0; q < 3; ++q) {
+    char text[2048];
+    snprintf(text, sizeof text,
+             "impact:\n"
+             "  spacing: 0.1\n"
+             "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
+             "  bodies:\n"
+             "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4]}\n"
+             "  t_end: 1\n%s",
+             decks[q]);
+    loaded L;
+    load(&L, text);
+    dk_errors_print(&L.e, stderr);
+    assert_null(L.p);
+    assert_true(has_error(&L.e, errs[q]));
+    unload(&L);
+  }
+  loaded L; /* fracture */
+  load(&L, "impact:\n"
+           "  spacing: 0.1\n"
+           "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
+           "  bodies:\n"
+           "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
+           "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
+           "  t_end: 1\n"
+           "  reference_update: {threshold: 0.05, families: merge, scope: family}\n");
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:13:63: impact.reference_update.scope: family is not "
+                              "available with fracture"));
+  unload(&L);
+}
+
 /* An elastic Al box (Y0 = 10 GPa: no yield at 0.1 km/s) hits the wall and rebounds. The wall's
  * work enters the balance K + U + E_hg − W_wall = E0 exactly per half kick (dm_finite.c): the
  * bound 1e-12 E0 is round-off over ~1000 steps of sums of ~1e3 terms. The wall is
@@ -312,6 +362,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_placement_errors),
       cmocka_unit_test(test_key_errors),
+      cmocka_unit_test(test_scope_errors),
       cmocka_unit_test(test_contact_too_soft),
       cmocka_unit_test(test_contact_rebound),
       cmocka_unit_test(test_elastic_rebound),

@@ -4,7 +4,11 @@
  * uniform deformation gives no stabilisation force, before and after the update, with the
  * families kept or merged); the update moves exactly the penalty's stored energy into heat
  * (K + U + E_hg unchanged) and restarts the mismatch z from 0; merged families stay symmetric
- * and gain a particle that has come within the horizon. */
+ * and gain a particle that has come within the horizon. The per-family update
+ * (dm_fin_rebase_local, particles/dm/dm_fin_local.c): its kernels reproduce the shared
+ * reference's forces; the patch test after a partial update (families with different
+ * references); energy to round-off and momentum exact over steps with updates; a merged
+ * partner gains the bond with zero mismatch; a refused update changes nothing. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -229,12 +233,208 @@ static void test_refused(void **state) {
   }
 }
 
+/* ---- per-family references (dm_fin_rebase_local) ---- */
+
+/* max |a − b| over 3n components, and max |b| */
+static double max_diff(const double *a, const double *b, size_t n3, double *scale) {
+  double d = 0, big = 0;
+  for (size_t j = 0; j < n3; ++j) d = fmax(d, fabs(a[j] - b[j])), big = fmax(big, fabs(b[j]));
+  *scale = big;
+  return d;
+}
+
+/* The per-family kernels (bond moments, gather with the reverse bonds' own vectors) on vectors
+ * equal to the shared reference give the shared reference's forces: a non-affine state (noise
+ * 0.05 h, so the penalty acts), switched to per-family vectors without an update
+ * (dm_fin_local_init; an update call with threshold 10 passes nothing and keeps the shared
+ * reference).
+ * 1e-13 of the largest force is round-off of sums of ~20 bonds in another order; a sign error
+ * in the reverse bonds' stress term Q_k ξ_rev gives 0.9 of |f|: the test can fail (an error
+ * in their offsets ΔX − ξ, 0 here, fails test_local_patch and test_local_dynamics). */
+static void test_local_kernels(void **state) {
+  (void)state;
+  block b;
+  block_make(&b, E_affine, 0.05, 1.0);
+  const size_t n3 = 3 * b.s.n;
+  double *f0 = malloc(n3 * sizeof(double));
+  memcpy(f0, b.f->frc, n3 * sizeof(double));
+  dm_refamily_report rep;
+  assert_int_equal(dm_fin_rebase_local(b.f, &b.ctx, 10.0, false, &rep), MS_OK);
+  assert_true(rep.families == 0 && !b.f->m->xref); /* nothing passed: still shared */
+  assert_int_equal(dm_fin_local_init(b.f), MS_OK);
+  assert_true(b.f->m->xref && b.f->m->rev);
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK);
+  double scale, d = max_diff(b.f->frc, f0, n3, &scale);
+  printf("per-family kernels on the shared reference: |df| %.3g of |f| %.3g\n", d, scale);
+  assert_true(scale > 0 && d < 1e-13 * scale);
+  free(f0);
+  block_free(&b);
+}
+
+/* Sets x ← (I + E2) x (an affine increment from the current configuration) and refreshes. */
+static void affine_increment(block *b, const double E2[9]) {
+  dm_state *s = &b->s;
+  for (size_t i = 0; i < s->n; ++i) {
+    double x[3];
+    for (int a = 0; a < 3; ++a) x[a] = s->X[3 * i + a] + s->w[3 * i + a];
+    for (int a = 0; a < 3; ++a)
+      s->w[3 * i + a] =
+          x[a] + E2[3 * a] * x[0] + E2[3 * a + 1] * x[1] + E2[3 * a + 2] * x[2] - s->X[3 * i + a];
+  }
+  assert_int_equal(dm_fin_refresh(b->f), MS_OK);
+}
+
+/* Patch test with mixed references: after an affine stretch only the families holding the
+ * most stretched bond direction pass a threshold just below it (the others, on two edges of
+ * the block, keep the lattice as reference); a further affine increment is then exact on every
+ * family, updated or not, so the bond penalty (f(c_s = 1) − f(c_s = 0)) stays at round-off
+ * (1e-12 of the boundary forces, as test_patch). With the reverse bonds' vectors taken from
+ * the bond itself (−ξ_b, the shared reference's rule) the penalty force is 7e-2 of |f|
+ * (measured): the test can fail. */
+static void test_local_patch(void **state) {
+  (void)state;
+  static const double E2[9] = {0.04, 0, -0.03, 0.02, -0.05, 0, 0, 0.01, 0.03};
+  block b1, b0;
+  /* 5 % stretch along (1, −1, 0): the families of the two vertical edges x = y = 0 and
+   * x = y = (N1 − 1) h have no bond along that line */
+  static const double E1[9] = {0.025, -0.025, 0, -0.025, 0.025, 0, 0, 0, 0};
+  block_make(&b1, E1, 0.0, 1.0), block_make(&b0, E1, 0.0, 0.0);
+  const double lam = dm_fin_max_stretch(b1.f, NULL);
+  block *bb[2] = {&b1, &b0};
+  for (int q = 0; q < 2; ++q) {
+    dm_refamily_report rep;
+    assert_int_equal(dm_fin_rebase_local(bb[q]->f, &bb[q]->ctx, 0.999 * (lam - 1), false, &rep),
+                     MS_OK);
+    printf("partial update: %zu of %zu families\n", rep.families, bb[q]->s.n);
+    assert_true(rep.families > 0 && rep.families < bb[q]->s.n);
+    affine_increment(bb[q], E2);
+  }
+  double scale, d = max_diff(b1.f->frc, b0.f->frc, 3 * b1.s.n, &scale);
+  printf("patch test, per-family update: |f_penalty| %.3g, |f| %.3g\n", d, scale);
+  assert_true(scale > 0 && d < 1e-12 * scale);
+  block_free(&b1), block_free(&b0);
+}
+
+/* Dynamics with per-family updates (random velocities 0.02 km/s on the block with noise,
+ * threshold 1 %: families update at different steps, a part of them at a time; merge
+ * on): K + U + E_hg stays at
+ * E0 to 1e-13 of |K| + |U| + |E_hg| (they nearly cancel: E0 is 1e-3 of them; round-off of 216
+ * terms over 60 steps, 1e-15 measured; nothing is driven), Σ m u is kept to
+ * 1e-15 of Σ m|u| (each family's bond forces act in equal and opposite pairs), ρ of an updated
+ * family is continuous (1e-12) and only the updated families change their volume. */
+static void test_local_dynamics(void **state) {
+  (void)state;
+  block b;
+  const double zero[9] = {0};
+  block_make(&b, zero, 0.02, 1.0);
+  unsigned r = 777u;
+  for (size_t j = 0; j < 3 * b.s.n; ++j) {
+    r = r * 1103515245u + 12345u;
+    b.s.u[j] = 0.02 * ((double)((r >> 8) & 0xffff) / 65535.0 - 0.5);
+  }
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK);
+  const size_t n = b.s.n;
+  double K, U, Hg, P0[3] = {0}, mu = 0;
+  dm_fin_energies(b.f, &K, &U, &Hg);
+  const double E0 = K + U + Hg;
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a)
+      P0[a] += b.s.mass[i] * b.s.u[3 * i + a], mu += b.s.mass[i] * fabs(b.s.u[3 * i + a]);
+  double dE = 0, Es = 0;
+  size_t updates = 0, steps_with = 0, most = 0;
+  for (int step = 0; step < 60; ++step) {
+    assert_int_equal(dm_fin_step(b.f), MS_OK);
+    double *V = malloc(n * sizeof(double)), *rho = malloc(n * sizeof(double));
+    memcpy(V, b.s.vol, n * sizeof(double)), memcpy(rho, b.f->rho, n * sizeof(double));
+    dm_refamily_report rep;
+    assert_int_equal(dm_fin_rebase_local(b.f, &b.ctx, 0.01, true, &rep), MS_OK);
+    updates += rep.families, steps_with += rep.families > 0;
+    most = rep.families > most ? rep.families : most;
+    size_t moved = 0; /* exactly the updated families change V */
+    for (size_t i = 0; i < n; ++i)
+      if (b.s.vol[i] != V[i]) {
+        ++moved;
+        assert_true(fabs(b.f->rho[i] / rho[i] - 1) < 1e-12);
+      }
+    assert_true(moved == rep.families);
+    free(V), free(rho);
+    dm_fin_energies(b.f, &K, &U, &Hg);
+    dE = fmax(dE, fabs(K + U + Hg - E0)), Es = fmax(Es, fabs(K) + fabs(U) + fabs(Hg));
+  }
+  double P[3] = {0}, dP = 0;
+  for (size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) P[a] += b.s.mass[i] * b.s.u[3 * i + a];
+  for (int a = 0; a < 3; ++a) dP = fmax(dP, fabs(P[a] - P0[a]));
+  printf("per-family dynamics: %zu family updates at %zu of 60 steps (at most %zu at once), "
+         "|dE| %.3g of |K| + |U| + |E_hg| %.3g, |dP| %.3g of sum m|u| %.3g\n",
+         updates, steps_with, most, dE, Es, dP, mu);
+  assert_true(steps_with > 1 && most < n);
+  assert_true(dE < 1e-13 * Es);
+  assert_true(dP < 1e-15 * mu);
+  block_free(&b);
+}
+
+/* Merge with per-family references: the corner pushed 0.3 h into the block (test_merge_symmetric)
+ * after a small affine strain; its family and its neighbours' pass the threshold; it bonds the particle at (1.5, 1.5, 1.5) h, which
+ * gains the bond back pulled through its own F (it did not pass: its F, J and stress stay, to
+ * round-off 1e-12; with the bond's current vector instead of the pull-back it does not:
+ * the test can fail), every bond's rev is its partner's bond back, and K + U + E_hg is unchanged
+ * (1e-12 of the energy the update moved from E_hg into e: round-off). */
+static void test_local_merge(void **state) {
+  (void)state;
+  /* a small affine strain first (bond stretch < 1.04), so that the partner's F is not I */
+  static const double E[9] = {0.03, 0.01, 0, 0, -0.02, 0, 0, 0, 0.01};
+  block b;
+  block_make(&b, E, 0.0, 1.0);
+  const size_t c = 0, far = (size_t)((N1 + 1) * N1 + 1);
+  for (int a = 0; a < 3; ++a) b.s.w[3 * c + a] += 0.3 * H;
+  assert_int_equal(dm_fin_refresh(b.f), MS_OK);
+  double F[9], K0, U0, H0, K1, U1, H1;
+  memcpy(F, &b.f->F[9 * far], sizeof F);
+  const size_t before = b.f->m->start[far + 1] - b.f->m->start[far];
+  dm_fin_energies(b.f, &K0, &U0, &H0);
+  dm_refamily_report rep;
+  assert_int_equal(dm_fin_rebase_local(b.f, &b.ctx, 0.1, true, &rep), MS_OK);
+  const dm_model *m = b.f->m;
+  dm_fin_energies(b.f, &K1, &U1, &H1);
+  printf("per-family merge: %zu families updated, %zu gained bonds; far family %zu -> %zu\n",
+         rep.families, rep.gained, before, m->start[far + 1] - m->start[far]);
+  assert_true(rep.families >= 1 && rep.gained >= 1);
+  assert_true(m->start[far + 1] - m->start[far] == before + 1);
+  for (int a = 0; a < 9; ++a) assert_true(fabs(b.f->F[9 * far + a] - F[a]) < 1e-12);
+  for (size_t i = 0; i < b.s.n; ++i)
+    for (size_t q = m->start[i]; q < m->start[i + 1]; ++q)
+      assert_true(m->nbr[m->rev[q]] == i && m->rev[m->rev[q]] == q);
+  assert_true(rep.released > 0);
+  assert_true(fabs((K1 + U1 + H1) - (K0 + U0 + H0)) < 1e-12 * rep.released);
+  block_free(&b);
+}
+
+/* A refused per-family update (cond_max 3 under a compression to half along x, as test_refused)
+ * changes nothing: volumes, energies, bonds. */
+static void test_local_refused(void **state) {
+  (void)state;
+  const double E[9] = {-0.5, 0, 0, 0, 0, 0, 0, 0, 0};
+  block b;
+  block_make(&b, E, 0.01, 1.0);
+  dm_model *m = b.f->m;
+  const size_t nb = m->nbonds;
+  const double e5 = b.f->e[5], V5 = b.s.vol[5];
+  m->opt.cond_max = 3.0;
+  dm_refamily_report rep;
+  assert_int_equal(dm_fin_rebase_local(b.f, &b.ctx, 0.1, true, &rep), MS_ERR_UNSTABLE);
+  assert_true(rep.bad < b.s.n && m->nbonds == nb);
+  assert_true(b.f->e[5] == e5 && b.s.vol[5] == V5);
+  block_free(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_patch),
-      cmocka_unit_test(test_energy_to_heat),
-      cmocka_unit_test(test_merge_symmetric),
-      cmocka_unit_test(test_refused),
+      cmocka_unit_test(test_patch),           cmocka_unit_test(test_energy_to_heat),
+      cmocka_unit_test(test_merge_symmetric), cmocka_unit_test(test_refused),
+      cmocka_unit_test(test_local_kernels),   cmocka_unit_test(test_local_patch),
+      cmocka_unit_test(test_local_dynamics),  cmocka_unit_test(test_local_merge),
+      cmocka_unit_test(test_local_refused),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
