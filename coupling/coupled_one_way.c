@@ -306,7 +306,8 @@ static void drive_check(one_way *w) {
   cpl_fs_check chk;
   const double depth = w->hf.x[0] - w->hd.x[0];
   const double window = p->check_window > 0 ? p->check_window : depth / w->ph.geo.c0;
-  if (cpl_free_surface_check(w->fs_n, w->fs_t, w->fs_ug, w->fs_up, window, &chk))
+  const bool found = cpl_free_surface_check(w->fs_n, w->fs_t, w->fs_ug, w->fs_up, window, &chk);
+  if (found)
     ms_log(w->ctx, MS_LOG_INFO,
            "coupled: drive check (free surface, %zu samples over [%g, %g] %s): plateau particles "
            "%.5g km/s vs grid %.5g km/s: %.2f %%; half-rise at t = %.5g %s (particles) vs %.5g "
@@ -315,7 +316,14 @@ static void drive_check(one_way *w) {
            ms_out_time_label(), chk.plateau_particles, chk.plateau_grid, 100 * chk.rel_diff,
            ms_out_time(chk.t_half_particles), ms_out_time_label(), ms_out_time(chk.t_half_grid),
            chk.min_after, cpl_drive_mode_names[p->drive_mode]);
-  else
+  if (found && w->ph.geo.surface_depth > 0) /* docs/coupling.md, the default deck */
+    ms_log(w->ctx, MS_LOG_INFO,
+           "coupled: drive check: the free surface is profiled (depth %g um), so the particles' "
+           "surface layer includes its jets (and, with fracture, its failed particles, which fly "
+           "as ejecta): the figure above measures the ejecta, not the plane; the same deck with "
+           "a flat surface (coupled.particles.surface.profile: flat) is the check",
+           1e4 * w->ph.geo.surface_depth);
+  if (!found)
     ms_log(w->ctx, MS_LOG_WARN,
            "coupled: drive check: no free-surface breakout within the "
            "particle phase (or no samples in the check window)");

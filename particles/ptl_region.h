@@ -42,15 +42,16 @@ ptl_region_estimate ptl_region_params_estimate(const ptl_region_params *pp, doub
 
 /* What a built region is. */
 typedef struct ptl_region_geometry {
-  int dim;          /* 2 (plane strain) or 3 */
-  double spacing;   /* lattice spacing a, cm */
-  double rho0, c0;  /* the sample's reference density (g/cm³) and bulk sound speed (km/s) */
-  double x_drive;   /* driven face, cm */
-  double x_top;     /* nominal free surface of the lattice, cm */
-  double period[3]; /* periodic extents ([0] = 0: the drive axis is open), cm */
-  double area;      /* cross-section that the grid's per-cm² quantities stand for, cm² */
-  double dt;        /* the model's own time step, 10 µs */
-  size_t particles; /* in the whole region (all ranks) */
+  int dim;              /* 2 (plane strain) or 3 */
+  double spacing;       /* lattice spacing a, cm */
+  double rho0, c0;      /* the sample's reference density (g/cm³) and bulk sound speed (km/s) */
+  double x_drive;       /* driven face, cm */
+  double x_top;         /* nominal free surface of the lattice, cm */
+  double surface_depth; /* peak-to-valley depth of a profiled free surface (0: flat), cm */
+  double period[3];     /* periodic extents ([0] = 0: the drive axis is open), cm */
+  double area;          /* cross-section that the grid's per-cm² quantities stand for, cm² */
+  double dt;            /* the model's own time step, 10 µs */
+  size_t particles;     /* in the whole region (all ranks) */
 } ptl_region_geometry;
 
 /* The energy terms of the region (kJ), as the checkpoint stores them (the same order). */

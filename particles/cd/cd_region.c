@@ -297,6 +297,7 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
                                  .c0 = c0,
                                  .x_drive = x_drive,
                                  .x_top = x_top,
+                                 .surface_depth = p->surface != SURF_FLAT ? p->surf_depth : 0.0,
                                  .period = {0.0, width, width_z},
                                  .area = fcc ? width * width_z : width * p->k.thickness,
                                  .dt = cfg.dt,

@@ -416,6 +416,7 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
                                  .c0 = eos_c0(eos),
                                  .x_drive = x_drive,
                                  .x_top = x_top,
+                                 .surface_depth = p->surface != SURF_FLAT ? p->surf_depth : 0.0,
                                  .period = {0.0, width, width_z},
                                  .area = dim == 3 ? width * width_z : width, /* 2D: 1 cm thick */
                                  .dt = r->dt,
