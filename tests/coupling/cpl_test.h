@@ -59,7 +59,11 @@ static inline void cpl_test_read(cpl_test_run *r, const char *text, const char *
   dk_report_unused(&r->e, r->doc);
 }
 
-static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *files, size_t nfiles) {
+/* Runs the read deck in a temporary directory, checks that `files` were written and, if given,
+ * calls read(ctx, user) on the outputs before the directory is removed. */
+static inline ms_status cpl_test_run_tmp_read(cpl_test_run *r, const char *const *files,
+                                              size_t nfiles, void (*read)(const ms_ctx *, void *),
+                                              void *user) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ctx.quiet = true;
@@ -73,11 +77,16 @@ static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *fil
     if (access(path, R_OK)) fail_msg("missing output %s", path);
     free(path);
   }
+  if (read && st == MS_OK) read(&ctx, user);
   ms_ctx_close(&ctx);
   char cmd[128];
   snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
   assert_int_equal(system(cmd), 0);
   return st;
+}
+
+static inline ms_status cpl_test_run_tmp(cpl_test_run *r, const char *const *files, size_t nfiles) {
+  return cpl_test_run_tmp_read(r, files, nfiles, NULL, NULL);
 }
 
 static inline void cpl_test_run_deck(cpl_test_run *r, const char *text, const char *name,

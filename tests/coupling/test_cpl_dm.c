@@ -144,23 +144,21 @@ static void test_deck_errors(void **state) {
                "test.yaml:26:", "spall_strength");
 }
 
-/* Runs a read deck in a temporary directory and finds, in its fragments.csv, the outermost
- * piece of at least 5 particles (its size, velocity) and the velocity of the innermost one. */
-static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, double *in_v) {
-  ms_ctx ctx;
-  ms_ctx_init_serial(&ctx);
-  ctx.quiet = true;
-  ctx.verbosity = MS_LOG_WARN;
-  char dir[] = "/tmp/mscale_test_cpl_dm_XXXXXX";
-  assert_non_null(mkdtemp(dir));
-  assert_int_equal(ms_outdir_create(&ctx, dir, true), MS_OK);
-  assert_int_equal(cpl_problem_run(&ctx, r->p), MS_OK);
-  char *fr = ms_out_path(&ctx, "fragments.csv");
+/* In a run's fragments.csv: the outermost piece of at least 5 particles (its size, velocity)
+ * and the velocity of the innermost one. */
+typedef struct outer_inner {
+  long count;
+  double v_out, v_in;
+} outer_inner;
+
+static void read_fragments(const ms_ctx *ctx, void *user) {
+  outer_inner *o = user;
+  char *fr = ms_out_path(ctx, "fragments.csv");
   FILE *fp = fopen(fr, "r");
   assert_non_null(fp);
   char line[1024];
   double xmax = -INFINITY, xmin = INFINITY;
-  *out_count = 0, *out_v = *in_v = NAN;
+  o->count = 0, o->v_out = o->v_in = NAN;
   while (fgets(line, sizeof line, fp)) {
     long id, count;
     double mass, d, x, y, z, vx;
@@ -168,15 +166,18 @@ static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, doubl
             8 ||
         count < 5)
       continue;
-    if (x > xmax) xmax = x, *out_count = count, *out_v = vx; /* the outermost big piece */
-    if (x < xmin) xmin = x, *in_v = vx;
+    if (x > xmax) xmax = x, o->count = count, o->v_out = vx; /* the outermost big piece */
+    if (x < xmin) xmin = x, o->v_in = vx;
   }
   fclose(fp);
   free(fr);
-  ms_ctx_close(&ctx);
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  assert_int_equal(system(cmd), 0);
+}
+
+/* Runs a read deck in a temporary directory (cpl_test_run_tmp_read) and reads its fragments. */
+static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, double *in_v) {
+  outer_inner o;
+  assert_int_equal(cpl_test_run_tmp_read(r, NULL, 0, read_fragments, &o), MS_OK);
+  *out_count = o.count, *out_v = o.v_out, *in_v = o.v_in;
 }
 
 /* 3. Spall in the coupled run (tests/coupling/data/cpl_spall_dm.yaml: a 0.2 mm Al flyer at
