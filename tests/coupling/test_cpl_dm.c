@@ -144,6 +144,19 @@ static void test_deck_errors(void **state) {
                "test.yaml:26:", "spall_strength");
 }
 
+/* The file at `rel` under MSCALE_SOURCE_DIR into text[cap] (NUL-terminated). */
+static void read_source(const char *rel, char *text, size_t cap) {
+  const char *src = getenv("MSCALE_SOURCE_DIR");
+  assert_non_null(src);
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", src, rel);
+  FILE *fp = fopen(path, "r");
+  assert_non_null(fp);
+  const size_t len = fread(text, 1, cap - 1, fp);
+  fclose(fp);
+  text[len] = 0;
+}
+
 /* In a run's fragments.csv: the outermost piece of at least 5 particles (its size, velocity)
  * and the velocity of the innermost one. */
 typedef struct outer_inner {
@@ -189,16 +202,8 @@ static void run_fragments(cpl_test_run *r, long *out_count, double *out_v, doubl
  * term closes. Without the fracture key the slab stays one fragment (its unbroken bonds). */
 static void spall_fragments(bool fracture, size_t *nfrag, long *scab_count, double *scab_v,
                             double *bulk_v, double *balance) {
-  const char *src = getenv("MSCALE_SOURCE_DIR");
-  assert_non_null(src);
-  char path[1024];
-  snprintf(path, sizeof path, "%s/tests/coupling/data/cpl_spall_dm.yaml", src);
-  FILE *fp = fopen(path, "r");
-  assert_non_null(fp);
   static char text[16384];
-  const size_t len = fread(text, 1, sizeof text - 1, fp);
-  fclose(fp);
-  text[len] = 0;
+  read_source("tests/coupling/data/cpl_spall_dm.yaml", text, sizeof text);
   if (!fracture) {
     char *k = strstr(text, "    fracture:");
     assert_non_null(k);
@@ -306,16 +311,8 @@ static double grid_spall_depth(cpl_test_run *r, double sigma_s, double depth, do
 
 static void test_default_deck(void **state) {
   (void)state;
-  const char *src = getenv("MSCALE_SOURCE_DIR");
-  assert_non_null(src);
-  char path[1024];
-  snprintf(path, sizeof path, "%s/inputs/default.yaml", src);
-  FILE *fp = fopen(path, "r");
-  assert_non_null(fp);
   static char text[32768];
-  const size_t len = fread(text, 1, sizeof text - 1, fp);
-  fclose(fp);
-  text[len] = 0;
+  read_source("inputs/default.yaml", text, sizeof text);
   assert_non_null(strstr(text, "model: discrete_model"));
   assert_non_null(strstr(text, "fracture: {model: mean_stress"));
   /* the particle phase to 0.06: past the check window (breakout ≈ 0.025 + depth/c0 = 0.025)
