@@ -76,6 +76,18 @@ static void test_table(void **state) {
  * r0, the second shell at √2 r0 beyond R_c): plain V = 0 (E(r0) = 0 is a node of the table;
  * the sites' rounding leaves ~1e-28 of the scale below); shifted V = −6 N E(R_c), the cohesive energy of the pair model (what dispersing the
  * lattice into free clusters costs), to the rounding of 648 terms. */
+/* One material's simulation of p in box with the Al table, forces at t = 0. */
+static cd_sim *start(ptl_state *p, const cd_box *box, const cd_config *cfg, const eos_t *eos) {
+  cd_sim *s = NULL;
+  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = box, .cfg = cfg, .nmat = 1}, &s),
+          "cd_sim_create");
+  cd_pair_table *t = calloc(1, sizeof *t);
+  build(t, eos);
+  cd_sim_set_pair(s, 0, 0, t);
+  assert_int_equal(cd_sim_init(s), MS_OK);
+  return s;
+}
+
 static double lattice_potential(const eos_t *eos, cd_cutoff_mode mode, size_t *n) {
   const int nc = 3;
   const double a = sqrt(2.0) * R0, m = eos_rho0(eos) * cd_cluster_volume(CD_LATTICE_FCC, R0, 0);
@@ -90,13 +102,7 @@ static double lattice_potential(const eos_t *eos, cd_cutoff_mode mode, size_t *n
                 .bc = {CD_BC_PERIODIC, CD_BC_PERIODIC, CD_BC_PERIODIC}};
   cd_config cfg = {
       .r0 = R0, .skin = 0.1 * R0, .dt = 0.02 * R0 / C0, .cutoff = mode, .lattice = CD_LATTICE_FCC};
-  cd_sim *s = NULL;
-  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
-          "cd_sim_create");
-  cd_pair_table *t = calloc(1, sizeof *t);
-  build(t, eos);
-  cd_sim_set_pair(s, 0, 0, t);
-  assert_int_equal(cd_sim_init(s), MS_OK);
+  cd_sim *s = start(p, &box, &cfg, eos);
   cd_energy e;
   cd_sim_energy(s, &e);
   cd_sim_destroy(&s);
@@ -141,13 +147,7 @@ static crossing cross(const eos_t *eos, cd_cutoff_mode mode, double dt, double v
   }
   cd_box box = {.lo = {-1, -1, -1}, .hi = {1, 1, 1}, .bc = {CD_BC_FREE, CD_BC_FREE, CD_BC_FREE}};
   cd_config cfg = {.r0 = R0, .skin = 0.1 * R0, .dt = dt, .cutoff = mode, .lattice = CD_LATTICE_FCC};
-  cd_sim *s = NULL;
-  ms_must(cd_sim_create(&(cd_sim_params){.particles = p, .box = &box, .cfg = &cfg, .nmat = 1}, &s),
-          "cd_sim_create");
-  cd_pair_table *t = calloc(1, sizeof *t);
-  build(t, eos);
-  cd_sim_set_pair(s, 0, 0, t);
-  assert_int_equal(cd_sim_init(s), MS_OK);
+  cd_sim *s = start(p, &box, &cfg, eos);
   crossing c = {0};
   cd_energy e;
   cd_sim_energy(s, &e);
