@@ -363,14 +363,18 @@ static ms_status summarise(one_way *w) {
   if (ctx->size > 1) view.n = ptl_region_state(r)->nlocal;
   cpl_phase_classify(ctx, &w->ph, &view, (1 + p->jet_margin) * p->sum.u_plateau, &p->sum.classes);
   const cpl_ejecta_classes *ec = &p->sum.classes;
+  /* no full-width fragment left (a layer broken sideways): say so rather than print NaN */
+  char level[96];
+  if (isfinite(ec->level)) snprintf(level, sizeof level, "x = %.5g cm", ec->level);
+  else snprintf(level, sizeof level, "none, so no jets and every detached piece is debris");
   ms_log(ctx, MS_LOG_INFO,
          "coupled: detached material at t = %.5g %s (docs/coupling.md \"The split\"; bulk %.4g g "
-         "in fragment %lld; level of the foremost full-width fragment x = %.5g cm): jets (ahead "
+         "in fragment %lld; level of the foremost full-width fragment %s): jets (ahead "
          "of the level) %.4g g, spall layers (full-width) %.4g g in %zu fragments, debris %.4g "
          "g; fragments ahead %zu, behind %zu; faster than %.4g km/s = (1 + %g) x the grid's "
          "free-surface plateau %.4g: %.4g g in %zu fragments; fastest %.4g km/s",
          ms_out_time(t_now), ms_out_time_label(), ec->m_bulk,
-         ec->bulk == SIZE_MAX ? -1LL : (long long)ec->bulk, ec->level, ec->m_jet, ec->m_layer,
+         ec->bulk == SIZE_MAX ? -1LL : (long long)ec->bulk, level, ec->m_jet, ec->m_layer,
          ec->n_layer, ec->m_debris, ec->n_jet, ec->n_debris, ec->v_fast, p->jet_margin,
          p->sum.u_plateau, ec->m_fast, ec->n_fast, ec->v_max);
   char title[160];
