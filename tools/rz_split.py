@@ -27,6 +27,14 @@ two check each other (the run's numbers are the last row of its ejecta_mass.csv,
   the foremost layer's particles below the initial crest tops.
 
 With --png, the last snapshot of each run is drawn coloured by that class.
+
+With --coverage, every snapshot of each run is also read with a level that does not need a
+connected layer: the top of the foremost slice 2 spacings thick in which particles (of any
+fragment) occupy at least 90 % of the lateral bins. A layer broken sideways into chunks still
+covers the width, so this level survives the break-up that leaves the run's split without a
+full-width fragment (every detached piece then counts as debris); the mass more than one
+spacing beyond it is printed per unit area, split at the valleys as above, and as a fraction of
+the region's mass.
 """
 import argparse
 import os
@@ -77,6 +85,37 @@ def valley_phase(snap, lam, nbin, lo, period):
     front = np.full(nbin, np.inf)
     np.minimum.at(front, b, -x)
     return ((np.argmin(-front) + 0.5) * period / nbin) % lam
+
+
+def coverage_level(x, y, lo, period, r0, nbin):
+    """Top of the foremost 2-spacing slice whose particles occupy >= COVER of the lateral bins."""
+    xs = np.floor(x / (2 * r0)).astype(int)
+    b = np.floor(((y - lo) % period) / period * nbin).astype(int)
+    occupied = np.unique(np.stack([xs, b]), axis=1)  # distinct (slice, bin) pairs
+    sl, count = np.unique(occupied[0], return_counts=True)
+    full = sl[count >= COVER * nbin]
+    return (full.max() + 1) * 2 * r0 if full.size else np.nan
+
+
+def coverage_history(run):
+    """Per snapshot: (t, level, ahead, ahead at the valleys, ahead / region mass); see --coverage."""
+    r = mscale.Run(run)
+    first = r.snapshots[0]
+    r0, period = float(first.attrs["r0"]), float(first.attrs["period_y"])
+    lo = float(first.attrs.get("lo_y", 0.0))
+    nbin = max(1, int(round(period / r0)))
+    area = period * thickness(run, r0)
+    lam = wavelength(run) or period
+    y0 = valley_phase(first, lam, nbin, lo, period)
+    rows = []
+    for snap in r.snapshots:
+        x, y, m = snap["x"][:, 0], snap["x"][:, 1], snap["mass"]
+        x_c = coverage_level(x, y, lo, period, r0, nbin)
+        ahead = x > x_c + r0 if np.isfinite(x_c) else np.zeros(x.size, bool)
+        dist = np.abs((y - lo - y0 + 0.5 * lam) % lam - 0.5 * lam)
+        rows.append((float(snap.attrs["time"]), x_c, m[ahead].sum() / area,
+                     m[ahead & (dist < 0.25 * lam)].sum() / area, m[ahead].sum() / m.sum()))
+    return rows
 
 
 def split(run):
@@ -190,6 +229,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs", nargs="+")
     ap.add_argument("--png", help="draw the last snapshots coloured by class")
+    ap.add_argument("--coverage", action="store_true",
+                    help="every snapshot read with the coverage level (see the docstring)")
     a = ap.parse_args()
     pics = []
     print("run,t_us,u_ref,run's split: jets/layers/debris/bulk,bulk,ahead(valley/crest),layers(n),behind,"
@@ -202,6 +243,11 @@ def main():
               f"{o['bulk']:.3g},{o['ahead']:.3g}({o['ahead_valley']:.3g}/{o['ahead_crest']:.3g}),"
               f"{o['layer']:.3g}({o['n_layers']}),{o['behind']:.3g},"
               f"{o['x_l'] * 1e4:.0f},{o['spall_depth'] * 1e4:.0f},{o['v_max']:.3f}")
+    if a.coverage:
+        print("run,t_us,x_cover_um,ahead,ahead_valley,ahead/region  [g/cm^2]")
+        for run in a.runs:
+            for t, x_c, ahead, valley, frac in coverage_history(run):
+                print(f"{run},{t:.3f},{x_c * 1e4:.0f},{ahead:.3g},{valley:.3g},{frac:.3f}")
     if a.png:
         draw(a.png, a.runs, pics)
 
