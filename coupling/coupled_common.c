@@ -187,15 +187,14 @@ ms_status cpl_drag_kick(const cpl_problem *p, cpl_particle_phase *ph, const cpl_
     ps->vx[i] += fx[i] / ps->mass[i] * span;
     ps->vy[i] += fy[i] / ps->mass[i] * span;
     if (three_d) ps->vz[i] += fz[i] / ps->mass[i] * span;
-    if (p->gas_return) {
-      double v1[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
-      double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], three_d ? ps->z[i] : 0.0};
-      for (int k = 0; k < 3; k++) {
-        dp[k] = ps->mass[i] * (v1[k] - v0[k]);
-        de += 0.5 * ps->mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]);
-      }
-      cpl_gas_deposit(gas, xi, t, t, dp, de);
+    double v1[3] = {ps->vx[i], ps->vy[i], three_d ? ps->vz[i] : 0.0};
+    double dp[3], de = 0, xi[3] = {ps->x[i], ps->y[i], three_d ? ps->z[i] : 0.0};
+    for (int k = 0; k < 3; k++) {
+      dp[k] = ps->mass[i] * (v1[k] - v0[k]);
+      de += 0.5 * ps->mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]);
     }
+    gas->drag_work += de; /* the kinetic energy the drag took: booked in the particle balance */
+    if (p->gas_return) cpl_gas_deposit(gas, xi, t, t, dp, de);
   }
   if (cell_src) cpl_gas_return_sum(gas);
   return gas->st;

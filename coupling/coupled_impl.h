@@ -61,7 +61,8 @@ typedef struct gas_ctx {
   double area;
   ms_status st;
   double returned_p, returned_e; /* what the gas received (absolute, g·km/s and kJ) */
-  cpl_gaslog *log;               /* sources recorded for checkpoints (NULL: none) */
+  double drag_work; /* Σ ΔK of this rank's drag kicks (kJ, ≤ 0): the balance's term */
+  cpl_gaslog *log;  /* sources recorded for checkpoints (NULL: none) */
   /* MPI, drag kicks: each rank's sources per grid cell (dp, de per cm²), summed over the ranks
    * before they enter the replicated grid (cpl_gas_return_sum); NULL otherwise */
   double *cell_src;

@@ -144,6 +144,7 @@ static ms_status particle_setup(one_way *w) {
     w->next_out = w->ls.next_out, w->last_search = w->ls.last_search;
     w->p_particles = w->ls.p_particles, w->fs_n = w->ls.fs_n, w->e0 = w->ls.e0;
     w->gas.returned_p = w->ls.returned_p, w->gas.returned_e = w->ls.returned_e;
+    w->gas.drag_work = w->ls.drag_work;
   } else {
     ptl_region_energy_get(w->ph.region, &w->e0);
   }
@@ -152,11 +153,17 @@ static ms_status particle_setup(one_way *w) {
   return st;
 }
 
+/* The kinetic energy the drag kicks took so far, summed over the ranks (collective). */
+static double drag_work(const one_way *w) {
+  return w->ctx->size > 1 ? par_sum_double(w->gas.drag_work) : w->gas.drag_work;
+}
+
 static ms_status checkpoint(one_way *w, long step) {
   cpl_loop_state *ls = &w->ls;
   ls->step = step, ls->next_out = w->next_out, ls->last_search = w->last_search;
   ls->p_particles = w->p_particles, ls->e0 = w->e0, ls->fs_n = w->fs_n;
   ls->returned_p = w->gas.returned_p, ls->returned_e = w->gas.returned_e;
+  ls->drag_work = w->gas.drag_work;
   ms_afile *const csv[2] = {&w->af_ej, &w->af_fs};
   return cpl_checkpoint_write(w->ctx, w->p->deck_hash, w->ph.region, ls, csv, 2);
 }
@@ -243,13 +250,14 @@ static ms_status search(one_way *w, long step, bool out_now) {
   if (st != MS_OK) return st;
   ptl_region_energy en;
   ptl_region_energy_get(r, &en);
+  const double drag = drag_work(w);
   ms_log(ctx, MS_LOG_INFO,
          "coupled: t = %.5g %s: %zu fragments, ejected mass %.4g g, free surface %.4g km/s "
          "(grid %.4g); energy [kJ]: kinetic %.4g potential %.4g damped %.4g broken %.4g "
-         "piston work %.4g, balance %.3g of the work",
+         "drag %.4g piston work %.4g, balance %.3g of the work",
          ms_out_time(t_abs), ms_out_time_label(), w->ph.fr.n, row_ej[1], up, ug, en.kinetic,
-         en.potential - w->e0.potential, en.dissipated, en.broken, en.piston_work,
-         en.piston_work != 0 ? (en.total - w->e0.total) / en.piston_work : 0.0);
+         en.potential - w->e0.potential, en.dissipated, en.broken, drag, en.piston_work,
+         en.piston_work != 0 ? (en.total - w->e0.total - drag) / en.piston_work : 0.0);
   w->next_out++;
   return MS_OK;
 }
@@ -345,7 +353,9 @@ static ms_status summarise(one_way *w) {
   ptl_region_energy_get(r, &en);
   p->sum.particles = w->ph.geo.particles;
   p->sum.steps = w->nsteps;
-  p->sum.energy_balance = en.piston_work != 0 ? (en.total - w->e0.total) / en.piston_work : 0.0;
+  const double drag = drag_work(w);
+  p->sum.energy_balance =
+      en.piston_work != 0 ? (en.total - w->e0.total - drag) / en.piston_work : 0.0;
   p->sum.piston_work = en.piston_work;
   p->sum.fragments = w->ph.fr.n;
   p->sum.ejected_mass = cpl_ejected_mass(&w->ph.fr, &w->ph.sel);

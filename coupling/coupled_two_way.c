@@ -114,6 +114,7 @@ static ms_status two_way_replay(two_way *w) {
 static ms_status two_way_checkpoint(two_way *w) {
   w->ls.step = w->psteps, w->ls.next_out = w->next_out, w->ls.last_search = w->last_search;
   w->ls.returned_p = w->gas.returned_p, w->ls.returned_e = w->gas.returned_e;
+  w->ls.drag_work = w->gas.drag_work;
   w->ls.tw = w->acc;
   w->ls.tw.gsteps = (double)w->gsteps;
   ms_status st =
@@ -301,6 +302,7 @@ static ms_status setup(two_way *w) {
     w->acc = w->ls.tw;
     w->replay_gsteps = (long)w->ls.tw.gsteps;
     w->gas.returned_p = w->ls.returned_p, w->gas.returned_e = w->ls.returned_e;
+    w->gas.drag_work = w->ls.drag_work;
     if (w->ckpt_every > 0) /* (a deck without checkpoints fails the deck-hash check above) */
       w->next_ckpt = (w->psteps / w->ckpt_every + 1) * w->ckpt_every;
   }

@@ -5,7 +5,7 @@
  *   /cd/...            the particle region (ptl_region_checkpoint_write; cluster dynamics:
  *                      particles/cd/cd_checkpoint.c);
  *   /loop              attributes step, next_out, last_search, p_particles, returned_p,
- *                      returned_e and the two-way accumulators (gsteps, J_grid, J_particles,
+ *                      returned_e, drag_work and the two-way accumulators (gsteps, J_grid, J_particles,
  *                      W_grid, W_particles, owed, dtg_last, p_avg, w_before; 0 in one-way runs);
  *                      datasets e0 (the initial energy terms), fs [n][3] (drive-check samples t,
  *                      u_grid, u_particles), gaslog [n][4] (what was done to the grids,
@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CPL_CHECKPOINT_FORMAT "mscale coupled checkpoint 2"
+#define CPL_CHECKPOINT_FORMAT "mscale coupled checkpoint 3" /* 3: drag_work */
 
 static void gaslog_add(cpl_gaslog *l, double kind, double a, double b, double c) {
   if (!l->on) return;
@@ -53,16 +53,16 @@ void cpl_gaslog_free(cpl_gaslog *l) {
   memset(l, 0, sizeof *l);
 }
 
-static const char *const loop_attrs[] = {"step",        "next_out",   "last_search", "p_particles",
-                                         "returned_p",  "returned_e", "gsteps",      "J_grid",
-                                         "J_particles", "W_grid",     "W_particles", "owed",
-                                         "dtg_last",    "p_avg",      "w_before"};
+static const char *const loop_attrs[] = {"step",       "next_out",    "last_search", "p_particles",
+                                         "returned_p", "returned_e",  "drag_work",   "gsteps",
+                                         "J_grid",     "J_particles", "W_grid",      "W_particles",
+                                         "owed",       "dtg_last",    "p_avg",       "w_before"};
 enum { N_TW = sizeof(cpl_two_way_acc) / sizeof(double) };
 enum {
   N_LOOP = sizeof loop_attrs / sizeof *loop_attrs,
   N_E0 = sizeof(ptl_region_energy) / sizeof(double)
 };
-_Static_assert(N_LOOP == 6 + N_TW, "loop_attrs: 6 loop values, then cpl_two_way_acc in order");
+_Static_assert(N_LOOP == 7 + N_TW, "loop_attrs: 7 loop values, then cpl_two_way_acc in order");
 
 ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, ptl_region *region,
                                const cpl_loop_state *ls, ms_afile *const *csv, int ncsv) {
@@ -72,8 +72,16 @@ ms_status cpl_checkpoint_write(const ms_ctx *ctx, uint64_t deck_hash, ptl_region
   if (!h) return MS_ERR_IO;
   const bool root = ctx->rank == 0; /* replicated data: rank 0 writes it */
   st = ptl_region_checkpoint_write(region, h, ctx);
-  double vals[N_LOOP] = {(double)ls->step, (double)ls->next_out, (double)ls->last_search,
-                         ls->p_particles,  ls->returned_p,       ls->returned_e};
+  /* the drag's work as one total (each rank kicks its own particles); a restart gives it to
+   * rank 0, so the ranks' sum stays the run's */
+  const double drag = ctx->size > 1 ? par_sum_double(ls->drag_work) : ls->drag_work;
+  double vals[N_LOOP] = {(double)ls->step,
+                         (double)ls->next_out,
+                         (double)ls->last_search,
+                         ls->p_particles,
+                         ls->returned_p,
+                         ls->returned_e,
+                         drag};
   memcpy(vals + N_LOOP - N_TW, &ls->tw, sizeof ls->tw);
   for (int k = 0; k < N_LOOP && st == MS_OK; k++)
     st = ms_h5_attr_double(h, "/loop", loop_attrs[k], vals[k]);
@@ -132,6 +140,7 @@ static ms_status restore(const ms_ctx *ctx, ms_h5r *h, ptl_region *region, cpl_l
   if (st == MS_OK) {
     ls->step = (long)vals[0], ls->next_out = (long)vals[1], ls->last_search = (long)vals[2];
     ls->p_particles = vals[3], ls->returned_p = vals[4], ls->returned_e = vals[5];
+    ls->drag_work = ctx->rank == 0 ? vals[6] : 0.0;
     memcpy(&ls->tw, vals + N_LOOP - N_TW, sizeof ls->tw);
     memcpy(&ls->e0, e0, sizeof ls->e0);
     ls->fs_n = nfs;

@@ -41,6 +41,7 @@ typedef struct cpl_loop_state {
   double p_particles;            /* transmitting piston: the particles' pressure, last step */
   ptl_region_energy e0;          /* at the start of the particle phase */
   double returned_p, returned_e; /* gas return so far */
+  double drag_work;              /* this rank's drag work so far (gas_ctx.drag_work) */
   size_t fs_n, fs_cap;           /* drive-check samples (arrays owned by the run) */
   double *fs_t, *fs_ug, *fs_up;
   cpl_gaslog gaslog;
