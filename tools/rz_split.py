@@ -20,7 +20,7 @@ two check each other (the run's numbers are the last row of its ejecta_mass.csv,
 * The level is one spacing above the largest, over the full-width fragments, of the median over
   the lateral bins of the fragment's front particle. Detached particles beyond the level are "ahead" (jets and
   the debris in front of the layers: the run's M_jet), split here into those within a quarter
-  groove period of a valley's axis (found in the first snapshot, before breakout) and the rest
+  groove period of a valley's axis (at half a period from the profile's peaks) and the rest
   (crest debris); detached particles below it are "layer" (M_layer) or "behind" (M_debris).
   Without a level every detached particle is "behind".
 * The depth of the first spall plane: the deepest initial position (first snapshot, by gid) of
@@ -77,14 +77,13 @@ def wavelength(run):
     return 0.0
 
 
-def valley_phase(snap, lam, nbin, lo, period):
-    """Lateral position of a groove valley, modulo the period lam: where the first snapshot's
-    (before breakout) front is lowest."""
-    x, y = snap["x"][:, 0], snap["x"][:, 1]
-    b = np.floor(((y - lo) % period) / period * nbin).astype(int)
-    front = np.full(nbin, np.inf)
-    np.minimum.at(front, b, -x)
-    return ((np.argmin(-front) + 0.5) * period / nbin) % lam
+def valley_phase(lam):
+    """Lateral position of a groove valley, modulo the period lam: the regions build the sine
+    profile as a drop of depth (1 - cos 2 pi y / lam) / 2 below the peaks at y = lo
+    (particles/dm/dm_region.c surface_drop, particles/cd/cd_region.c), so the valleys lie at
+    lam / 2. (Read from the deck, not from a snapshot: after breakout a valley carries the jet
+    and no longer has the lowest front.)"""
+    return 0.5 * lam
 
 
 def coverage_level(x, y, lo, period, r0, nbin):
@@ -106,7 +105,7 @@ def coverage_history(run):
     nbin = max(1, int(round(period / r0)))
     area = period * thickness(run, r0)
     lam = wavelength(run) or period
-    y0 = valley_phase(first, lam, nbin, lo, period)
+    y0 = valley_phase(lam)
     rows = []
     for snap in r.snapshots:
         x, y, m = snap["x"][:, 0], snap["x"][:, 1], snap["mass"]
@@ -182,7 +181,7 @@ def split(run):
     # "ahead" split laterally: within a quarter period of a valley's axis (the jets) or not
     # (the crests' debris)
     lam = wavelength(run) or period
-    y0 = valley_phase(r.snapshots[0], lam, nbin, lo, period)
+    y0 = valley_phase(lam)
     dist = np.abs((y - lo - y0 + 0.5 * lam) % lam - 0.5 * lam)
     out["ahead_valley"] = m[(where == "ahead") & (dist < 0.25 * lam)].sum() / area
     out["ahead_crest"] = out["ahead"] - out["ahead_valley"]
