@@ -251,13 +251,19 @@ static ms_status search(one_way *w, long step, bool out_now) {
   ptl_region_energy en;
   ptl_region_energy_get(r, &en);
   const double drag = drag_work(w);
+  long nfail[3];
+  char failed[128] = "";
+  if (ptl_region_failures(r, nfail))
+    snprintf(failed, sizeof failed,
+             "; failed particles %ld by the criterion, %ld isolated, %ld degenerate", nfail[0],
+             nfail[1], nfail[2]);
   ms_log(ctx, MS_LOG_INFO,
          "coupled: t = %.5g %s: %zu fragments, ejected mass %.4g g, free surface %.4g km/s "
          "(grid %.4g); energy [kJ]: kinetic %.4g potential %.4g damped %.4g broken %.4g "
-         "drag %.4g piston work %.4g, balance %.3g of the work",
+         "drag %.4g piston work %.4g, balance %.3g of the work%s",
          ms_out_time(t_abs), ms_out_time_label(), w->ph.fr.n, row_ej[1], up, ug, en.kinetic,
          en.potential - w->e0.potential, en.dissipated, en.broken, drag, en.piston_work,
-         en.piston_work != 0 ? (en.total - w->e0.total - drag) / en.piston_work : 0.0);
+         en.piston_work != 0 ? (en.total - w->e0.total - drag) / en.piston_work : 0.0, failed);
   w->next_out++;
   return MS_OK;
 }
@@ -356,6 +362,7 @@ static ms_status summarise(one_way *w) {
   const double drag = drag_work(w);
   p->sum.energy_balance =
       en.piston_work != 0 ? (en.total - w->e0.total - drag) / en.piston_work : 0.0;
+  ptl_region_failures(r, p->sum.failed);
   p->sum.piston_work = en.piston_work;
   p->sum.fragments = w->ph.fr.n;
   p->sum.ejected_mass = cpl_ejected_mass(&w->ph.fr, &w->ph.sel);

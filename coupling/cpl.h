@@ -420,7 +420,8 @@ typedef struct cpl_run_summary {
   size_t particles;
   long steps;
   cpl_fs_check check;         /* free-surface drive check */
-  double energy_balance;      /* (E(t_end) − E(0))/piston work of the particle phase */
+  double energy_balance;      /* (E(t_end) − E(0) − drag work)/piston work, particle phase */
+  long failed[3];             /* failed particles: criterion, isolated, degenerate (DM) */
   double piston_work;         /* kJ */
   size_t fragments;           /* at the end of the particle phase */
   double ejected_mass;        /* g (every fragment but the largest) */

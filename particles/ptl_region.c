@@ -65,6 +65,10 @@ void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner) {
 ms_status ptl_region_write_snapshot(ptl_region *r, const char *path, const char *material) {
   return r->model->write_snapshot(r, path, material);
 }
+bool ptl_region_failures(const ptl_region *r, long count[3]) {
+  count[0] = count[1] = count[2] = 0;
+  return r->model->failures && r->model->failures(r, count);
+}
 bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr) {
   if (r->model->links) return r->model->links(r, start, nbr);
   *start = NULL, *nbr = NULL;

@@ -115,6 +115,11 @@ void ptl_region_ghost_owners(const ptl_region *r, int32_t *owner);
  * |r_i − r_k| ≤ b·a (cluster dynamics). The discrete model links the unbroken bonds. */
 bool ptl_region_links(ptl_region *r, const size_t **start, const int32_t **nbr);
 
+/* Particles failed so far in this process (not carried by checkpoints), by cause: the
+ * material's criterion, isolated (too few intact family members), degenerate F — the discrete
+ * model's fracture (docs/particles-dm.md "Fracture"). false (counts 0) if the model has none. */
+bool ptl_region_failures(const ptl_region *r, long count[3]);
+
 /* The model's own HDF5 snapshot of its state (a run that went unstable), in the layout of every
  * particle snapshot (ptl.h); `material` names the sample's material (material 0) for the
  * snapshot's material_names (NULL: none). */

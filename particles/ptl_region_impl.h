@@ -44,6 +44,8 @@ struct ptl_region_model {
   void (*ghost_owners)(const ptl_region *r, int32_t *owner);
   /* optional (NULL: the coupling's distance criterion): ptl_region_links */
   bool (*links)(ptl_region *r, const size_t **start, const int32_t **nbr);
+  /* optional (NULL: the model has no fracture): ptl_region_failures */
+  bool (*failures)(const ptl_region *r, long count[3]);
   ms_status (*write_snapshot)(ptl_region *r, const char *path, const char *material);
   ms_status (*refresh)(ptl_region *r);
   ms_status (*checkpoint_write)(const ptl_region *r, ms_h5 *h, const ms_ctx *ctx);

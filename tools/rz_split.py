@@ -35,6 +35,10 @@ covers the width, so this level survives the break-up that leaves the run's spli
 full-width fragment (every detached piece then counts as debris); the mass more than one
 spacing beyond it is printed per unit area, split at the valleys as above, and as a fraction of
 the region's mass.
+
+With --failed FILE, every snapshot of the first run is drawn with the particles that are a
+fragment of their own (failed particles: the discrete model's failed particle is its own
+fragment) in red: where the slab fails, and when.
 """
 import argparse
 import os
@@ -224,12 +228,37 @@ def draw(png, runs, pics):
     fig.savefig(png, dpi=80)
 
 
+def draw_failed(png, run):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    snaps = mscale.Run(run).snapshots
+    fig, axes = plt.subplots(1, len(snaps), figsize=(2.4 * len(snaps), 5.5), squeeze=False)
+    for ax, snap in zip(axes.flat, snaps):
+        x, y, fid = snap["x"][:, 0], snap["x"][:, 1], snap["fragment"]
+        ids, count = np.unique(fid, return_counts=True)
+        alone = count[np.searchsorted(ids, fid)] == 1
+        for sel, c in ((~alone, "tab:blue"), (alone, "tab:red")):
+            ax.scatter(y[sel] * 1e4, x[sel] * 1e4, c=c, s=0.6, linewidths=0)
+        ax.set_title(f"{float(snap.attrs['time']):.2f} us: {alone.sum()} alone", fontsize=8)
+        ax.set_xlabel("y [um]")
+        ax.set_aspect("equal")
+    axes[0, 0].set_ylabel("x [um] (drive axis)")
+    fig.suptitle(f"{os.path.basename(run.rstrip('/'))}: red = a fragment of its own (failed)",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(png, dpi=80)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs", nargs="+")
     ap.add_argument("--png", help="draw the last snapshots coloured by class")
     ap.add_argument("--coverage", action="store_true",
                     help="every snapshot read with the coverage level (see the docstring)")
+    ap.add_argument("--failed", help="draw every snapshot of the first run, failed particles red")
     a = ap.parse_args()
     pics = []
     print("run,t_us,u_ref,run's split: jets/layers/debris/bulk,bulk,ahead(valley/crest),layers(n),behind,"
@@ -249,6 +278,8 @@ def main():
                 print(f"{run},{t:.3f},{x_c * 1e4:.0f},{ahead:.3g},{valley:.3g},{frac:.3f}")
     if a.png:
         draw(a.png, a.runs, pics)
+    if a.failed:
+        draw_failed(a.failed, a.runs[0])
 
 
 if __name__ == "__main__":

@@ -615,6 +615,14 @@ static void region_energy(ptl_region *rr, ptl_region_energy *out) {
       for (int a = 0; a < 3; a++) out->momentum[a] += r->s.mass[i] * r->s.u[3 * i + a];
 }
 
+/* Failures by cause (dm_fracture.c's counters); false without a fracture model. */
+static bool region_failures(const ptl_region *rr, long count[3]) {
+  const dm_fin *f = cdmr(rr)->f;
+  if (!f->failed) return false;
+  count[0] = f->nfail_stress, count[1] = f->nfail_isolated, count[2] = f->nfail_degenerate;
+  return true;
+}
+
 /* The fragments' connectivity: every bond of the families but the broken ones (both particles
  * failed, dm_fracture.c), so a slab is one fragment until it breaks, however far its spike
  * tips stretch. Particle i of the model is particle i of the view (on ranks > 0 the view is
@@ -744,6 +752,7 @@ static const ptl_region_model dm_region_model = {
     .refresh_ghosts = region_refresh_ghosts,
     .ghost_owners = region_ghost_owners,
     .links = region_links,
+    .failures = region_failures,
     .write_snapshot = region_write_snapshot,
     .refresh = region_refresh,
     .checkpoint_write = region_checkpoint_write,
