@@ -445,6 +445,8 @@ ms_status dm_fin_local_init(dm_fin *f);
  * Q, κ, failed). */
 size_t dm_sym_ghosts(dm_state *s, size_t nreal, const dm_sym_planes *pl, double reach, double ell);
 bool dm_sym_on_plane(double x, double pos, double ell);
+/* The mirror ghosts' X and V from their partners' (a moved reference on a ghost set kept). */
+void dm_sym_reference(dm_state *s, size_t nreal, const dm_sym_planes *pl);
 static inline double dm_fin_fold(const dm_fin *f, size_t i) { return f->fold ? f->fold[i] : 1.0; }
 void dm_fin_momentum(const dm_fin *f, double P[3]);
 void dm_sym_sync(dm_fin *f);
@@ -474,6 +476,14 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
                                   bool owner);
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e);
+/* The families of a model that kept or merged them at reference updates, or has per-family
+ * references (dm_family_checkpoint.c): the bond lists, the bond vectors ξ_b (m->xref), A⁻¹, cond
+ * and κ of every row (mirror ghosts included) under `group`, and back into a model of the same
+ * particles (the lists, xref, rev and the shapes replaced; a mismatch is an error in e). */
+ms_status dm_families_checkpoint_write(const dm_model *m, ms_h5 *h, const char *group, bool owner);
+ms_status dm_families_checkpoint_read(dm_model *m, ms_h5r *h, const char *group, dk_errors *e);
+/* m->rev from the lists (dm_fin_local.c); MS_ERR_INTERNAL for asymmetric families. */
+ms_status dm_fin_local_rev(dm_model *m);
 /* Rows of a checkpoint's [rows][ncol] dataset `name` into dst: exactly nmax rows when `exact`,
  * else at most nmax (their number in *nrow, may be NULL); any other shape is an error in e. */
 ms_status dm_ckpt_read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, bool exact,

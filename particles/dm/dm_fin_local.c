@@ -222,6 +222,14 @@ static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_
   return bad ? MS_ERR_INTERNAL : MS_OK;
 }
 
+ms_status dm_fin_local_rev(dm_model *m) {
+  free(m->rev);
+  m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
+  const ms_status st = build_rev(m, m->start, m->nbr, m->rev);
+  if (st != MS_OK) free(m->rev), m->rev = NULL;
+  return st;
+}
+
 ms_status dm_fin_local_init(dm_fin *f) {
   dm_model *m = f->m;
   if (m->xref) return MS_OK;
