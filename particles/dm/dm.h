@@ -408,6 +408,7 @@ typedef struct dm_refamily_report {
   size_t bad;        /* on refusal: the first particle with a degenerate family */
   size_t families;   /* dm_fin_rebase_local: the families updated (0: none passed the trigger) */
   size_t gained;     /* dm_fin_rebase_local: the others that gained bonds (merge) */
+  bool uncovered;    /* refused: rep->bad's mirror image within the horizon has no ghost */
 } dm_refamily_report;
 double dm_fin_max_stretch(const dm_fin *f, size_t *where); /* per-family refs: their own ξ */
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);

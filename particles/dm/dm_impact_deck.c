@@ -308,11 +308,6 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
     static const char *const family_names[] = {"rebuild", "keep", "merge", NULL};
     dk_read_double(e, doc, ru, "threshold", MS_DIM_NONE, true, 0, 1e-3, 10.0, &p->ref_threshold);
     dk_read_enum(e, doc, ru, "families", false, 0, family_names, &p->ref_keep);
-    if (p->ref_keep && dk_get(sec, "symmetry"))
-      dk_error(e, doc, dk_get(ru, "families"),
-               "impact.reference_update.families: %s is not available with symmetry planes yet "
-               "(the mirror ghosts would need the kept families too): use rebuild or the full body",
-               p->ref_keep == 2 ? "merge" : "keep");
     static const char *const scope_names[] = {"all", "family", NULL};
     const dk_node *sc = dk_get(ru, "scope");
     /* read only when given: the resolved deck, and so the checkpoints' deck hash, of a deck

@@ -306,15 +306,15 @@ static void test_deck_errors(void **state) {
   assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0 passes "
                             "through the body off its symmetry"));
   dm_test_deck_free(doc, &mats, &e);
-  /* merged families with the planes (the bodies' errors above kept) */
+  /* merged per-family references with the planes: accepted (only the bodies' errors above) */
   snprintf(t2, sizeof t2,
            "%.*s  symmetry: {x: 0, y: 0}\n"
-           "  reference_update: {threshold: 0.1, families: merge}\n  t_end: 1\n",
+           "  reference_update: {threshold: 0.1, families: merge, scope: family}\n  t_end: 1\n",
            (int)(strstr(text, "  symmetry") - text), text);
   doc = dm_test_deck(t2, "deck.yaml", &mats, &e);
   assert_null(dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e));
-  assert_true(has_error(&e, "deck.yaml:15:48: impact.reference_update.families: merge is not "
-                            "available with symmetry planes"));
+  assert_false(has_error(&e, "reference_update"));
+  assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0"));
   dm_test_deck_free(doc, &mats, &e);
 }
 
