@@ -354,13 +354,17 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   }
   read_controls(p, doc, sec, e);
   read_bodies(p, doc, sec, mats, e);
-  for (size_t b = 0; p->ref_family && b < p->nbodies; ++b)
+  /* fracture's per-bond contact state (dm_fracture.c) belongs to the families it was built on:
+   * no reference update moves it (dm_fin_reference_update, dm_fin_rebase, dm_fin_rebase_local
+   * refuse a model with fracture), so refuse the pair here, located, before the run */
+  const dk_node *ru = dk_get(sec, "reference_update");
+  for (size_t b = 0; p->ref_threshold > 0 && b < p->nbodies; ++b)
     if (p->bodies[b].mat.frac.model != DM_FRACTURE_NONE) {
-      dk_error(e, doc, dk_get(dk_get(sec, "reference_update"), "scope"),
-               "impact.reference_update.scope: family is not available with fracture "
-               "(impact.bodies[%zu] has a fracture model: the broken bonds' contact belongs to one "
-               "shared reference)",
-               b);
+      dk_error(e, doc, dk_get(ru, "scope") ? dk_get(ru, "scope") : ru,
+               "impact.reference_update%s is not available with fracture (impact.bodies[%zu] has "
+               "a fracture model: the broken bonds' contact belongs to the families it was built "
+               "on)",
+               p->ref_family ? ".scope: family" : "", b);
       break;
     }
   read_wall(p, doc, sec, e);
