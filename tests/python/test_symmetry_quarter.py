@@ -57,8 +57,9 @@ def same(what, a, b, tol=TOL):
 
 
 def without_reference_update(deck):
-    """The deck without its reference update: kept or merged families (the Taylor decks') are
-    not available with symmetry planes yet, so the quarter deck has none and so must the full."""
+    """The deck without its reference update: the JC quarter deck is the deck as it was before
+    the per-family update (none), so the full run must have none either. The per-family
+    update with symmetry planes: tests/python/test_symmetry_families.py."""
     path = os.path.join(work, deck + "-no-update.yaml")
     with open(os.path.join(src, "inputs", deck + ".yaml")) as fin:
         lines = [ln for ln in fin if not ln.lstrip().startswith("reference_update:")]
