@@ -530,6 +530,7 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
     return MS_ERR_INTERNAL; /* the head of this file */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;
+  if (f->sym.n) dm_sym_sync(f); /* the ghosts' w for the neighbour search (a no-op if current) */
   uint8_t *upd = ms_calloc(n + 1, 1);
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < (long)n; ++i) upd[i] = family_stretch(m, (size_t)i) > 1.0 + threshold;
