@@ -417,7 +417,9 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
  * penalty's mismatch z restarts from 0; its stored energy Σ κ|z|²/2 moves into each particle's
  * e (rep->released). Never degenerate while J > 0 unless cond(F A Fᵀ) > cond_max (then refused
  * as above). merge: each family also gains the particles now within the horizon (the union
- * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL. */
+ * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL.
+ * Symmetry planes: the set-up's ghosts kept (X, V from their partners); a merge that needs an
+ * image without a ghost is refused (MS_ERR_UNSTABLE, rep->uncovered, rep->bad). */
 ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_report *rep);
 /* The per-family reference update (dm_fin_local.c, docs/particles-dm.md "Reference update"):
  * only the families whose own largest bond stretch exceeds 1 + threshold move their reference
@@ -425,8 +427,9 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
  * into e), each family keeping its own bond vectors from then on (m->xref); merge: they also
  * bond the particles now within the horizon (symmetrically; the partner's new bond pulled back
  * through its F). rep->families = 0: nothing passed the trigger, nothing changed. Refused as
- * dm_fin_rebase (MS_ERR_UNSTABLE, rep->bad, nothing changed); MS_ERR_INTERNAL with fracture,
- * the short-range contact, symmetry planes or a periodic box. Once called, dm_fin_rebase and
+ * dm_fin_rebase (MS_ERR_UNSTABLE, rep->bad, nothing changed; rep->uncovered: with symmetry
+ * planes a mirror image that a merge needs has no ghost); MS_ERR_INTERNAL with fracture, the
+ * short-range contact or a periodic box. Once called, dm_fin_rebase and
  * dm_fin_reference_update refuse (MS_ERR_INTERNAL). */
 ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bool merge,
                               dm_refamily_report *rep);

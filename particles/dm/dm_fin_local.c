@@ -28,9 +28,10 @@
  * stored energy do not change; its κ_k = c_s M V_k / tr A_k drops with the larger family and
  * what that releases of its stored energy, E_k (1 − κ_new/κ_old), becomes its heat). The other
  * families are untouched. Refused (MS_ERR_UNSTABLE, nothing changed, rep->bad) when a changed
- * family's cond A exceeds cond_max. Not with fracture, the short-range contact, symmetry planes
- * or periodic images (MS_ERR_INTERNAL, nothing changed: their per-bond state and ghosts
- * belong to one shared reference). */
+ * family's cond A exceeds cond_max. Not with fracture, the short-range contact or periodic
+ * images (MS_ERR_INTERNAL, nothing changed: their per-bond state belongs to one shared
+ * reference). Symmetry planes: the ghosts' rows hold the reverse bonds, the merged pairs are
+ * closed under the reflections (dm_sym_family.c). */
 #include "dm_vec.h"
 
 #include <math.h>
