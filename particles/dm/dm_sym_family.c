@@ -63,28 +63,63 @@ size_t dm_sym_image(const dm_fin *f, const dm_sym_map *mp, size_t k, unsigned ma
   return g == UINT32_MAX ? SIZE_MAX : g;
 }
 
+/* Is a real particle within `reach` of the point y (current positions; cl: the real particles'
+ * cell list, cells of size reach)? */
+static bool real_near(const dm_cells *cl, const dm_state *s, const double y[3], double reach) {
+  long c0[3];
+  dm_cells_of(cl, y, c0);
+  for (long dz = -cl->reach[2]; dz <= cl->reach[2]; ++dz)
+    for (long dy = -cl->reach[1]; dy <= cl->reach[1]; ++dy)
+      for (long dx = -cl->reach[0]; dx <= cl->reach[0]; ++dx) {
+        long cn[3] = {c0[0] + dx, c0[1] + dy, c0[2] + dz};
+        for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
+          const long *cj = &cl->cidx[3 * j]; /* the cell's own particles only */
+          if (cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2]) continue;
+          double r2 = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double d = s->X[3 * j + a] + s->w[3 * j + a] - y[a];
+            r2 += d * d;
+          }
+          if (r2 < reach * reach) return true;
+        }
+      }
+  return false;
+}
+
 size_t dm_sym_uncovered(const dm_fin *f, const dm_sym_map *mp, double reach) {
   const dm_state *s = f->m->s;
-  /* the image of i under the planes of m lies at least √Σ_{j∈m} (d_ij + dmin_j)² from every real
-   * particle (d: current distances to plane j; dmin_j: the real particles' smallest) */
+  /* a cheap bound first: the image of i under the planes of m lies at least
+   * √Σ_{j∈m} (d_ij + dmin_j)² from every real particle (d: current distances to plane j; dmin_j:
+   * the real particles' smallest); only where that is below reach, the real particles near the
+   * image itself (a cell list, built once) */
   double dmin[3] = {INFINITY, INFINITY, INFINITY};
   for (size_t i = 0; i < mp->nreal; ++i)
     for (int j = 0; j < f->sym.n; ++j) {
       const int a = f->sym.axis[j];
       dmin[j] = fmin(dmin[j], s->X[3 * i + a] + s->w[3 * i + a] - f->sym.pos[j]);
     }
-  for (size_t i = 0; i < mp->nreal; ++i)
-    for (unsigned m = 1; m < mp->nmask; ++m) {
+  dm_cells cl;
+  bool built = false;
+  size_t bad = SIZE_MAX;
+  for (size_t i = 0; i < mp->nreal && bad == SIZE_MAX; ++i)
+    for (unsigned m = 1; m < mp->nmask && bad == SIZE_MAX; ++m) {
       if ((m & mp->off[i]) != m || mp->ghost[i * mp->nmask + m] != UINT32_MAX) continue;
-      double r2 = 0; /* on a plane of m: its own image there; a ghost: covered */
+      double r2 = 0, y[3]; /* on a plane of m: its own image there; a ghost: covered */
+      for (int a = 0; a < 3; ++a) y[a] = s->X[3 * i + a] + s->w[3 * i + a];
       for (int j = 0; j < f->sym.n; ++j) {
         const int a = f->sym.axis[j];
-        const double d = s->X[3 * i + a] + s->w[3 * i + a] - f->sym.pos[j] + fmax(dmin[j], 0.0);
-        if (m >> j & 1u) r2 += d * d;
+        const double d = y[a] - f->sym.pos[j] + fmax(dmin[j], 0.0);
+        if (m >> j & 1u) r2 += d * d, y[a] = 2.0 * f->sym.pos[j] - y[a];
       }
-      if (r2 < reach * reach) return i;
+      if (!(r2 < reach * reach)) continue;
+      if (!built) {
+        if (dm_cells_init(&cl, mp->nreal, f->dim, reach, NULL, NULL) != MS_OK) return i;
+        dm_cells_build(&cl, s->X, s->w), built = true;
+      }
+      if (real_near(&cl, s, y, reach)) bad = i;
     }
-  return SIZE_MAX;
+  if (built) dm_cells_free(&cl);
+  return bad;
 }
 
 static int cmp_u64(const void *a, const void *b) {
