@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* dm_family_checkpoint.c — the families of a model whose bonds are no longer a function of the
- * reference positions into a checkpoint and back (docs/particles-dm.md "Checkpoints"): after a
- * reference update that kept or merged the families (dm_refamily.c's dm_fin_rebase) or a
+ * reference positions into a checkpoint and back (docs/particles-dm.md "Families kept or
+ * merged"): after a reference update that kept or merged the families (dm_fin_rebase) or a
  * per-family update (dm_fin_local.c) the bond lists, each family's own bond vectors ξ_b and the
  * shape arrays A⁻¹, cond and κ cannot be rebuilt from X, so they are stored as they are (every
  * row, the mirror ghosts' included: their set never changes with kept families) and read back
