@@ -408,6 +408,7 @@ typedef struct dm_refamily_report {
   size_t bad;        /* on refusal: the first particle with a degenerate family */
   size_t families;   /* dm_fin_rebase_local: the families updated (0: none passed the trigger) */
   size_t gained;     /* dm_fin_rebase_local: the others that gained bonds (merge) */
+  bool uncovered;    /* refused: rep->bad's mirror image within the horizon has no ghost */
 } dm_refamily_report;
 double dm_fin_max_stretch(const dm_fin *f, size_t *where); /* per-family refs: their own ξ */
 ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_report *rep);
@@ -416,7 +417,9 @@ ms_status dm_fin_reference_update(dm_fin *f, const ms_ctx *ctx, dm_refamily_repo
  * penalty's mismatch z restarts from 0; its stored energy Σ κ|z|²/2 moves into each particle's
  * e (rep->released). Never degenerate while J > 0 unless cond(F A Fᵀ) > cond_max (then refused
  * as above). merge: each family also gains the particles now within the horizon (the union
- * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL. */
+ * with the current configuration's families, symmetric). Not with fracture: MS_ERR_INTERNAL.
+ * Symmetry planes: the set-up's ghosts kept (X, V from their partners); a merge that needs an
+ * image without a ghost is refused (MS_ERR_UNSTABLE, rep->uncovered, rep->bad). */
 ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_report *rep);
 /* The per-family reference update (dm_fin_local.c, docs/particles-dm.md "Reference update"):
  * only the families whose own largest bond stretch exceeds 1 + threshold move their reference
@@ -424,8 +427,9 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
  * into e), each family keeping its own bond vectors from then on (m->xref); merge: they also
  * bond the particles now within the horizon (symmetrically; the partner's new bond pulled back
  * through its F). rep->families = 0: nothing passed the trigger, nothing changed. Refused as
- * dm_fin_rebase (MS_ERR_UNSTABLE, rep->bad, nothing changed); MS_ERR_INTERNAL with fracture,
- * the short-range contact, symmetry planes or a periodic box. Once called, dm_fin_rebase and
+ * dm_fin_rebase (MS_ERR_UNSTABLE, rep->bad, nothing changed; rep->uncovered: with symmetry
+ * planes a mirror image that a merge needs has no ghost); MS_ERR_INTERNAL with fracture, the
+ * short-range contact or a periodic box. Once called, dm_fin_rebase and
  * dm_fin_reference_update refuse (MS_ERR_INTERNAL). */
 ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bool merge,
                               dm_refamily_report *rep);
@@ -445,6 +449,8 @@ ms_status dm_fin_local_init(dm_fin *f);
  * Q, κ, failed). */
 size_t dm_sym_ghosts(dm_state *s, size_t nreal, const dm_sym_planes *pl, double reach, double ell);
 bool dm_sym_on_plane(double x, double pos, double ell);
+/* The mirror ghosts' X and V from their partners' (a moved reference on a ghost set kept). */
+void dm_sym_reference(dm_state *s, size_t nreal, const dm_sym_planes *pl);
 static inline double dm_fin_fold(const dm_fin *f, size_t i) { return f->fold ? f->fold[i] : 1.0; }
 void dm_fin_momentum(const dm_fin *f, double P[3]);
 void dm_sym_sync(dm_fin *f);
@@ -474,6 +480,14 @@ ms_status dm_fin_checkpoint_write(const dm_fin *f, const dm_state *s, ms_h5 *h, 
                                   bool owner);
 ms_status dm_fin_checkpoint_read(dm_fin *f, dm_state *s, ms_h5r *h, const char *group,
                                  dk_errors *e);
+/* The families of a model that kept or merged them at reference updates, or has per-family
+ * references (dm_family_checkpoint.c): the bond lists, the bond vectors ξ_b (m->xref), A⁻¹, cond
+ * and κ of every row (mirror ghosts included) under `group`, and back into a model of the same
+ * particles (the lists, xref, rev and the shapes replaced; a mismatch is an error in e). */
+ms_status dm_families_checkpoint_write(const dm_model *m, ms_h5 *h, const char *group, bool owner);
+ms_status dm_families_checkpoint_read(dm_model *m, ms_h5r *h, const char *group, dk_errors *e);
+/* m->rev from the lists (dm_fin_local.c); MS_ERR_INTERNAL for asymmetric families. */
+ms_status dm_fin_local_rev(dm_model *m);
 /* Rows of a checkpoint's [rows][ncol] dataset `name` into dst: exactly nmax rows when `exact`,
  * else at most nmax (their number in *nrow, may be NULL); any other shape is an error in e. */
 ms_status dm_ckpt_read_rows(ms_h5r *h, const char *name, size_t ncol, size_t nmax, bool exact,

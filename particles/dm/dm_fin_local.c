@@ -28,9 +28,10 @@
  * stored energy do not change; its κ_k = c_s M V_k / tr A_k drops with the larger family and
  * what that releases of its stored energy, E_k (1 − κ_new/κ_old), becomes its heat). The other
  * families are untouched. Refused (MS_ERR_UNSTABLE, nothing changed, rep->bad) when a changed
- * family's cond A exceeds cond_max. Not with fracture, the short-range contact, symmetry planes
- * or periodic images (MS_ERR_INTERNAL, nothing changed: their per-bond state and ghosts
- * belong to one shared reference). */
+ * family's cond A exceeds cond_max. Not with fracture, the short-range contact or periodic
+ * images (MS_ERR_INTERNAL, nothing changed: their per-bond state belongs to one shared
+ * reference). Symmetry planes: the ghosts' rows hold the reverse bonds, the merged pairs are
+ * closed under the reflections (dm_sym_family.c). */
 #include "dm_vec.h"
 
 #include <math.h>
@@ -222,12 +223,35 @@ static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_
   return bad ? MS_ERR_INTERNAL : MS_OK;
 }
 
+ms_status dm_fin_local_rev(dm_model *m) {
+  free(m->rev);
+  m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
+  const ms_status st = build_rev(m, m->start, m->nbr, m->rev);
+  if (st != MS_OK) free(m->rev), m->rev = NULL;
+  return st;
+}
+
 ms_status dm_fin_local_init(dm_fin *f) {
   dm_model *m = f->m;
   if (m->xref) return MS_OK;
+  ms_status st = MS_OK;
+  if (f->sym.n) { /* the ghosts' rows: the reverse bonds of the real ones (dm_sym_family.c) */
+    size_t *from = NULL;
+    dm_sym_ghost_rows(m->s->n, f->n, &m->start, &m->nbr, &from, &m->nbonds);
+    uint8_t *img = ms_calloc(m->nbonds + 1, 1);
+    for (size_t c = 0; c < m->nbonds; ++c) img[c] = from[c] != SIZE_MAX ? m->img[from[c]] : 13;
+    free(m->img), free(from);
+    m->img = img;
+  }
   init_xref(m);
+  if (f->sym.n) {
+    dm_sym_map mp;
+    dm_sym_map_build(f, &mp);
+    st = dm_sym_ghost_xref(f, &mp, m->start, m->nbr, m->xref);
+    dm_sym_map_free(&mp);
+  }
   m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
-  const ms_status st = build_rev(m, m->start, m->nbr, m->rev);
+  if (st == MS_OK) st = build_rev(m, m->start, m->nbr, m->rev);
   if (st != MS_OK) free(m->xref), free(m->rev), m->xref = NULL, m->rev = NULL;
   return st;
 }
@@ -257,7 +281,8 @@ static size_t new_pairs(const dm_fin *f, const size_t *list, size_t nl, uint64_t
   const double *X = s->X, *w = s->w, h2 = m->opt.horizon * m->opt.horizon;
   dm_cells cl;
   *out = NULL;
-  if (dm_cells_init(&cl, f->n, f->dim, m->opt.horizon, NULL, m->opt.box) != MS_OK) return 0;
+  /* the mirror ghosts too (symmetry planes): a family near a plane bonds across it */
+  if (dm_cells_init(&cl, s->n, f->dim, m->opt.horizon, NULL, m->opt.box) != MS_OK) return 0;
   dm_cells_build(&cl, X, w);
   size_t np = 0, cap = 64;
   uint64_t *pr = ms_calloc(cap, sizeof *pr);
@@ -288,6 +313,19 @@ static size_t new_pairs(const dm_fin *f, const size_t *list, size_t nl, uint64_t
   for (size_t q = 0; q < np; ++q)
     if (u == 0 || pr[q] != pr[u - 1]) pr[u++] = pr[q];
   *out = pr;
+  return u;
+}
+
+/* dm_sym_close_pairs without the pairs already bonded (a mirror image of a new pair is new in
+ * the full body, whose families are mirror symmetric; a kept duplicate would bond twice). */
+static size_t close_pairs(const dm_fin *f, const dm_sym_map *mp, uint64_t **pr, size_t np,
+                          size_t *missing) {
+  np = dm_sym_close_pairs(f, mp, pr, np, missing);
+  size_t u = 0;
+  for (size_t q = 0; q < np; ++q) {
+    const uint64_t p = (*pr)[q];
+    if (!in_family(f->m, (size_t)(p >> 32), (uint32_t)(p & 0xffffffffu))) (*pr)[u++] = p;
+  }
   return u;
 }
 
@@ -335,8 +373,10 @@ static void new_shapes(const dm_fin *f, const uint8_t *upd, new_families *nf, si
   const long n = (long)f->n;
   const double cmax = m->opt.cond_max > 0 ? m->opt.cond_max : 1e8;
   nf->xref = ms_calloc(3 * nf->nbonds + 1, sizeof(double));
-  nf->Ainv = ms_calloc(9 * (size_t)n + 1, sizeof(double));
-  nf->cond = ms_calloc((size_t)n + 1, sizeof(double));
+  nf->Ainv = ms_calloc(9 * s->n + 1, sizeof(double)); /* the ghosts' rows: unused, kept */
+  nf->cond = ms_calloc(s->n + 1, sizeof(double));
+  memcpy(&nf->Ainv[9 * n], &m->Ainv[9 * n], 9 * (s->n - (size_t)n) * sizeof(double));
+  memcpy(&nf->cond[n], &m->cond[n], (s->n - (size_t)n) * sizeof(double));
   long first = n;
 #pragma omp parallel for schedule(static) reduction(min : first)
   for (long j = 0; j < n; ++j) {
@@ -393,7 +433,7 @@ static double commit_family(dm_fin *f, size_t j, bool updated, const double *xi,
 }
 
 /* No new bonds: the updated families' rows in place (the lists and rev unchanged). */
-static ms_status update_in_place(dm_fin *f, const size_t *list, size_t nl,
+static ms_status update_in_place(dm_fin *f, const dm_sym_map *mp, const size_t *list, size_t nl,
                                  dm_refamily_report *rep) {
   dm_model *m = f->m;
   const dm_state *s = m->s;
@@ -425,7 +465,7 @@ static ms_status update_in_place(dm_fin *f, const size_t *list, size_t nl,
   for (size_t q = 0; q < nl; ++q) {
     const size_t i = list[q], nb = off[q + 1] - off[q];
     rep->jmin = fmin(rep->jmin, f->J[i]), rep->jmax = fmax(rep->jmax, f->J[i]);
-    rep->released += commit_family(f, i, true, &xn[3 * off[q]], nb);
+    rep->released += dm_fin_fold(f, i) * commit_family(f, i, true, &xn[3 * off[q]], nb);
     memcpy(&m->xref[3 * m->start[i]], &xn[3 * off[q]], 3 * nb * sizeof(double));
     memcpy(&m->Ainv[9 * i], &Ai[9 * q], 9 * sizeof(double));
     m->cond[i] = cond[q];
@@ -434,32 +474,36 @@ static ms_status update_in_place(dm_fin *f, const size_t *list, size_t nl,
     m->kappa[i] = dm_fin_kappa(f, i, trA);
   }
   free(Ai), free(off), free(xn);
-  return MS_OK;
+  return mp ? dm_sym_ghost_xref(f, mp, m->start, m->nbr, m->xref) : MS_OK;
 }
 
 /* New bonds (merge): new lists, vectors, A⁻¹ and rev for all; the changed families committed. */
-static ms_status update_merged(dm_fin *f, const uint8_t *upd, const uint64_t *pr, size_t np,
-                               dm_refamily_report *rep) {
+static ms_status update_merged(dm_fin *f, const dm_sym_map *mp, const uint8_t *upd,
+                               const uint64_t *pr, size_t np, dm_refamily_report *rep) {
   dm_model *m = f->m;
-  const size_t n = f->n;
+  const size_t n = f->n, nall = m->s->n;
   new_families nf = {0};
   merge_lists(m, pr, np, &nf);
+  if (mp) dm_sym_ghost_rows(nall, n, &nf.start, &nf.nbr, &nf.from, &nf.nbonds);
   new_shapes(f, upd, &nf, &rep->bad);
   ms_status st = rep->bad != SIZE_MAX ? MS_ERR_UNSTABLE : MS_OK;
+  if (st == MS_OK && mp) st = dm_sym_ghost_xref(f, mp, nf.start, nf.nbr, nf.xref);
   nf.rev = ms_calloc(nf.nbonds + 1, sizeof(size_t));
   if (st == MS_OK) st = build_rev(m, nf.start, nf.nbr, nf.rev);
   if (st != MS_OK) { /* nothing changed */
     free_new(&nf);
     return st;
   }
-  nf.kappa = ms_calloc(n + 1, sizeof(double));
+  nf.kappa = ms_calloc(nall + 1, sizeof(double));
+  memcpy(&nf.kappa[n], &m->kappa[n], (nall - n) * sizeof(double)); /* the ghosts': synced */
   for (size_t j = 0; j < n; ++j) {
     const size_t nb = nf.start[j + 1] - nf.start[j];
     const bool gained = nb != m->start[j + 1] - m->start[j];
     if (upd[j] || gained) {
       if (upd[j]) rep->jmin = fmin(rep->jmin, f->J[j]), rep->jmax = fmax(rep->jmax, f->J[j]);
       else rep->gained++;
-      rep->released += commit_family(f, j, upd[j], &nf.xref[3 * nf.start[j]], nb);
+      rep->released +=
+          dm_fin_fold(f, j) * commit_family(f, j, upd[j], &nf.xref[3 * nf.start[j]], nb);
       double trA = 0;
       for (size_t c = 3 * nf.start[j]; c < 3 * nf.start[j + 1]; ++c) trA += nf.xref[c] * nf.xref[c];
       nf.kappa[j] = dm_fin_kappa(f, j, trA);
@@ -482,11 +526,12 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
   const size_t n = f->n;
   memset(rep, 0, sizeof *rep);
   rep->bad = SIZE_MAX, rep->jmin = INFINITY;
-  if (f->failed || f->sr || f->sym.n || s->n != n || m->opt.box[0] > 0 || m->opt.box[1] > 0 ||
+  if (f->failed || f->sr || (!f->sym.n && s->n != n) || m->opt.box[0] > 0 || m->opt.box[1] > 0 ||
       m->opt.box[2] > 0)
     return MS_ERR_INTERNAL; /* the head of this file */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;
+  if (f->sym.n) dm_sym_sync(f); /* the ghosts' w for the neighbour search (a no-op if current) */
   uint8_t *upd = ms_calloc(n + 1, 1);
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (long i = 0; i < (long)n; ++i) upd[i] = family_stretch(m, (size_t)i) > 1.0 + threshold;
@@ -505,9 +550,19 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
   size_t *list = ms_calloc(nl, sizeof(size_t));
   for (size_t i = 0, q = 0; i < n; ++i)
     if (upd[i]) list[q++] = i;
+  dm_sym_map map = {0}, *mp = f->sym.n ? &map : NULL;
+  if (mp) dm_sym_map_build(f, mp);
+  /* symmetry planes: the ghost set is the set-up's; a merge needs every image within the
+   * horizon of a real particle among the ghosts (dm_sym_family.c) */
+  const size_t miss = mp && merge ? dm_sym_uncovered(f, mp, m->opt.horizon) : SIZE_MAX;
   uint64_t *pr = NULL;
-  const size_t np = merge ? new_pairs(f, list, nl, &pr) : 0;
-  const ms_status st = np ? update_merged(f, upd, pr, np, rep) : update_in_place(f, list, nl, rep);
+  size_t np = merge && miss == SIZE_MAX ? new_pairs(f, list, nl, &pr) : 0;
+  if (mp && np) np = close_pairs(f, mp, &pr, np, &rep->bad);
+  ms_status st = MS_OK;
+  if (miss != SIZE_MAX || rep->bad != SIZE_MAX) {
+    rep->bad = miss != SIZE_MAX ? miss : rep->bad, rep->uncovered = true, st = MS_ERR_UNSTABLE;
+  } else st = np ? update_merged(f, mp, upd, pr, np, rep) : update_in_place(f, mp, list, nl, rep);
+  if (mp) dm_sym_map_free(mp);
   free(pr), free(list), free(upd);
   if (st != MS_OK) return st;
   rep->bonds = m->nbonds, rep->families = nl;

@@ -329,6 +329,17 @@ static ms_status maybe_update(dmi_run *r, const ms_ctx *ctx) {
                      : dm_fin_reference_update(r->f, ctx, &rep);
   }
   const dm_state *s = r->f->m->s;
+  if (st != MS_OK && rep.uncovered && rep.bad < s->n) { /* dm_sym_family.c */
+    const size_t b = rep.bad;
+    ms_log(ctx, MS_LOG_ERROR,
+           "impact: step %ld, t = %.9g: the reference update is refused: particle %zu at x = "
+           "(%g, %g, %g) has come within the horizon of a symmetry plane where it has no mirror "
+           "ghost (the kept families use the set-up's ghosts); the run stops (no output of this "
+           "state): run the full body",
+           r->f->step, r->t, b, s->X[3 * b] + s->w[3 * b], s->X[3 * b + 1] + s->w[3 * b + 1],
+           s->X[3 * b + 2] + s->w[3 * b + 2]);
+    return st;
+  }
   if (st != MS_OK) {
     const size_t b = rep.bad < s->n ? rep.bad : at;
     ms_log(ctx, MS_LOG_ERROR,

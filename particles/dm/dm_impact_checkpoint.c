@@ -14,6 +14,10 @@
  *    particles'): the update changes which lie within a horizon of a plane, so a restart
  *    rebuilds the mirror ghosts on the checkpoint's reference (dm_sym_ghosts) and fills their
  *    rows from their partners (dm_sym_sync);
+ *  - /impact/families (families: keep or merge, either scope): the bond lists, each family's
+ *    own bond vectors (per-family references), A⁻¹, cond and κ of every row as they are
+ *    (dm_family_checkpoint.c; kept or merged families are not a function of X), and the count
+ *    of family updates;
  *  - /impact/history: the rows of impact_history.csv so far, with the run's scalars as its
  *    attributes: time, the history's stride (energy_every, doubled when thinned), snapshots
  *    written, the next checkpoint time, the wall's and the contact's stored energy and contact
@@ -31,6 +35,7 @@
 #include <string.h>
 
 #define DMI_CHECKPOINT_FORMAT "mscale impact checkpoint 1"
+#define DMI_FAMILIES          "/impact/families"
 
 bool dmi_checkpoint_due(dmi_run *r) {
   const dm_impact *p = r->p;
@@ -86,6 +91,11 @@ ms_status dmi_checkpoint_write(dmi_run *r) {
   const size_t n = owner ? r->f->n : 0;
   if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/impact/X", n, 3, s->X, "cm");
   if (st == MS_OK) st = ms_h5_write_doubles_dist(h, "/impact/volume", n, 1, s->vol, "cm^3");
+  if (st == MS_OK && r->p->ref_keep) /* kept, merged or per-family: the families as they are */
+    st = dm_families_checkpoint_write(r->f->m, h, DMI_FAMILIES, owner);
+  if (st == MS_OK && r->p->ref_keep)
+    st =
+        ms_h5_attr_double(h, DMI_FAMILIES "/sizes", "family_updates", (double)r->p->family_updates);
   if (st == MS_OK) /* at least the row of step 0 (recorded before any checkpoint) */
     st = ms_h5_write_doubles_dist(h, "/impact/history", owner ? r->nh : 0, r->ncol, r->hist,
                                   "impact_history.csv");
@@ -103,7 +113,9 @@ ms_status dmi_checkpoint_write(dmi_run *r) {
  * it when a reference update had moved it, as dm_refamily.c's update did: with symmetry planes
  * the mirror ghosts of the new reference first (dm_sym_ghosts: which particles lie within a
  * horizon of a plane has changed), then dm_model_create on the same X and V, the ghosts' rows
- * (dm_sym_resize), κ. */
+ * (dm_sym_resize), κ. Kept, merged or per-family families (reference_update.families: keep,
+ * merge) are not a function of X: read as they are (dm_family_checkpoint.c), on the ghost set
+ * of the set-up, which such updates never change (dm_refamily.c, dm_fin_local.c). */
 static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
   dm_fin *f = r->f;
   dm_state *s = f->m->s;
@@ -114,13 +126,17 @@ static ms_status read_reference(dmi_run *r, ms_h5r *h, dk_errors *e) {
   if (st == MS_OK) st = dm_ckpt_read_rows(h, "/impact/volume", 1, n, true, V, &nr, e);
   const bool moved =
       st == MS_OK && (memcmp(X, s->X, 3 * n * sizeof *X) || memcmp(V, s->vol, n * sizeof *V));
-  if (moved && r->p->ref_keep) { /* kept or merged families are not a function of X alone */
-    dk_error_at(e, "checkpoint", 0, 0,
-                "the checkpoint lies after a reference update with impact.reference_update."
-                "families: %s, whose families it does not store (they cannot be rebuilt from the "
-                "positions): run the deck again from the start (--force)",
-                r->p->ref_keep == 2 ? "merge" : "keep");
-    st = MS_ERR_INPUT;
+  if (st == MS_OK && r->p->ref_keep) { /* kept, merged or per-family: stored, not rebuilt */
+    double nfam = 0;
+    st = dm_families_checkpoint_read(f->m, h, DMI_FAMILIES, e);
+    if (st == MS_OK)
+      st = ms_h5_read_attr_double(h, DMI_FAMILIES "/sizes", "family_updates", &nfam, e);
+    if (st == MS_OK) {
+      memcpy(s->X, X, 3 * n * sizeof *X), memcpy(s->vol, V, n * sizeof *V);
+      if (f->sym.n)
+        dm_sym_reference(s, n, &f->sym); /* the ghosts' X and V of the moved reference */
+      r->p->family_updates = (long)nfam;
+    }
   } else if (moved) {
     memcpy(s->X, X, 3 * n * sizeof *X), memcpy(s->vol, V, n * sizeof *V);
     if (f->sym.n) dm_sym_ghosts(s, n, &f->sym, f->m->opt.horizon, f->par.ell);

@@ -308,11 +308,6 @@ static void read_controls(dm_impact *p, dk_doc *doc, const dk_node *sec, dk_erro
     static const char *const family_names[] = {"rebuild", "keep", "merge", NULL};
     dk_read_double(e, doc, ru, "threshold", MS_DIM_NONE, true, 0, 1e-3, 10.0, &p->ref_threshold);
     dk_read_enum(e, doc, ru, "families", false, 0, family_names, &p->ref_keep);
-    if (p->ref_keep && dk_get(sec, "symmetry"))
-      dk_error(e, doc, dk_get(ru, "families"),
-               "impact.reference_update.families: %s is not available with symmetry planes yet "
-               "(the mirror ghosts would need the kept families too): use rebuild or the full body",
-               p->ref_keep == 2 ? "merge" : "keep");
     static const char *const scope_names[] = {"all", "family", NULL};
     const dk_node *sc = dk_get(ru, "scope");
     /* read only when given: the resolved deck, and so the checkpoints' deck hash, of a deck
@@ -359,13 +354,17 @@ dm_impact *dm_impact_problem_read(dk_doc *doc, const dk_node *sec, const eos_mat
   }
   read_controls(p, doc, sec, e);
   read_bodies(p, doc, sec, mats, e);
-  for (size_t b = 0; p->ref_family && b < p->nbodies; ++b)
+  /* fracture's per-bond contact state (dm_fracture.c) belongs to the families it was built on:
+   * no reference update moves it (dm_fin_reference_update, dm_fin_rebase, dm_fin_rebase_local
+   * refuse a model with fracture), so refuse the pair here, located, before the run */
+  const dk_node *ru = dk_get(sec, "reference_update");
+  for (size_t b = 0; p->ref_threshold > 0 && b < p->nbodies; ++b)
     if (p->bodies[b].mat.frac.model != DM_FRACTURE_NONE) {
-      dk_error(e, doc, dk_get(dk_get(sec, "reference_update"), "scope"),
-               "impact.reference_update.scope: family is not available with fracture "
-               "(impact.bodies[%zu] has a fracture model: the broken bonds' contact belongs to one "
-               "shared reference)",
-               b);
+      dk_error(e, doc, dk_get(ru, "scope") ? dk_get(ru, "scope") : ru,
+               "impact.reference_update%s is not available with fracture (impact.bodies[%zu] has "
+               "a fracture model: the broken bonds' contact belongs to the families it was built "
+               "on)",
+               p->ref_family ? ".scope: family" : "", b);
       break;
     }
   read_wall(p, doc, sec, e);

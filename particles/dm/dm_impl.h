@@ -96,6 +96,36 @@ ms_status dm_sym_init(dm_fin *f, const dm_sym_planes *pl, const uint8_t *imat);
 void dm_sym_resize(dm_fin *f, const uint8_t *imat);
 void dm_sym_free(dm_fin *f);
 
+/* ---- symmetry planes with kept families (dm_sym_family.c) ----
+ * dm_sym_map: the mirror ghost of real particle i under the planes of mask m
+ * (ghost[i·nmask + m], UINT32_MAX: none) and the planes i lies off (off[i]), of the fixed ghost
+ * set. dm_sym_image: the index of particle k's image under the reflections of mask (k itself
+ * when on those planes; SIZE_MAX: no such ghost). dm_sym_uncovered: the first real particle
+ * whose image under some mask has no ghost and may lie within `reach` of a real particle (by
+ * the current distances to the planes; SIZE_MAX: none). dm_sym_close_pairs: the new pairs (row << 32 | column, both directions)
+ * closed under the reflections, real rows only, sorted unique (returns their count; *missing:
+ * a real particle whose image partner has no ghost, SIZE_MAX if none). dm_sym_ghost_rows: the
+ * CSR lists (n rows, the first nreal real) with each ghost row = the real particles bonded to
+ * it, in order; from[c] the old bond of a real row's bond (from may be NULL: the identity),
+ * SIZE_MAX for a ghost row's. dm_sym_ghost_xref: the ghost rows' bond vectors from their
+ * partners' (MS_ERR_INTERNAL: a bond without its mirror). */
+typedef struct dm_sym_map {
+  size_t nreal;
+  unsigned nmask;
+  uint32_t *ghost;
+  uint8_t *off;
+} dm_sym_map;
+void dm_sym_map_build(const dm_fin *f, dm_sym_map *mp);
+void dm_sym_map_free(dm_sym_map *mp);
+size_t dm_sym_image(const dm_fin *f, const dm_sym_map *mp, size_t k, unsigned mask);
+size_t dm_sym_uncovered(const dm_fin *f, const dm_sym_map *mp, double reach);
+size_t dm_sym_close_pairs(const dm_fin *f, const dm_sym_map *mp, uint64_t **pairs, size_t np,
+                          size_t *missing);
+void dm_sym_ghost_rows(size_t n, size_t nreal, size_t **start, uint32_t **nbr, size_t **from,
+                       size_t *nbonds);
+ms_status dm_sym_ghost_xref(const dm_fin *f, const dm_sym_map *mp, const size_t *start,
+                            const uint32_t *nbr, double *xref);
+
 /* ---- fracture (dm_fracture.c; docs/particles-dm.md "Fracture") ----
  * dm_frac_alloc: failed[], broken[] and the contact's arrays (kcon, dtcon, fcon, econ) when a
  * material of f has a fracture model (else NULL); dm_frac_free releases them. dm_frac_stress, called by the stress pass after

@@ -205,11 +205,23 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
   move_reference(f, keep, rep);
   size_t bad = (size_t)-1;
   bond_lists old = {0};
-  ms_status st = merge ? merge_families(m, ctx, &old) : MS_OK;
+  ms_status st = MS_OK;
+  if (f->sym.n) { /* the ghosts follow their partners on the set-up's ghost set, which the kept
+                   * lists index; a merge needs every image within the horizon among them */
+    dm_sym_reference(s, n, &f->sym);
+    dm_sym_sync(f);
+    dm_sym_map mp;
+    dm_sym_map_build(f, &mp);
+    bad = merge ? dm_sym_uncovered(f, &mp, m->opt.horizon) : SIZE_MAX;
+    dm_sym_map_free(&mp);
+    if (bad != SIZE_MAX) rep->uncovered = true, st = MS_ERR_UNSTABLE;
+  }
+  if (st == MS_OK && merge) st = merge_families(m, ctx, &old);
   rep->bonds = m->nbonds;
   if (st == MS_OK && dm_build_shape(m, ctx, &bad) != MS_OK) st = MS_ERR_UNSTABLE;
   if (st != MS_OK) { /* refused (cond F A Fᵀ > cond_max): the old reference and families */
     restore_reference(s, n, keep);
+    if (f->sym.n) dm_sym_reference(s, n, &f->sym), dm_sym_sync(f);
     if (old.start) {
       free(m->start), free(m->nbr), free(m->img);
       m->start = old.start, m->nbr = old.nbr, m->img = old.img, m->nbonds = old.nbonds;
@@ -224,7 +236,8 @@ ms_status dm_fin_rebase(dm_fin *f, const ms_ctx *ctx, bool merge, dm_refamily_re
   /* the penalty's stored energy of each family becomes the particle's heat: K + U + E_hg is
    * unchanged, E_hg drops by what it releases */
   for (size_t i = 0; i < n; ++i)
-    f->e[i] += Ehg[i] / s->mass[i], f->ehg[i] -= Ehg[i], rep->released += Ehg[i];
+    f->e[i] += Ehg[i] / s->mass[i], f->ehg[i] -= Ehg[i],
+        rep->released += dm_fin_fold(f, i) * Ehg[i]; /* full body */
   free(keep);
   dm_fin_bond_penalty(f);
   if (f->sr) dm_pair_stiffness(f, f->sr->kc, f->par.ell); /* the short-range κc: V changed */

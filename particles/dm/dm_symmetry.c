@@ -95,6 +95,18 @@ size_t dm_sym_ghosts(dm_state *s, size_t nreal, const dm_sym_planes *pl, double 
   return ng;
 }
 
+void dm_sym_reference(dm_state *s, size_t nreal, const dm_sym_planes *pl) {
+  for (size_t g = nreal; g < s->n; ++g) {
+    const size_t i = s->partner[g];
+    for (int a = 0; a < 3; ++a) s->X[3 * g + a] = s->X[3 * i + a];
+    for (int j = 0; j < pl->n; ++j) { /* dm_sym_ghosts' arithmetic */
+      const int a = pl->axis[j];
+      if (s->msign[3 * g + a] < 0) s->X[3 * g + a] = 2.0 * pl->pos[j] - s->X[3 * i + a];
+    }
+    s->vol[g] = s->vol[i];
+  }
+}
+
 /* The ghosts' materials (imat_all) and the arrays of nall rows that the passes read at the ghosts
  * (v̄, v_close) for the current ghost set. */
 void dm_sym_resize(dm_fin *f, const uint8_t *imat) {

@@ -155,7 +155,7 @@ static void test_key_errors(void **state) {
 
 /* The per-family reference update's deck errors (docs/input-impact.md), each at its key:
  * scope: family with the rebuilding update, with the short-range contact, with a fracture
- * model; an unknown scope. */
+ * model; an unknown scope; any reference update with a fracture model. */
 static void test_scope_errors(void **state) {
   (void)state;
   static const char *const decks[] = {
@@ -200,6 +200,20 @@ static void test_scope_errors(void **state) {
   assert_null(L.p);
   assert_true(has_error(&L.e, "deck.yaml:13:63: impact.reference_update.scope: family is not "
                               "available with fracture"));
+  unload(&L);
+  /* fracture with any reference update (the global one refused it only at run time) */
+  load(&L, "impact:\n"
+           "  spacing: 0.1\n"
+           "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
+           "  bodies:\n"
+           "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
+           "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
+           "  t_end: 1\n"
+           "  reference_update: {threshold: 0.05}\n");
+  dk_errors_print(&L.e, stderr);
+  assert_null(L.p);
+  assert_true(has_error(&L.e, "deck.yaml:13:21: impact.reference_update is not available with "
+                              "fracture"));
   unload(&L);
 }
 

@@ -183,6 +183,45 @@ static void test_quarter_cylinder(void **state) {
   eos_destroy(&eos);
 }
 
+/* Kept families keep the set-up's ghosts (dm_sym_family.c): a merge that would need the mirror
+ * image of a particle that had none (farther than a horizon from the plane at the set-up, now
+ * next to it) is refused, located (rep.uncovered, rep.bad the particle); the same particle moved
+ * along the plane instead merges. The particle at (2.5 h, 0.5 h) has no ghost across x = 0;
+ * moved to x = 0.3 h its image lies 0.8 h from the real particle at (0.5 h, 0.5 h). */
+static void test_kept_families_uncovered(void **state) {
+  (void)state;
+  eos_t *eos = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
+  dm_fin_material mat = {.eos = eos, .yield = DM_YIELD_ELASTIC_PLASTIC, .G = 27.6, .Y0 = 0.1};
+  ms_ctx ctx;
+  ms_ctx_init_serial(&ctx);
+  ctx.verbosity = MS_LOG_ERROR;
+  for (int toward = 1; toward >= 0; --toward) {
+    run r;
+    setup(&r, CYL, true, &mat, 0.5, 0.0);
+    size_t p = SIZE_MAX;
+    for (size_t i = 0; i < r.f->n; ++i)
+      if (fabs(r.s.X[3 * i] - 2.5 * H) < 1e-12 && fabs(r.s.X[3 * i + 1] - 0.5 * H) < 1e-12 &&
+          fabs(r.s.X[3 * i + 2] - (ZC - 0.5 * H)) < 1e-12)
+        p = i;
+    assert_true(p < r.f->n);
+    r.s.w[3 * p + (toward ? 0 : 2)] = toward ? -2.2 * H : 0.2 * H;
+    dm_refamily_report rep;
+    const ms_status st = dm_fin_rebase_local(r.f, &ctx, 0.01, true, &rep);
+    if (toward) {
+      assert_int_equal(st, MS_ERR_UNSTABLE);
+      assert_true(rep.uncovered);
+      assert_int_equal(rep.bad, p);
+    } else {
+      assert_int_equal(st, MS_OK);
+      assert_false(rep.uncovered);
+      assert_true(rep.families > 0);
+    }
+    teardown(&r);
+  }
+  ms_ctx_close(&ctx);
+  eos_destroy(&eos);
+}
+
 static void test_quarter_box_on_planes(void **state) {
   (void)state;
   eos_t *eos = eos_create_mg_linear(2.703, 5.35, 1.34, 2.0);
@@ -306,15 +345,15 @@ static void test_deck_errors(void **state) {
   assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0 passes "
                             "through the body off its symmetry"));
   dm_test_deck_free(doc, &mats, &e);
-  /* merged families with the planes (the bodies' errors above kept) */
+  /* merged per-family references with the planes: accepted (only the bodies' errors above) */
   snprintf(t2, sizeof t2,
            "%.*s  symmetry: {x: 0, y: 0}\n"
-           "  reference_update: {threshold: 0.1, families: merge}\n  t_end: 1\n",
+           "  reference_update: {threshold: 0.1, families: merge, scope: family}\n  t_end: 1\n",
            (int)(strstr(text, "  symmetry") - text), text);
   doc = dm_test_deck(t2, "deck.yaml", &mats, &e);
   assert_null(dm_impact_problem_read(doc, dk_get(dk_root(doc), "impact"), mats, &e));
-  assert_true(has_error(&e, "deck.yaml:15:48: impact.reference_update.families: merge is not "
-                            "available with symmetry planes"));
+  assert_false(has_error(&e, "reference_update"));
+  assert_true(has_error(&e, "deck.yaml:12:45: impact.bodies[2]: the symmetry plane y = 0"));
   dm_test_deck_free(doc, &mats, &e);
 }
 
@@ -324,6 +363,7 @@ int main(void) {
       cmocka_unit_test(test_half_space_uniform),
       cmocka_unit_test(test_quarter_cylinder),
       cmocka_unit_test(test_quarter_box_on_planes),
+      cmocka_unit_test(test_kept_families_uncovered),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
