@@ -185,6 +185,19 @@ static inline size_t dm_rows_thin(double *rows, size_t n, size_t ncol) {
   return n / 2;
 }
 
+/* The x slab of the piston (dm_finite.c) and flyer (dm_flyer.c) problems: nx × ny × nz
+ * particles of spacing h, particle i = (iz ny + iy) nx + ix (dm_flyer.c).
+ * dm_slab_place: their X at the cell centres, w = u = 0, mass, volume, K = ρ0 c0², G of material
+ * imat[i] of mat, free; dm_slab_create: the model (horizon × h, periodic in y and z over the
+ * slab) and its dm_fin; on failure imat and s are freed (and *m, *f NULL);
+ * dm_slab_layers: each x layer's mean X, x, u_x, ρ, p, q, −σ_xx, e added into lay[nx][8]. */
+void dm_slab_place(dm_state *s, int dim, long nx, long ny, long nz, double h,
+                   const dm_fin_material *mat, const uint8_t *imat);
+ms_status dm_slab_create(dm_state *s, long ny, long nz, double h, double horizon,
+                         const dm_fin_material *mat, uint8_t *imat, const dm_fin_params *par,
+                         const ms_ctx *ctx, dm_model **m, dm_fin **f);
+void dm_slab_layers(const dm_fin *f, const dm_state *s, long nx, long nyz, double *lay);
+
 /* A free-surface history of fixed size: (t, mean u_x of the last x layer of an nx × nyz slab)
  * recorded every `stride`-th step; when full, every other row is dropped and the stride
  * doubled, so any run length fits (dm_finite.c). */
