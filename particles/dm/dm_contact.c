@@ -177,7 +177,7 @@ static double contact_one(const dm_fin *f, dm_contact *c, size_t i) {
                            (u[3 * j + 2] - u[3 * i + 2]) * y[2]) /
                           r;
       /* no pair closes in a step by more than courant times its gap to the end of the EOS's
-     * range (λ_end L), nor, in contact, by more than courant · L (dm_fracture.c) */
+       * range (λ_end L), nor, in contact, by more than courant · L (dm_fracture.c) */
       const double lend = fmax(c->lam_end[f->imat[i]], c->lam_end[f->imat[j]]);
       const double gap = fmax(r - lend * L, 1e-300);
       if (rdot < 0) closing = fmax(closing, -rdot / (r < L ? fmin(L, gap) : gap));

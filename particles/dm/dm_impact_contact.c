@@ -120,7 +120,7 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
           const double pen = h - r;
           for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
           /* each pair is visited from both sides; a real particle stands for its orbit of
-         * fold particles (dm_symmetry.c), whose visits are all alike */
+           * fold particles (dm_symmetry.c), whose visits are all alike */
           E += 0.25 * dm_fin_fold(f, i) * k * pen * pen;
           touching = (int)dm_fin_fold(f, i);
         }
