@@ -72,7 +72,7 @@ static inline void dm_cells_of(const dm_cells *c, const double x[3], long idx[3]
  *     for (long j = dm_cells_list(cells, cell); j >= 0; j = cells->next[j])
  *       if (dm_cells_holds(cells, j, cell)) ...
  *   }
- * `at` must be a cell of the list (dm_cells_of: wrapped). (A table of offsets rather than three
+ * `at` is wrapped (as dm_cells_of gives it), so a neighbour is one step out at most. (A table of offsets rather than three
  * nested loops over ±reach: the impact's contact pass took 30 % longer than with its own
  * constant loops with the loops in a macro, 5 % with the table.) */
 static inline void dm_cells_near(const dm_cells *c, const long at[3], int q, long cell[3]) {
