@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* dm_contact.c — contact of the finite-deformation discrete model (docs/particles-dm.md
- * "Contact"): the one pair law, the one hashed cell list, and the short-range contact between
- * particles that are not in each other's family.
+ * "Contact"): the one pair law and the short-range contact between particles that are not in
+ * each other's family, over the hashed cell list of dm_cells.c.
  *
  * The pair law (dm_pair_law; used by the contact across broken bonds, dm_fracture.c, and by the
  * short-range contact below): a compression-only central spring of rest length L,
@@ -11,11 +11,6 @@
  * g = [p(ρ0 λ^−d) − p(ρ0)] λ^(d−1)/(K d) → 1 − λ, so that a uniformly compressed lattice of such
  * pairs carries its EOS pressure; and a dashpot η ṙ while the pair approaches,
  * η = C_l √(κ s √(m_i m_k)) (s the spring's current stiffness over κ).
- *
- * The cell list (dm_cells): cells of a given size, hashed into 2n + 1 or more buckets (a power of two) ([Teschner2003]:
- * memory O(n) however far the particles fly; two cells sharing a bucket only add candidates,
- * which the cell-index test drops), periodic axes wrapped (a whole number of cells along the
- * box), rebuilt at every force evaluation into arrays allocated once.
  *
  * The short-range contact (dm_contact_*; [SillingAskari2005] §5's short-range forces, LAMMPS PERI
  * [Parks2008]): the pair law between any two particles that are not in each other's family,
@@ -45,7 +40,6 @@
  * those without the contact). */
 #include "dm_impl.h"
 
-#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -104,57 +98,6 @@ void dm_pair_ends(const dm_fin *f, double *lam_end) {
   }
 }
 
-/* ---- the hashed cell list ---- */
-
-ms_status dm_cells_init(dm_cells *c, size_t n, int dim, double size, const double lo[3],
-                        const double box[3]) {
-  memset(c, 0, sizeof *c);
-  for (int a = 0; a < 3; ++a) {
-    c->lo[a] = lo ? lo[a] : 0.0;
-    c->size[a] = size, c->reach[a] = a < dim ? 1 : 0;
-    c->box[a] = box ? box[a] : 0.0;
-    if (c->box[a] > 0 && a < dim) { /* a whole number of cells, at least 3, none below size */
-      c->nper[a] = (long)floor(c->box[a] / size);
-      if (c->nper[a] < 3) return MS_ERR_INPUT;
-      c->size[a] = c->box[a] / (double)c->nper[a];
-    }
-  }
-  c->n = n, c->nbucket = 1; /* a power of two ≥ 2n + 1: the bucket is a mask, not a division */
-  while (c->nbucket < 2 * n + 1) c->nbucket *= 2;
-  c->head = ms_calloc(c->nbucket + 1, sizeof(long)); /* + the always empty one */
-  c->next = ms_calloc(n ? n : 1, sizeof(long));
-  c->cidx = ms_calloc(3 * (n ? n : 1), sizeof(long));
-  return MS_OK;
-}
-
-void dm_cells_free(dm_cells *c) {
-  free(c->head), free(c->next), free(c->cidx);
-  memset(c, 0, sizeof *c);
-}
-
-void dm_cells_build(dm_cells *c, const double *X, const double *w) {
-  for (size_t q = 0; q <= c->nbucket; ++q) c->head[q] = -1;
-  long lo[3] = {LONG_MAX, LONG_MAX, LONG_MAX}, hi[3] = {LONG_MIN, LONG_MIN, LONG_MIN};
-  for (size_t i = 0; i < c->n; ++i) {
-    double x[3];
-    for (int a = 0; a < 3; ++a) x[a] = X[3 * i + a] + w[3 * i + a];
-    long *idx = &c->cidx[3 * i];
-    dm_cells_of(c, x, idx);
-    for (int a = 0; a < 3; ++a)
-      lo[a] = idx[a] < lo[a] ? idx[a] : lo[a], hi[a] = idx[a] > hi[a] ? idx[a] : hi[a];
-  }
-  double cells = 1.0;
-  for (int a = 0; a < 3; ++a) {
-    c->base[a] = c->n ? lo[a] : 0, c->ext[a] = c->n ? hi[a] - lo[a] + 1 : 1;
-    cells *= (double)c->ext[a];
-  }
-  c->dense = cells <= (double)c->nbucket;
-  for (size_t i = 0; i < c->n; ++i) { /* serial: the lists' order is thread-count independent */
-    const size_t q = dm_cells_bucket(c, &c->cidx[3 * i]);
-    c->next[i] = c->head[q], c->head[q] = (long)i;
-  }
-}
-
 /* ---- the short-range contact ---- */
 
 ms_status dm_contact_alloc(dm_fin *f) {
@@ -210,55 +153,51 @@ static double contact_one(const dm_fin *f, dm_contact *c, size_t i) {
   const double L = c->L, rsee2 = c->r_see * c->r_see;
   double xi[3], ft[3] = {0, 0, 0}, lmin = 1.0, closing = 0.0, sk = 0.0;
   for (int a = 0; a < 3; ++a) xi[a] = X[3 * i + a] + w[3 * i + a];
-  const long *ci = &cl->cidx[3 * i];
   int touching = 0;
-  for (long dz = -cl->reach[2]; dz <= cl->reach[2]; ++dz)
-    for (long dy = -cl->reach[1]; dy <= cl->reach[1]; ++dy)
-      for (long dx = -cl->reach[0]; dx <= cl->reach[0]; ++dx) {
-        long cn[3] = {ci[0] + dx, ci[1] + dy, ci[2] + dz};
-        dm_cells_wrap(cl, cn);
-        for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
-          const long *cj = &cl->cidx[3 * j]; /* the cell's own particles only */
-          if ((size_t)j == i || cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2]) continue;
-          double y[3], r2 = 0; /* y = x_j − x_i, the minimum image along periodic axes */
-          for (int a = 0; a < 3; ++a) {
-            y[a] = (X[3 * j + a] + w[3 * j + a]) - xi[a];
-            if (cl->box[a] > 0) y[a] -= cl->box[a] * nearbyint(y[a] / cl->box[a]);
-            r2 += y[a] * y[a];
-          }
-          if (!(r2 < rsee2) || in_family(m, i, (size_t)j) ||
-              (c->within_material && f->imat[i] != f->imat[j]))
-            continue;
-          const double r = sqrt(r2);
-          if (!(r > 0)) {
-            lmin = 0.0;
-            continue;
-          }
-          const double rdot = ((u[3 * j] - u[3 * i]) * y[0] + (u[3 * j + 1] - u[3 * i + 1]) * y[1] +
-                               (u[3 * j + 2] - u[3 * i + 2]) * y[2]) /
-                              r;
-          /* no pair closes in a step by more than courant times its gap to the end of the EOS's
-           * range (λ_end L), nor, in contact, by more than courant · L (dm_fracture.c) */
-          const double lend = fmax(c->lam_end[f->imat[i]], c->lam_end[f->imat[j]]);
-          const double gap = fmax(r - lend * L, 1e-300);
-          if (rdot < 0) closing = fmax(closing, -rdot / (r < L ? fmin(L, gap) : gap));
-          if (!(r < L)) continue;
-          double gi, si, gk, sk_;
-          dm_pair_law(f, i, r / L, &gi, &si);
-          dm_pair_law(f, (size_t)j, r / L, &gk, &sk_);
-          const double kap = c->kc[i] + c->kc[j], gl = 0.5 * (gi + gk), sl = 0.5 * (si + sk_);
-          if (!isfinite(gl) || !isfinite(sl)) {
-            lmin = 0.0;
-            continue;
-          }
-          const double eta = f->par.cl * sqrt(kap * sl * sqrt(mass[i] * mass[j]));
-          const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * L * gl;
-          for (int a = 0; a < 3; ++a) ft[a] += (g - spring) * y[a] / r;
-          sk += kap * sl;
-          lmin = fmin(lmin, r / L);
-          touching = 1;
-        }
+  for (int q = 0; q < cl->nnear; ++q) {
+    long cn[3];
+    dm_cells_near(cl, &cl->cidx[3 * i], q, cn);
+    for (long j = dm_cells_list(cl, cn); j >= 0; j = cl->next[j]) {
+      if ((size_t)j == i || !dm_cells_holds(cl, j, cn)) continue;
+      double y[3], r2 = 0; /* y = x_j − x_i, the minimum image along periodic axes */
+      for (int a = 0; a < 3; ++a) {
+        y[a] = (X[3 * j + a] + w[3 * j + a]) - xi[a];
+        if (cl->box[a] > 0) y[a] -= cl->box[a] * nearbyint(y[a] / cl->box[a]);
+        r2 += y[a] * y[a];
       }
+      if (!(r2 < rsee2) || in_family(m, i, (size_t)j) ||
+          (c->within_material && f->imat[i] != f->imat[j]))
+        continue;
+      const double r = sqrt(r2);
+      if (!(r > 0)) {
+        lmin = 0.0;
+        continue;
+      }
+      const double rdot = ((u[3 * j] - u[3 * i]) * y[0] + (u[3 * j + 1] - u[3 * i + 1]) * y[1] +
+                           (u[3 * j + 2] - u[3 * i + 2]) * y[2]) /
+                          r;
+      /* no pair closes in a step by more than courant times its gap to the end of the EOS's
+       * range (λ_end L), nor, in contact, by more than courant · L (dm_fracture.c) */
+      const double lend = fmax(c->lam_end[f->imat[i]], c->lam_end[f->imat[j]]);
+      const double gap = fmax(r - lend * L, 1e-300);
+      if (rdot < 0) closing = fmax(closing, -rdot / (r < L ? fmin(L, gap) : gap));
+      if (!(r < L)) continue;
+      double gi, si, gk, sk_;
+      dm_pair_law(f, i, r / L, &gi, &si);
+      dm_pair_law(f, (size_t)j, r / L, &gk, &sk_);
+      const double kap = c->kc[i] + c->kc[j], gl = 0.5 * (gi + gk), sl = 0.5 * (si + sk_);
+      if (!isfinite(gl) || !isfinite(sl)) {
+        lmin = 0.0;
+        continue;
+      }
+      const double eta = f->par.cl * sqrt(kap * sl * sqrt(mass[i] * mass[j]));
+      const double g = rdot < 0 ? eta * rdot : 0.0, spring = kap * L * gl;
+      for (int a = 0; a < 3; ++a) ft[a] += (g - spring) * y[a] / r;
+      sk += kap * sl;
+      lmin = fmin(lmin, r / L);
+      touching = 1;
+    }
+  }
   for (int a = 0; a < 3; ++a) c->force[3 * i + a] = ft[a];
   c->touch[i] = (uint8_t)touching;
   /* the stiffness limit with the dashpot's lowering (dm_fracture.c contact_stiffness) */

@@ -585,38 +585,17 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
   const int dim = sp->dim;
   const long nx = sp->nx, ny = dim > 1 ? sp->ny : 1, nz = dim > 2 ? sp->nz : 1;
   const size_t n = (size_t)(nx * ny * nz);
-  const double h = sp->h, rho0 = eos_rho0(sp->mat.eos), vol = pow(h, dim);
+  const double h = sp->h;
   dm_state s;
   dm_state_alloc(&s, n, dim);
-  for (long iz = 0; iz < nz; ++iz)
-    for (long iy = 0; iy < ny; ++iy)
-      for (long ix = 0; ix < nx; ++ix) {
-        size_t i = (size_t)((iz * ny + iy) * nx + ix);
-        s.X[3 * i] = (ix + 0.5) * h;
-        s.X[3 * i + 1] = dim > 1 ? (iy + 0.5) * h : 0.0;
-        s.X[3 * i + 2] = dim > 2 ? (iz + 0.5) * h : 0.0;
-        for (int a = 0; a < 3; ++a) s.w[3 * i + a] = s.u[3 * i + a] = 0.0;
-        s.mass[i] = rho0 * vol, s.vol[i] = vol;
-        s.K[i] = rho0 * pow(eos_c0(sp->mat.eos), 2), s.G[i] = sp->mat.G;
-        s.bc[i] = ix < sp->npiston ? DM_PRESCRIBED : DM_FREE;
-        if (ix < sp->npiston) s.u[3 * i] = sp->up;
-      }
-  dm_options opt = {.horizon = sp->horizon * h, .cond_max = 1e8, .hourglass = 0.0};
-  if (dim > 1) opt.box[1] = ny * h;
-  if (dim > 2) opt.box[2] = nz * h;
-  dm_model *m = NULL;
-  ms_status st = dm_model_create(&(dm_model_params){.state = &s, .opt = opt, .ctx = ctx}, &m);
-  if (st != MS_OK) {
-    dm_state_free(&s);
-    return res->status = st;
-  }
   uint8_t *imat = ms_calloc(n, 1);
-  dm_fin *f = NULL;
-  st = dm_fin_create(&(dm_fin_setup){.m = m, .mat = &sp->mat, .imat = imat, .par = sp->par}, &f);
-  if (st != MS_OK) {
-    free(imat), dm_model_destroy(&m), dm_state_free(&s);
-    return res->status = st;
-  }
+  dm_slab_place(&s, dim, nx, ny, nz, h, &sp->mat, imat);
+  for (size_t i = 0; i < n; ++i)
+    if ((long)(i % (size_t)nx) < sp->npiston) s.bc[i] = DM_PRESCRIBED, s.u[3 * i] = sp->up;
+  dm_model *m;
+  dm_fin *f;
+  ms_status st = dm_slab_create(&s, ny, nz, h, sp->horizon, &sp->mat, imat, &sp->par, ctx, &m, &f);
+  if (st != MS_OK) return res->status = st;
   double K, U, H;
   dm_fin_energies(f, &K, &U, &H);
   const double E0 = K + U + H;
@@ -652,16 +631,9 @@ ms_status dm_piston_run(const dm_piston_spec *sp, const ms_ctx *ctx, dm_piston_r
   }
   res->steps = f->step;
   if (st == MS_OK) {
-    for (long ix = 0; ix < nx; ++ix) {
-      double *r = &lay[8 * ix];
-      for (long j = 0; j < ny * nz; ++j) {
-        size_t i = (size_t)(j * nx + ix);
-        r[0] += s.X[3 * i], r[1] += s.X[3 * i] + s.w[3 * i], r[2] += s.u[3 * i];
-        r[3] += f->rho[i], r[4] += f->p[i], r[5] += f->q[i], r[6] += -f->sig[9 * i];
-        r[7] += f->e[i];
-        lay[8 * nx + ix] += f->eps_p[i];
-      }
-      for (int c = 0; c < 8; ++c) r[c] /= (double)(ny * nz);
+    dm_slab_layers(f, &s, nx, ny * nz, lay);
+    for (long ix = 0; ix < nx; ++ix) { /* then the mean ε_p */
+      for (long j = 0; j < ny * nz; ++j) lay[8 * nx + ix] += f->eps_p[(size_t)(j * nx + ix)];
       lay[8 * nx + ix] /= (double)(ny * nz);
     }
     /* D: least-squares slope of the front positions */

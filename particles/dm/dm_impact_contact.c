@@ -13,7 +13,7 @@
  * discretisation (reported with the wall's). No friction, no bonding (the bodies' families
  * stay their own: docs/input-impact.md).
  *
- * Neighbours: the hashed cell list of dm_contact.c (dm_cells, cell size 1.5 h), rebuilt at
+ * Neighbours: the hashed cell list of dm_cells.c (dm_cells, cell size 1.5 h, and its walk), rebuilt at
  * every force evaluation into arrays allocated once. Time step: ω Δt ≤ courant, ω = √(2 k_ij/m) the pair's frequency
  * (half the wall's 2·courant: the contact is 10× stiffer, so its ω Δt rather than the
  * material's limits the step, and at 2·courant two elastic boxes colliding at ±0.1 km/s gained
@@ -57,7 +57,7 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
   const size_t n = f->n; /* the real particles (with symmetry planes: images below) */
   const double *X = s->X, *w = s->w, *u = s->u, *mass = s->mass;
   const dm_sym_planes *pl = &f->sym;
-  /* the cell list (dm_contact.c) over the real particles (the mirror ghosts after them are
+  /* the cell list (dm_cells.c) over the real particles (the mirror ghosts after them are
    * not listed: the images are found by current positions) and the velocity spread */
   c->cells.n = n; /* ≤ the rows it was made for */
   dm_cells_build(&c->cells, X, w);
@@ -95,40 +95,36 @@ double dmi_contact_force(dmi_contact *c, const dm_fin *f, double *fext) {
         }
       if (!near) continue;
       dm_cells_of(cl, xm, idx);
-      for (long dz = -1; dz <= 1; ++dz)
-        for (long dy = -1; dy <= 1; ++dy)
-          for (long dx = -1; dx <= 1; ++dx) {
-            const long cn[3] = {idx[0] + dx, idx[1] + dy, idx[2] + dz};
-            for (long j = cl->head[dm_cells_bucket(cl, cn)]; j >= 0; j = cl->next[j]) {
-              const long *cj = &cl->cidx[3 * j]; /* only the cell's own particles: no other cell
-                                                    sharing its bucket, none twice */
-              if (f->imat[j] == f->imat[i] || cj[0] != cn[0] || cj[1] != cn[1] || cj[2] != cn[2])
-                continue;
-              double d[3], r2 = 0;
-              bool own = false; /* j on a plane of the mask: its image is itself */
-              for (int p = 0; p < pl->n; ++p)
-                own = own || ((mask >> p & 1u) &&
-                              X[3 * j + pl->axis[p]] + w[3 * j + pl->axis[p]] == pl->pos[p]);
-              if (own) continue;
-              for (int a = 0; a < 3; ++a) { /* x_i − M x_j = M (M x_i − x_j) */
-                d[a] = sg[a] * (xm[a] - (X[3 * j + a] + w[3 * j + a]));
-                r2 += d[a] * d[a];
-              }
-              if (r2 >= r_see * r_see) continue;
-              const double r = sqrt(r2);
-              double ur = 0; /* rate of approach: −d(r)/dt */
-              for (int a = 0; a < 3; ++a) ur -= d[a] * (u[3 * i + a] - sg[a] * u[3 * j + a]) / r;
-              vapp = fmax(vapp, ur);
-              if (r >= h) continue;
-              const double k = 2.0 * c->k[i] * c->k[(size_t)j] / (c->k[i] + c->k[(size_t)j]);
-              const double pen = h - r;
-              for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
-              /* each pair is visited from both sides; a real particle stands for its orbit of
-               * fold particles (dm_symmetry.c), whose visits are all alike */
-              E += 0.25 * dm_fin_fold(f, i) * k * pen * pen;
-              touching = (int)dm_fin_fold(f, i);
-            }
+      for (int q = 0; q < cl->nnear; ++q) {
+        long cn[3];
+        dm_cells_near(cl, idx, q, cn);
+        for (long j = dm_cells_list(cl, cn); j >= 0; j = cl->next[j]) {
+          if (f->imat[j] == f->imat[i] || !dm_cells_holds(cl, j, cn)) continue;
+          double d[3], r2 = 0;
+          bool own = false; /* j on a plane of the mask: its image is itself */
+          for (int p = 0; p < pl->n; ++p)
+            own = own || ((mask >> p & 1u) &&
+                          X[3 * j + pl->axis[p]] + w[3 * j + pl->axis[p]] == pl->pos[p]);
+          if (own) continue;
+          for (int a = 0; a < 3; ++a) { /* x_i − M x_j = M (M x_i − x_j) */
+            d[a] = sg[a] * (xm[a] - (X[3 * j + a] + w[3 * j + a]));
+            r2 += d[a] * d[a];
           }
+          if (r2 >= r_see * r_see) continue;
+          const double r = sqrt(r2);
+          double ur = 0; /* rate of approach: −d(r)/dt */
+          for (int a = 0; a < 3; ++a) ur -= d[a] * (u[3 * i + a] - sg[a] * u[3 * j + a]) / r;
+          vapp = fmax(vapp, ur);
+          if (r >= h) continue;
+          const double k = 2.0 * c->k[i] * c->k[(size_t)j] / (c->k[i] + c->k[(size_t)j]);
+          const double pen = h - r;
+          for (int a = 0; a < 3; ++a) fi[a] += k * pen * d[a] / r;
+          /* each pair is visited from both sides; a real particle stands for its orbit of
+           * fold particles (dm_symmetry.c), whose visits are all alike */
+          E += 0.25 * dm_fin_fold(f, i) * k * pen * pen;
+          touching = (int)dm_fin_fold(f, i);
+        }
+      }
     }
     for (int a = 0; a < 3; ++a) fext[3 * i + a] += fi[a];
     nc += touching;

@@ -51,7 +51,7 @@ typedef struct dmi_contact {
   double h, courant;
   size_t n;            /* particles */
   const uint8_t *imat; /* [n] body of each particle (not owned) */
-  dm_cells cells;      /* the hashed cell list (dm_contact.c), cells of 1.5 h */
+  dm_cells cells;      /* the hashed cell list (dm_cells.c), cells of 1.5 h */
   double *k;           /* [n] c_c h M_i */
   double dt_k;         /* 2 courant / max ω of a pair */
   double stored;       /* Σ k d²/2 at the last evaluation (kJ) */

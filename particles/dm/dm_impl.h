@@ -4,6 +4,7 @@
 #define MSCALE_DM_IMPL_H
 
 #include "dm.h"
+#include "dm_cells.h"
 
 #include <math.h>
 #include <string.h>
@@ -178,47 +179,6 @@ double dm_frac_max_principal(const double *a);
 void dm_pair_stiffness(const dm_fin *f, double *kc, double ell);
 void dm_pair_law(const dm_fin *f, size_t i, double lam, double *g, double *s);
 void dm_pair_ends(const dm_fin *f, double *lam_end);
-/* A cell list hashed into ≥ 2n + 1 buckets (a power of two; [Teschner2003]), cells of `size` (along a periodic
- * axis of box[a] > 0 a whole number ≥ 3 of them, no smaller), reach[a] = 1 along the dim axes.
- * dm_cells_init: MS_ERR_INPUT when a periodic box holds fewer than 3 cells (nothing allocated);
- * dm_cells_build: each particle's cell and the lists at x = X + w (serial, O(n)); when the
- * cells' bounding box has no more cells than buckets, the buckets are the cells themselves in
- * x-fastest order (memory locality: the hash scatters neighbouring cells over the table), else
- * hashed. Either way a bucket's list is walked for one cell's particles (dropping others'), in
- * the same order, so the candidates and their order do not depend on the mode. */
-typedef struct dm_cells {
-  double size[3], lo[3], box[3];
-  long nper[3], reach[3];
-  size_t nbucket, n;
-  int dense;            /* the cells' bounding box fits the buckets: one bucket per cell */
-  long base[3], ext[3]; /* that box (the last build's) */
-  long *head, *next; /* the lists: first particle of a bucket, next particle of the same bucket */
-  long *cidx;        /* [n][3] each particle's cell */
-} dm_cells;
-ms_status dm_cells_init(dm_cells *c, size_t n, int dim, double size, const double lo[3],
-                        const double box[3]);
-void dm_cells_free(dm_cells *c);
-void dm_cells_build(dm_cells *c, const double *X, const double *w);
-static inline size_t dm_cells_bucket(const dm_cells *c, const long idx[3]) {
-  if (c->dense) { /* neighbouring cells in neighbouring buckets; outside: the empty last one */
-    const long i = idx[0] - c->base[0], j = idx[1] - c->base[1], k = idx[2] - c->base[2];
-    if (i < 0 || j < 0 || k < 0 || i >= c->ext[0] || j >= c->ext[1] || k >= c->ext[2])
-      return c->nbucket;
-    return (size_t)((k * c->ext[1] + j) * c->ext[0] + i);
-  }
-  const uint64_t hsh = ((uint64_t)idx[0] * 73856093u) ^ ((uint64_t)idx[1] * 19349663u) ^
-                       ((uint64_t)idx[2] * 83492791u);
-  return (size_t)(hsh & (c->nbucket - 1)); /* nbucket: a power of two */
-}
-/* A cell index taken back into the box along periodic axes. */
-static inline void dm_cells_wrap(const dm_cells *c, long idx[3]) {
-  for (int a = 0; a < 3; ++a)
-    if (c->nper[a] > 0) idx[a] = ((idx[a] % c->nper[a]) + c->nper[a]) % c->nper[a];
-}
-static inline void dm_cells_of(const dm_cells *c, const double x[3], long idx[3]) {
-  for (int a = 0; a < 3; ++a) idx[a] = (long)floor((x[a] - c->lo[a]) / c->size[a]);
-  dm_cells_wrap(c, idx);
-}
 /* The short-range contact between particles not in each other's family (f->sr; NULL when
  * par.contact = 0): L = d_c, the seeing distance, each particle's κc, λ_end per material, the
  * force [n][3] and step [n] of the last evaluation, the energy booked [n] (kJ), touch[i] = 1
@@ -254,6 +214,19 @@ static inline size_t dm_rows_thin(double *rows, size_t n, size_t ncol) {
     memmove(&rows[j * ncol], &rows[2 * j * ncol], ncol * sizeof *rows);
   return n / 2;
 }
+
+/* The x slab of the piston (dm_finite.c) and flyer (dm_flyer.c) problems: nx × ny × nz
+ * particles of spacing h, particle i = (iz ny + iy) nx + ix (dm_flyer.c).
+ * dm_slab_place: their X at the cell centres, w = u = 0, mass, volume, K = ρ0 c0², G of material
+ * imat[i] of mat, free; dm_slab_create: the model (horizon × h, periodic in y and z over the
+ * slab) and its dm_fin; on failure imat and s are freed (and *m, *f NULL);
+ * dm_slab_layers: each x layer's mean X, x, u_x, ρ, p, q, −σ_xx, e added into lay[nx][8]. */
+void dm_slab_place(dm_state *s, int dim, long nx, long ny, long nz, double h,
+                   const dm_fin_material *mat, const uint8_t *imat);
+ms_status dm_slab_create(dm_state *s, long ny, long nz, double h, double horizon,
+                         const dm_fin_material *mat, uint8_t *imat, const dm_fin_params *par,
+                         const ms_ctx *ctx, dm_model **m, dm_fin **f);
+void dm_slab_layers(const dm_fin *f, const dm_state *s, long nx, long nyz, double *lay);
 
 /* A free-surface history of fixed size: (t, mean u_x of the last x layer of an nx × nyz slab)
  * recorded every `stride`-th step; when full, every other row is dropped and the stride

@@ -14,15 +14,9 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "c2d_deck_test.h"
 #include "c2d_test.h"
 #include "test_util.h"
-
-typedef struct loaded {
-  dk_doc *doc;
-  eos_materials *mats;
-  c2d_problem *p;
-  dk_errors e;
-} loaded;
 
 static const char *head =
     "problem: grid2d\n"
@@ -39,24 +33,11 @@ static const char *head =
     "    blocks:\n"; /* line 12 */
 
 /* Loads the deck head + `blocks` (lines from 13 on, one block per line). */
-static void load(loaded *l, const char *geo, const char *ilo, const char *blocks) {
+static void load(c2d_deck *l, const char *geo, const char *ilo, const char *blocks) {
   char text[4096];
   int n = snprintf(text, sizeof text, head, geo, ilo);
   snprintf(text + n, sizeof text - (size_t)n, "%s", blocks);
-  dk_errors_init(&l->e);
-  l->doc = dk_load_string(text, "deck.yaml", &l->e);
-  assert_non_null(l->doc);
-  l->mats = eos_materials_read(l->doc, &l->e);
-  assert_non_null(l->mats);
-  l->p = c2d_problem_read(l->doc, dk_get(dk_root(l->doc), "grid2d"), l->mats, &l->e);
-  for (size_t i = 0; i < l->e.n; ++i) printf("  %s\n", l->e.msg[i]);
-}
-
-static void close_loaded(loaded *l) {
-  c2d_problem_destroy(&l->p);
-  eos_materials_destroy(&l->mats);
-  dk_free(l->doc);
-  dk_errors_free(&l->e);
+  c2d_deck_load(l, text);
 }
 
 /* Four blocks 2 × 2 (different materials and densities) tile an 8 × 6 mesh: the shared nodes are
@@ -64,7 +45,7 @@ static void close_loaded(loaded *l) {
  * makes successive zone widths grow by the ratio, and the grid steps. */
 static void test_tiling(void **state) {
   (void)state;
-  loaded l;
+  c2d_deck l;
   load(&l, "xy", "wall",
        "      - {i: [0, 5], j: [0, 4], x: [0, 1], y: [0, 1], material: al, density: 2.703}\n"
        "      - {i: [5, 8], j: [0, 4], x: [1, 2], y: [0, 1], grade: [1.2, 1], material: gas, "
@@ -96,14 +77,14 @@ static void test_tiling(void **state) {
     if (i >= 5) assert_true(fabs(v.p[z] / (j < 4 ? 1.01325e-4 : 1e-4) - 1) < 1e-12);
   }
   assert_int_equal(c2d_grid_step(g, 1e-3), MS_OK);
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 /* A sphere of Al (r < 0.5) in gas (0.5 < r < 1) in r–z: two polar blocks, the inner one with the
  * degenerate centre (ilo fixed). The shared circle r = 0.5 is one set of nodes. */
 static void test_sphere_rz(void **state) {
   (void)state;
-  loaded l;
+  c2d_deck l;
   load(&l, "rz", "fixed",
        "      - {type: polar, i: [0, 10], j: [0, 8], r: [0, 0.5], theta: [0, 90], material: al, "
        "density: 2.703, velocity: [0, -1]}\n"
@@ -119,7 +100,7 @@ static void test_sphere_rz(void **state) {
     assert_true(v.v[n + 1] == 0.0);
   }
   for (int k = 0; k < 5; ++k) assert_int_equal(c2d_grid_step(g, 1e-3), MS_OK);
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 /* Regions on a blocks mesh with no section material: a region names its material and density
@@ -130,12 +111,12 @@ static void test_regions_on_blocks(void **state) {
       "      - {i: [0, 4], j: [0, 2], x: [0, 1], y: [0, 0.5], material: al, density: 2.703}\n"
       "  regions:\n"
       "    - {x: [0, 0.5], material: gas, density: 0.01, energy: 0.025}\n";
-  loaded l;
+  c2d_deck l;
   load(&l, "xy", "wall", blk);
   assert_non_null(l.p);
   c2d_view v = c2d_grid_view(c2d_problem_grid(l.p));
   for (size_t z = 0; z < v.nzones; ++z) assert_int_equal(v.material[z], z % 4 < 2 ? 0 : 1);
-  close_loaded(&l);
+  c2d_deck_close(&l);
   load(&l, "xy", "wall",
        "      - {i: [0, 4], j: [0, 2], x: [0, 1], y: [0, 0.5], material: al, density: 2.703}\n"
        "  regions:\n"
@@ -143,7 +124,7 @@ static void test_regions_on_blocks(void **state) {
   assert_null(l.p);
   assert_true(
       has_error(&l.e, "deck.yaml:15:7: grid2d.regions[0]: missing required key 'material'"));
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 typedef struct bad_case {
@@ -177,12 +158,12 @@ static void test_block_errors(void **state) {
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
     char blocks[1024];
     snprintf(blocks, sizeof blocks, "%s%s", A, cases[c].blocks);
-    loaded l;
+    c2d_deck l;
     load(&l, cases[c].geo, "wall", blocks);
     assert_null(l.p);
     if (!has_error(&l.e, cases[c].msg)) printf("case %zu: expected \"%s\"\n", c, cases[c].msg);
     assert_true(has_error(&l.e, cases[c].msg));
-    close_loaded(&l);
+    c2d_deck_close(&l);
   }
   /* a block alone: inverted (x reversed), r < 0 in r–z */
   const bad_case single[] = {
@@ -201,12 +182,12 @@ static void test_block_errors(void **state) {
        "itself"},
   };
   for (size_t c = 0; c < sizeof single / sizeof single[0]; ++c) {
-    loaded l;
+    c2d_deck l;
     load(&l, single[c].geo, "wall", single[c].blocks);
     assert_null(l.p);
     if (!has_error(&l.e, single[c].msg)) printf("single %zu: expected \"%s\"\n", c, single[c].msg);
     assert_true(has_error(&l.e, single[c].msg));
-    close_loaded(&l);
+    c2d_deck_close(&l);
   }
 }
 
@@ -216,7 +197,7 @@ static void test_block_errors(void **state) {
  * zone-by-zone set-up. Both are stepped to t = 0.1; every field must be bit for bit equal. */
 static void test_flyer_blocks(void **state) {
   (void)state;
-  loaded l;
+  c2d_deck l;
   load(&l, "rz", "wall",
        "      - {i: [0, 24], j: [0, 16], x: [0, 1.5], y: [-1, 0], material: al, density: 2.703, "
        "energy: 0}\n"
@@ -270,7 +251,7 @@ static void test_flyer_blocks(void **state) {
   free(mid);
   eos_destroy(&al);
   eos_destroy(&gas);
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 int main(void) {

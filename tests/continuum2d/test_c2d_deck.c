@@ -11,7 +11,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "cont2d.h"
+#include "c2d_deck_test.h"
 #include "test_util.h"
 
 static const char *deck_fmt = "problem: grid2d\n"
@@ -27,79 +27,41 @@ static const char *deck_fmt = "problem: grid2d\n"
                               "  boundaries: {ilo: {type: wall}, jlo: {type: wall}}\n"
                               "  time: {end: 0.1}\n";
 
-static bool read_deck(const char *geo, const char *mesh, dk_errors *e) {
+/* The deck of geometry geo and mesh, read into l, steps once where it reads; true if it does. */
+static bool read_deck(c2d_deck *l, const char *geo, const char *mesh) {
   char text[2048];
   snprintf(text, sizeof text, deck_fmt, geo, mesh);
-  dk_errors_init(e);
-  dk_doc *doc = dk_load_string(text, "deck.yaml", e);
-  assert_non_null(doc);
-  eos_materials *mats = eos_materials_read(doc, e);
-  assert_non_null(mats);
-  c2d_problem *p = c2d_problem_read(doc, dk_get(dk_root(doc), "grid2d"), mats, e);
-  for (size_t i = 0; i < e->n; ++i) printf("  %s\n", e->msg[i]);
-  /* the grid keeps only EOS pointers; this test frees everything at once at the end */
-  if (p) {
-    c2d_grid *g = c2d_problem_grid(p);
-    assert_int_equal(c2d_grid_step(g, 1e-3), MS_OK);
-  }
-  bool built = p != NULL;
-  c2d_problem_destroy(&p);
-  eos_materials_destroy(&mats);
-  dk_free(doc);
-  return built;
+  c2d_deck_load(l, text);
+  if (l->p) assert_int_equal(c2d_grid_step(c2d_problem_grid(l->p), 1e-3), MS_OK);
+  return l->p != NULL;
 }
 
 static void test_deck_ok(void **state) {
   (void)state;
-  dk_errors e;
-  assert_true(read_deck("xy", "{type: rect, ni: 10, nj: 4, x: [0, 1], y: [0, 0.4]}", &e));
-  assert_int_equal(e.n, 0);
-  dk_errors_free(&e);
-  assert_true(read_deck("rz", "{type: polar, ni: 10, nj: 8, r: [0.1, 1], theta: [0, 90]}", &e));
-  assert_int_equal(e.n, 0);
-  dk_errors_free(&e);
+  c2d_deck l;
+  assert_true(read_deck(&l, "xy", "{type: rect, ni: 10, nj: 4, x: [0, 1], y: [0, 0.4]}"));
+  assert_int_equal(l.e.n, 0);
+  c2d_deck_close(&l);
+  assert_true(read_deck(&l, "rz", "{type: polar, ni: 10, nj: 8, r: [0.1, 1], theta: [0, 90]}"));
+  assert_int_equal(l.e.n, 0);
+  c2d_deck_close(&l);
 }
 
 static void test_deck_bad_mesh(void **state) {
   (void)state;
-  dk_errors e;
+  c2d_deck l;
   /* skew 30: x moves by up to 30 zone heights, so neighbouring columns cross */
   assert_false(
-      read_deck("xy", "{type: rect, ni: 10, nj: 4, x: [0, 1], y: [0, 0.4], skew: 30}", &e));
-  assert_true(has_error(&e, "deck.yaml:7:9: 2D grid: zone"));
-  assert_true(has_error(&e, "is tangled or inverted"));
-  dk_errors_free(&e);
-  assert_false(read_deck("xy", "{type: rect, ni: 10, nj: 4, x: [1, 0], y: [0, 0.4]}", &e));
-  assert_true(has_error(&e, "deck.yaml:7:9: 2D grid: zone 0 (i = 0, j = 0"));
-  dk_errors_free(&e);
-  assert_false(read_deck("rz", "{type: rect, ni: 10, nj: 4, x: [-0.5, 1], y: [0, 0.4]}", &e));
-  assert_true(has_error(&e, "deck.yaml:7:9: r–z grid: node 0 (i = 0, j = 0) has r = -0.5 < 0"));
-  dk_errors_free(&e);
-}
-
-/* A deck text loaded and read; close() frees it. */
-typedef struct loaded {
-  dk_doc *doc;
-  eos_materials *mats;
-  c2d_problem *p;
-  dk_errors e;
-} loaded;
-
-static void load(loaded *l, const char *text) {
-  dk_errors_init(&l->e);
-  l->doc = dk_load_string(text, "deck.yaml", &l->e);
-  assert_non_null(l->doc);
-  l->mats = eos_materials_read(l->doc, &l->e);
-  assert_non_null(l->mats);
-  l->p = c2d_problem_read(l->doc, dk_get(dk_root(l->doc), "grid2d"), l->mats, &l->e);
-  for (size_t i = 0; i < l->e.n; ++i) printf("  %s\n", l->e.msg[i]);
-}
-
-static void close_loaded(loaded *l) {
-  c2d_problem_destroy(&l->p);
-  eos_materials_destroy(&l->mats);
-  dk_free(l->doc);
-  dk_errors_free(&l->e);
+      read_deck(&l, "xy", "{type: rect, ni: 10, nj: 4, x: [0, 1], y: [0, 0.4], skew: 30}"));
+  assert_true(has_error(&l.e, "deck.yaml:7:9: 2D grid: zone"));
+  assert_true(has_error(&l.e, "is tangled or inverted"));
+  c2d_deck_close(&l);
+  assert_false(read_deck(&l, "xy", "{type: rect, ni: 10, nj: 4, x: [1, 0], y: [0, 0.4]}"));
+  assert_true(has_error(&l.e, "deck.yaml:7:9: 2D grid: zone 0 (i = 0, j = 0"));
+  c2d_deck_close(&l);
+  assert_false(read_deck(&l, "rz", "{type: rect, ni: 10, nj: 4, x: [-0.5, 1], y: [0, 0.4]}"));
+  assert_true(has_error(&l.e, "deck.yaml:7:9: r–z grid: node 0 (i = 0, j = 0) has r = -0.5 < 0"));
+  c2d_deck_close(&l);
 }
 
 static const char *sedov_fmt = "problem: grid2d\n"
@@ -125,8 +87,8 @@ static void test_energy_total(void **state) {
   for (int geo = 0; geo < 2; ++geo) {
     char text[2048];
     snprintf(text, sizeof text, sedov_fmt, geo ? "rz" : "xy", 0.0, 0.05);
-    loaded l;
-    load(&l, text);
+    c2d_deck l;
+    c2d_deck_load(&l, text);
     assert_non_null(l.p);
     c2d_view v = c2d_grid_view(c2d_problem_grid(l.p));
     double m_in = 0, m_all = 0;
@@ -138,15 +100,15 @@ static void test_energy_total(void **state) {
                  got = c2d_grid_balance(c2d_problem_grid(l.p)).internal;
     printf("energy_total (%s): internal %.15g, expected %.15g\n", geo ? "rz" : "xy", got, want);
     assert_true(fabs(got - want) < 1e-13 * want);
-    close_loaded(&l);
+    c2d_deck_close(&l);
   }
   char text[2048];
   snprintf(text, sizeof text, sedov_fmt, "rz", 0.3, 0.31); /* between ring centres 0.275, 0.325 */
-  loaded l;
-  load(&l, text);
+  c2d_deck l;
+  c2d_deck_load(&l, text);
   assert_null(l.p);
   assert_true(has_error(&l.e, "deck.yaml:12:7: region 0: energy_total: no zone centre lies in it"));
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 static const char *piston_fmt = "problem: grid2d\n"
@@ -172,8 +134,8 @@ static void test_piston_history(void **state) {
   (void)state;
   char text[2048];
   snprintf(text, sizeof text, piston_fmt, "{table: [[0, 0], [0.5, 1.0]]}");
-  loaded l;
-  load(&l, text);
+  c2d_deck l;
+  c2d_deck_load(&l, text);
   assert_non_null(l.p);
   c2d_grid *g = c2d_problem_grid(l.p);
   double worst = 0;
@@ -188,17 +150,17 @@ static void test_piston_history(void **state) {
   printf("piston table: worst |u - u_table(t)| = %.3f of one step's change\n", worst);
   assert_true(worst < 1e-9);
   assert_true(c2d_grid_time(g) > 0.01); /* the ramp was really followed, not u = 0 */
-  close_loaded(&l);
+  c2d_deck_close(&l);
   snprintf(text, sizeof text, piston_fmt, "{table: [[0, 0], [0, 1.0]]}");
-  load(&l, text);
+  c2d_deck_load(&l, text);
   assert_null(l.p);
   assert_true(has_error(&l.e, "deck.yaml:11:52: table row 1: time 0 does not increase"));
-  close_loaded(&l);
+  c2d_deck_close(&l);
   snprintf(text, sizeof text, piston_fmt, "{value: 1, pulse: {amplitude: 1, hold: 1}}");
-  load(&l, text);
+  c2d_deck_load(&l, text);
   assert_null(l.p);
   assert_true(has_error(&l.e, "ilo.velocity: give exactly one of value, table, file, pulse"));
-  close_loaded(&l);
+  c2d_deck_close(&l);
 }
 
 int main(void) {

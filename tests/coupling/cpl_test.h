@@ -36,6 +36,19 @@ static inline double cpl_test_mean_over(size_t n, const double *t, const double 
   return s / (b - a);
 }
 
+/* One column's free-surface plateaus (test_drive2d, test_coupled2d_deck): cpl_free_surface_check
+ * of the grid's g and the particles' p sampled at t[n] with window w into chk, then the means
+ * over [t_b + w/2, t_b + w], t_b the grid's breakout, the particles' window shifted by their
+ * half-rise offset (test_drive2d gives the reasons), into *pg and *pp. */
+static inline void cpl_test_plateaus(size_t n, const double *t, const double *g, const double *p,
+                                     double w, cpl_fs_check *chk, double *pg, double *pp) {
+  assert_true(cpl_free_surface_check(n, t, g, p, w, chk));
+  const double shift = chk->t_half_particles - chk->t_half_grid;
+  const double a = chk->t_break + 0.5 * w, b = chk->t_break + w;
+  assert_true(b + fabs(shift) < t[n - 1]);
+  *pg = cpl_test_mean_over(n, t, g, a, b), *pp = cpl_test_mean_over(n, t, p, a + shift, b + shift);
+}
+
 /* A `coupled` deck read from text (cpl_test_read: p is NULL and e holds the errors of a bad
  * deck), run in a temporary directory that must then hold `files` and is removed
  * (cpl_test_run_tmp), or both with no error allowed (cpl_test_run_deck); the problem stays for

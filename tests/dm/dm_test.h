@@ -2,6 +2,8 @@
 /* dm_test.h — fixtures shared by the discrete model's tests (include after <cmocka.h>):
  *  - dm_test_deck: a deck text read as `mscale run` reads it before the problem's reader (units,
  *    materials), and dm_test_deck_free;
+ *  - dm_test_problem: a `discrete_model` deck text read through the model's reader (test_dm_deck.c,
+ *    tests/mpi/test_dm_mpi.c);
  *  - dm_fin_body: the finite-model test body of test_dm_contact.c (two blocks) and
  *    test_dm_fracture.c (a bar): particles of Al (mg_linear ρ0 2.703, c0 5.35, s 1.34, Γ0 2.0)
  *    on a lattice of spacing h, its model (horizon 1.5 h, periodic in y over ny h when dim > 1)
@@ -32,6 +34,25 @@ static inline void dm_test_deck_free(dk_doc *doc, eos_materials **mats, dk_error
   eos_materials_destroy(mats);
   dk_free(doc);
   if (e) dk_errors_free(e);
+}
+
+/* A discrete_model deck text read through the model's reader (dm_test_problem_read: p is NULL
+ * and e holds the errors of a bad deck), and dm_test_problem_free. */
+typedef struct dm_test_problem {
+  dk_doc *doc;
+  eos_materials *mats;
+  dm_problem *p;
+  dk_errors e;
+} dm_test_problem;
+
+static inline void dm_test_problem_read(dm_test_problem *L, const char *text) {
+  L->doc = dm_test_deck(text, "deck.yaml", &L->mats, &L->e);
+  L->p = dm_problem_read(L->doc, dk_get(dk_root(L->doc), "discrete_model"), L->mats, &L->e);
+}
+
+static inline void dm_test_problem_free(dm_test_problem *L) {
+  dm_problem_destroy(&L->p);
+  dm_test_deck_free(L->doc, &L->mats, &L->e);
 }
 
 typedef struct dm_fin_body {

@@ -10,7 +10,10 @@
  *     is conserved to round-off at every step, momentum to round-off, the blocks' velocities are
  *     reversed, no pair comes closer than half the contact distance, and the contact's energy
  *     after the separation (the spring's booked work, 0 for an exact integration) falls with the
- *     step; without the contact (contact_distance 0) they pass into each other. */
+ *     step; without the contact (contact_distance 0) they pass into each other;
+ *  c. the cell list's walk (particles/dm/dm_cells.h), which the contact passes share, finds from
+ *     each particle every other one closer than the cell size exactly once, against all pairs
+ *     by brute force. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -167,10 +170,67 @@ static void test_blocks_rebound(void **state) {
   assert_true(p0 || r0 < 0.1);
 }
 
+/* c. The walk from every particle over 400 random ones in a box of 6 × 5 × 4 cells, in 1D, 2D
+ * and 3D, periodic along the dimension's axes (minimum image; the wrap across each face) or not,
+ * packed (one bucket per cell) or with 8 particles 10⁴ cells away (hashed buckets): every pair
+ * closer than the cell size is visited exactly once from each side. Exact: integer counts. */
+static void test_cell_walk(void **state) {
+  (void)state;
+  const size_t n = 400;
+  const double box[3] = {6, 5, 4}; /* cell size 1 */
+  double *X = calloc(3 * n, sizeof *X), *w = calloc(3 * n, sizeof *w);
+  uint8_t *seen = calloc(n * n, 1);
+  uint64_t rng = 12345;
+  for (int dim = 1; dim <= 3; ++dim)
+    for (int periodic = 0; periodic < 2; ++periodic)
+      for (int far = 0; far < 2 - periodic; ++far) {
+        for (size_t i = 0; i < 3 * n; ++i) {
+          rng = rng * 6364136223846793005u + 1442695040888963407u; /* 64-bit LCG: any spread */
+          const int a = (int)(i % 3);
+          X[i] = a < dim ? box[a] * (double)(rng >> 11) / 9007199254740992.0 : 0.0;
+          if (far && i < 24 && a < dim) X[i] += 1e4;
+        }
+        dm_cells c;
+        assert_int_equal(dm_cells_init(&c, n, dim, 1.0, NULL, periodic ? box : NULL), MS_OK);
+        dm_cells_build(&c, X, w);
+        assert_int_equal(c.dense, !far);
+        memset(seen, 0, n * n);
+        size_t pairs = 0;
+        for (size_t i = 0; i < n; ++i)
+          for (int q = 0; q < c.nnear; ++q) {
+            long cell[3];
+            dm_cells_near(&c, &c.cidx[3 * i], q, cell);
+            for (long j = dm_cells_list(&c, cell); j >= 0; j = c.next[j])
+              if ((size_t)j != i && dm_cells_holds(&c, j, cell)) ++seen[i * n + (size_t)j];
+          }
+        for (size_t i = 0; i < n; ++i)
+          for (size_t j = 0; j < n; ++j) {
+            double r2 = 0;
+            for (int a = 0; a < 3; ++a) {
+              double y = X[3 * j + a] - X[3 * i + a];
+              if (periodic && a < dim) y -= box[a] * nearbyint(y / box[a]);
+              r2 += y * y;
+            }
+            if (i != j && r2 < 1.0) {
+              assert_int_equal(seen[i * n + j], 1);
+              ++pairs;
+            } else {
+              assert_true(seen[i * n + j] <= 1);
+            }
+          }
+        printf("cell walk, %dD, %s, %s: %zu pairs within the cell size, each seen once\n", dim,
+               periodic ? "periodic" : "not periodic", far ? "hashed" : "dense", pairs);
+        assert_true(pairs > n / 2);
+        dm_cells_free(&c);
+      }
+  free(X), free(w), free(seen);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_pair_pushed_apart),
       cmocka_unit_test(test_blocks_rebound),
+      cmocka_unit_test(test_cell_walk),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -23,36 +23,18 @@ static const char *materials =
     "    eos: {type: linear_elastic, rho0: 7.85, bulk_modulus: 66.666666666666667}\n"
     "    shear_modulus: 100.0\n";
 
-typedef struct loaded {
-  dk_doc *doc;
-  eos_materials *mats;
-  dm_problem *p;
-  dk_errors e;
-} loaded;
-
-/* A whole deck text read through the model's reader. */
-static void load_text(loaded *L, const char *text) {
-  L->doc = dm_test_deck(text, "deck.yaml", &L->mats, &L->e);
-  L->p = dm_problem_read(L->doc, dk_get(dk_root(L->doc), "discrete_model"), L->mats, &L->e);
-}
-
 /* The steel head + a discrete_model section, read, with the unused-key report. */
-static void load(loaded *L, const char *section) {
+static void load(dm_test_problem *L, const char *section) {
   char text[4096];
   snprintf(text, sizeof text, "%s%s", materials, section);
-  load_text(L, text);
+  dm_test_problem_read(L, text);
   dk_report_unused(&L->e, L->doc);
-}
-
-static void unload(loaded *L) {
-  dm_problem_destroy(&L->p);
-  dm_test_deck_free(L->doc, &L->mats, &L->e);
 }
 
 /* Six independent mistakes: all reported in one pass, each with FILE:LINE:COL. */
 static void test_errors_collected(void **state) {
   (void)state;
-  loaded L;
+  dm_test_problem L;
   load(&L, "discrete_model:\n"
            "  dimension: 2\n"
            "  spacing: 0.3\n"
@@ -73,10 +55,10 @@ static void test_errors_collected(void **state) {
   assert_true(has_error(&L.e, "stel"));
   assert_true(has_error(&L.e, "1D (rod) problem"));
   assert_true(has_error(&L.e, "leapfrog"));
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
-static ms_status run(loaded *L) {
+static ms_status run(dm_test_problem *L) {
   ms_ctx ctx;
   ms_ctx_init_serial(&ctx);
   ctx.verbosity = MS_LOG_ERROR;
@@ -88,7 +70,7 @@ static ms_status run(loaded *L) {
 /* A time step beyond the scheme's stability limit is refused before any step is taken. */
 static void test_unstable_dt_refused(void **state) {
   (void)state;
-  loaded L;
+  dm_test_problem L;
   load(&L, "discrete_model:\n"
            "  spacing: 0.05\n"
            "  domain: {lo: [0], hi: [2]}\n"
@@ -100,13 +82,13 @@ static void test_unstable_dt_refused(void **state) {
            "  t_end: 1.0\n");
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_INPUT);
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 /* One layer of particles in a 3D model: every A_i is singular -> input error, no run. */
 static void test_singular_geometry_refused(void **state) {
   (void)state;
-  loaded L;
+  dm_test_problem L;
   load(&L, "discrete_model:\n"
            "  dimension: 3\n"
            "  spacing: 0.1\n"
@@ -115,7 +97,7 @@ static void test_singular_geometry_refused(void **state) {
            "  steps: 1\n");
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_INPUT);
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 /* A small rod with every scheme runs and keeps the sine mode's energy (< 1e-3 relative:
@@ -135,7 +117,7 @@ static void test_small_runs(void **state) {
              "  t_end: 1.0\n"
              "  output: {probes: [0.5], energy_every: 10}\n",
              rkn_scheme_names[k]);
-    loaded L;
+    dm_test_problem L;
     load(&L, sec);
     dk_errors_print(&L.e, stderr);
     assert_int_equal(L.e.n, 0);
@@ -145,7 +127,7 @@ static void test_small_runs(void **state) {
     assert_true(s->particles > 40);
     assert_true(fabs(s->t_end - 1.0) < 1e-12);
     assert_true(s->energy_err_max < 1e-3);
-    unload(&L);
+    dm_test_problem_free(&L);
   }
 }
 
@@ -170,8 +152,8 @@ static void test_finite_errors(void **state) {
       "    - {material: gas, x_max: 2, response: eos, yield: elastic_plastic}\n"
       "    - {rho: 1, bulk_modulus: 1, response: eos}\n"
       "  t_end: 1.0\n";
-  loaded L;
-  load_text(&L, deck);
+  dm_test_problem L;
+  dm_test_problem_read(&L, deck);
   dk_errors_print(&L.e, stderr);
   assert_null(L.p);
   assert_true(has_error(&L.e, "deck.yaml:12:"));     /* negative yield stress */
@@ -180,7 +162,7 @@ static void test_finite_errors(void **state) {
   assert_true(has_error(&L.e, "needs 'yield_stress'"));
   assert_true(has_error(&L.e, "deck.yaml:14:"));
   assert_true(has_error(&L.e, "needs a material with an 'eos:'"));
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 /* The flyer problem's per-layer 'velocity': a number in km/s within ±1000, only with
@@ -201,14 +183,14 @@ static void test_flyer_errors(void **state) {
       "    - {material: al, response: eos, velocity: 1.0}\n"
       "  initial: {profile: random_velocity, amplitude: 0.1}\n"
       "  t_end: 1.0\n";
-  loaded L;
-  load_text(&L, eos_deck);
+  dm_test_problem L;
+  dm_test_problem_read(&L, eos_deck);
   dk_errors_print(&L.e, stderr);
   assert_null(L.p);
   assert_true(has_error(&L.e, "deck.yaml:9:"));  /* 5000 km/s: out of range */
   assert_true(has_error(&L.e, "deck.yaml:10:")); /* not a number */
   assert_true(has_error(&L.e, "exclude each other"));
-  unload(&L);
+  dm_test_problem_free(&L);
   /* the linear model has no per-body velocity */
   load(&L, "discrete_model:\n"
            "  spacing: 0.1\n"
@@ -220,7 +202,7 @@ static void test_flyer_errors(void **state) {
   assert_null(L.p);
   assert_true(has_error(&L.e, "deck.yaml:10:"));
   assert_true(has_error(&L.e, "'velocity' (a body's initial velocity) needs response: eos"));
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 /* The fracture keys of a layer (docs/input-dm.md): a failure model needs spall_strength > 0,
@@ -241,8 +223,8 @@ static void test_fracture_errors(void **state) {
       "    - {material: al, x_max: 3, response: eos, fracture: {spall_strength: 0}}\n"
       "    - {material: al, fracture: {spall_strength: 1.2}}\n"
       "  t_end: 1.0\n";
-  loaded L;
-  load_text(&L, deck);
+  dm_test_problem L;
+  dm_test_problem_read(&L, deck);
   dk_errors_print(&L.e, stderr);
   assert_null(L.p);
   assert_true(has_error(&L.e, "deck.yaml:9:")); /* no spall_strength */
@@ -251,7 +233,7 @@ static void test_fracture_errors(void **state) {
   assert_true(has_error(&L.e, "deck.yaml:11:")); /* σ_s = 0 */
   assert_true(has_error(&L.e, "deck.yaml:12:")); /* the linear model */
   assert_true(has_error(&L.e, "'fracture' needs response: eos"));
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 /* A piston far beyond what the time step resolves (courant 20) inverts a family: the run stops
@@ -271,11 +253,11 @@ static void test_finite_degenerate_stops(void **state) {
       "  piston: {velocity: 5.0}\n"
       "  courant: 20\n"
       "  t_end: 0.5\n";
-  loaded L;
-  load_text(&L, deck);
+  dm_test_problem L;
+  dm_test_problem_read(&L, deck);
   assert_non_null(L.p);
   assert_int_equal(run(&L), MS_ERR_UNSTABLE);
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 
@@ -286,7 +268,7 @@ static void test_finite_degenerate_stops(void **state) {
  * the vertex dataset, and the time series particles.xmf lists it. */
 static void test_snapshot_layout(void **state) {
   (void)state;
-  loaded L;
+  dm_test_problem L;
   load(&L, "discrete_model:\n"
            "  spacing: 0.05\n"
            "  domain: {lo: [0], hi: [1]}\n"
@@ -375,7 +357,7 @@ static void test_snapshot_layout(void **state) {
     }
   closedir(d);
   rmdir(dir);
-  unload(&L);
+  dm_test_problem_free(&L);
 }
 
 int main(void) {

@@ -15,23 +15,17 @@
  *    touch the previous checkpoint, which still restarts, and restarting from the truncated
  *    file fails cleanly. */
 #include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <cmocka.h> /* dm_test.h's deck reader asserts on the literal decks below only */
 
-#include "dm.h"
-
-static int failures = 0;
-static int my_rank = 0;
-#define CHECK(cond, ...)                                                                           \
-  do {                                                                                             \
-    if (!(cond)) {                                                                                 \
-      fprintf(stderr, "FAIL rank %d %s:%d: ", my_rank, __FILE__, __LINE__);                        \
-      fprintf(stderr, __VA_ARGS__);                                                                \
-      fputc('\n', stderr);                                                                         \
-      failures++;                                                                                  \
-    }                                                                                              \
-  } while (0)
+#include "dm/dm_test.h"
+#include "mpi_check.h"
 
 static const char *block_deck =
     "problem: discrete_model\n"
@@ -79,37 +73,13 @@ static const char *sphere_deck =
     "  t_end: 0.3\n"
     "  output: {energy_every: 5, checkpoint_every: %ld}\n";
 
-typedef struct loaded {
-  dk_doc *doc;
-  eos_materials *mats;
-  dm_problem *p;
-  dk_errors e;
-} loaded;
-
-static int load(loaded *L, const char *text) {
-  dk_errors_init(&L->e);
-  L->doc = dk_load_string(text, "deck.yaml", &L->e);
-  L->mats = NULL;
-  L->p = NULL;
-  if (!L->doc) return 0;
-  dk_read_units(L->doc, &L->e);
-  dk_get(dk_root(L->doc), "problem");
-  L->mats = eos_materials_read(L->doc, &L->e);
-  L->p = dm_problem_read(L->doc, dk_get(dk_root(L->doc), "discrete_model"), L->mats, &L->e);
-  if (!L->p) dk_errors_print(&L->e, stderr);
-  return L->p != NULL;
-}
-
-static void unload(loaded *L) {
-  dm_problem_destroy(&L->p);
-  eos_materials_destroy(&L->mats);
-  dk_free(L->doc);
-  dk_errors_free(&L->e);
-}
-
 /* Runs the deck on ctx (restart: checkpoint path or NULL); result kept in L. */
-static ms_status run(loaded *L, const char *text, ms_ctx *ctx, const char *restart) {
-  if (!load(L, text)) return MS_ERR_INPUT;
+static ms_status run(dm_test_problem *L, const char *text, ms_ctx *ctx, const char *restart) {
+  dm_test_problem_read(L, text);
+  if (!L->p) {
+    dk_errors_print(&L->e, stderr);
+    return MS_ERR_INPUT;
+  }
   ctx->restart = restart;
   ms_status st = dm_problem_run(ctx, L->p);
   ctx->restart = NULL;
@@ -118,7 +88,7 @@ static ms_status run(loaded *L, const char *text, ms_ctx *ctx, const char *resta
 
 /* Bitwise comparison of two runs' end states and summaries (== on doubles: −0 and +0 agree,
  * NaN fields are compared by their NaN-ness). */
-static void same_run(const loaded *a, const loaded *b, const char *what) {
+static void same_run(const dm_test_problem *a, const dm_test_problem *b, const char *what) {
   const double *wa, *ua, *wb, *ub;
   size_t na = dm_problem_final_state(a->p, &wa, &ua), nb = dm_problem_final_state(b->p, &wb, &ub);
   CHECK(na == nb && na > 0, "%s: particle counts %zu vs %zu", what, na, nb);
@@ -154,7 +124,6 @@ int main(int argc, char **argv) {
   ms_ctx ctx, serial;
   ms_ctx_init_serial(&ctx);
   if (par_init(&argc, &argv, &ctx)) return 1;
-  my_rank = ctx.rank;
   ms_ctx_init_serial(&serial); /* rank-local reference run: no communication at all */
   serial.verbosity = MS_LOG_WARN;
   ctx.verbosity = MS_LOG_WARN;
@@ -164,7 +133,7 @@ int main(int argc, char **argv) {
   /* 1. block: distributed run == one-rank run, bit for bit */
   const long nsteps = 60;
   snprintf(text, sizeof text, block_deck, nsteps, 0L);
-  loaded ref, dist;
+  dm_test_problem ref, dist;
   CHECK(run(&ref, text, &serial, NULL) == MS_OK, "block, serial reference");
   CHECK(run(&dist, text, &ctx, NULL) == MS_OK, "block, %d ranks", np);
   if (ref.p && dist.p) {
@@ -191,16 +160,16 @@ int main(int argc, char **argv) {
       CHECK(s->edge_cut == 0, "one rank cuts nothing");
     }
   }
-  unload(&ref);
-  unload(&dist);
+  dm_test_problem_free(&ref);
+  dm_test_problem_free(&dist);
 
   /* 2. spherical source (prescribed particles + mirror ghosts of them) */
   snprintf(text, sizeof text, sphere_deck, 0L);
   CHECK(run(&ref, text, &serial, NULL) == MS_OK, "sphere, serial reference");
   CHECK(run(&dist, text, &ctx, NULL) == MS_OK, "sphere, %d ranks", np);
   if (ref.p && dist.p) same_run(&ref, &dist, "sphere");
-  unload(&ref);
-  unload(&dist);
+  dm_test_problem_free(&ref);
+  dm_test_problem_free(&dist);
 
   /* 3. checkpoint / restart: 2N steps with a checkpoint at N */
   char dirA[64], ckpt[128], part[160];
@@ -210,7 +179,7 @@ int main(int argc, char **argv) {
   ms_status st = par_agree_status(ms_outdir_create(&ctx, dirA, true));
   CHECK(st == MS_OK, "output directory");
   snprintf(text, sizeof text, block_deck, 2 * nsteps, nsteps);
-  loaded full, again, other;
+  dm_test_problem full, again, other;
   CHECK(run(&full, text, &ctx, NULL) == MS_OK, "run to 2N with a checkpoint at N");
   par_barrier();
   FILE *f = fopen(ckpt, "rb");
@@ -228,8 +197,8 @@ int main(int argc, char **argv) {
           dm_problem_summary(again.p)->restart_step);
   }
   if (full.p && other.p) same_run(&full, &other, "restart, 1 rank");
-  unload(&again);
-  unload(&other);
+  dm_test_problem_free(&again);
+  dm_test_problem_free(&other);
 
   /* 4. a write interrupted by a crash leaves CHECKPOINT.part, never a damaged CHECKPOINT:
    * simulate it with the first half of a valid file under the .part name */
@@ -250,16 +219,16 @@ int main(int argc, char **argv) {
   par_barrier();
   CHECK(run(&again, text, &quiet_ctx, ckpt) == MS_OK, "restart with a stale .part beside it");
   if (full.p && again.p) same_run(&full, &again, "restart after an interrupted write");
-  unload(&again);
+  dm_test_problem_free(&again);
   /* (the error it logs is expected) */
   CHECK(run(&again, text, &quiet_ctx, part) != MS_OK, "restart from a truncated file must fail");
-  unload(&again);
-  unload(&full);
+  dm_test_problem_free(&again);
+  dm_test_problem_free(&full);
 
   ms_ctx_close(&serial);
   ms_ctx_close(&ctx);
   int all = (int)par_sum_long(failures);
-  if (my_rank == 0) printf("%s: %d failure(s) over %d rank(s)\n", all ? "FAILED" : "OK", all, np);
+  if (ctx.rank == 0) printf("%s: %d failure(s) over %d rank(s)\n", all ? "FAILED" : "OK", all, np);
   par_finalize();
   return all ? 1 : 0;
 }
