@@ -7,6 +7,7 @@
  *                 [--depth WL] [--obs WL] [--fit-from WL] [--dt-margin F]
  *                 [--yield LIST --shear-modulus G --strength-kh0 X --strength-ncol N]
  *                 [--strength-set NAME] [--visc-linear CL] [--hourglass CS] [--decay TAU]
+ *                 [--spall-strength S]
  *                 [--trace] -o OUTDIR
  *
  * Defaults: inputs/eos-materials.yaml's pb, u_p 0.8 km/s (26.2 GPa, `mscale hugoniot`),
@@ -16,7 +17,8 @@
  * the k h0 sweep's cases with yield steinberg_guinan and that built-in set (Al6061_T6, Cu_OFHC,
  * Pb, Sn: particles/dm/dm_strength.c) instead of yield none. Diagnostics: --visc-linear CL
  * and --hourglass CS set the region's viscosity.linear and hourglass (defaults 0.5, 1);
- * --decay TAU drives with u_p exp(−t/τ), τ = TAU λ/U_s (default: held at u_p). Besides the
+ * --decay TAU drives with u_p exp(−t/τ), τ = TAU λ/U_s (default: held at u_p);
+ * --spall-strength S adds fracture {model: mean_stress, spall_strength: S} (GPa; default none). Besides the
  * old tip measures, jets_kh0.csv has those of jets_tip.h (leading-mass fronts, jet cluster).
  * Writes OUTDIR/jets_kh0.csv and OUTDIR/jets_strength.csv (units in the headers), with
  * --trace the histories OUTDIR/trace_<kind>_<i>.csv and the final particle snapshots
@@ -48,6 +50,7 @@ typedef struct opts {
   const char *deck, *material, *outdir, *strength_set;
   double up, h, depth, obs, fit_from, fit_to, dt_margin, G, skh0, sobs, sdepth;
   double visc_linear, hourglass, decay; /* 0: the region's defaults, a held piston */
+  double spall;                         /* > 0: fracture with this spall strength, GPa */
   double kh0[MAXL], ncol[MAXL], Y[MAXL];
   int nk, nn, ny, trace;
   long sncol;
@@ -126,7 +129,8 @@ static jets_case base_case(const opts *o, const eos_t *eos) {
                      .strength_set = o->strength_set,
                      .visc_linear = o->visc_linear,
                      .hourglass = o->hourglass,
-                     .decay = o->decay};
+                     .decay = o->decay,
+                     .spall_strength = o->spall};
 }
 
 static int sweep_kh0(const opts *o, const eos_t *eos) {
@@ -324,6 +328,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--visc-linear")) o.visc_linear = atof(v);
     else if (!strcmp(a, "--hourglass")) o.hourglass = atof(v);
     else if (!strcmp(a, "--decay")) o.decay = atof(v);
+    else if (!strcmp(a, "--spall-strength")) o.spall = atof(v);
     else if (!strcmp(a, "--shear-modulus")) o.G = atof(v);
     else if (!strcmp(a, "--strength-kh0")) o.skh0 = atof(v);
     else if (!strcmp(a, "--strength-ncol")) o.sncol = atol(v);

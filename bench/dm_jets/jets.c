@@ -62,6 +62,9 @@ static ms_status build(const jets_case *c, double width, bool grooved, double de
   if (c->visc_linear > 0)
     len += snprintf(text + len, sizeof text - (size_t)len, "  viscosity: {linear: %.17g}\n",
                     c->visc_linear);
+  if (c->spall_strength > 0)
+    len += snprintf(text + len, sizeof text - (size_t)len,
+                    "  fracture: {model: mean_stress, spall_strength: %.17g}\n", c->spall_strength);
   if (c->hourglass > 0)
     len += snprintf(text + len, sizeof text - (size_t)len, "  hourglass: %.17g\n", c->hourglass);
   if (grooved)

@@ -31,7 +31,8 @@ typedef struct jets_case {
    * penalty c_s (`hourglass`), and a decaying drive u_p exp(−t/τ) with τ = decay λ/U_s on the
    * region's clock (0: the piston held at u_p) */
   double visc_linear, hourglass, decay;
-  const char *snapshot; /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
+  double spall_strength; /* > 0: fracture {model: mean_stress} with this σ_s (GPa); 0: none */
+  const char *snapshot;  /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
 } jets_case;
 
 typedef struct jets_result {
