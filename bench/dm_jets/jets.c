@@ -22,7 +22,8 @@
  * over the free surface), of x_spike − x_fs (v_spike_max) and of η (v_eta) are compared with
  * Richtmyer's impulsive estimate k a0⁺ Δu [Richtmyer1960], a0⁺ = a0 (1 − u_p/U_s) and Δu the
  * flat surface's mean velocity over the window, as [Buttler2012] apply it to metals; a0 is the
- * cut lattice's amplitude (classify). */
+ * cut lattice's amplitude (classify). The jet's tip is also measured by leading mass and by
+ * cluster (jets_tip.c), every step, as absolute slopes over the window (fit_window). */
 #include "jets.h"
 
 #include <math.h>

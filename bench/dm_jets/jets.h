@@ -3,8 +3,9 @@
  * finite-deformation discrete model (the coupled problem's particle region `discrete_model`,
  * driven through particles/ptl_region.h without a grid). One case = a grooved slab (one groove
  * wavelength wide, periodic across) and a flat strip of the same depth and drive (5 columns),
- * both hit by a constant-velocity piston; the spike, bubble and free surface are measured from
- * the particles' positions (no fragments). docs/validation.md "Microjets". */
+ * both hit by a piston (held at u_p, or decaying); the spike, bubble and free surface are
+ * measured from the particles' positions, the jet's tip also by leading mass and by cluster
+ * (jets_tip.h). docs/validation.md "Microjets". */
 #ifndef MSCALE_BENCH_JETS_H
 #define MSCALE_BENCH_JETS_H
 
