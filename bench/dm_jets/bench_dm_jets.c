@@ -6,7 +6,8 @@
  *   bench_dm_jets [--deck D] [--material M] [--up U] [--kh0 LIST] [--ncol LIST] [--h H]
  *                 [--depth WL] [--obs WL] [--fit-from WL] [--dt-margin F]
  *                 [--yield LIST --shear-modulus G --strength-kh0 X --strength-ncol N]
- *                 [--strength-set NAME]
+ *                 [--strength-set NAME] [--visc-linear CL] [--hourglass CS] [--decay TAU]
+ *                 [--spall-strength S]
  *                 [--trace] -o OUTDIR
  *
  * Defaults: inputs/eos-materials.yaml's pb, u_p 0.8 km/s (26.2 GPa, `mscale hugoniot`),
@@ -14,7 +15,11 @@
  * obs 3 λ/U_s after breakout, fit from 1 λ/U_s, dt_margin 0.35; strength at kh0 0.5 and
  * ncol 64 with Y = 0 (none) and the --yield list, G from --shear-modulus. --strength-set NAME:
  * the k h0 sweep's cases with yield steinberg_guinan and that built-in set (Al6061_T6, Cu_OFHC,
- * Pb, Sn: particles/dm/dm_strength.c) instead of yield none.
+ * Pb, Sn: particles/dm/dm_strength.c) instead of yield none. Diagnostics: --visc-linear CL
+ * and --hourglass CS set the region's viscosity.linear and hourglass (defaults 0.5, 1);
+ * --decay TAU drives with u_p exp(−t/τ), τ = TAU λ/U_s (default: held at u_p);
+ * --spall-strength S adds fracture {model: mean_stress, spall_strength: S} (GPa; default none). Besides the
+ * old tip measures, jets_kh0.csv has those of jets_tip.h (leading-mass fronts, jet cluster).
  * Writes OUTDIR/jets_kh0.csv and OUTDIR/jets_strength.csv (units in the headers), with
  * --trace the histories OUTDIR/trace_<kind>_<i>.csv and the final particle snapshots
  * OUTDIR/snap_<kind>_<i>.h5 (pressure, density); one line per case on stdout.
@@ -44,18 +49,56 @@ static int parse_list(const char *s, double *v) {
 typedef struct opts {
   const char *deck, *material, *outdir, *strength_set;
   double up, h, depth, obs, fit_from, fit_to, dt_margin, G, skh0, sobs, sdepth;
+  double visc_linear, hourglass, decay; /* 0: the region's defaults, a held piston */
+  double spall;                         /* > 0: fracture with this spall strength, GPa */
   double kh0[MAXL], ncol[MAXL], Y[MAXL];
   int nk, nn, ny, trace;
   long sncol;
 } opts;
 
-static const char *const kh0_names[] = {
-    "kh0",         "ncol",       "h",           "lambda",       "a0_over_h0",
-    "up",          "us",         "du",          "v_lin",        "v_spike",
-    "v_tip",       "v_eta",      "ratio",       "v_spike_peak", "v_spike_late",
-    "v_spike_max", "eta_end",    "t_end",       "stopped",      "particles",
-    "v_bubble",    "v_spike_nl", "v_bubble_nl", "keta_start",   "keta_end",
-    "k_deta_end"};
+static const char *const kh0_names[] = {"kh0",
+                                        "ncol",
+                                        "h",
+                                        "lambda",
+                                        "a0_over_h0",
+                                        "up",
+                                        "us",
+                                        "du",
+                                        "v_lin",
+                                        "v_spike",
+                                        "v_tip",
+                                        "v_eta",
+                                        "ratio",
+                                        "v_spike_peak",
+                                        "v_spike_late",
+                                        "v_spike_max",
+                                        "eta_end",
+                                        "t_end",
+                                        "stopped",
+                                        "particles",
+                                        "v_bubble",
+                                        "v_spike_nl",
+                                        "v_bubble_nl",
+                                        "keta_start",
+                                        "keta_end",
+                                        "k_deta_end",
+                                        "u_fs_start",
+                                        "v_tip_slope",
+                                        "v_front1",
+                                        "v_front10",
+                                        "v_front50",
+                                        "v_lead1",
+                                        "v_lead10",
+                                        "v_lead50",
+                                        "v_main",
+                                        "m_jet_end",
+                                        "n_jet_end",
+                                        "n_clusters_end",
+                                        "n_ahead_end",
+                                        "tip_cluster_end",
+                                        "visc_linear",
+                                        "hourglass",
+                                        "decay"};
 static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",    "km/s",      "km/s",
                                         "km/s", "km/s", "km/s", "km/s", "km/s", "1",         "km/s",
                                         "km/s", "km/s", "cm",   "10us", "1",    "particles", "km/s",
@@ -83,7 +126,11 @@ static jets_case base_case(const opts *o, const eos_t *eos) {
                      .fit_to = o->fit_to,
                      .dt_margin = o->dt_margin,
                      .G = o->G,
-                     .strength_set = o->strength_set};
+                     .strength_set = o->strength_set,
+                     .visc_linear = o->visc_linear,
+                     .hourglass = o->hourglass,
+                     .decay = o->decay,
+                     .spall_strength = o->spall};
 }
 
 static int sweep_kh0(const opts *o, const eos_t *eos) {
@@ -138,7 +185,24 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
                             r.v_bubble_nl,
                             r.keta_fit0,
                             r.keta_fit1,
-                            r.k * r.deta_end};
+                            r.k * r.deta_end,
+                            r.u_fs_b,
+                            r.v_tip_slope,
+                            r.v_front[0],
+                            r.v_front[1],
+                            r.v_front[2],
+                            r.v_lead[0],
+                            r.v_lead[1],
+                            r.v_lead[2],
+                            r.v_main,
+                            r.m_jet_end,
+                            (double)r.n_jet_end,
+                            (double)r.n_clusters_end,
+                            (double)r.n_ahead_end,
+                            (double)r.tip_cluster_end,
+                            c.visc_linear,
+                            c.hourglass,
+                            c.decay};
       ms_csv_row(af.f, sizeof row / sizeof *row, row);
       fflush(af.f);
       printf("kh0 %-5g ncol %-4ld a0/h0 %.3f du %.4f v_lin %.4f v_spike %.4f (ratio %.3f) "
@@ -154,6 +218,14 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
           "bubble %.4f vs %.4f; k eta %.3f -> %.3f, k deta %.3f; tip u_fs + spike %.4f km/s\n",
           r.v_spike, r.v_spike_nl, 100 * (r.v_spike / r.v_spike_nl - 1), r.v_bubble, r.v_bubble_nl,
           r.keta_fit0, r.keta_fit1, r.k * r.deta_end, r.du + r.v_spike);
+      printf("    tip measures (absolute, km/s): foremost particle %.4f; leading-mass fronts "
+             "(0.01, 0.1, 0.5 rho0 h0 lambda) %.4f %.4f %.4f, their mean velocities %.4f %.4f "
+             "%.4f; jet cluster's front %.4f; u_fs %.4f at the window's start\n"
+             "    at the window's end: jet %.3f rho0 h0 lambda (%ld particles), %ld clusters, %ld "
+             "particles ahead of the jet cluster, the foremost particle's cluster %ld\n",
+             r.v_tip_slope, r.v_front[0], r.v_front[1], r.v_front[2], r.v_lead[0], r.v_lead[1],
+             r.v_lead[2], r.v_main, r.u_fs_b, r.m_jet_end, r.n_jet_end, r.n_clusters_end,
+             r.n_ahead_end, r.tip_cluster_end);
       fflush(stdout);
     }
   return ms_afile_commit(&af) == MS_OK ? 0 : 1;
@@ -253,6 +325,10 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--strength-depth")) o.sdepth = atof(v);
     else if (!strcmp(a, "--dt-margin")) o.dt_margin = atof(v);
     else if (!strcmp(a, "--strength-set")) o.strength_set = v;
+    else if (!strcmp(a, "--visc-linear")) o.visc_linear = atof(v);
+    else if (!strcmp(a, "--hourglass")) o.hourglass = atof(v);
+    else if (!strcmp(a, "--decay")) o.decay = atof(v);
+    else if (!strcmp(a, "--spall-strength")) o.spall = atof(v);
     else if (!strcmp(a, "--shear-modulus")) o.G = atof(v);
     else if (!strcmp(a, "--strength-kh0")) o.skh0 = atof(v);
     else if (!strcmp(a, "--strength-ncol")) o.sncol = atol(v);

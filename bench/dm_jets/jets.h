@@ -3,13 +3,15 @@
  * finite-deformation discrete model (the coupled problem's particle region `discrete_model`,
  * driven through particles/ptl_region.h without a grid). One case = a grooved slab (one groove
  * wavelength wide, periodic across) and a flat strip of the same depth and drive (5 columns),
- * both hit by a constant-velocity piston; the spike, bubble and free surface are measured from
- * the particles' positions (no fragments). docs/validation.md "Microjets". */
+ * both hit by a piston (held at u_p, or decaying); the spike, bubble and free surface are
+ * measured from the particles' positions, the jet's tip also by leading mass and by cluster
+ * (jets_tip.h). docs/validation.md "Microjets". */
 #ifndef MSCALE_BENCH_JETS_H
 #define MSCALE_BENCH_JETS_H
 
 #include <stdio.h>
 
+#include "jets_tip.h"
 #include "ptl_region.h"
 
 typedef struct jets_case {
@@ -26,7 +28,12 @@ typedef struct jets_case {
   const char *strength_set; /* if not NULL (and Y = 0): yield steinberg_guinan with this
                              * built-in set (particles/dm/dm_strength.c, [Steinberg1996]) */
   double dt_margin;         /* the region's dt_margin */
-  const char *snapshot;     /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
+  /* diagnostics (0: the region's default): the viscosity's linear coefficient C_l, the bond
+   * penalty c_s (`hourglass`), and a decaying drive u_p exp(−t/τ) with τ = decay λ/U_s on the
+   * region's clock (0: the piston held at u_p) */
+  double visc_linear, hourglass, decay;
+  double spall_strength; /* > 0: fracture {model: mean_stress} with this σ_s (GPa); 0: none */
+  const char *snapshot;  /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
 } jets_case;
 
 typedef struct jets_result {
@@ -62,12 +69,21 @@ typedef struct jets_result {
   double t_eta_max; /* when, after breakout, 10 µs */
   int arrested;     /* η reached its maximum before the last 10 % of the run */
   double spike_len; /* x_spike − x_bubble at the end, cm */
+  /* the tip measures of jets_tip.h, absolute (not relative to x_fs), over the fit window:
+   * slopes of x_spike (the foremost particle), of the leading-mass fronts x_m[j] and of the
+   * jet cluster's front x_main; means of the leading masses' velocities v_m[j]; and, at the
+   * window's end, the jet's mass / (ρ0 h0 λ), its particles, clusters, the particles ahead of
+   * the jet cluster and the size of the foremost particle's cluster */
+  double u_fs_b; /* the flat strip's surface velocity at t_b + fit_from λ/U_s */
+  double v_tip_slope, v_front[JETS_TIP_NFRAC], v_lead[JETS_TIP_NFRAC], v_main;
+  double m_jet_end;
+  long n_jet_end, n_clusters_end, n_ahead_end, tip_cluster_end;
   long steps, particles;
 } jets_result;
 
 /* Run the case (the flat strip, then the grooved slab). trace: if not NULL, a CSV of the
- * histories (t, x_spike, x_bubble, x_fs_flat, η, the tip's velocity, u_fs_flat) every `every`
- * steps. Returns MS_OK if both ran (result->status tells whether the grooved run stopped
+ * histories (t, x_spike, x_bubble, x_fs_flat, η, the tip's velocity, u_fs_flat, x_valley and
+ * the jets_tip_sample's fields) every `every` steps. Returns MS_OK if both ran (result->status tells whether the grooved run stopped
  * early), an error if the set-up failed. */
 ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every);
 
