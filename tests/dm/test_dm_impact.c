@@ -187,34 +187,32 @@ static void test_scope_errors(void **state) {
     assert_true(has_error(&L.e, errs[q]));
     unload(&L);
   }
-  loaded L; /* fracture */
-  load(&L, "impact:\n"
-           "  spacing: 0.1\n"
-           "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
-           "  bodies:\n"
-           "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
-           "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
-           "  t_end: 1\n"
-           "  reference_update: {threshold: 0.05, families: merge, scope: family}\n");
-  dk_errors_print(&L.e, stderr);
-  assert_null(L.p);
-  assert_true(has_error(&L.e, "deck.yaml:13:63: impact.reference_update.scope: family is not "
-                              "available with fracture"));
-  unload(&L);
-  /* fracture with any reference update (the global one refused it only at run time) */
-  load(&L, "impact:\n"
-           "  spacing: 0.1\n"
-           "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
-           "  bodies:\n"
-           "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
-           "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
-           "  t_end: 1\n"
-           "  reference_update: {threshold: 0.05}\n");
-  dk_errors_print(&L.e, stderr);
-  assert_null(L.p);
-  assert_true(has_error(&L.e, "deck.yaml:13:21: impact.reference_update is not available with "
-                              "fracture"));
-  unload(&L);
+  /* with a fracture model: scope family, and any reference update (the global one refused it
+   * only at run time) */
+  static const char *const frac_updates[] = {"{threshold: 0.05, families: merge, scope: family}",
+                                             "{threshold: 0.05}"};
+  static const char *const frac_errs[] = {
+      "deck.yaml:13:63: impact.reference_update.scope: family is not available with fracture",
+      "deck.yaml:13:21: impact.reference_update is not available with fracture"};
+  for (int q = 0; q < 2; ++q) {
+    char text[2048];
+    snprintf(text, sizeof text,
+             "impact:\n"
+             "  spacing: 0.1\n"
+             "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
+             "  bodies:\n"
+             "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
+             "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
+             "  t_end: 1\n"
+             "  reference_update: %s\n",
+             frac_updates[q]);
+    loaded L;
+    load(&L, text);
+    dk_errors_print(&L.e, stderr);
+    assert_null(L.p);
+    assert_true(has_error(&L.e, frac_errs[q]));
+    unload(&L);
+  }
 }
 
 /* An elastic Al box (Y0 = 10 GPa: no yield at 0.1 km/s) hits the wall and rebounds. The wall's
