@@ -7,7 +7,7 @@
  *                 [--depth WL] [--obs WL] [--fit-from WL] [--dt-margin F]
  *                 [--yield LIST --shear-modulus G --strength-kh0 X --strength-ncol N]
  *                 [--strength-set NAME] [--visc-linear CL] [--hourglass CS] [--decay TAU]
- *                 [--spall-strength S]
+ *                 [--spall-strength S] [--reference-update T]
  *                 [--trace] -o OUTDIR
  *
  * Defaults: inputs/eos-materials.yaml's pb, u_p 0.8 km/s (26.2 GPa, `mscale hugoniot`),
@@ -18,7 +18,9 @@
  * Pb, Sn: particles/dm/dm_strength.c) instead of yield none. Diagnostics: --visc-linear CL
  * and --hourglass CS set the region's viscosity.linear and hourglass (defaults 0.5, 1);
  * --decay TAU drives with u_p exp(−t/τ), τ = TAU λ/U_s (default: held at u_p);
- * --spall-strength S adds fracture {model: mean_stress, spall_strength: S} (GPa; default none). Besides the
+ * --spall-strength S adds fracture {model: mean_stress, spall_strength: S} (GPa; default none);
+ * --reference-update T the region's reference_update {threshold: T} (per-family references,
+ * families kept; default none; jets_kh0.csv's energy_err = |ΔE|/W shows the balance). Besides the
  * old tip measures, jets_kh0.csv has those of jets_tip.h (leading-mass fronts, jet cluster).
  * Writes OUTDIR/jets_kh0.csv and OUTDIR/jets_strength.csv (units in the headers), with
  * --trace the histories OUTDIR/trace_<kind>_<i>.csv and the final particle snapshots
@@ -51,6 +53,7 @@ typedef struct opts {
   double up, h, depth, obs, fit_from, fit_to, dt_margin, G, skh0, sobs, sdepth;
   double visc_linear, hourglass, decay; /* 0: the region's defaults, a held piston */
   double spall;                         /* > 0: fracture with this spall strength, GPa */
+  double ref;                           /* > 0: reference_update {threshold: ref} */
   double kh0[MAXL], ncol[MAXL], Y[MAXL];
   int nk, nn, ny, trace;
   long sncol;
@@ -98,11 +101,16 @@ static const char *const kh0_names[] = {"kh0",
                                         "tip_cluster_end",
                                         "visc_linear",
                                         "hourglass",
-                                        "decay"};
-static const char *const kh0_units[] = {"1",    "1",    "cm",   "cm",   "1",    "km/s",      "km/s",
-                                        "km/s", "km/s", "km/s", "km/s", "km/s", "1",         "km/s",
-                                        "km/s", "km/s", "cm",   "10us", "1",    "particles", "km/s",
-                                        "km/s", "km/s", "1",    "1",    "1"};
+                                        "decay",
+                                        "reference_update",
+                                        "energy_err"};
+static const char *const kh0_units[] = {
+    "1",    "1",    "cm",   "cm",   "1",    "km/s", "km/s", "km/s", "km/s", "km/s",
+    "km/s", "km/s", "1",    "km/s", "km/s", "km/s", "cm",   "10us", "1",    "particles",
+    "km/s", "km/s", "km/s", "1",    "1",    "1",    "km/s", "km/s", "km/s", "km/s",
+    "km/s", "km/s", "km/s", "km/s", "km/s", "1",    "1",    "1",    "1",    "1",
+    "1",    "1",    "1",    "1",    "1"}; /* one per name (m_jet_end: rho0 h0 lambda) */
+_Static_assert(sizeof kh0_units == sizeof kh0_names, "a unit per column");
 static const char *const str_names[] = {
     "Y",        "G",         "kh0",      "ncol",   "lambda",         "du",      "v_lin", "eta_b",
     "deta_max", "t_eta_max", "arrested", "k_deta", "rho_v2_over_kY", "stopped", "t_end"};
@@ -130,7 +138,8 @@ static jets_case base_case(const opts *o, const eos_t *eos) {
                      .visc_linear = o->visc_linear,
                      .hourglass = o->hourglass,
                      .decay = o->decay,
-                     .spall_strength = o->spall};
+                     .spall_strength = o->spall,
+                     .ref_threshold = o->ref};
 }
 
 static int sweep_kh0(const opts *o, const eos_t *eos) {
@@ -202,7 +211,9 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
                             (double)r.tip_cluster_end,
                             c.visc_linear,
                             c.hourglass,
-                            c.decay};
+                            c.decay,
+                            c.ref_threshold,
+                            r.energy_err};
       ms_csv_row(af.f, sizeof row / sizeof *row, row);
       fflush(af.f);
       printf("kh0 %-5g ncol %-4ld a0/h0 %.3f du %.4f v_lin %.4f v_spike %.4f (ratio %.3f) "
@@ -222,10 +233,11 @@ static int sweep_kh0(const opts *o, const eos_t *eos) {
              "(0.01, 0.1, 0.5 rho0 h0 lambda) %.4f %.4f %.4f, their mean velocities %.4f %.4f "
              "%.4f; jet cluster's front %.4f; u_fs %.4f at the window's start\n"
              "    at the window's end: jet %.3f rho0 h0 lambda (%ld particles), %ld clusters, %ld "
-             "particles ahead of the jet cluster, the foremost particle's cluster %ld\n",
+             "particles ahead of the jet cluster, the foremost particle's cluster %ld; energy "
+             "|dE|/W %.2e\n",
              r.v_tip_slope, r.v_front[0], r.v_front[1], r.v_front[2], r.v_lead[0], r.v_lead[1],
              r.v_lead[2], r.v_main, r.u_fs_b, r.m_jet_end, r.n_jet_end, r.n_clusters_end,
-             r.n_ahead_end, r.tip_cluster_end);
+             r.n_ahead_end, r.tip_cluster_end, r.energy_err);
       fflush(stdout);
     }
   return ms_afile_commit(&af) == MS_OK ? 0 : 1;
@@ -329,6 +341,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--hourglass")) o.hourglass = atof(v);
     else if (!strcmp(a, "--decay")) o.decay = atof(v);
     else if (!strcmp(a, "--spall-strength")) o.spall = atof(v);
+    else if (!strcmp(a, "--reference-update")) o.ref = atof(v);
     else if (!strcmp(a, "--shear-modulus")) o.G = atof(v);
     else if (!strcmp(a, "--strength-kh0")) o.skh0 = atof(v);
     else if (!strcmp(a, "--strength-ncol")) o.sncol = atol(v);

@@ -26,6 +26,7 @@
  * cluster (jets_tip.c), every step, as absolute slopes over the window (fit_window). */
 #include "jets.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -68,6 +69,9 @@ static ms_status build(const jets_case *c, double width, bool grooved, double de
                     "  fracture: {model: mean_stress, spall_strength: %.17g}\n", c->spall_strength);
   if (c->hourglass > 0)
     len += snprintf(text + len, sizeof text - (size_t)len, "  hourglass: %.17g\n", c->hourglass);
+  if (c->ref_threshold > 0)
+    len += snprintf(text + len, sizeof text - (size_t)len,
+                    "  reference_update: {threshold: %.17g}\n", c->ref_threshold);
   if (grooved)
     snprintf(text + len, sizeof text - (size_t)len,
              "  surface: {profile: sine, depth: %.17g, wavelength: %.17g}\n", 2 * h0, lambda);
@@ -325,6 +329,8 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
   if (trace) trace_head(trace, c, r);
   const double t_fit = r->t_break + c->fit_from * r->lambda / r->us;
   const double t_fit_end = r->t_break + c->fit_to * r->lambda / r->us;
+  ptl_region_energy e0, e1;
+  ptl_region_energy_get(reg, &e0);
   long n = 0;
   for (long k = 0; k < nsteps; k++) {
     st = ptl_region_step(reg);
@@ -361,6 +367,8 @@ ms_status jets_run(const jets_case *c, jets_result *r, FILE *trace, long every) 
               ts.n_clusters, ts.n_ahead, ts.tip_cluster);
   }
   r->steps = n;
+  ptl_region_energy_get(reg, &e1);
+  r->energy_err = fabs(e1.total - e0.total) / fmax(fabs(e1.piston_work), DBL_MIN);
   if (c->snapshot && ptl_region_write_snapshot(reg, c->snapshot, NULL) != MS_OK)
     fprintf(stderr, "jets: could not write %s\n", c->snapshot);
   r->t_end = n ? h.tt[n - 1] : 0;

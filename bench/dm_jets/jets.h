@@ -33,6 +33,7 @@ typedef struct jets_case {
    * region's clock (0: the piston held at u_p) */
   double visc_linear, hourglass, decay;
   double spall_strength; /* > 0: fracture {model: mean_stress} with this σ_s (GPa); 0: none */
+  double ref_threshold;  /* > 0: reference_update {threshold} (per-family, kept; dm_region.c) */
   const char *snapshot;  /* if not NULL: the region's HDF5 snapshot at the end (pressure, ρ) */
 } jets_case;
 
@@ -79,6 +80,9 @@ typedef struct jets_result {
   double m_jet_end;
   long n_jet_end, n_clusters_end, n_ahead_end, tip_cluster_end;
   long steps, particles;
+  /* the grooved run's energy balance: |ΔE_total| / W over the run (K + U + E_hg − W at
+   * round-off, reference updates included: their released penalty energy is booked as heat) */
+  double energy_err;
 } jets_result;
 
 /* Run the case (the flat strip, then the grooved slab). trace: if not NULL, a CSV of the

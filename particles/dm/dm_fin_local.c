@@ -28,10 +28,16 @@
  * stored energy do not change; its κ_k = c_s M V_k / tr A_k drops with the larger family and
  * what that releases of its stored energy, E_k (1 − κ_new/κ_old), becomes its heat). The other
  * families are untouched. Refused (MS_ERR_UNSTABLE, nothing changed, rep->bad) when a changed
- * family's cond A exceeds cond_max. Not with fracture, the short-range contact or periodic
- * images (MS_ERR_INTERNAL, nothing changed: their per-bond state belongs to one shared
- * reference). Symmetry planes: the ghosts' rows hold the reverse bonds, the merged pairs are
- * closed under the reflections (dm_sym_family.c). */
+ * family's cond A exceeds cond_max. Not with fracture or the short-range contact
+ * (MS_ERR_INTERNAL, nothing changed: their per-bond state belongs to one shared reference).
+ * Periodic boxes (dm_family.c's images): bond b keeps its image s_b, so Δx_b = X_k + s_b − X_i +
+ * w_k − w_i is the minimum-image bond for as long as the families are kept (the box is at least
+ * 3 horizons, the bond shorter than a horizon, so its image is the nearest one while |Δx| stays
+ * under half the box: what a stretch past 1 + threshold triggers long before), ξ_b ← Δx_b at an
+ * update includes it, and the reverse bond of b is the one with the opposite image (build_rev).
+ * merge with a box is refused (MS_ERR_INTERNAL): new_pairs would need the images of the new
+ * pairs. Symmetry planes: the ghosts' rows hold the reverse bonds, the merged pairs are closed
+ * under the reflections (dm_sym_family.c). */
 #include "dm_vec.h"
 
 #include <math.h>
@@ -112,8 +118,10 @@ MS_KERNEL_CLONES void dm_fin_local_moments(const dm_model *m, size_t i, const do
 
 /* f_i = Σ_b [Q_i ξ_b + κ_i Δw_b − Q_k ξ_rev − κ_k Δw_rev] (the head of this file), with
  * Δw_b = d_b + (w_k − w_i), d_b = ΔX_b − ξ_b, and Δw_rev = d_rev − (w_k − w_i),
- * d_rev = −ΔX_b − ξ_rev (no periodic images: the reverse bond's shift is 0). m->Q holds each
- * Q transposed (dm_finite.c). */
+ * d_rev = ΔX_rev − ξ_rev, ΔX_b = X_k + s_b − X_i with the bond's periodic shift s_b (0 without
+ * a periodic box) and ΔX_rev = X_i + s_rev − X_k = −ΔX_b: the reverse bond's image is the
+ * opposite one, s_rev = −s_b (build_rev).
+ * m->Q holds each Q transposed (dm_finite.c). */
 MS_KERNEL_CLONES void dm_fin_local_gather(const dm_model *m, const double *w, size_t i, double *F) {
   const double *restrict X = m->s->X, *restrict QT = m->Q, *restrict kap = m->kappa;
   const double *restrict R = m->xref;
@@ -123,12 +131,17 @@ MS_KERNEL_CLONES void dm_fin_local_gather(const dm_model *m, const double *w, si
   const size_t e = m->start[i + 1];
   for (size_t b = m->start[i]; b < e; ++b) {
     const size_t k = m->nbr[b];
-    const v4d xi = ld4(&R[3 * b]), xr = ld4(&R[3 * m->rev[b]]);
-    const v4d dX = ld4(&X[3 * k]) - x0, dw = ld4(&w[3 * k]) - wi;
+    const size_t r = m->rev[b];
+    const v4d xi = ld4(&R[3 * b]), xr = ld4(&R[3 * r]);
+    const v4d dX = ld4(&X[3 * k]) + ld4(m->shift4[m->img[b]]) - x0, dw = ld4(&w[3 * k]) - wi;
+    /* the reverse bond's ΔX as family k computes it: with an image, X_i + s_rev − X_k is not
+     * bit for bit −ΔX_b, and the pair's forces cancel exactly only with the same bits (without
+     * one it is: a − b = −(b − a)) */
+    const v4d dXr = x0 + ld4(m->shift4[m->img[r]]) - ld4(&X[3 * k]);
     const double *q = &QT[9 * k];
     r0 -= bc4(xr[0]) * ld4(q), r1 -= bc4(xr[1]) * ld4(q + 3), r2 -= bc4(xr[2]) * ld4(q + 6);
     const double kk = kap[k];
-    fw += bc4(ki + kk) * dw + bc4(ki) * (dX - xi) + bc4(kk) * (dX + xr);
+    fw += bc4(ki + kk) * dw + bc4(ki) * (dX - xi) + bc4(kk) * (xr - dXr);
     sxi += xi;
   }
   const double *qi = &QT[9 * i];
@@ -203,9 +216,14 @@ static void init_xref(dm_model *m) {
     for (size_t b = m->start[i]; b < m->start[i + 1]; ++b) dm_bond_vector(m, i, b, &m->xref[3 * b]);
 }
 
-/* rev[b] for every bond: the position of i in k's sorted list (families symmetric). */
+/* rev[b] for every bond b = i → k (image c): the position of (i, 26 − c) in k's list, sorted by
+ * (neighbour, image) (dm_family.c; families symmetric). Image c = (s_x+1) + 3(s_y+1) + 9(s_z+1)
+ * for the shift s ∈ {−1, 0, 1}³ boxes, so 26 − c is the opposite shift: across a periodic
+ * boundary the reverse bond is the one to the other image (with a box of at least 3 horizons a
+ * pair has one bond, but matching the image keeps rev right without relying on that). img NULL:
+ * every bond's image is 13 (no box). */
 static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_t *nbr,
-                           size_t *rev) {
+                           const uint8_t *img, size_t *rev) {
   const long n = (long)m->s->n;
   long bad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : bad)
@@ -217,6 +235,8 @@ static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_
         if (nbr[mid] < (uint32_t)i) lo = mid + 1;
         else hi = mid;
       }
+      const uint8_t want = img ? (uint8_t)(26 - img[b]) : 13;
+      while (img && lo < start[nbr[b] + 1] && nbr[lo] == (uint32_t)i && img[lo] != want) ++lo;
       if (lo < start[nbr[b] + 1] && nbr[lo] == (uint32_t)i) rev[b] = lo;
       else ++bad;
     }
@@ -226,7 +246,7 @@ static ms_status build_rev(const dm_model *m, const size_t *start, const uint32_
 ms_status dm_fin_local_rev(dm_model *m) {
   free(m->rev);
   m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
-  const ms_status st = build_rev(m, m->start, m->nbr, m->rev);
+  const ms_status st = build_rev(m, m->start, m->nbr, m->img, m->rev);
   if (st != MS_OK) free(m->rev), m->rev = NULL;
   return st;
 }
@@ -251,7 +271,7 @@ ms_status dm_fin_local_init(dm_fin *f) {
     dm_sym_map_free(&mp);
   }
   m->rev = ms_calloc(m->nbonds + 1, sizeof(size_t));
-  if (st == MS_OK) st = build_rev(m, m->start, m->nbr, m->rev);
+  if (st == MS_OK) st = build_rev(m, m->start, m->nbr, m->img, m->rev);
   if (st != MS_OK) free(m->xref), free(m->rev), m->xref = NULL, m->rev = NULL;
   return st;
 }
@@ -489,8 +509,8 @@ static ms_status update_merged(dm_fin *f, const dm_sym_map *mp, const uint8_t *u
   ms_status st = rep->bad != SIZE_MAX ? MS_ERR_UNSTABLE : MS_OK;
   if (st == MS_OK && mp) st = dm_sym_ghost_xref(f, mp, nf.start, nf.nbr, nf.xref);
   nf.rev = ms_calloc(nf.nbonds + 1, sizeof(size_t));
-  if (st == MS_OK) st = build_rev(m, nf.start, nf.nbr, nf.rev);
-  if (st != MS_OK) { /* nothing changed */
+  if (st == MS_OK) st = build_rev(m, nf.start, nf.nbr, NULL, nf.rev); /* no box: refused */
+  if (st != MS_OK) {                                                  /* nothing changed */
     free_new(&nf);
     return st;
   }
@@ -526,8 +546,8 @@ ms_status dm_fin_rebase_local(dm_fin *f, const ms_ctx *ctx, double threshold, bo
   const size_t n = f->n;
   memset(rep, 0, sizeof *rep);
   rep->bad = SIZE_MAX, rep->jmin = INFINITY;
-  if (f->failed || f->sr || (!f->sym.n && s->n != n) || m->opt.box[0] > 0 || m->opt.box[1] > 0 ||
-      m->opt.box[2] > 0)
+  const bool box = m->opt.box[0] > 0 || m->opt.box[1] > 0 || m->opt.box[2] > 0;
+  if (f->failed || f->sr || (!f->sym.n && s->n != n) || (box && merge))
     return MS_ERR_INTERNAL; /* the head of this file */
   const ms_status fl = dm_fin_flush(f);
   if (fl != MS_OK) return fl;

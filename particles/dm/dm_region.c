@@ -42,6 +42,7 @@ typedef struct dm_region_params {
   dm_sg sg;         /* steinberg_guinan: strength_set and/or strength {...} (dm_strength.c) */
   dm_fracture frac; /* fracture: {...} (dm_fracture.c) */
   double cq, cl, courant, hourglass, dt_margin, cond_max, contact;
+  double ref_threshold; /* reference_update.threshold (0: none) */
   int surface;
   double surf_depth, surf_wavelength;
   const dk_node *at, *at_r0;
@@ -67,6 +68,7 @@ typedef struct dm_region {
   int32_t *link_nbr;
   ptl_region_geometry geo;
   double t, dt, dt0_limit;
+  double ref_threshold; /* > 0: per-family reference updates (region_rebase) */
   piston pis;
   dm_columns *cols; /* the piston by columns (set_piston_columns); NULL: pis */
   int rank, nranks; /* replicated on MPI ranks: rank 0 owns the particles (region_distribute) */
@@ -152,6 +154,16 @@ static ptl_region_params *region_read(dk_doc *doc, const dk_node *P, dk_errors *
   dk_read_double(e, doc, P, "cond_max", MS_DIM_NONE, false, 1e8, 1.0, 1e16, &p->cond_max);
   dk_read_double(e, doc, P, "contact_distance", MS_DIM_NONE, false, DM_CONTACT_DEFAULT, 0.0,
                  DM_CONTACT_MAX, &p->contact); /* dm_contact.c */
+  /* reference_update: {threshold}: the impact problem's per-family update, families kept
+   * (dm_fin_rebase_local; docs/input-coupled.md) */
+  const dk_node *RU = dk_get(P, "reference_update");
+  if (RU && dk_expect_map(e, doc, RU, "particles.reference_update")) {
+    dk_read_double(e, doc, RU, "threshold", MS_DIM_NONE, true, 0, 1e-3, 10.0, &p->ref_threshold);
+    if (p->frac.model || p->contact > 0)
+      dk_error(e, doc, RU,
+               "particles.reference_update needs contact_distance: 0 and no fracture (their "
+               "per-bond state belongs to one shared reference)");
+  }
   /* its cells: at least 3 seeing distances (d_c + h/2) across a periodic width */
   const double see = (p->contact + 0.5) * p->h;
   if (p->contact > 0 && p->h > 0 &&
@@ -404,6 +416,7 @@ static ms_status region_create(const ptl_region_params *pp, const ms_ctx *ctx, c
   r->link_start = ms_calloc(r->s.n + 1, sizeof *r->link_start);
   r->link_nbr = ms_calloc(r->m->nbonds + 1, sizeof *r->link_nbr);
   r->dt0_limit = r->f->dt_next;
+  r->ref_threshold = p->ref_threshold;
   r->dt = p->dt_margin * r->dt0_limit;
   r->pis.dir[0] = 1.0;
   piston_reserve(&r->pis, 2);
@@ -510,6 +523,22 @@ static void take_view_velocities(const dm_region *r) {
     }
 }
 
+/* After a model step: the families whose bonds stretched past 1 + threshold get their own
+ * references (dm_fin_rebase_local); a refusal (a degenerate family) stops the run. */
+static ms_status region_rebase(dm_region *r) {
+  if (!(r->ref_threshold > 0)) return MS_OK;
+  dm_refamily_report rep;
+  const ms_status st = dm_fin_rebase_local(r->f, NULL, r->ref_threshold, false, &rep);
+  if (st != MS_OK) {
+    const size_t b = rep.bad < r->s.n ? rep.bad : 0;
+    snprintf(r->err, sizeof r->err,
+             "discrete model: model step %ld, t = %.9g: the reference update is refused: particle "
+             "%zu (X = %g %g %g) would have a degenerate family",
+             r->f->step, r->t, b, r->s.X[3 * b], r->s.X[3 * b + 1], r->s.X[3 * b + 2]);
+  }
+  return st;
+}
+
 static ms_status region_step(ptl_region *rr) {
   dm_region *r = dmr(rr);
   dm_state *s = &r->s;
@@ -566,6 +595,11 @@ static ms_status region_step(ptl_region *rr) {
                "discrete model: model step %ld, t = %.9g: particle %zu (X = %g %g %g): %s = %g",
                r->f->step, r->t, r->f->bad, X[0], X[1], X[2], r->f->bad_what, r->f->bad_value);
       return MS_ERR_UNSTABLE;
+    }
+    if ((st = region_rebase(r)) != MS_OK) {
+      r->t += dt - rest;
+      sync_state(r);
+      return st;
     }
   }
   r->t += dt;
@@ -688,8 +722,10 @@ static ms_status region_refresh(ptl_region *r) {
  * velocities replace u, since the coupling may have kicked them (drag) since the step. The
  * piston needs nothing: the drivers hold it again before every step. */
 static ms_status region_checkpoint_write(const ptl_region *rr, ms_h5 *h, const ms_ctx *ctx) {
-  (void)ctx;
   const dm_region *r = cdmr(rr);
+  if (r->ref_threshold > 0) /* the families' own references are not in /dm (not yet) */
+    return ms_log(ctx, MS_LOG_ERROR, "coupled: particles: no checkpoint with reference_update"),
+           MS_ERR_INPUT;
   const ptl_state *ps = r->ps;
   take_view_velocities(r); /* what the next step would take, so the checkpoint holds it */
   ms_status st = dm_fin_checkpoint_write(r->f, &r->s, h, "/dm", r->rank == 0);

@@ -447,6 +447,15 @@ static void test_deck_errors(void **state) {
                "needs yield: elastic_plastic");
   expect_error("particles:\n  r0: 1.0e-3\n  width: 0.004\n", "region.yaml:3:10",
                "at least 3 horizons");
+  /* reference_update: not with the short-range contact (on by default) or fracture (their
+   * per-bond state belongs to one shared reference); a threshold below 1e-3 is refused */
+  expect_error(SECTION("  reference_update: {threshold: 0.01}\n"), "region.yaml:5:21",
+               "needs contact_distance: 0");
+  expect_error(SECTION("  contact_distance: 0\n  reference_update: {threshold: 0.01}\n  fracture: "
+                       "{model: mean_stress, spall_strength: 1}\n"),
+               "region.yaml:6:21", "needs contact_distance: 0 and no fracture");
+  expect_error(SECTION("  contact_distance: 0\n  reference_update: {threshold: 1e-4}\n"),
+               "region.yaml", "threshold");
 }
 
 int main(void) {
