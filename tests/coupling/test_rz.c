@@ -102,11 +102,11 @@ static void test_rz(void **state) {
   const double detached = c->m_jet + c->m_layer + c->m_debris;
   assert_true(detached / a > 0.057);
   if (!strncmp(which, "dm-", 3)) {
-    /* the discrete model's balance with the drag on its ejecta booked (docs/coupling.md §7,
-     * "Energy"): the kicks' ΔK is the view's ½m(v1² − v0²), the model's kinetic energy at the
-     * step's synchronised velocities differs by O(dt) per kick — bounded, measured ≤ 3e-6 of
-     * the piston work; the drag itself took 5e-5 of it by 1 µs at the coarse Rz20 size, which
-     * a balance without the term shows */
+    /* the discrete model's balance with the drag on its ejecta booked (docs/coupling.md §4,
+     * "In the particles' balance"): the kicks' ΔK is the view's ½m(v1² − v0²), the model's
+     * kinetic energy at the step's synchronised velocities differs by O(dt) per kick —
+     * bounded, measured ≤ 3e-6 of the piston work; the drag itself took 5e-5 of it by 1 µs at
+     * the coarse Rz20 size, which a balance without the term shows */
     printf("%s: energy balance %.3g of the piston work (drag booked); failed particles %ld by "
            "the criterion, %ld isolated, %ld degenerate\n",
            which, s->energy_balance, s->failed[0], s->failed[1], s->failed[2]);
