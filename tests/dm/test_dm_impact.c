@@ -158,59 +158,42 @@ static void test_key_errors(void **state) {
  * model; an unknown scope; any reference update with a fracture model. */
 static void test_scope_errors(void **state) {
   (void)state;
-  static const char *const decks[] = {
-      "  reference_update: {threshold: 0.05, scope: family}\n",
-      "  reference_update: {threshold: 0.05, families: merge, scope: family}\n"
-      "  contact_distance: 0.5\n",
-      "  reference_update: {threshold: 0.05, families: keep, scope: every}\n",
+  /* per case: the body's fracture model (or none), what follows t_end, the error */
+  static const char *const frac = ",\n       fracture: {model: mean_stress, spall_strength: 1.2}";
+  static const struct {
+    const char *body_extra, *tail, *err;
+  } cases[] = {
+      {"", "  reference_update: {threshold: 0.05, scope: family}\n",
+       "deck.yaml:12:46: impact.reference_update.scope: family needs families: keep or merge"},
+      {"",
+       "  reference_update: {threshold: 0.05, families: merge, scope: family}\n"
+       "  contact_distance: 0.5\n",
+       "deck.yaml:12:63: impact.reference_update.scope: family is not available with "
+       "contact_distance"},
+      {"", "  reference_update: {threshold: 0.05, families: keep, scope: every}\n",
+       "deck.yaml:12:62: impact.reference_update.scope: expected one of: all, family"},
+      /* with a fracture model: scope family, and any reference update (the global one
+       * refused it only at run time) */
+      {frac, "  reference_update: {threshold: 0.05, families: merge, scope: family}\n",
+       "deck.yaml:13:63: impact.reference_update.scope: family is not available with fracture"},
+      {frac, "  reference_update: {threshold: 0.05}\n",
+       "deck.yaml:13:21: impact.reference_update is not available with fracture"},
   };
-  static const char *const errs[] = {
-      "deck.yaml:12:46: impact.reference_update.scope: family needs families: keep or merge",
-      "deck.yaml:12:63: impact.reference_update.scope: family is not available with "
-      "contact_distance",
-      "deck.yaml:12:62: impact.reference_update.scope: expected one of: all, family",
-  };
-  for (int q = 0; q < 3; ++q) {
+  for (size_t q = 0; q < sizeof cases / sizeof *cases; ++q) {
     char text[2048];
     snprintf(text, sizeof text,
              "impact:\n"
              "  spacing: 0.1\n"
              "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
              "  bodies:\n"
-             "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4]}\n"
+             "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4]%s}\n"
              "  t_end: 1\n%s",
-             decks[q]);
+             cases[q].body_extra, cases[q].tail);
     loaded L;
     load(&L, text);
     dk_errors_print(&L.e, stderr);
     assert_null(L.p);
-    assert_true(has_error(&L.e, errs[q]));
-    unload(&L);
-  }
-  /* with a fracture model: scope family, and any reference update (the global one refused it
-   * only at run time) */
-  static const char *const frac_updates[] = {"{threshold: 0.05, families: merge, scope: family}",
-                                             "{threshold: 0.05}"};
-  static const char *const frac_errs[] = {
-      "deck.yaml:13:63: impact.reference_update.scope: family is not available with fracture",
-      "deck.yaml:13:21: impact.reference_update is not available with fracture"};
-  for (int q = 0; q < 2; ++q) {
-    char text[2048];
-    snprintf(text, sizeof text,
-             "impact:\n"
-             "  spacing: 0.1\n"
-             "  domain: {lo: [-1, -1, 0], hi: [1, 1, 2]}\n"
-             "  bodies:\n"
-             "    - {shape: box, material: al, center: [0, 0, 0.5], size: [0.4, 0.4, 0.4],\n"
-             "       fracture: {model: mean_stress, spall_strength: 1.2}}\n"
-             "  t_end: 1\n"
-             "  reference_update: %s\n",
-             frac_updates[q]);
-    loaded L;
-    load(&L, text);
-    dk_errors_print(&L.e, stderr);
-    assert_null(L.p);
-    assert_true(has_error(&L.e, frac_errs[q]));
+    assert_true(has_error(&L.e, cases[q].err));
     unload(&L);
   }
 }
